@@ -1,0 +1,1 @@
+//! mtec-comp: Compensation: volumetric maps, correction values, G-code rewriting, controller tables, real-time API.

@@ -1,0 +1,1 @@
+//! mtec-identify: Identification of error elements from measurements: line sets (9-line method), ballbar rotary-axis modes; identifiability and conditioning.

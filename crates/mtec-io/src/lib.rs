@@ -1,0 +1,96 @@
+//! mtec-io: the one place where mtec touches files.
+//!
+//! What it is for: reading CSV tables (with `#` comments, unit-suffixed column names), TOML and
+//! JSON documents into typed values, with every failure reported as an [`InputError`] that names
+//! the file, the line and the column; writing outputs atomically (temporary file + rename) and
+//! refusing to overwrite an input.
+//!
+//! What it is not for: the meaning of a file. Which columns a measurement needs and what their
+//! values must satisfy is decided by the crate that owns the measurement (`mtec-measure`,
+//! `mtec-thermal`, ...), using the typed accessors of [`Table`].
+
+mod error;
+mod table;
+mod write;
+
+pub use error::{InputError, Located};
+pub use table::{Table, TableRow};
+pub use write::{write_atomic, OutputGuard};
+
+use std::path::Path;
+
+/// Reads a whole file as UTF-8 text; non-UTF-8 bytes are reported with their line and column.
+pub fn read_text(path: &Path) -> Result<String, InputError> {
+    let bytes =
+        std::fs::read(path).map_err(|e| InputError::file(path, format!("cannot read: {e}")))?;
+    match String::from_utf8(bytes) {
+        Ok(mut s) => {
+            if s.starts_with('\u{feff}') {
+                s.drain(..'\u{feff}'.len_utf8());
+            }
+            Ok(s)
+        }
+        Err(e) => {
+            let valid = e.utf8_error().valid_up_to();
+            let bytes = e.as_bytes();
+            let line = bytes[..valid].iter().filter(|&&b| b == b'\n').count() + 1;
+            let col = valid
+                - bytes[..valid]
+                    .iter()
+                    .rposition(|&b| b == b'\n')
+                    .map(|p| p + 1)
+                    .unwrap_or(0)
+                + 1;
+            Err(InputError::at(
+                path,
+                line,
+                col,
+                format!("byte 0x{:02x} is not valid UTF-8 text", bytes[valid]),
+            ))
+        }
+    }
+}
+
+/// Parses a TOML document into `T`; syntax and type errors carry the line and column of the span.
+pub fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, InputError> {
+    let text = read_text(path)?;
+    parse_toml(path, &text)
+}
+
+/// Parses TOML text (already read from `path`) into `T`.
+pub fn parse_toml<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    text: &str,
+) -> Result<T, InputError> {
+    toml::from_str(text).map_err(|e| {
+        let msg = e.message().to_string();
+        match e.span() {
+            Some(span) => {
+                let (line, col) = line_col(text, span.start);
+                InputError::at(path, line, col, msg)
+            }
+            None => InputError::file(path, msg),
+        }
+    })
+}
+
+/// Parses a JSON document into `T`; errors carry serde_json's line and column.
+pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, InputError> {
+    let text = read_text(path)?;
+    serde_json::from_str(&text)
+        .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))
+}
+
+/// 1-based line and column of a byte offset in `text`.
+pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(text.len());
+    let before = &text[..offset];
+    let line = before.matches('\n').count() + 1;
+    let col = before
+        .rsplit('\n')
+        .next()
+        .map(|s| s.chars().count())
+        .unwrap_or(0)
+        + 1;
+    (line, col)
+}

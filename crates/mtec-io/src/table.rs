@@ -1,0 +1,347 @@
+//! A CSV table with a header row, `#` comment lines, and typed, located column access.
+
+use crate::error::InputError;
+use std::path::{Path, PathBuf};
+
+/// One data row: its fields as text and the line of the file it came from (1-based).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TableRow {
+    pub line: usize,
+    pub fields: Vec<String>,
+}
+
+/// A CSV file read whole: header, data rows with their line numbers, and the comment lines.
+///
+/// Conventions (SPEC §2): comma-separated, first non-comment line is the header, lines starting
+/// with `#` are comments (kept in [`Table::comments`], e.g. a circular test's radius), a UTF-8
+/// byte-order mark and CRLF line ends are accepted (spreadsheet exports), fields are trimmed.
+#[derive(Debug, Clone)]
+pub struct Table {
+    pub path: PathBuf,
+    pub header: Vec<String>,
+    pub header_line: usize,
+    pub rows: Vec<TableRow>,
+    pub comments: Vec<String>,
+}
+
+impl Table {
+    /// Reads and checks the file's shape: header present, no duplicated column, every row as wide
+    /// as the header, at least one data row.
+    pub fn read(path: &Path) -> Result<Table, InputError> {
+        let text = crate::read_text(path)?;
+        Table::parse(path, &text)
+    }
+
+    /// Parses CSV text that was read from `path` (the path is used in messages only).
+    pub fn parse(path: &Path, text: &str) -> Result<Table, InputError> {
+        let mut comments = Vec::new();
+        let mut header: Option<(usize, Vec<String>)> = None;
+        let mut rows = Vec::new();
+        for (i, raw) in text.split('\n').enumerate() {
+            let line_no = i + 1;
+            let line = raw.strip_suffix('\r').unwrap_or(raw);
+            let trimmed = line.trim();
+            if trimmed.is_empty() {
+                continue;
+            }
+            if let Some(c) = trimmed.strip_prefix('#') {
+                comments.push(c.trim().to_string());
+                continue;
+            }
+            let fields = split_fields(path, line_no, line)?;
+            match &header {
+                None => {
+                    check_header(path, line_no, line, &fields)?;
+                    header = Some((line_no, fields));
+                }
+                Some((_, h)) => {
+                    if fields.len() != h.len() {
+                        let col = fields.len().min(h.len()) + 1;
+                        return Err(InputError::at(
+                            path,
+                            line_no,
+                            col,
+                            format!(
+                                "row has {} fields but the header has {} columns",
+                                fields.len(),
+                                h.len()
+                            ),
+                        ));
+                    }
+                    rows.push(TableRow {
+                        line: line_no,
+                        fields,
+                    });
+                }
+            }
+        }
+        let Some((header_line, header)) = header else {
+            return Err(InputError::file(
+                path,
+                "file is empty: expected a header row with column names",
+            ));
+        };
+        if rows.is_empty() {
+            return Err(InputError::line(
+                path,
+                header_line,
+                "header only: the file has no data rows",
+            ));
+        }
+        Ok(Table {
+            path: path.to_path_buf(),
+            header,
+            header_line,
+            rows,
+            comments,
+        })
+    }
+
+    /// Index of a column, or an error that says what is there instead (including a column with
+    /// the same name but another unit suffix, the most common mistake).
+    pub fn column(&self, name: &str) -> Result<usize, InputError> {
+        if let Some(i) = self.header.iter().position(|h| h == name) {
+            return Ok(i);
+        }
+        let stem = stem_of(name);
+        if let Some((i, other)) = self
+            .header
+            .iter()
+            .enumerate()
+            .find(|(_, h)| stem_of(h) == stem && h.as_str() != name)
+        {
+            return Err(InputError::at(
+                &self.path,
+                self.header_line,
+                i + 1,
+                format!("column `{other}` has the wrong unit suffix: mtec expects `{name}` (units are part of the column name, SPEC §2)"),
+            ));
+        }
+        Err(InputError::line(
+            &self.path,
+            self.header_line,
+            format!(
+                "missing column `{name}`; the header has: {}",
+                self.header.join(", ")
+            ),
+        ))
+    }
+
+    /// True when the header has this exact column.
+    pub fn has(&self, name: &str) -> bool {
+        self.header.iter().any(|h| h == name)
+    }
+
+    /// Checks that all named columns are present (first missing one reported).
+    pub fn require(&self, names: &[&str]) -> Result<(), InputError> {
+        for n in names {
+            self.column(n)?;
+        }
+        Ok(())
+    }
+
+    /// A column of finite numbers. Non-numeric cells, NaN and infinities are errors located at
+    /// their line and column.
+    pub fn f64_column(&self, name: &str) -> Result<Vec<f64>, InputError> {
+        let c = self.column(name)?;
+        self.rows.iter().map(|r| self.cell_f64(r, c)).collect()
+    }
+
+    /// The number in row `row`, column index `c`, or a located error.
+    pub fn cell_f64(&self, row: &TableRow, c: usize) -> Result<f64, InputError> {
+        let s = row.fields[c].as_str();
+        let name = &self.header[c];
+        match s.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            Ok(_) => Err(InputError::at(
+                &self.path,
+                row.line,
+                c + 1,
+                format!("`{name}` is `{s}`: not a finite number"),
+            )),
+            Err(_) if s.is_empty() => Err(InputError::at(
+                &self.path,
+                row.line,
+                c + 1,
+                format!("`{name}` is empty"),
+            )),
+            Err(_) => Err(InputError::at(
+                &self.path,
+                row.line,
+                c + 1,
+                format!("`{name}` is `{s}`: not a number"),
+            )),
+        }
+    }
+
+    /// A column of text cells.
+    pub fn str_column(&self, name: &str) -> Result<Vec<String>, InputError> {
+        let c = self.column(name)?;
+        Ok(self.rows.iter().map(|r| r.fields[c].clone()).collect())
+    }
+
+    /// A column of integers (e.g. run or experiment numbers).
+    pub fn i64_column(&self, name: &str) -> Result<Vec<i64>, InputError> {
+        let c = self.column(name)?;
+        self.rows
+            .iter()
+            .map(|r| {
+                let s = r.fields[c].as_str();
+                s.parse::<i64>().map_err(|_| {
+                    InputError::at(
+                        &self.path,
+                        r.line,
+                        c + 1,
+                        format!("`{}` is `{s}`: not a whole number", self.header[c]),
+                    )
+                })
+            })
+            .collect()
+    }
+
+    /// Names of the columns that end with `suffix` (e.g. every `_c` temperature column).
+    pub fn columns_with_suffix(&self, suffix: &str) -> Vec<String> {
+        self.header
+            .iter()
+            .filter(|h| h.ends_with(suffix))
+            .cloned()
+            .collect()
+    }
+
+    /// A located error about row `row`, column named `name` (or the row alone if the column is absent).
+    pub fn error_at(&self, row: &TableRow, name: &str, message: impl Into<String>) -> InputError {
+        match self.header.iter().position(|h| h == name) {
+            Some(c) => InputError::at(&self.path, row.line, c + 1, message),
+            None => InputError::line(&self.path, row.line, message),
+        }
+    }
+
+    /// The `key = value` or `key: value` pairs found in the comment lines (e.g. `# radius_mm = 100`).
+    pub fn comment_value(&self, key: &str) -> Option<String> {
+        self.comments.iter().find_map(|c| {
+            let (k, v) = c.split_once('=').or_else(|| c.split_once(':'))?;
+            (k.trim() == key).then(|| v.trim().to_string())
+        })
+    }
+}
+
+fn stem_of(name: &str) -> &str {
+    const SUFFIXES: [&str; 10] = [
+        "_mm", "_deg", "_um", "_urad", "_c", "_min", "_s", "_in", "_rad", "_k",
+    ];
+    for s in SUFFIXES {
+        if let Some(stem) = name.strip_suffix(s) {
+            return stem;
+        }
+    }
+    name
+}
+
+fn split_fields(path: &Path, line_no: usize, line: &str) -> Result<Vec<String>, InputError> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(line.as_bytes());
+    let mut rec = csv::StringRecord::new();
+    match rdr.read_record(&mut rec) {
+        Ok(_) => Ok(rec.iter().map(|f| f.trim().to_string()).collect()),
+        Err(e) => Err(InputError::line(
+            path,
+            line_no,
+            format!("cannot split the line into fields: {e}"),
+        )),
+    }
+}
+
+fn check_header(
+    path: &Path,
+    line_no: usize,
+    line: &str,
+    fields: &[String],
+) -> Result<(), InputError> {
+    if fields.len() == 1 {
+        for (d, name) in [(';', "semicolons"), ('\t', "tabs"), ('|', "bars")] {
+            if line.contains(d) {
+                return Err(InputError::line(
+                    path,
+                    line_no,
+                    format!("the header is separated by {name}: mtec reads comma-separated files (SPEC §2)"),
+                ));
+            }
+        }
+    }
+    for (i, f) in fields.iter().enumerate() {
+        if f.is_empty() {
+            return Err(InputError::at(
+                path,
+                line_no,
+                i + 1,
+                "empty column name in the header",
+            ));
+        }
+        if let Some(j) = fields[..i].iter().position(|g| g == f) {
+            return Err(InputError::at(
+                path,
+                line_no,
+                i + 1,
+                format!(
+                    "column `{f}` appears twice (columns {} and {})",
+                    j + 1,
+                    i + 1
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<Table, InputError> {
+        Table::parse(Path::new("t.csv"), s)
+    }
+
+    #[test]
+    fn reads_comments_header_rows_and_crlf() {
+        let t = parse("# radius_mm = 100\r\nx_mm,y_um\r\n1,2\r\n\r\n3,4\r\n").unwrap();
+        assert_eq!(t.header, vec!["x_mm", "y_um"]);
+        assert_eq!(t.f64_column("y_um").unwrap(), vec![2.0, 4.0]);
+        assert_eq!(t.rows[1].line, 5);
+        assert_eq!(t.comment_value("radius_mm").as_deref(), Some("100"));
+    }
+
+    #[test]
+    fn nan_and_text_are_located() {
+        let t = parse("a_mm,b_um\n1,2\n3,NaN\n").unwrap();
+        let e = t.f64_column("b_um").unwrap_err();
+        assert_eq!((e.line, e.column), (Some(3), Some(2)));
+        let t = parse("a_mm,b_um\n1,x\n").unwrap();
+        assert!(t
+            .f64_column("b_um")
+            .unwrap_err()
+            .to_string()
+            .contains("t.csv:2:2"));
+    }
+
+    #[test]
+    fn wrong_unit_suffix_is_named() {
+        let t = parse("x_in,y_um\n1,2\n").unwrap();
+        let e = t.column("x_mm").unwrap_err();
+        assert!(e.message.contains("x_in"), "{e}");
+        assert_eq!(e.column, Some(1));
+    }
+
+    #[test]
+    fn shape_errors() {
+        assert!(parse("").unwrap_err().message.contains("empty"));
+        assert!(parse("a_mm\n").unwrap_err().message.contains("header only"));
+        assert_eq!(parse("a_mm,b_mm\n1\n").unwrap_err().line, Some(2));
+        assert!(parse("a_mm;b_mm\n1;2\n")
+            .unwrap_err()
+            .message
+            .contains("semicolons"));
+        assert_eq!(parse("a_mm,a_mm\n1,2\n").unwrap_err().column, Some(2));
+    }
+}

@@ -1,0 +1,1 @@
+//! mtec-report: Plots (SVG) and the self-contained HTML report.
