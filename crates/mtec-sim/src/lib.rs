@@ -1,1 +1,12 @@
-//! mtec-sim: The virtual machine: ground-truth errors, lumped thermal network, instrument models with noise, measurement scenarios.
+//! mtec-sim: the virtual machine with a known ground truth.
+//!
+//! What it is for: generating every kind of measurement mtec analyses (laser-interferometer
+//! lines, ISO 230-2 runs, ballbar runs, thermal logs, tracker grids) from exact (non-linearised)
+//! rigid-body kinematics, a lumped thermal network and instrument noise, deterministically from a
+//! seed, together with the truth (`truth.json`) that the analysis must recover.
+//!
+//! What it is not for: analysis. Nothing here is used to identify or fit anything.
+
+pub mod scenario;
+
+pub use scenario::{run_scenario, OutputFile, ScenarioOutput, SimError, SCENARIOS};
