@@ -15,6 +15,7 @@ pub mod errors;
 pub mod function;
 pub mod htm;
 pub mod kinematics;
+pub mod line_design;
 pub mod machine;
 pub mod poe;
 
@@ -23,5 +24,6 @@ pub use errors::{ErrorSet, ERRORS_FORMAT};
 pub use function::{ErrorFunction, Shape, Temperatures, ThermalTerm};
 pub use htm::Htm;
 pub use kinematics::{Formalism, Order, Volumetric, VolumetricModel};
+pub use line_design::{line_preset, LineSpec, LINE_PRESETS};
 pub use machine::{AxisSpec, Chain, ErrorFrame, Machine, MachineSpec};
 pub use poe::Twist;

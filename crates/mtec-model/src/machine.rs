@@ -208,6 +208,22 @@ impl Machine {
         })
     }
 
+    /// The TOML form of this machine (for writing it back out).
+    pub fn to_spec(&self) -> MachineSpec {
+        MachineSpec {
+            name: self.name.clone(),
+            chain: self.chain.text.clone(),
+            axes: self
+                .specs
+                .iter()
+                .map(|(a, s)| (a.letter().to_string(), s.clone()))
+                .collect(),
+            tool_offset_mm: self.tool_offset_mm,
+            workpiece_origin_mm: self.workpiece_origin_mm,
+            error_frame: self.error_frame,
+        }
+    }
+
     /// Position of an axis in the pose vector.
     pub fn axis_index(&self, a: Axis) -> Option<usize> {
         self.axes.iter().position(|&x| x == a)
