@@ -358,11 +358,23 @@ fn scan_pitch(pts: &[Pt], r_mm: f64, axis: usize, resid: &[f64], k_lo: f64, k_hi
     let n = pts.len();
     let pos: Vec<f64> = pts
         .iter()
-        .map(|p| r_mm * if axis == 0 { p.theta.cos() } else { p.theta.sin() })
+        .map(|p| {
+            r_mm * if axis == 0 {
+                p.theta.cos()
+            } else {
+                p.theta.sin()
+            }
+        })
         .collect();
     let proj: Vec<f64> = pts
         .iter()
-        .map(|p| if axis == 0 { p.theta.cos() } else { p.theta.sin() })
+        .map(|p| {
+            if axis == 0 {
+                p.theta.cos()
+            } else {
+                p.theta.sin()
+            }
+        })
         .collect();
     // phase over the travel 2R changes by < 0.5 rad between grid points
     let dk = 0.5 / (2.0 * PI * 2.0 * r_mm);
@@ -483,7 +495,10 @@ fn dead_zone_um(pts: &[Pt], r_um: f64, axis: usize, b_pos: f64, b_neg: f64) -> V
             let (proj, reversals) = if axis == 0 {
                 (p.theta.cos(), [(0.0, b_pos, 1.0), (PI, b_neg, -1.0)])
             } else {
-                (p.theta.sin(), [(PI / 2.0, b_pos, 1.0), (1.5 * PI, b_neg, -1.0)])
+                (
+                    p.theta.sin(),
+                    [(PI / 2.0, b_pos, 1.0), (1.5 * PI, b_neg, -1.0)],
+                )
             };
             for (theta_r, b, end) in reversals {
                 if b <= 0.0 {

@@ -131,7 +131,11 @@ fn interp_periodic(sorted: &[(f64, f64)], at_deg: f64) -> f64 {
 }
 
 fn sorted_pairs(samples: &[Sample], r: &[f64]) -> Vec<(f64, f64)> {
-    let mut v: Vec<(f64, f64)> = samples.iter().map(|s| s.angle_deg).zip(r.iter().copied()).collect();
+    let mut v: Vec<(f64, f64)> = samples
+        .iter()
+        .map(|s| s.angle_deg)
+        .zip(r.iter().copied())
+        .collect();
     v.sort_by(|x, y| x.0.total_cmp(&y.0));
     v
 }
@@ -149,7 +153,13 @@ pub fn evaluate(trace: &CircularTrace) -> Iso230_4 {
     let g_cw = range(&radii_about(r, cw, &circle_cw));
     let rb_ccw = radii_about(r, ccw, &circle_b);
     let rb_cw = radii_about(r, cw, &circle_b);
-    let g_b = range(&rb_ccw.iter().chain(rb_cw.iter()).copied().collect::<Vec<_>>());
+    let g_b = range(
+        &rb_ccw
+            .iter()
+            .chain(rb_cw.iter())
+            .copied()
+            .collect::<Vec<_>>(),
+    );
     let s_ccw = sorted_pairs(ccw, &rb_ccw);
     let s_cw = sorted_pairs(cw, &rb_cw);
     let h1 = s_cw

@@ -112,9 +112,17 @@ impl CircularTrace {
         let header_number = |key: &str| -> Result<Option<f64>, InputError> {
             match table.comment_value(key) {
                 None => Ok(None),
-                Some(v) => v.parse::<f64>().ok().filter(|x| x.is_finite()).map(Some).ok_or_else(|| {
-                    InputError::file(path, format!("header comment `{key} = {v}`: not a finite number"))
-                }),
+                Some(v) => v
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .map(Some)
+                    .ok_or_else(|| {
+                        InputError::file(
+                            path,
+                            format!("header comment `{key} = {v}`: not a finite number"),
+                        )
+                    }),
             }
         };
         let radius_mm = match opts.radius_mm {
@@ -262,7 +270,11 @@ mod tests {
 
     #[test]
     fn header_values_and_validation() {
-        let t = trace("# radius_mm = 150\n# plane = zx\n# feed_mm_min: 2000\n", &full(30)).unwrap();
+        let t = trace(
+            "# radius_mm = 150\n# plane = zx\n# feed_mm_min: 2000\n",
+            &full(30),
+        )
+        .unwrap();
         assert_eq!(t.radius_mm, 150.0);
         assert_eq!(t.plane, Plane::ZX);
         assert_eq!(t.feed_mm_min, Some(2000.0));
@@ -286,6 +298,6 @@ mod tests {
             }
         }
         let e = trace("# radius_mm = 100\n", &half).unwrap_err();
-        assert!(e.message.contains("gap of 170.0°"), "{e}");
+        assert!(e.message.contains("gap of 180.0°"), "{e}");
     }
 }
