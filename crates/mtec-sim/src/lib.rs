@@ -7,6 +7,8 @@
 //!
 //! What it is not for: analysis. Nothing here is used to identify or fit anything.
 
+pub mod circular_test;
+pub mod iso230_2;
 pub mod scenario;
 
 pub use scenario::{run_scenario, OutputFile, ScenarioOutput, SimError, SCENARIOS};

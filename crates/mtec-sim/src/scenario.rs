@@ -24,10 +24,26 @@ pub enum SimError {
 }
 
 /// The scenarios this build knows, with a one-line description each (shown by `mtec simulate --help`).
-pub const SCENARIOS: &[(&str, &str)] = &[];
+pub const SCENARIOS: &[(&str, &str)] = &[
+    ("iso230-2", "laser-interferometer positioning runs of one axis (ISO 230-2: 11 targets, 5 bidirectional runs)"),
+    ("circular-test", "ISO 230-4 ballbar circular test of X and Y with injected faults, and a fault-free run"),
+];
 
 /// Runs the named scenario with a seed.
 pub fn run_scenario(name: &str, seed: u64) -> Result<ScenarioOutput, SimError> {
-    let _ = seed;
-    Err(SimError::UnknownScenario(name.to_string()))
+    let (files, truth): (Vec<(String, String)>, serde_json::Value) = match name {
+        "iso230-2" => {
+            let (csv, truth) = crate::iso230_2::simulate(&Default::default(), seed);
+            (vec![("iso230-2.csv".into(), csv)], truth)
+        }
+        "circular-test" => crate::circular_test::scenario(seed),
+        _ => return Err(SimError::UnknownScenario(name.to_string())),
+    };
+    Ok(ScenarioOutput {
+        files: files
+            .into_iter()
+            .map(|(name, contents)| OutputFile { name, contents })
+            .collect(),
+        truth,
+    })
 }

@@ -44,6 +44,15 @@
 //! the current estimate and subtracted from the data, and the fit is repeated (a fixed-point
 //! iteration that converges in a few steps because the zone is short).
 //!
+//! ## Known limits
+//! - The model is first order in e/R. Servo lag is not: with lags τ₁ ≠ τ₂ the second-order terms
+//!   (the radial effect of the lag angle φᵢ = ωτᵢ and the square of the tangential lag Rφ over
+//!   2R) add −(3/4)R(φ₁² − φ₂²)·cos 2θ, which reads as a scale mismatch. It is not separable,
+//!   because it needs the absolute lags, which a ballbar cannot see. At R = 100 mm, 1000 mm/min,
+//!   τ = 16/14 ms it is −2.5 ppm (6 % of the 40 ppm injected in the `circular-test` scenario).
+//! - The reversal angles are the commanded ones: a servo lag moves the actual reversal by ωτ
+//!   (0.15° in the scenario), which leaves a few residual samples at each backlash step.
+//!
 //! ## Contributions and thresholds
 //! A fault's contribution to circularity is the peak-to-valley of its fitted pattern over both
 //! directions after removing the pattern's own least-squares circle (1, cos θ, sin θ): what it
