@@ -9,3 +9,5 @@ pub mod plot;
 
 pub use html::{Report, Section};
 pub use plot::{bar_chart, line_chart, scatter_chart, Band, Series};
+
+pub mod polar;
