@@ -3,6 +3,8 @@
 //!
 //! What it is not for: identifying or fitting errors; it takes an [`ErrorModel`] from elsewhere.
 
+pub mod correction;
 pub mod model;
 
+pub use correction::{command_for_target, CorrectionError, CorrectionOptions};
 pub use model::ErrorModel;
