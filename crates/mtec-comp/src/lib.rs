@@ -7,6 +7,7 @@ pub mod correction;
 pub mod load;
 pub mod map;
 pub mod model;
+pub mod table;
 
 pub use correction::{command_for_target, CorrectionError, CorrectionOptions};
 pub use load::load_error_model;
