@@ -259,27 +259,35 @@ impl GridMap {
             }
             index_of_row.push(ijk);
         }
+        // the stray value is the one seen in the smallest share of the rows it needs
+        let mut worst: Option<(f64, usize, usize, usize, usize)> = None; // (share, axis, node, count, need)
         for a in 0..3 {
             let need = n[0] * n[1] * n[2] / n[a];
             let mut count = vec![0usize; n[a]];
             for ijk in &index_of_row {
                 count[ijk[a]] += 1;
             }
-            if let Some(bad) = count.iter().position(|&c| c < need) {
-                let r = index_of_row
-                    .iter()
-                    .position(|ijk| ijk[a] == bad)
-                    .unwrap_or(0);
-                let row = &table.rows[r];
-                return Err(table.error_at(
-                    row,
-                    AXIS_NAMES[a],
-                    format!(
-                        "not a regular grid: `{}` = {} appears in {} row(s) but each grid value needs {} ({} distinct values of the other two coordinates)",
-                        AXIS_NAMES[a], axes[a][bad], count[bad], need, need
-                    ),
-                ));
+            for (node, &c) in count.iter().enumerate() {
+                let share = c as f64 / need as f64;
+                if c < need && worst.map_or(true, |w| share < w.0) {
+                    worst = Some((share, a, node, c, need));
+                }
             }
+        }
+        if let Some((_, a, bad, count, need)) = worst {
+            let r = index_of_row
+                .iter()
+                .position(|ijk| ijk[a] == bad)
+                .unwrap_or(0);
+            let row = &table.rows[r];
+            return Err(table.error_at(
+                row,
+                AXIS_NAMES[a],
+                format!(
+                    "not a regular grid: `{}` = {} appears in {count} row(s) but each grid value needs {need} (one per combination of the other two coordinates)",
+                    AXIS_NAMES[a], axes[a][bad]
+                ),
+            ));
         }
         // limits
         for a in 0..3 {

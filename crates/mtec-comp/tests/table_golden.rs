@@ -45,7 +45,10 @@ fn linuxcnc_type0_golden() {
 #[test]
 fn linuxcnc_checker_rules() {
     let err = table::linuxcnc::check("nominal fwd rev\n0 0 0\n").unwrap_err();
-    assert!(matches!(err, TableError::Constraint { line: Some(1), .. }), "{err}");
+    assert!(
+        matches!(err, TableError::Constraint { line: Some(1), .. }),
+        "{err}"
+    );
     let err = table::linuxcnc::check("0 0 0\n0 0 0\n").unwrap_err();
     assert!(err.to_string().contains("does not increase"), "{err}");
     let many: String = (0..257).map(|i| format!("{i} 0 0\n")).collect();
@@ -145,7 +148,10 @@ N10042P-2
         ..Default::default()
     };
     let text2 = table::fanuc::write(&p, &opts2).unwrap();
-    assert!(text2.contains("N03623A1P2\n") && text2.contains("N10041P-1\n"), "{text2}");
+    assert!(
+        text2.contains("N03623A1P2\n") && text2.contains("N10041P-1\n"),
+        "{text2}"
+    );
     // values beyond the range are refused
     let tight = table::fanuc::FanucOptions {
         reference_number: 40,
@@ -205,7 +211,11 @@ N10064P2
 fn heidenhain_golden() {
     let p = profile(Axis::Y, Axis::Z, -400.0, 400.0, 400.0);
     let t = table::heidenhain::write(&p, "ZY.COM", "CONFIG.CMA").unwrap();
-    let words: Vec<Vec<&str>> = t.com.lines().map(|l| l.split_whitespace().collect()).collect();
+    let words: Vec<Vec<&str>> = t
+        .com
+        .lines()
+        .map(|l| l.split_whitespace().collect())
+        .collect();
     assert_eq!(
         words,
         vec![
@@ -227,7 +237,9 @@ NR    X            Y            Z            ACTIVE
     );
     let long: String = format!(
         "BEGIN A.COM MM\nNR AXISPOS X\n{}[END]\n",
-        (0..257).map(|i| format!("{i} {i}.0 0\n")).collect::<String>()
+        (0..257)
+            .map(|i| format!("{i} {i}.0 0\n"))
+            .collect::<String>()
     );
     let err = table::heidenhain::check_com(&long).unwrap_err();
     assert!(err.to_string().contains("at most 256"), "{err}");
