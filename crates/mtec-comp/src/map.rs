@@ -24,7 +24,10 @@
 //!   its axis range: the controller behaviour, the error stays bounded); `extrapolate` continues
 //!   the edge cell's trilinear polynomial linearly (identical to SciPy's `fill_value=None`);
 //!   `refuse` returns [`OutsideGrid`] (and NaN through the [`ErrorModel`] trait, which correction
-//!   turns into a located error). A point within 1e-9 mm of the box counts as inside.
+//!   turns into a located error). A point within 1e-9 mm of the box counts as inside. Note that
+//!   correction evaluates the map at the corrected command, not at the target: with `refuse`, a
+//!   target on the edge of the grid whose command moves outside is refused; use `clamp` to
+//!   compensate up to the edges.
 //!
 //! Map JSON (`"format": "mtec.map/1"`): `model` (`"trilinear"`), `outside`, `source`, the axes
 //! `x_mm`, `y_mm`, `z_mm` (strictly increasing) and the values `ex_um`, `ey_um`, `ez_um` as flat
