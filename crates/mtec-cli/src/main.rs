@@ -15,6 +15,8 @@ geometric and thermal errors.
 The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
+  map           volumetric error maps: fit a grid (trilinear) and evaluate it at points
+  compensate    compensation: controller tables (`compensate table`) from an error model
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
 Every CSV column name carries its unit suffix (x_mm, ex_um, ...). Exit codes: 0 success,
@@ -33,13 +35,34 @@ enum Command {
     Simulate(cmd::simulate::Args),
     /// Volumetric error at commanded points (HTM or POE, exact or first-order).
     Volumetric(cmd::volumetric::Args),
+    /// Volumetric error maps: `map fit` (grid CSV -> map JSON), `map eval` (errors at points).
+    Map(cmd::map::Args),
+    /// Compensation from an error model: `compensate table` (controller tables).
+    Compensate(CompensateArgs),
+}
+
+#[derive(clap::Args)]
+struct CompensateArgs {
+    #[command(subcommand)]
+    command: CompensateCommand,
+}
+
+#[derive(Subcommand)]
+enum CompensateCommand {
+    /// Controller compensation tables (LinuxCNC, Siemens CEC/LEC, Fanuc, Heidenhain, Beckhoff).
+    #[command(long_about = cmd::compensate_table::HELP)]
+    Table(cmd::compensate_table::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
+    let result: Result<(), error::CliError> = match cli.command {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Volumetric(a) => cmd::volumetric::run(a),
+        Command::Map(a) => cmd::map::run(a),
+        Command::Compensate(c) => match c.command {
+            CompensateCommand::Table(a) => cmd::compensate_table::run(a),
+        },
     };
     error::exit(result)
 }

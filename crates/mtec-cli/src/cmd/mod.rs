@@ -2,3 +2,5 @@
 
 pub mod simulate;
 pub mod volumetric;
+pub mod compensate_table;
+pub mod map;
