@@ -3,6 +3,7 @@
 //!
 //! What it is not for: identifying or fitting errors; it takes an [`ErrorModel`] from elsewhere.
 
+pub mod gcode;
 pub mod model;
 
 pub use model::ErrorModel;
