@@ -14,6 +14,7 @@ geometric and thermal errors.
 The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
+  compensate gcode  rewrite an NC program so every commanded point is corrected
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
 Every CSV column name carries its unit suffix (x_mm, ex_um, ...). Exit codes: 0 success,
@@ -27,10 +28,22 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Compensation outputs: corrected NC programs, controller tables.
+    #[command(subcommand)]
+    Compensate(CompensateCommand),
+}
+
+#[derive(Subcommand)]
+enum CompensateCommand {
+    /// Rewrite an NC program (G-code) so the machine reaches the programmed points.
+    Gcode(cmd::compensate_gcode::Args),
+}
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result: Result<(), error::CliError> = match cli.command {};
+    let result: Result<(), error::CliError> = match cli.command {
+        Command::Compensate(CompensateCommand::Gcode(a)) => cmd::compensate_gcode::run(a),
+    };
     error::exit(result)
 }

@@ -57,6 +57,9 @@ pub struct RewriteOptions {
     pub offsets: Offsets,
     /// A single move split into more pieces than this is an error (a runaway model).
     pub max_pieces_per_move: usize,
+    /// Machine position (mm) at program start, when known (e.g. the home position; on a lathe
+    /// the Y position that programs never state). `None`: unknown until programmed.
+    pub start_position_mm: Option<[f64; 3]>,
 }
 
 impl Default for RewriteOptions {
@@ -72,6 +75,7 @@ impl Default for RewriteOptions {
             default_units: Units::Mm,
             offsets: Offsets::default(),
             max_pieces_per_move: 1_000_000,
+            start_position_mm: None,
         }
     }
 }
@@ -234,6 +238,8 @@ struct Rewriter<'a> {
     seen_content: bool,
     /// The current line writes its letters in lower case (new words follow it).
     lower: bool,
+    /// The motion of the current block was written (by `emit_pieces` or as an uncorrected rapid).
+    emitted: bool,
 }
 
 /// A target point with the correction to apply there.
@@ -245,8 +251,8 @@ impl<'a> Rewriter<'a> {
             model,
             opt,
             st: State {
-                prog: [None; 3],
-                out: [None; 3],
+                prog: opt.start_position_mm.map(|p| p.map(Some)).unwrap_or([None; 3]),
+                out: opt.start_position_mm.map(|p| p.map(Some)).unwrap_or([None; 3]),
                 units: Some(opt.default_units),
                 absolute: Some(true),
                 arc_absolute: Some(false),
@@ -270,6 +276,7 @@ impl<'a> Rewriter<'a> {
             tape_ended: false,
             seen_content: false,
             lower: false,
+            emitted: false,
         }
     }
 
@@ -462,8 +469,19 @@ impl<'a> Rewriter<'a> {
                 | 940 | 950 | 960 | 970 | 980 | 990 | 281 | 301 => {}
                 530 => g53 = true,
                 280 | 300 => axis_consumer = Some(code),
-                410 | 411 | 420 | 421 => {} // tracked: cutter compensation makes moves unsupported
-                930 => {}                   // tracked: inverse time makes moves unsupported
+                410 | 411 | 420 | 421 => issues.push(Issue {
+                    token: Some(tok),
+                    message: format!(
+                        "{}: cutter radius compensation offsets the path in the controller; compensate the offset path instead",
+                        g_name(code)
+                    ),
+                    poisons_all: false,
+                }),
+                930 => issues.push(Issue {
+                    token: Some(tok),
+                    message: "G93 inverse-time feed: splitting a move would change its duration".into(),
+                    poisons_all: false,
+                }),
                 100 | 920 | 921 | 922 | 923 | 520 => {
                     axis_consumer = Some(code);
                     issues.push(Issue {
@@ -694,7 +712,13 @@ impl<'a> Rewriter<'a> {
         }
 
         if let Some(m) = motion {
-            self.motion_block(b, body, m, motion_word.map(|(_, t)| t), g53)?;
+            self.emitted = false;
+            let motion_tok = motion_word.map(|(_, t)| t);
+            self.motion_block(b, body, m, motion_tok, g53)?;
+            if !self.emitted {
+                // copied without compensation: it must still move in the program's mode
+                self.restore_motion_word(b, m, motion_tok.is_none());
+            }
         } else if motion_word.is_some() {
             self.st.out_motion = self.st.motion;
         }
@@ -809,6 +833,7 @@ impl<'a> Rewriter<'a> {
                     }
                 }
                 self.restore_motion_word(b, m, uses_modal);
+                self.emitted = true;
                 return Ok(());
             }
             let missing = (0..3)
@@ -1120,6 +1145,7 @@ impl<'a> Rewriter<'a> {
         linearised: bool,
     ) -> Result<(), GcodeError> {
         let _ = body;
+        self.emitted = true;
         let lower = self.lower(b);
         let sep = self.sep_for(b);
         let decimals = self.decimals();
