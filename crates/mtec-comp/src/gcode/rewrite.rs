@@ -439,7 +439,7 @@ impl<'a> Rewriter<'a> {
 
         if b.block_delete {
             let meaningful = !b.g.is_empty()
-                || !b.m.is_empty()
+                || b.m.iter().any(|(m, _)| matches!(m, 2 | 6 | 30 | 98 | 99))
                 || has_axis
                 || [b'T', b'H', b'I', b'J', b'K', b'R', b'P']
                     .iter()
