@@ -16,7 +16,8 @@ The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
   map           volumetric error maps: fit a grid (trilinear) and evaluate it at points
-  compensate    compensation: controller tables (`compensate table`) from an error model
+  compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
+                (`compensate table`)
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
 Every CSV column name carries its unit suffix (x_mm, ex_um, ...). Exit codes: 0 success,
@@ -37,18 +38,15 @@ enum Command {
     Volumetric(cmd::volumetric::Args),
     /// Volumetric error maps: `map fit` (grid CSV -> map JSON), `map eval` (errors at points).
     Map(cmd::map::Args),
-    /// Compensation from an error model: `compensate table` (controller tables).
-    Compensate(CompensateArgs),
-}
-
-#[derive(clap::Args)]
-struct CompensateArgs {
+    /// Compensation outputs: corrected NC programs, controller tables.
     #[command(subcommand)]
-    command: CompensateCommand,
+    Compensate(CompensateCommand),
 }
 
 #[derive(Subcommand)]
 enum CompensateCommand {
+    /// Rewrite an NC program (G-code) so the machine reaches the programmed points.
+    Gcode(cmd::compensate_gcode::Args),
     /// Controller compensation tables (LinuxCNC, Siemens CEC/LEC, Fanuc, Heidenhain, Beckhoff).
     #[command(long_about = cmd::compensate_table::HELP)]
     Table(cmd::compensate_table::Args),
@@ -60,9 +58,8 @@ fn main() -> ExitCode {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Volumetric(a) => cmd::volumetric::run(a),
         Command::Map(a) => cmd::map::run(a),
-        Command::Compensate(c) => match c.command {
-            CompensateCommand::Table(a) => cmd::compensate_table::run(a),
-        },
+        Command::Compensate(CompensateCommand::Gcode(a)) => cmd::compensate_gcode::run(a),
+        Command::Compensate(CompensateCommand::Table(a)) => cmd::compensate_table::run(a),
     };
     error::exit(result)
 }

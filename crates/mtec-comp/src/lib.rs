@@ -12,6 +12,7 @@
 //! What it is not for: identifying or fitting errors; it takes an [`ErrorModel`] from elsewhere.
 
 pub mod correction;
+pub mod gcode;
 pub mod load;
 pub mod map;
 pub mod model;
