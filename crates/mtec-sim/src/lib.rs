@@ -7,7 +7,9 @@
 //!
 //! What it is not for: analysis. Nothing here is used to identify or fit anything.
 
+pub mod feed_axis_ambient;
 pub mod scenario;
+pub mod spindle_sensors;
 pub mod thermal_network;
 
 pub use scenario::{run_scenario, OutputFile, ScenarioOutput, SimError, SCENARIOS};

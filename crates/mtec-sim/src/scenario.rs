@@ -24,10 +24,16 @@ pub enum SimError {
 }
 
 /// The scenarios this build knows, with a one-line description each (shown by `mtec simulate --help`).
-pub const SCENARIOS: &[(&str, &str)] = &[];
+pub const SCENARIOS: &[(&str, &str)] = &[
+    ("spindle-sensors", "8 collinear spindle temperature sensors and the radial drift (ridge-trace sensor selection)"),
+    ("feed-axis-ambient", "Z-axis thermal error along the axis at ambient 15/20/25/30 C (exp-ambient model)"),
+];
 
 /// Runs the named scenario with a seed.
 pub fn run_scenario(name: &str, seed: u64) -> Result<ScenarioOutput, SimError> {
-    let _ = seed;
-    Err(SimError::UnknownScenario(name.to_string()))
+    match name {
+        "spindle-sensors" => crate::spindle_sensors::run(seed),
+        "feed-axis-ambient" => crate::feed_axis_ambient::run(seed),
+        _ => Err(SimError::UnknownScenario(name.to_string())),
+    }
 }

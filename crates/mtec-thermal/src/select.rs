@@ -4,10 +4,12 @@
 //! mtec makes each reading a rule with a number, applied to the standardised coefficients
 //! β*_j(k) on the trace grid (k₀ = 0 and 99 values log-spaced from 10⁻⁴ to 1):
 //!
-//! - **chosen k** (where the coefficients stabilise): let c_i be the largest change of any
-//!   coefficient between grid points i and i+1, relative to the largest coefficient at i+1. After
-//!   the step where c_i peaks (the collinear directions being damped), k is the first grid value
-//!   with c_i < `stable_step` (1 % per grid step, i.e. per 10 % change of k).
+//! - **chosen k** (where the coefficients stabilise): let c_i be the angle between the
+//!   coefficient vectors β*(k_i) and β*(k_{i+1}) — the trace turning, not shrinking (ridge
+//!   shrinks every coefficient as k grows; instability is coefficients trading weight and
+//!   changing sign). After the step where c_i peaks (the collinear directions being damped), k is
+//!   the first grid value with c_i < `stable_step` (0.01 rad per grid step, i.e. per 10 % change
+//!   of k); when the trace never turns faster than that, k is the smallest k > 0 on the grid.
 //! - S = max_j |β*_j(k*)| is the scale; coefficient j is **small** when |β*_j(k*)| < `small`·S
 //!   (0.15) and **unstable** when its swing over k ≤ k*, max − min of β*_j, exceeds
 //!   `unstable`·S (0.5).
@@ -90,23 +92,25 @@ impl RidgeTrace {
     /// The k where the coefficients stabilise (module docs) and its grid index.
     pub fn stable_k(&self, stable_step: f64) -> (usize, f64) {
         let m = self.k.len();
+        // c_i: angle (rad) between β*(k_i) and β*(k_{i+1}); pure shrinkage does not turn it
         let c: Vec<f64> = (0..m - 1)
             .map(|i| {
                 let a = &self.coefficients[i];
                 let b = &self.coefficients[i + 1];
-                let scale = b.iter().fold(0.0_f64, |s, v| s.max(v.abs())).max(1e-300);
-                a.iter()
-                    .zip(b)
-                    .fold(0.0_f64, |s, (x, y)| s.max((x - y).abs()))
-                    / scale
+                let na = a.iter().map(|v| v * v).sum::<f64>().sqrt();
+                let nb = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+                let cos = a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>() / (na * nb).max(1e-300);
+                cos.clamp(-1.0, 1.0).acos()
             })
             .collect();
         let peak = (0..c.len())
             .max_by(|&i, &j| c[i].total_cmp(&c[j]))
             .unwrap_or(0);
+        if c[peak] < stable_step {
+            return (1, self.k[1]);
+        }
         let idx = (peak + 1..c.len())
             .find(|&i| c[i] < stable_step)
-            .map(|i| i + 1)
             .unwrap_or(m - 1);
         (idx, self.k[idx])
     }
