@@ -14,6 +14,7 @@ geometric and thermal errors.
 The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
+  thermal       thermal drift models from temperature logs: select sensors, fit, predict
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
 Every CSV column name carries its unit suffix (x_mm, ex_um, ...). Exit codes: 0 success,
@@ -27,10 +28,15 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Thermal error models: ridge-trace sensor selection, MLR/ridge/exp-ambient fit, predict.
+    Thermal(cmd::thermal::Args),
+}
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result: Result<(), error::CliError> = match cli.command {};
+    let result: Result<(), error::CliError> = match cli.command {
+        Command::Thermal(a) => cmd::thermal::run(a),
+    };
     error::exit(result)
 }

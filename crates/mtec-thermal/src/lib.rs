@@ -18,9 +18,11 @@ pub mod data;
 pub mod error;
 pub mod exp_ambient;
 pub mod features;
+pub mod lag_select;
 pub mod linear;
 pub mod metrics;
 pub mod model;
+pub mod plot;
 pub mod select;
 pub mod validate;
 
@@ -28,6 +30,7 @@ pub use data::ThermalData;
 pub use error::ThermalError;
 pub use exp_ambient::ExpAmbientModel;
 pub use features::Feature;
+pub use lag_select::LagSelect;
 pub use metrics::Metrics;
 pub use model::{
     ExpAmbient, Fit, LinearModel, Mlr, ModelFile, Predict, Ridge, RidgeSelect, ThermalModel,

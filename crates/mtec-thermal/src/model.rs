@@ -46,6 +46,7 @@ pub enum LinearMethod {
     Mlr,
     Ridge,
     RidgeSelect,
+    LagSelect,
 }
 
 /// Standardisation kept with a ridge model (its standardised equation is in these units).

@@ -33,7 +33,8 @@ pub fn split_at_time(data: &ThermalData, until_min: f64) -> (Vec<usize>, Vec<usi
 }
 
 /// Consecutive time blocks of `block_min` minutes from the start of the record (for a duty cycle
-/// of run/rest periods, a block is one run followed by its rest).
+/// of run/rest periods, a block is one run followed by its rest). A trailing block shorter than
+/// half a block joins the one before it (too short to validate on its own).
 pub fn time_blocks(data: &ThermalData, block_min: f64) -> Vec<Vec<usize>> {
     let t0 = data.time_min.first().copied().unwrap_or(0.0);
     let mut blocks: Vec<Vec<usize>> = Vec::new();
@@ -45,6 +46,16 @@ pub fn time_blocks(data: &ThermalData, block_min: f64) -> Vec<Vec<usize>> {
         blocks[b].push(i);
     }
     blocks.retain(|b| !b.is_empty());
+    if blocks.len() >= 2 {
+        let last = &blocks[blocks.len() - 1];
+        let span = data.time_min[last[last.len() - 1]] - data.time_min[last[0]];
+        if span < 0.5 * block_min {
+            let tail = blocks.pop().unwrap_or_default();
+            if let Some(prev) = blocks.last_mut() {
+                prev.extend(tail);
+            }
+        }
+    }
     blocks
 }
 
