@@ -22,17 +22,23 @@ use std::path::PathBuf;
 const BLOCK_MIN: f64 = 240.0;
 
 fn main() {
-    let path = std::env::args().nth(1).map(PathBuf::from).unwrap_or_else(|| {
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/fl-thermal/train_1min.csv")
-    });
+    let path = std::env::args()
+        .nth(1)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("../../examples/fl-thermal/train_1min.csv")
+        });
     let table = Table::read(&path).expect("readable file");
-    let sel = |d: &ThermalData| LagSelect {
-        block_min: Some(BLOCK_MIN),
-        max_sensors: 3,
-        ..Default::default()
-    }
-    .fit(d)
-    .expect("selection");
+    let sel = |d: &ThermalData| {
+        LagSelect {
+            block_min: Some(BLOCK_MIN),
+            max_sensors: 3,
+            ..Default::default()
+        }
+        .fit(d)
+        .expect("selection")
+    };
     let mut rows: Vec<(String, Vec<f64>)> = vec![
         ("MLR all 16 sensors".into(), vec![]),
         ("ridge-select".into(), vec![]),
@@ -44,9 +50,20 @@ fn main() {
         let d = ThermalData::from_table(&table, Some(&format!("ch{ch}_um")), true).unwrap();
         rows[0].1.push(cv(&Mlr::default(), &d));
         rows[1].1.push(cv(&RidgeSelect::default(), &d));
-        rows[2].1.push(cv(&LagSelect { block_min: Some(BLOCK_MIN), ..Default::default() }, &d));
+        rows[2].1.push(cv(
+            &LagSelect {
+                block_min: Some(BLOCK_MIN),
+                ..Default::default()
+            },
+            &d,
+        ));
         let m = sel(&d);
-        rows[3].1.push(cv(&OlsOnFeatures { features: m.features.clone() }, &d));
+        rows[3].1.push(cv(
+            &OlsOnFeatures {
+                features: m.features.clone(),
+            },
+            &d,
+        ));
         structures.push((ch, m.features.iter().map(|f| f.name()).collect::<Vec<_>>()));
     }
     println!("leave-one-block-out RMSE (um), 8 blocks of {BLOCK_MIN} min");

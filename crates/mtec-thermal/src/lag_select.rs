@@ -76,7 +76,10 @@ fn block_score(x: &DMatrix<f64>, y: &[f64], labels: &[usize]) -> f64 {
             return f64::INFINITY;
         };
         for &i in &te {
-            let f = fit.intercept + (0..x.ncols()).map(|j| fit.coefficients[j] * x[(i, j)]).sum::<f64>();
+            let f = fit.intercept
+                + (0..x.ncols())
+                    .map(|j| fit.coefficients[j] * x[(i, j)])
+                    .sum::<f64>();
             sse += (y[i] - f).powi(2);
             n += 1;
         }
@@ -93,7 +96,10 @@ impl Fit for LagSelect {
         let candidates: Vec<usize> = if self.sensors.is_empty() {
             (0..data.sensor_names.len()).collect()
         } else {
-            self.sensors.iter().map(|s| data.sensor_index(s)).collect::<Result<_, _>>()?
+            self.sensors
+                .iter()
+                .map(|s| data.sensor_index(s))
+                .collect::<Result<_, _>>()?
         };
         let taus = tau_grid();
         let pick = |v: Vec<f64>| -> Vec<f64> { rows.iter().map(|&i| v[i]).collect() };
@@ -107,13 +113,22 @@ impl Fit for LagSelect {
                 let name = data.sensor_names[j].clone();
                 let t = data.sensor(j);
                 let tcol = pick(t.clone());
-                let mut options: Vec<(Vec<Feature>, Vec<Vec<f64>>)> =
-                    vec![(vec![Feature::Temp { sensor: name.clone() }], vec![tcol.clone()])];
+                let mut options: Vec<(Vec<Feature>, Vec<Vec<f64>>)> = vec![(
+                    vec![Feature::Temp {
+                        sensor: name.clone(),
+                    }],
+                    vec![tcol.clone()],
+                )];
                 for &tau in &taus {
                     options.push((
                         vec![
-                            Feature::Temp { sensor: name.clone() },
-                            Feature::Lag { sensor: name.clone(), tau_min: tau },
+                            Feature::Temp {
+                                sensor: name.clone(),
+                            },
+                            Feature::Lag {
+                                sensor: name.clone(),
+                                tau_min: tau,
+                            },
                         ],
                         vec![tcol.clone(), pick(lag_filter(data, &t, tau))],
                     ));
@@ -127,7 +142,9 @@ impl Fit for LagSelect {
                     }
                 }
             }
-            let Some((s, feats, new_cols, j)) = best else { break };
+            let Some((s, feats, new_cols, j)) = best else {
+                break;
+            };
             if !(s < 0.98 * best_score) {
                 break;
             }
@@ -138,7 +155,8 @@ impl Fit for LagSelect {
         }
         if chosen.is_empty() {
             return Err(ThermalError::Undetermined(
-                "lag selection needs at least two validation blocks (experiments or --block-min)".into(),
+                "lag selection needs at least two validation blocks (experiments or --block-min)"
+                    .into(),
             ));
         }
         let x = design(data, &chosen)?.select_rows(rows.iter());

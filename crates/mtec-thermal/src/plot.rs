@@ -17,14 +17,22 @@ pub fn ridge_trace_svg(trace: &RidgeTrace, chosen_k: f64) -> Result<String, Stri
             .filter(|(_, k)| **k > 0.0)
             .map(|(i, k)| (i, *k))
             .collect();
-        let (kmin, kmax) = (pts.first().map(|p| p.1).unwrap_or(1e-4), pts.last().map(|p| p.1).unwrap_or(1.0));
-        let (lo, hi) = pts.iter().flat_map(|(i, _)| trace.coefficients[*i].iter()).fold(
-            (f64::INFINITY, f64::NEG_INFINITY),
-            |(l, h), v| (l.min(*v), h.max(*v)),
+        let (kmin, kmax) = (
+            pts.first().map(|p| p.1).unwrap_or(1e-4),
+            pts.last().map(|p| p.1).unwrap_or(1.0),
         );
+        let (lo, hi) = pts
+            .iter()
+            .flat_map(|(i, _)| trace.coefficients[*i].iter())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                (l.min(*v), h.max(*v))
+            });
         let pad = 0.05 * (hi - lo).max(1e-9);
         let mut chart = ChartBuilder::on(&root)
-            .caption("Ridge trace (standardised coefficients)", ("sans-serif", 20))
+            .caption(
+                "Ridge trace (standardised coefficients)",
+                ("sans-serif", 20),
+            )
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(60)
@@ -46,7 +54,9 @@ pub fn ridge_trace_svg(trace: &RidgeTrace, chosen_k: f64) -> Result<String, Stri
                 ))
                 .map_err(|e| e.to_string())?
                 .label(name.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                });
         }
         chart
             .draw_series(LineSeries::new(

@@ -4,28 +4,39 @@
 
 use mtec_io::Table;
 use mtec_thermal::linear::{ols, vif, RidgeProblem};
-use mtec_thermal::{Metrics, Mlr, Predict, Fit, ThermalData};
+use mtec_thermal::{Fit, Metrics, Mlr, Predict, ThermalData};
 use serde_json::Value;
 use std::path::PathBuf;
 
 fn fixture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name)
 }
 
 fn load() -> (ThermalData, Value) {
     let t = Table::read(&fixture("collinear.csv")).unwrap();
     let d = ThermalData::from_table(&t, Some("drift_um"), true).unwrap();
-    let r: Value = serde_json::from_str(&std::fs::read_to_string(fixture("reference.json")).unwrap()).unwrap();
+    let r: Value =
+        serde_json::from_str(&std::fs::read_to_string(fixture("reference.json")).unwrap()).unwrap();
     (d, r)
 }
 
 fn close(a: f64, b: f64, what: &str) {
     let tol = 1e-8 * b.abs().max(1.0);
-    assert!((a - b).abs() <= tol, "{what}: mtec {a} vs reference {b} (diff {:e})", (a - b).abs());
+    assert!(
+        (a - b).abs() <= tol,
+        "{what}: mtec {a} vs reference {b} (diff {:e})",
+        (a - b).abs()
+    );
 }
 
 fn nums(v: &Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }
 
 #[test]
@@ -44,12 +55,28 @@ fn mlr_equals_statsmodels_ols() {
     let model = Mlr::default().fit(&d).unwrap();
     let m: Metrics = model.evaluate(&d).unwrap();
     close(m.r2.unwrap(), r["ols"]["rsquared"].as_f64().unwrap(), "R2");
-    close(m.adj_r2.unwrap(), r["ols"]["rsquared_adj"].as_f64().unwrap(), "adjusted R2");
-    close(m.f_statistic.unwrap(), r["ols"]["fvalue"].as_f64().unwrap(), "F");
+    close(
+        m.adj_r2.unwrap(),
+        r["ols"]["rsquared_adj"].as_f64().unwrap(),
+        "adjusted R2",
+    );
+    close(
+        m.f_statistic.unwrap(),
+        r["ols"]["fvalue"].as_f64().unwrap(),
+        "F",
+    );
     close(m.sse_um2, r["ols"]["ssr"].as_f64().unwrap(), "SSE");
-    close(m.mse_um2.unwrap(), r["ols"]["mse_resid"].as_f64().unwrap(), "MSE");
+    close(
+        m.mse_um2.unwrap(),
+        r["ols"]["mse_resid"].as_f64().unwrap(),
+        "MSE",
+    );
     let p = r["ols"]["f_pvalue"].as_f64().unwrap();
-    assert!((m.f_pvalue.unwrap() - p).abs() <= 1e-8 * p.max(1e-300) + 1e-300, "{} vs {p}", m.f_pvalue.unwrap());
+    assert!(
+        (m.f_pvalue.unwrap() - p).abs() <= 1e-8 * p.max(1e-300) + 1e-300,
+        "{} vs {p}",
+        m.f_pvalue.unwrap()
+    );
 }
 
 #[test]
@@ -74,7 +101,11 @@ fn ridge_equals_scikit_learn() {
             close(*a, b, &format!("standardised coefficient at k={k}"));
         }
         let (b0, b) = prob.destandardise(&beta);
-        close(b0, case["intercept"].as_f64().unwrap(), &format!("intercept at k={k}"));
+        close(
+            b0,
+            case["intercept"].as_f64().unwrap(),
+            &format!("intercept at k={k}"),
+        );
         for (a, c) in b.iter().zip(nums(&case["coefficients"])) {
             close(*a, c, &format!("coefficient at k={k}"));
         }

@@ -29,7 +29,11 @@ fn rmse_on(model: &impl Predict, data: &ThermalData, rows: &[usize]) -> f64 {
 /// ≈ full (R²), better F; the simple-correlation model worse.
 #[test]
 fn spindle_sensors_ridge_selection() {
-    let data = scenario_data("spindle-sensors", 1, "radial_um");
+    let seed: u64 = std::env::var("SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1);
+    let data = scenario_data("spindle-sensors", seed, "radial_um");
     let train = rows_of_experiments(&data, &["1".into()]).unwrap();
     let test = rows_of_experiments(&data, &["2".into()]).unwrap();
     let tr = data.rows(&train);
@@ -83,7 +87,11 @@ fn spindle_sensors_ridge_selection() {
 /// Trained on three ambient levels, the exp-ambient model predicts the fourth within 2 µm RMS.
 #[test]
 fn feed_axis_ambient_predicts_unseen_ambient() {
-    let data = scenario_data("feed-axis-ambient", 1, "ez_um");
+    let seed: u64 = std::env::var("SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1);
+    let data = scenario_data("feed-axis-ambient", seed, "ez_um");
     for held in ["3", "4", "2"] {
         let train_exps: Vec<String> = ["1", "2", "3", "4"]
             .iter()

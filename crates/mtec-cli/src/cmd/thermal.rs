@@ -7,8 +7,8 @@ use mtec_thermal::select::{select_sensors, SelectOptions, Selection};
 use mtec_thermal::validate::{block_cv, rows_of_experiments, split_at_time, time_blocks};
 use mtec_thermal::{
     features::{design, temp_features},
-    ExpAmbient, Fit, LagSelect, Metrics, Mlr, Predict, Ridge, RidgeSelect, ThermalData, ThermalError,
-    MODEL_FORMAT,
+    ExpAmbient, Fit, LagSelect, Metrics, Mlr, Predict, Ridge, RidgeSelect, ThermalData,
+    ThermalError, MODEL_FORMAT,
 };
 use std::path::{Path, PathBuf};
 
@@ -220,27 +220,39 @@ fn select(a: SelectArgs) -> Result<(), CliError> {
         guard.write(&dir.join("ridge_trace.svg"), svg.as_bytes())?;
         guard.write(
             &dir.join("selection.json"),
-            serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?.as_bytes(),
+            serde_json::to_string_pretty(&doc)
+                .map_err(|e| CliError::Internal(e.into()))?
+                .as_bytes(),
         )?;
     }
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?
+        );
     } else {
         print_selection(&sel, data.target_name().unwrap_or_default());
         if let Some(dir) = out_dir {
-            println!("\nwrote {}/ridge_trace.csv, ridge_trace.svg, selection.json", dir.display());
+            println!(
+                "\nwrote {}/ridge_trace.csv, ridge_trace.svg, selection.json",
+                dir.display()
+            );
         }
     }
     Ok(())
 }
 
 fn default_out(data: &Path, what: &str) -> PathBuf {
-    let stem = data.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
+    let stem = data
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
     data.with_file_name(format!("{stem}-{what}"))
 }
 
 fn fmt_opt(v: Option<f64>, prec: usize) -> String {
-    v.map(|x| format!("{x:.prec$}")).unwrap_or_else(|| "-".into())
+    v.map(|x| format!("{x:.prec$}"))
+        .unwrap_or_else(|| "-".into())
 }
 
 fn print_selection(sel: &Selection, target: &str) {
@@ -249,7 +261,9 @@ fn print_selection(sel: &Selection, target: &str) {
         println!(
             "  {:<16} {:>12} {}",
             v.sensor,
-            v.vif.map(|x| format!("{x:.1}")).unwrap_or_else(|| "inf".into()),
+            v.vif
+                .map(|x| format!("{x:.1}"))
+                .unwrap_or_else(|| "inf".into()),
             if v.severe { "severe" } else { "" }
         );
     }
@@ -264,21 +278,32 @@ fn print_selection(sel: &Selection, target: &str) {
             s.remaining.join(",")
         );
     }
-    println!("\nSelected sensors: {}   chosen k = {:.4}", sel.selected.join(", "), sel.k);
+    println!(
+        "\nSelected sensors: {}   chosen k = {:.4}",
+        sel.selected.join(", "),
+        sel.k
+    );
     let std_eq: Vec<String> = sel
         .selected
         .iter()
         .zip(&sel.standardised_coefficients)
         .map(|(s, b)| format!("{b:+.4}·z({s})"))
         .collect();
-    println!("Standardised equation:    z({target}) = {}", std_eq.join(" "));
+    println!(
+        "Standardised equation:    z({target}) = {}",
+        std_eq.join(" ")
+    );
     let eq: Vec<String> = sel
         .selected
         .iter()
         .zip(&sel.coefficients)
         .map(|(s, b)| format!("{b:+.4}·{s}"))
         .collect();
-    println!("De-standardised equation: {target} = {:.4} {}", sel.intercept_um, eq.join(" "));
+    println!(
+        "De-standardised equation: {target} = {:.4} {}",
+        sel.intercept_um,
+        eq.join(" ")
+    );
     println!("\nComparison");
     println!(
         "  {:<34} {:>3} {:>8} {:>10} {:>12} {:>10} {:>12}",
@@ -302,18 +327,35 @@ fn print_selection(sel: &Selection, target: &str) {
 fn fit_model(c: &Common, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
     Ok(match c.model {
         ModelKind::Mlr => ThermalModel::Linear(
-            Mlr { sensors: c.sensors.clone(), lag: c.lag }.fit_rows(data, rows)?,
+            Mlr {
+                sensors: c.sensors.clone(),
+                lag: c.lag,
+            }
+            .fit_rows(data, rows)?,
         ),
         ModelKind::Ridge => ThermalModel::Linear(
-            Ridge { sensors: c.sensors.clone(), k: c.k, lag: c.lag }.fit_rows(data, rows)?,
+            Ridge {
+                sensors: c.sensors.clone(),
+                k: c.k,
+                lag: c.lag,
+            }
+            .fit_rows(data, rows)?,
         ),
         ModelKind::RidgeSelect => ThermalModel::Linear(
-            RidgeSelect { sensors: c.sensors.clone(), options: SelectOptions::default(), lag: c.lag }
-                .fit_rows(data, rows)?,
+            RidgeSelect {
+                sensors: c.sensors.clone(),
+                options: SelectOptions::default(),
+                lag: c.lag,
+            }
+            .fit_rows(data, rows)?,
         ),
         ModelKind::LagSelect => ThermalModel::Linear(
-            LagSelect { sensors: c.sensors.clone(), max_sensors: c.max_sensors, block_min: c.block_min }
-                .fit_rows(data, rows)?,
+            LagSelect {
+                sensors: c.sensors.clone(),
+                max_sensors: c.max_sensors,
+                block_min: c.block_min,
+            }
+            .fit_rows(data, rows)?,
         ),
         ModelKind::ExpAmbient => {
             let [up, nut] = c.sensors.as_slice() else {
@@ -322,7 +364,11 @@ fn fit_model(c: &Common, data: &ThermalData, rows: &[usize]) -> Result<ThermalMo
                 ));
             };
             ThermalModel::ExpAmbient(
-                ExpAmbient { up_sensor: up.clone(), nut_sensor: nut.clone() }.fit_rows(data, rows)?,
+                ExpAmbient {
+                    up_sensor: up.clone(),
+                    nut_sensor: nut.clone(),
+                }
+                .fit_rows(data, rows)?,
             )
         }
     })
@@ -331,24 +377,35 @@ fn fit_model(c: &Common, data: &ThermalData, rows: &[usize]) -> Result<ThermalMo
 fn check_common(c: &Common) -> Result<(), CliError> {
     if let Some(b) = c.block_min {
         if !(b > 0.0 && b.is_finite()) {
-            return Err(CliError::usage("--block-min must be a number of minutes > 0"));
+            return Err(CliError::usage(
+                "--block-min must be a number of minutes > 0",
+            ));
         }
     }
     if c.model == ModelKind::LagSelect && c.max_sensors == 0 {
         return Err(CliError::usage("--max-sensors must be at least 1"));
     }
     if c.model == ModelKind::ExpAmbient && c.lag {
-        return Err(CliError::usage("--lag applies to the linear models, not exp-ambient"));
+        return Err(CliError::usage(
+            "--lag applies to the linear models, not exp-ambient",
+        ));
     }
     if let Some(k) = c.k {
         if !(k >= 0.0 && k.is_finite()) || c.model != ModelKind::Ridge {
-            return Err(CliError::usage("--k must be a number ≥ 0 and goes with --model ridge"));
+            return Err(CliError::usage(
+                "--k must be a number ≥ 0 and goes with --model ridge",
+            ));
         }
     }
     Ok(())
 }
 
-fn metrics_on(model: &ThermalModel, data: &ThermalData, rows: &[usize], pred: &[f64]) -> Result<Metrics, ThermalError> {
+fn metrics_on(
+    model: &ThermalModel,
+    data: &ThermalData,
+    rows: &[usize],
+    pred: &[f64],
+) -> Result<Metrics, ThermalError> {
     let y = data.target_um()?;
     let yt: Vec<f64> = rows.iter().map(|&i| y[i]).collect();
     let pt: Vec<f64> = rows.iter().map(|&i| pred[i]).collect();
@@ -362,7 +419,10 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
     let all: Vec<usize> = (0..data.len()).collect();
     let (train, test, split) = if let Some(t) = a.train_until {
         let (tr, te) = split_at_time(&data, t);
-        let s = Split { train_until_min: Some(t), ..Default::default() };
+        let s = Split {
+            train_until_min: Some(t),
+            ..Default::default()
+        };
         (tr, te, s)
     } else if !a.train.is_empty() {
         let tr = rows_of_experiments(&data, &a.train).map_err(err)?;
@@ -372,11 +432,18 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
             rows_of_experiments(&data, &a.test).map_err(err)?
         };
         let test_exps = if a.test.is_empty() {
-            data.experiments().into_iter().filter(|e| !a.train.contains(e)).collect()
+            data.experiments()
+                .into_iter()
+                .filter(|e| !a.train.contains(e))
+                .collect()
         } else {
             a.test.clone()
         };
-        let s = Split { train_experiments: a.train.clone(), test_experiments: test_exps, ..Default::default() };
+        let s = Split {
+            train_experiments: a.train.clone(),
+            test_experiments: test_exps,
+            ..Default::default()
+        };
         (tr, te, s)
     } else if !a.test.is_empty() {
         return Err(CliError::usage("--test needs --train"));
@@ -431,9 +498,13 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
 
 fn predict(a: PredictArgs) -> Result<(), CliError> {
     let file: ModelFile = mtec_io::read_json(&a.model)?;
-    file.check_format().map_err(|e| CliError::Input(InputError::file(&a.model, e.to_string())))?;
+    file.check_format()
+        .map_err(|e| CliError::Input(InputError::file(&a.model, e.to_string())))?;
     let data = load(&a.data, Some(&file.target), false)?;
-    let pred = file.model.predict(&data).map_err(|e| located(&data, &a.data, e))?;
+    let pred = file
+        .model
+        .predict(&data)
+        .map_err(|e| located(&data, &a.data, e))?;
     let metrics = match data.target_um() {
         Ok(y) => Some(Metrics::new(y, &pred, file.model.predictors())),
         Err(_) => None,
@@ -451,7 +522,10 @@ fn predict(a: PredictArgs) -> Result<(), CliError> {
             doc["max_abs_residual_um"] = m.max_abs_residual_um.into();
             doc["metrics"] = serde_json::to_value(m).map_err(|e| CliError::Internal(e.into()))?;
         }
-        println!("{}", serde_json::to_string(&doc).map_err(|e| CliError::Internal(e.into()))?);
+        println!(
+            "{}",
+            serde_json::to_string(&doc).map_err(|e| CliError::Internal(e.into()))?
+        );
     }
     if a.output.is_some() || !a.json {
         let y = data.target_um().ok();
@@ -461,7 +535,10 @@ fn predict(a: PredictArgs) -> Result<(), CliError> {
         }
         csv.push('\n');
         for i in 0..pred.len() {
-            csv.push_str(&format!("{},{},{:.4}", data.experiment[i], data.time_min[i], pred[i]));
+            csv.push_str(&format!(
+                "{},{},{:.4}",
+                data.experiment[i], data.time_min[i], pred[i]
+            ));
             if let Some(y) = y {
                 csv.push_str(&format!(",{:.4},{:.4}", y[i], y[i] - pred[i]));
             }
@@ -505,12 +582,24 @@ fn cv(a: CvArgs) -> Result<(), CliError> {
     if a.json {
         let mut doc = serde_json::to_value(&res).map_err(|e| CliError::Internal(e.into()))?;
         doc["format"] = "mtec.thermal-cv/1".into();
-        println!("{}", serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?
+        );
     } else {
         for (i, m) in res.per_block.iter().enumerate() {
-            println!("block {:<3} n={:<6} RMSE {:.3} um  max|res| {:.3} um", i + 1, m.n, m.rmse_um, m.max_abs_residual_um);
+            println!(
+                "block {:<3} n={:<6} RMSE {:.3} um  max|res| {:.3} um",
+                i + 1,
+                m.n,
+                m.rmse_um,
+                m.max_abs_residual_um
+            );
         }
-        println!("pooled RMSE {:.3} um, max|res| {:.3} um", res.pooled_rmse_um, res.pooled_max_abs_um);
+        println!(
+            "pooled RMSE {:.3} um, max|res| {:.3} um",
+            res.pooled_rmse_um, res.pooled_max_abs_um
+        );
     }
     Ok(())
 }
