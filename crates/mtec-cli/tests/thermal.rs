@@ -11,7 +11,7 @@ fn mtec(args: &[&str]) -> Output {
 }
 
 fn scenario(dir: &Path, name: &str) -> PathBuf {
-    let out = mtec_sim::run_scenario(name, 3).unwrap();
+    let out = mtec_sim::run_scenario(name, 1).unwrap();
     let p = dir.join(format!("{name}.csv"));
     std::fs::write(&p, &out.files[0].contents).unwrap();
     p
@@ -138,7 +138,7 @@ fn select_fit_predict_round_trip() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let p: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert!(p.get("rmse_um").is_none() && p["predictions"].as_array().unwrap().len() == 240);
+    assert!(p.get("rmse_um").is_none() && p["predictions"].as_array().unwrap().len() == 242);
 }
 
 #[test]
