@@ -5,4 +5,5 @@ pub mod compensate_table;
 pub mod map;
 pub mod model_loader;
 pub mod simulate;
+pub mod thermal;
 pub mod volumetric;
