@@ -152,6 +152,12 @@ pub fn analyze(
     }
     let n = y.len() / (d + 2);
     check_outputs(y, n * (d + 2))?;
+    // Centre the outputs on their overall mean (as SALib does by standardising): the indices
+    // are invariant to the shift, but f(B) in the S1 estimator then has mean ≈ 0, which removes
+    // the μ·mean(f(A_B) − f(A)) term from the estimator's variance.
+    let mean = y.iter().sum::<f64>() / y.len() as f64;
+    let centred: Vec<f64> = y.iter().map(|v| v - mean).collect();
+    let y = &centred[..];
     let all: Vec<usize> = (0..n).collect();
     let (s1, st, variance) = estimate(y, d, &all);
     if !(variance > 0.0) {
