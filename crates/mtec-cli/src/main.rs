@@ -3,6 +3,7 @@
 
 mod cmd;
 mod error;
+mod inputs;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -27,10 +28,18 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Simulate measurements on the virtual machine (known truth).
+    Simulate(cmd::simulate::Args),
+    /// Volumetric error at commanded points (HTM or POE, exact or first-order).
+    Volumetric(cmd::volumetric::Args),
+}
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result: Result<(), error::CliError> = match cli.command {};
+    let result = match cli.command {
+        Command::Simulate(a) => cmd::simulate::run(a),
+        Command::Volumetric(a) => cmd::volumetric::run(a),
+    };
     error::exit(result)
 }

@@ -1,1 +1,4 @@
 //! One module per subcommand: its clap `Args` and a `run(args) -> Result<(), CliError>`.
+
+pub mod simulate;
+pub mod volumetric;
