@@ -23,6 +23,7 @@
 pub mod distribution;
 pub mod efast;
 mod error;
+pub mod error_model;
 pub mod morris;
 pub mod problem;
 pub mod sobol;
