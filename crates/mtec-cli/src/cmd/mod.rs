@@ -4,6 +4,9 @@ pub mod compensate_gcode;
 pub mod compensate_table;
 pub mod map;
 pub mod model_loader;
+pub mod sensitivity;
 pub mod simulate;
 pub mod thermal;
 pub mod volumetric;
+
+pub mod compensate;
