@@ -3,6 +3,7 @@
 
 mod cmd;
 mod error;
+mod inputs;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -14,6 +15,9 @@ geometric and thermal errors.
 The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
+  map           volumetric error maps: fit a grid (trilinear) and evaluate it at points
+  compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
+                (`compensate table`)
   thermal       thermal drift models from temperature logs: select sensors, fit, predict
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
@@ -29,13 +33,36 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Simulate measurements on the virtual machine (known truth).
+    Simulate(cmd::simulate::Args),
+    /// Volumetric error at commanded points (HTM or POE, exact or first-order).
+    Volumetric(cmd::volumetric::Args),
+    /// Volumetric error maps: `map fit` (grid CSV -> map JSON), `map eval` (errors at points).
+    Map(cmd::map::Args),
+    /// Compensation outputs: corrected NC programs, controller tables.
+    #[command(subcommand)]
+    Compensate(CompensateCommand),
     /// Thermal error models: ridge-trace sensor selection, MLR/ridge/exp-ambient fit, predict.
     Thermal(cmd::thermal::Args),
+}
+
+#[derive(Subcommand)]
+enum CompensateCommand {
+    /// Rewrite an NC program (G-code) so the machine reaches the programmed points.
+    Gcode(cmd::compensate_gcode::Args),
+    /// Controller compensation tables (LinuxCNC, Siemens CEC/LEC, Fanuc, Heidenhain, Beckhoff).
+    #[command(long_about = cmd::compensate_table::HELP)]
+    Table(cmd::compensate_table::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result: Result<(), error::CliError> = match cli.command {
+        Command::Simulate(a) => cmd::simulate::run(a),
+        Command::Volumetric(a) => cmd::volumetric::run(a),
+        Command::Map(a) => cmd::map::run(a),
+        Command::Compensate(CompensateCommand::Gcode(a)) => cmd::compensate_gcode::run(a),
+        Command::Compensate(CompensateCommand::Table(a)) => cmd::compensate_table::run(a),
         Command::Thermal(a) => cmd::thermal::run(a),
     };
     error::exit(result)
