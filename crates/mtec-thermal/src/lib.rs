@@ -6,9 +6,9 @@
 //! ridge-selected, simple-correlation top-n), and the ambient-adaptive exponential feed-axis
 //! model — plus thermal-dynamics features (first-order lags with fitted time constants,
 //! temperature rates) so a linear model follows duty cycles it was not trained on, and
-//! `lag-select`, a forward selection of a few sensors with lags scored on held-out blocks. Every model
-//! `fit`s and `predict`s through the traits in [`model`], serialises to versioned JSON
-//! (`mtec.thermal-model/1`) and is scored by one [`Metrics`] type.
+//! `lag-select`, a forward selection of a few sensors with lags scored on held-out blocks.
+//! Every model `fit`s and `predict`s through the traits in [`model`], serialises to versioned
+//! JSON (`mtec.thermal-model/1`) and is scored by one [`Metrics`] type.
 //!
 //! What it is not for: reading files beyond turning a [`mtec_io::Table`] into [`ThermalData`],
 //! neural models (`mtec-nn`), or simulating the machine (`mtec-sim`). Validation splits are by
