@@ -8,5 +8,9 @@
 //! What it is not for: analysis. Nothing here is used to identify or fit anything.
 
 pub mod scenario;
+pub mod thermal_network;
 
 pub use scenario::{run_scenario, OutputFile, ScenarioOutput, SimError, SCENARIOS};
+pub use thermal_network::{
+    AmbientProfile, Body, DutyCycle, HeatSource, Link, ThermalHistory, ThermalNetwork,
+};
