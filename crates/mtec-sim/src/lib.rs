@@ -7,6 +7,7 @@
 //!
 //! What it is not for: analysis. Nothing here is used to identify or fit anything.
 
+pub mod dbb_rotary;
 pub mod scenario;
 pub mod thermal_network;
 

@@ -24,10 +24,15 @@ pub enum SimError {
 }
 
 /// The scenarios this build knows, with a one-line description each (shown by `mtec simulate --help`).
-pub const SCENARIOS: &[(&str, &str)] = &[];
+pub const SCENARIOS: &[(&str, &str)] = &[(
+    "dbb-rotary",
+    "ballbar on a C axis: 5 installation modes, 4 speeds x 4 h, every 20 min, temperatures T1-T9",
+)];
 
 /// Runs the named scenario with a seed.
 pub fn run_scenario(name: &str, seed: u64) -> Result<ScenarioOutput, SimError> {
-    let _ = seed;
-    Err(SimError::UnknownScenario(name.to_string()))
+    match name {
+        "dbb-rotary" => crate::dbb_rotary::run(seed),
+        _ => Err(SimError::UnknownScenario(name.to_string())),
+    }
 }

@@ -315,14 +315,35 @@ mod tests {
 
     #[test]
     fn search_beats_or_equals_the_default_layout() {
+        // A 3×3×3 grid that contains the default layout (h 100, b 500, a = 0.6·b = 300).
         let r = PresetRanges {
-            steps: 4,
+            h_mm: (50.0, 150.0),
+            b_mm: (150.0, 500.0),
+            a_over_b: (0.3, 0.9),
+            steps: 3,
             ..Default::default()
         };
         let best = search_preset(&r).unwrap();
-        assert_eq!(best.evaluated, 64);
+        assert_eq!(best.evaluated, 27);
         let default = score_mode_set(&Setup::preset(Setup::default_dims()).unwrap(), 36);
-        assert!(best.score.worst_condition_number <= default.worst_condition_number * 1.0001);
+        assert!(
+            best.score.worst_condition_number <= default.worst_condition_number * (1.0 + 1e-12)
+        );
         assert!((best.k_mm.hypot(best.dims.a_mm) - best.dims.b_mm).abs() < 1e-9);
+        // and it is the minimum over the grid, recomputed point by point
+        for h in [50.0, 100.0, 150.0] {
+            for b in [150.0, 325.0, 500.0] {
+                for f in [0.3, 0.6, 0.9] {
+                    let mut d = Setup::default_dims();
+                    (d.h_mm, d.b_mm, d.a_mm) = (h, b, f * b);
+                    let s = score_mode_set(&Setup::preset(d).unwrap(), 36);
+                    assert!(
+                        best.score.worst_condition_number
+                            <= s.worst_condition_number * (1.0 + 1e-12),
+                        "{best:?} vs {s:?} at {h} {b} {f}"
+                    );
+                }
+            }
+        }
     }
 }

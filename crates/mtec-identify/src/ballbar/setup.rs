@@ -130,13 +130,14 @@ impl Setup {
         Setup::new(modes)
     }
 
-    /// The preset used by the `dbb-rotary` scenario: h = 100 mm, a = 90 mm, b = 150 mm
-    /// (k = 120 mm), second mount at 0°, 120°, 240°.
+    /// The preset used by the `dbb-rotary` scenario: h = 100 mm, a = 300 mm, b = 500 mm
+    /// (k = 400 mm), second mount at 0°, 120°, 240°. A long bar because the angular motions are
+    /// resolved only to ≈ 0.21 µm / b per µm of reading noise (see `conditioning`).
     pub fn default_dims() -> PresetDims {
         PresetDims {
             h_mm: 100.0,
-            a_mm: 90.0,
-            b_mm: 150.0,
+            a_mm: 300.0,
+            b_mm: 500.0,
             mount2_angles_deg: [0.0, 120.0, 240.0],
         }
     }
@@ -280,7 +281,7 @@ mod tests {
                 assert!((a.workpiece_ball_mm[i] - b.workpiece_ball_mm[i]).abs() < 1e-12);
                 assert!((a.tool_ball_mm[i] - b.tool_ball_mm[i]).abs() < 1e-12);
             }
-            assert!((a.bar_length_mm() - 150.0).abs() < 1e-9);
+            assert!((a.bar_length_mm() - 500.0).abs() < 1e-9);
         }
     }
 
@@ -302,11 +303,11 @@ mod tests {
         assert_eq!(e.line, Some(second));
         // wrong type: three numbers expected
         let e =
-            parse(&good.replacen("tool_ball_mm = [150", "tool_ball_mm = [\"x\"", 1)).unwrap_err();
+            parse(&good.replacen("tool_ball_mm = [500", "tool_ball_mm = [\"x\"", 1)).unwrap_err();
         assert!(e.line.is_some() && e.column.is_some(), "{e}");
         // coincident balls
         let e = parse(&good.replacen(
-            "tool_ball_mm = [150, 0, 100]",
+            "tool_ball_mm = [500, 0, 100]",
             "tool_ball_mm = [0, 0, 100]",
             1,
         ))
@@ -327,7 +328,7 @@ mod tests {
     #[test]
     fn preset_rejects_impossible_dims() {
         let mut d = Setup::default_dims();
-        d.a_mm = 200.0;
+        d.a_mm = 600.0;
         assert!(Setup::preset(d).is_err());
     }
 }
