@@ -14,6 +14,7 @@ geometric and thermal errors.
 The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
+  identify ballbar  rotary-axis error motions (EXC EYC EZC EAC EBC) from ballbar readings in 5 modes
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
 Every CSV column name carries its unit suffix (x_mm, ex_um, ...). Exit codes: 0 success,
@@ -27,10 +28,22 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Identify error elements or error motions from measurements.
+    #[command(subcommand)]
+    Identify(Identify),
+}
+
+#[derive(Subcommand)]
+enum Identify {
+    /// Rotary-axis error motions from ballbar readings in five installation modes.
+    Ballbar(cmd::identify_ballbar::Args),
+}
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result: Result<(), error::CliError> = match cli.command {};
+    let result: Result<(), error::CliError> = match cli.command {
+        Command::Identify(Identify::Ballbar(a)) => cmd::identify_ballbar::run(a),
+    };
     error::exit(result)
 }

@@ -1,1 +1,2 @@
 //! One module per subcommand: its clap `Args` and a `run(args) -> Result<(), CliError>`.
+pub mod identify_ballbar;
