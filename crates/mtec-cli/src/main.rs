@@ -3,6 +3,7 @@
 
 mod cmd;
 mod error;
+mod inputs;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -29,6 +30,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Simulate measurements on the virtual machine (known truth).
+    Simulate(cmd::simulate::Args),
+    /// Volumetric error at commanded points (HTM or POE, exact or first-order).
+    Volumetric(cmd::volumetric::Args),
     /// Identify error elements or error motions from measurements.
     #[command(subcommand)]
     Identify(Identify),
@@ -42,7 +47,9 @@ enum Identify {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result: Result<(), error::CliError> = match cli.command {
+    let result = match cli.command {
+        Command::Simulate(a) => cmd::simulate::run(a),
+        Command::Volumetric(a) => cmd::volumetric::run(a),
         Command::Identify(Identify::Ballbar(a)) => cmd::identify_ballbar::run(a),
     };
     error::exit(result)

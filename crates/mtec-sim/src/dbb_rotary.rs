@@ -29,7 +29,8 @@
 
 use crate::scenario::{OutputFile, ScenarioOutput, SimError};
 use crate::thermal_network::{AmbientProfile, Body, DutyCycle, HeatSource, Link, ThermalNetwork};
-use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use mtec_model::Htm;
+use nalgebra::Vector3;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
@@ -226,12 +227,11 @@ impl AxisTruth {
     }
 }
 
-/// The table's error transform `Trans(δ)·Rz(εz)·Ry(εy)·Rx(εx)` (mm, rad) from µm and µrad.
-fn error_transform(e: &[f64; 6]) -> Isometry3<f64> {
-    let rot = Rotation3::from_euler_angles(e[3] * 1e-6, e[4] * 1e-6, e[5] * 1e-6);
-    Isometry3::from_parts(
-        Translation3::new(e[0] * 1e-3, e[1] * 1e-3, e[2] * 1e-3),
-        UnitQuaternion::from_rotation_matrix(&rot),
+/// The table's exact error transform `Trans(δ)·Rz(εz)·Ry(εy)·Rx(εx)` (mm, rad) from µm and µrad.
+fn error_transform(e: &[f64; 6]) -> Htm {
+    Htm::error_exact(
+        Vector3::new(e[0], e[1], e[2]) * 1e-3,
+        Vector3::new(e[3], e[4], e[5]) * 1e-6,
     )
 }
 
@@ -246,10 +246,10 @@ fn exact_reading_um(
     c_deg: f64,
     e: &[f64; 6],
 ) -> f64 {
-    let table = error_transform(e) * Isometry3::rotation(Vector3::z() * c_deg.to_radians());
-    let ball = table * Point3::from(pw + ew_mm);
+    let table = error_transform(e) * Htm::rotation(Vector3::z(), c_deg.to_radians());
+    let ball = table.point(&(pw + ew_mm));
     let cup = pt + et_mm;
-    ((ball.coords - cup).norm() - (pw - pt).norm()) * 1e3
+    ((ball - cup).norm() - (pw - pt).norm()) * 1e3
 }
 
 /// Runs the scenario.

@@ -8,8 +8,12 @@
 //! What it is not for: analysis. Nothing here is used to identify or fit anything.
 
 pub mod dbb_rotary;
+pub mod instruments;
 pub mod scenario;
 pub mod thermal_network;
+pub mod truth;
+pub mod vmc_9line;
+pub mod volumetric_grid;
 
 pub use scenario::{run_scenario, OutputFile, ScenarioOutput, SimError, SCENARIOS};
 pub use thermal_network::{

@@ -24,14 +24,17 @@ pub enum SimError {
 }
 
 /// The scenarios this build knows, with a one-line description each (shown by `mtec simulate --help`).
-pub const SCENARIOS: &[(&str, &str)] = &[(
-    "dbb-rotary",
-    "ballbar on a C axis: 5 installation modes, 4 speeds x 4 h, every 20 min, temperatures T1-T9",
-)];
+pub const SCENARIOS: &[(&str, &str)] = &[
+    ("vmc-9line", "laser-interferometer lines (9-line design) on an XYFZ machining centre, for `mtec identify lines`"),
+    ("volumetric-grid", "laser-tracker volumetric error grid (11x11x11) and body diagonals, for `mtec map fit`"),
+    ("dbb-rotary", "ballbar on a C axis: 5 installation modes, 4 speeds x 4 h, every 20 min, temperatures T1-T9, for `mtec identify ballbar`"),
+];
 
 /// Runs the named scenario with a seed.
 pub fn run_scenario(name: &str, seed: u64) -> Result<ScenarioOutput, SimError> {
     match name {
+        "vmc-9line" => Ok(crate::vmc_9line::run(seed)),
+        "volumetric-grid" => Ok(crate::volumetric_grid::run(seed)),
         "dbb-rotary" => crate::dbb_rotary::run(seed),
         _ => Err(SimError::UnknownScenario(name.to_string())),
     }

@@ -1,7 +1,8 @@
 //! The bar-length model of a C axis: exact (rigid-body transform) and first order.
 
 use super::setup::{Mode, Setup};
-use nalgebra::{Isometry3, Matrix5, Rotation3, Translation3, UnitQuaternion, Vector3};
+use mtec_model::Htm;
+use nalgebra::{Matrix5, Vector3};
 
 /// ISO 230-1 names of the five observable error motions, in the order of every vector here.
 pub const OBSERVABLE_NAMES: [&str; 5] = ["EXC", "EYC", "EZC", "EAC", "EBC"];
@@ -42,31 +43,32 @@ impl ErrorMotions {
         }
     }
 
-    /// The table's error transform `E = Trans(δ)·Rz(εz)·Ry(εy)·Rx(εx)` (mm, rad).
-    pub fn transform(&self) -> Isometry3<f64> {
-        let rot = Rotation3::from_euler_angles(
-            self.eac_urad * 1e-6,
-            self.ebc_urad * 1e-6,
-            self.ecc_urad * 1e-6,
-        );
-        Isometry3::from_parts(
-            Translation3::new(self.exc_um * 1e-3, self.eyc_um * 1e-3, self.ezc_um * 1e-3),
-            UnitQuaternion::from_rotation_matrix(&rot),
+    /// The table's exact error transform `E = Trans(δ)·Rz(εz)·Ry(εy)·Rx(εx)` (mm, rad), the
+    /// ISO 230-1 small-error transform of `mtec-model`.
+    pub fn transform(&self) -> Htm {
+        Htm::error_exact(
+            Vector3::new(self.exc_um, self.eyc_um, self.ezc_um) * 1e-3,
+            Vector3::new(self.eac_urad, self.ebc_urad, self.ecc_urad) * 1e-6,
         )
     }
 }
 
+/// The ideal pose of the table at angle C: `Rz(C)`.
+pub fn ideal_table(angle_deg: f64) -> Htm {
+    Htm::rotation(Vector3::z(), angle_deg.to_radians())
+}
+
 /// Ideal position of the workpiece ball at table angle `angle_deg` (mm): `Rz(C)·p`.
 pub fn ideal_workpiece_mm(mode: &Mode, angle_deg: f64) -> Vector3<f64> {
-    Rotation3::from_axis_angle(&Vector3::z_axis(), angle_deg.to_radians()) * mode.workpiece()
+    ideal_table(angle_deg).point(&mode.workpiece())
 }
 
 /// Exact bar-length change (µm): `|E(C)·Rz(C)·p_w − p_t| − |Rz(C)·p_w − p_t|`.
 pub fn exact_dl_um(mode: &Mode, angle_deg: f64, e: &ErrorMotions) -> f64 {
     let ideal = ideal_workpiece_mm(mode, angle_deg);
-    let actual = e.transform() * nalgebra::Point3::from(ideal);
+    let actual = (e.transform() * ideal_table(angle_deg)).point(&mode.workpiece());
     let l0 = (ideal - mode.tool()).norm();
-    let l = (actual.coords - mode.tool()).norm();
+    let l = (actual - mode.tool()).norm();
     (l - l0) * 1e3
 }
 
