@@ -50,6 +50,9 @@ fn identifies_and_joins_temperatures() {
     assert_eq!(report["format"], "mtec.ballbar-conditioning/1");
     assert_eq!(report["rank"], 5);
     assert_eq!(report["per_angle"].as_array().unwrap().len(), 72);
+    let polar = std::fs::read_to_string(dir.path().join("id/polar_EAC.svg")).unwrap();
+    assert!(polar.starts_with("<svg") && polar.contains("exp 4, 240 min"));
+    assert!(dir.path().join("id/time_EBC.svg").exists());
 
     // --json prints the same rows
     let o = mtec(&[

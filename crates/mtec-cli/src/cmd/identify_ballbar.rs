@@ -3,6 +3,7 @@
 use crate::error::CliError;
 use mtec_identify::ballbar::{identify, BallbarError, Identification, Measurements, Setup};
 use mtec_io::{InputError, OutputGuard, Table};
+use mtec_report::rotary::{rotary_figures, MotionSample};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -31,11 +32,14 @@ experiment,time_min,<sensor>_c,... joined to the output by experiment and time.
 Outputs (in --out DIR, default <data>-ballbar/ beside the data):
   motions.csv        experiment,time_min,angle_deg,EXC_um,EYC_um,EZC_um,EAC_urad,EBC_urad[,<sensor>_c...]
   conditioning.json  rank, singular values and condition number per angle, worst angle
+  polar_<EXC..EBC>.svg, time_<EXC..EBC>.svg   polar plots against C and change with time
 With --json the same content is printed as one JSON object (files only if --out is given).
 
 Example:
   mtec simulate dbb-rotary --out d --seed 1
   mtec identify ballbar --setup d/setup.toml --data d/dbb.csv --temps d/temps.csv --out d/id";
+
+const MOTION_COLUMNS: [&str; 5] = ["EXC_um", "EYC_um", "EZC_um", "EAC_urad", "EBC_urad"];
 
 /// Arguments of `mtec identify ballbar`.
 #[derive(clap::Args, Debug)]
@@ -142,6 +146,19 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if let Some(dir) = &out_dir {
         guard.write(&dir.join("motions.csv"), csv.as_bytes())?;
         guard.write(&dir.join("conditioning.json"), conditioning.as_bytes())?;
+        let samples: Vec<MotionSample> = result
+            .rows
+            .iter()
+            .map(|r| MotionSample {
+                experiment: r.experiment,
+                time_min: r.time_min,
+                angle_deg: r.angle_deg,
+                values: r.motions.observable().to_vec(),
+            })
+            .collect();
+        for f in rotary_figures(&samples, &MOTION_COLUMNS) {
+            guard.write(&dir.join(&f.name), f.svg.as_bytes())?;
+        }
     }
     if args.json {
         let rows: Vec<serde_json::Value> = result
@@ -185,7 +202,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
             c.worst_noise_gain
         );
         if let Some(dir) = &out_dir {
-            println!("wrote {}/motions.csv and conditioning.json", dir.display());
+            println!(
+                "wrote {}/motions.csv, conditioning.json and the polar/time plots",
+                dir.display()
+            );
         }
     }
     Ok(())
