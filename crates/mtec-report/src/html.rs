@@ -5,14 +5,23 @@ use std::fmt::Write;
 
 /// Escapes text for HTML.
 pub fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 #[derive(Debug, Clone)]
 enum Block {
     Paragraph(String),
-    Table { header: Vec<String>, rows: Vec<Vec<String>> },
-    Figure { svg: String, caption: String },
+    Table {
+        header: Vec<String>,
+        rows: Vec<Vec<String>>,
+    },
+    Figure {
+        svg: String,
+        caption: String,
+    },
     Note(String),
 }
 
@@ -25,7 +34,10 @@ pub struct Section {
 
 impl Section {
     pub fn new(title: impl Into<String>) -> Self {
-        Section { title: title.into(), blocks: vec![] }
+        Section {
+            title: title.into(),
+            blocks: vec![],
+        }
     }
     /// A paragraph of plain text.
     pub fn text(&mut self, t: impl Into<String>) -> &mut Self {
@@ -39,17 +51,26 @@ impl Section {
     }
     /// A table.
     pub fn table(&mut self, header: &[&str], rows: Vec<Vec<String>>) -> &mut Self {
-        self.blocks.push(Block::Table { header: header.iter().map(|s| s.to_string()).collect(), rows });
+        self.blocks.push(Block::Table {
+            header: header.iter().map(|s| s.to_string()).collect(),
+            rows,
+        });
         self
     }
     /// A figure (SVG text from [`crate::plot`]).
     pub fn figure(&mut self, svg: String, caption: impl Into<String>) -> &mut Self {
-        self.blocks.push(Block::Figure { svg, caption: caption.into() });
+        self.blocks.push(Block::Figure {
+            svg,
+            caption: caption.into(),
+        });
         self
     }
     /// Number of figures (the browser check counts them).
     pub fn figures(&self) -> usize {
-        self.blocks.iter().filter(|b| matches!(b, Block::Figure { .. })).count()
+        self.blocks
+            .iter()
+            .filter(|b| matches!(b, Block::Figure { .. }))
+            .count()
     }
 }
 
@@ -69,7 +90,11 @@ th{background:#f0f4f8}td:first-child,th:first-child{text-align:left}figure{margi
 
 impl Report {
     pub fn new(title: impl Into<String>, subtitle: impl Into<String>) -> Self {
-        Report { title: title.into(), subtitle: subtitle.into(), sections: vec![] }
+        Report {
+            title: title.into(),
+            subtitle: subtitle.into(),
+            sections: vec![],
+        }
     }
 
     /// Adds a section and returns it for filling.
@@ -82,7 +107,12 @@ impl Report {
     pub fn to_html(&self) -> String {
         let mut h = String::new();
         let _ = write!(h, "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title><style>{STYLE}</style></head><body>", escape(&self.title));
-        let _ = write!(h, "<h1>{}</h1><p class=\"sub\">{}</p><nav>", escape(&self.title), escape(&self.subtitle));
+        let _ = write!(
+            h,
+            "<h1>{}</h1><p class=\"sub\">{}</p><nav>",
+            escape(&self.title),
+            escape(&self.subtitle)
+        );
         for (i, s) in self.sections.iter().enumerate() {
             let _ = write!(h, "<a href=\"#s{i}\">{}</a>", escape(&s.title));
         }
@@ -113,7 +143,11 @@ impl Report {
                         h.push_str("</table>");
                     }
                     Block::Figure { svg, caption } => {
-                        let _ = write!(h, "<figure class=\"plot\">{svg}<figcaption>{}</figcaption></figure>", escape(caption));
+                        let _ = write!(
+                            h,
+                            "<figure class=\"plot\">{svg}<figcaption>{}</figcaption></figure>",
+                            escape(caption)
+                        );
                     }
                 }
             }
@@ -131,9 +165,16 @@ mod tests {
     #[test]
     fn report_is_self_contained_and_escaped() {
         let mut r = Report::new("mtec <report>", "test");
-        r.section("A").text("x < y").table(&["k", "v"], vec![vec!["a".into(), "1".into()]]).figure("<svg></svg>".into(), "fig");
+        r.section("A")
+            .text("x < y")
+            .table(&["k", "v"], vec![vec!["a".into(), "1".into()]])
+            .figure("<svg></svg>".into(), "fig");
         let h = r.to_html();
-        assert!(h.contains("mtec &lt;report&gt;") && h.contains("x &lt; y") && h.contains("<svg></svg>"));
+        assert!(
+            h.contains("mtec &lt;report&gt;")
+                && h.contains("x &lt; y")
+                && h.contains("<svg></svg>")
+        );
         assert!(!h.contains("http://") && !h.contains("https://") && !h.contains("<script"));
     }
 }

@@ -10,3 +10,5 @@ pub mod rotary;
 
 pub use html::{Report, Section};
 pub use plot::{bar_chart, line_chart, scatter_chart, Band, Series};
+
+pub mod polar;

@@ -13,7 +13,10 @@ pub struct Series {
 
 impl Series {
     pub fn new(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
-        Series { name: name.into(), points }
+        Series {
+            name: name.into(),
+            points,
+        }
     }
 }
 
@@ -59,16 +62,29 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
 }
 
 /// A line chart of several series with optional bands. Returns SVG text.
-pub fn line_chart(title: &str, x_label: &str, y_label: &str, series: &[Series], bands: &[Band]) -> String {
+pub fn line_chart(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+    bands: &[Band],
+) -> String {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (720, 400)).into_drawing_area();
         let _ = root.fill(&WHITE);
-        let xs = series.iter().flat_map(|s| s.points.iter().map(|p| p.0)).chain(bands.iter().flat_map(|b| b.x.iter().copied()));
+        let xs = series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.0))
+            .chain(bands.iter().flat_map(|b| b.x.iter().copied()));
         let ys = series
             .iter()
             .flat_map(|s| s.points.iter().map(|p| p.1))
-            .chain(bands.iter().flat_map(|b| b.lower.iter().chain(b.upper.iter()).copied()));
+            .chain(
+                bands
+                    .iter()
+                    .flat_map(|b| b.lower.iter().chain(b.upper.iter()).copied()),
+            );
         let (x0, x1) = range(xs);
         let (y0, y1) = range(ys);
         let mut chart = match ChartBuilder::on(&root)
@@ -81,24 +97,40 @@ pub fn line_chart(title: &str, x_label: &str, y_label: &str, series: &[Series], 
             Ok(c) => c,
             Err(_) => return svg_error(title),
         };
-        let _ = chart.configure_mesh().x_desc(x_label).y_desc(y_label).light_line_style(RGBColor(235, 235, 235)).draw();
+        let _ = chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc(y_label)
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw();
         for (i, b) in bands.iter().enumerate() {
             let c = colour(i + series.len()).mix(0.18);
-            let mut poly: Vec<(f64, f64)> = b.x.iter().zip(&b.upper).map(|(x, y)| (*x, *y)).collect();
+            let mut poly: Vec<(f64, f64)> =
+                b.x.iter().zip(&b.upper).map(|(x, y)| (*x, *y)).collect();
             poly.extend(b.x.iter().zip(&b.lower).rev().map(|(x, y)| (*x, *y)));
             if let Ok(a) = chart.draw_series(std::iter::once(Polygon::new(poly, c.filled()))) {
                 let cc = colour(i + series.len());
-                a.label(b.name.clone()).legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 15, y + 5)], cc.mix(0.3).filled()));
+                a.label(b.name.clone()).legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 5), (x + 15, y + 5)], cc.mix(0.3).filled())
+                });
             }
         }
         for (i, s) in series.iter().enumerate() {
             let c = colour(i);
-            if let Ok(a) = chart.draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2))) {
-                a.label(s.name.clone()).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], c.stroke_width(2)));
+            if let Ok(a) =
+                chart.draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
+            {
+                a.label(s.name.clone()).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 15, y)], c.stroke_width(2))
+                });
             }
         }
         if series.len() + bands.len() > 1 {
-            let _ = chart.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK).draw();
+            let _ = chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw();
         }
         let _ = root.present();
     }
@@ -113,19 +145,37 @@ pub fn scatter_chart(title: &str, x_label: &str, y_label: &str, series: &[Series
         let _ = root.fill(&WHITE);
         let (x0, x1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
         let (y0, y1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
-        let mut chart = match ChartBuilder::on(&root).caption(title, ("sans-serif", 18)).margin(10).x_label_area_size(40).y_label_area_size(60).build_cartesian_2d(x0..x1, y0..y1) {
+        let mut chart = match ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x0..x1, y0..y1)
+        {
             Ok(c) => c,
             Err(_) => return svg_error(title),
         };
-        let _ = chart.configure_mesh().x_desc(x_label).y_desc(y_label).light_line_style(RGBColor(235, 235, 235)).draw();
+        let _ = chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc(y_label)
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw();
         for (i, s) in series.iter().enumerate() {
             let c = colour(i);
-            if let Ok(a) = chart.draw_series(s.points.iter().map(|p| Circle::new(*p, 2, c.filled()))) {
-                a.label(s.name.clone()).legend(move |(x, y)| Circle::new((x + 7, y), 3, c.filled()));
+            if let Ok(a) =
+                chart.draw_series(s.points.iter().map(|p| Circle::new(*p, 2, c.filled())))
+            {
+                a.label(s.name.clone())
+                    .legend(move |(x, y)| Circle::new((x + 7, y), 3, c.filled()));
             }
         }
         if series.len() > 1 {
-            let _ = chart.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK).draw();
+            let _ = chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw();
         }
         let _ = root.present();
     }
@@ -133,25 +183,53 @@ pub fn scatter_chart(title: &str, x_label: &str, y_label: &str, series: &[Series
 }
 
 /// A grouped bar chart: one group per category, one bar per series (e.g. S1 and ST per element).
-pub fn bar_chart(title: &str, y_label: &str, categories: &[String], series: &[(String, Vec<f64>)]) -> String {
+pub fn bar_chart(
+    title: &str,
+    y_label: &str,
+    categories: &[String],
+    series: &[(String, Vec<f64>)],
+) -> String {
     let mut svg = String::new();
     {
-        let width = (120 + 40 * categories.len().max(1) * series.len().max(1)).clamp(480, 1100) as u32;
+        let width =
+            (120 + 40 * categories.len().max(1) * series.len().max(1)).clamp(480, 1100) as u32;
         let root = SVGBackend::with_string(&mut svg, (width, 400)).into_drawing_area();
         let _ = root.fill(&WHITE);
-        let (mut y0, y1) = range(series.iter().flat_map(|s| s.1.iter().copied()).chain(std::iter::once(0.0)));
+        let (mut y0, y1) = range(
+            series
+                .iter()
+                .flat_map(|s| s.1.iter().copied())
+                .chain(std::iter::once(0.0)),
+        );
         if y0 > 0.0 {
             y0 = 0.0;
         }
         let n = categories.len().max(1) as f64;
-        let mut chart = match ChartBuilder::on(&root).caption(title, ("sans-serif", 18)).margin(10).x_label_area_size(50).y_label_area_size(60).build_cartesian_2d(0.0..n, y0..y1) {
+        let mut chart = match ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(50)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..n, y0..y1)
+        {
             Ok(c) => c,
             Err(_) => return svg_error(title),
         };
-        let _ = chart.configure_mesh().disable_x_mesh().disable_x_axis().y_desc(y_label).draw();
+        let _ = chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .disable_x_axis()
+            .y_desc(y_label)
+            .draw();
         // category names under each group (categorical axis)
-        let style = TextStyle::from(("sans-serif", 12).into_font()).pos(Pos::new(HPos::Center, VPos::Top));
-        let _ = chart.draw_series(categories.iter().enumerate().map(|(i, c)| Text::new(c.clone(), (i as f64 + 0.5, y0), style.clone())));
+        let style =
+            TextStyle::from(("sans-serif", 12).into_font()).pos(Pos::new(HPos::Center, VPos::Top));
+        let _ = chart.draw_series(
+            categories
+                .iter()
+                .enumerate()
+                .map(|(i, c)| Text::new(c.clone(), (i as f64 + 0.5, y0), style.clone())),
+        );
         let k = series.len().max(1) as f64;
         for (j, (name, vals)) in series.iter().enumerate() {
             let c = colour(j);
@@ -161,11 +239,17 @@ pub fn bar_chart(title: &str, y_label: &str, categories: &[String], series: &[(S
                 Rectangle::new([(x0, 0.0), (x1, *v)], c.filled())
             });
             if let Ok(a) = chart.draw_series(bars) {
-                a.label(name.clone()).legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 15, y + 5)], c.filled()));
+                a.label(name.clone()).legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 5), (x + 15, y + 5)], c.filled())
+                });
             }
         }
         if series.len() > 1 {
-            let _ = chart.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK).draw();
+            let _ = chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw();
         }
         let _ = root.present();
     }
@@ -182,10 +266,35 @@ mod tests {
 
     #[test]
     fn charts_draw_their_data() {
-        let s = Series::new("sin", (0..50).map(|i| (i as f64, (i as f64 / 5.0).sin())).collect());
-        let svg = line_chart("t", "x", "y", &[s], &[Band { name: "band".into(), x: vec![0.0, 49.0], lower: vec![-1.0, -1.0], upper: vec![1.0, 1.0] }]);
-        assert!(svg.starts_with("<svg") && svg.contains("polyline") || svg.contains("path"), "{}", &svg[..200.min(svg.len())]);
-        let b = bar_chart("b", "S", &["EXX".into(), "EYY".into()], &[("S1".into(), vec![0.5, 0.2]), ("ST".into(), vec![0.6, 0.3])]);
+        let s = Series::new(
+            "sin",
+            (0..50)
+                .map(|i| (i as f64, (i as f64 / 5.0).sin()))
+                .collect(),
+        );
+        let svg = line_chart(
+            "t",
+            "x",
+            "y",
+            &[s],
+            &[Band {
+                name: "band".into(),
+                x: vec![0.0, 49.0],
+                lower: vec![-1.0, -1.0],
+                upper: vec![1.0, 1.0],
+            }],
+        );
+        assert!(
+            svg.starts_with("<svg") && svg.contains("polyline") || svg.contains("path"),
+            "{}",
+            &svg[..200.min(svg.len())]
+        );
+        let b = bar_chart(
+            "b",
+            "S",
+            &["EXX".into(), "EYY".into()],
+            &[("S1".into(), vec![0.5, 0.2]), ("ST".into(), vec![0.6, 0.3])],
+        );
         assert!(b.contains("EXX") && b.matches("<rect").count() >= 4);
     }
 }
