@@ -1,3 +1,4 @@
+#![allow(clippy::needless_range_loop)] // index loops read like the Jacobi algorithm
 //! Ballbar identification against the virtual machine (`dbb-rotary`) and an independent SVD.
 
 use mtec_identify::ballbar::identify::solve_angle;
