@@ -114,8 +114,29 @@ fn dbb_rotary_identification_matches_truth() {
         }
     }
     let n = id.rows.len() as f64;
+    // Noise-limited check: the expected RMS from the covariance σ²·(AᵀA)⁻¹ averaged over the
+    // angles, reduced by (N − 3)/N for the three removed Fourier terms per signal.
+    let noise_um = truth["ballbar_noise_um"].as_f64().unwrap();
+    let mut var = [0.0; 5];
+    for i in 0..72 {
+        let a = identification_matrix(&setup, i as f64 * 5.0);
+        let cov = (a.transpose() * a).try_inverse().unwrap();
+        for k in 0..5 {
+            var[k] += cov[(k, k)] / 72.0;
+        }
+    }
     for k in 0..5 {
         let rms = (sq[k] / n).sqrt();
+        let expected = noise_um * (var[k] * 69.0 / 72.0).sqrt();
+        eprintln!(
+            "{}: RMS {rms:.3}, expected from noise alone {expected:.3}",
+            OBSERVABLE_NAMES[k]
+        );
+        assert!(
+            (rms / expected - 1.0).abs() < 0.15,
+            "{}: not noise-limited ({rms} vs {expected})",
+            OBSERVABLE_NAMES[k]
+        );
         eprintln!(
             "{}: RMS error {rms:.3} (largest cleaned truth value {:.2})",
             OBSERVABLE_NAMES[k], amp[k]
