@@ -42,6 +42,7 @@ enum Command {
 #[derive(Subcommand)]
 enum Identify {
     /// Rotary-axis error motions from ballbar readings in five installation modes.
+    #[command(long_about = cmd::identify_ballbar::LONG_ABOUT)]
     Ballbar(cmd::identify_ballbar::Args),
 }
 

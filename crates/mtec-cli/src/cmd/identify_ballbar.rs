@@ -7,7 +7,7 @@ use mtec_report::rotary::{rotary_figures, MotionSample};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-const LONG_ABOUT: &str = "\
+pub const LONG_ABOUT: &str = "\
 Identifies the error motions EXC, EYC, EZC (um) and EAC, EBC (urad) of a rotary C axis from
 double-ball-bar readings taken in five installation modes, at every measured angle, for every
 experiment and time (static errors at t = 0, thermal errors later). ECC (rotation about the axis)
