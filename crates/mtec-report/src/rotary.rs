@@ -45,11 +45,13 @@ pub fn polar_chart(title: &str, unit: &str, series: &[Series]) -> String {
     };
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (520, 520)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, (700, 520)).into_drawing_area();
         let _ = root.fill(&WHITE);
+        // square polar area on the left, legend in the 180 px on the right
         let mut chart = match ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 18))
             .margin(10)
+            .margin_right(190)
             .build_cartesian_2d(-lim..lim, -lim..lim)
         {
             Ok(c) => c,
@@ -93,24 +95,28 @@ pub fn polar_chart(title: &str, unit: &str, series: &[Series]) -> String {
             if let Some(first) = pts.first().copied() {
                 pts.push(first);
             }
-            if let Ok(a) = chart.draw_series(LineSeries::new(pts, c.stroke_width(2))) {
-                a.label(s.name.clone()).legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 15, y)], c.stroke_width(2))
-                });
-            }
+            let _ = chart.draw_series(LineSeries::new(pts, c.stroke_width(2)));
         }
         let style = TextStyle::from(("sans-serif", 12).into_font());
         let _ = chart.draw_series(std::iter::once(Text::new(
             format!("circles: 0 (dashed), ±{peak:.3} {unit}"),
             (-lim * 0.97, -lim * 0.93),
-            style,
+            style.clone(),
         )));
-        if !series.is_empty() {
-            let _ = chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .draw();
+        // legend in the free band right of the square polar area (pixel coordinates of the root)
+        let x0 = 520;
+        for (i, s) in series.iter().enumerate() {
+            let y = 50 + 18 * i as i32;
+            let c = colour(i);
+            let _ = root.draw(&PathElement::new(
+                vec![(x0, y), (x0 + 20, y)],
+                c.stroke_width(2),
+            ));
+            let _ = root.draw(&Text::new(
+                s.name.clone(),
+                (x0 + 26, y),
+                style.clone().pos(Pos::new(HPos::Left, VPos::Center)),
+            ));
         }
         let _ = root.present();
     }
