@@ -31,7 +31,9 @@ experiment,time_min,<sensor>_c,... joined to the output by experiment and time.
 
 Outputs (in --out DIR, default <data>-ballbar/ beside the data):
   motions.csv        experiment,time_min,angle_deg,EXC_um,EYC_um,EZC_um,EAC_urad,EBC_urad[,<sensor>_c...]
-  conditioning.json  rank, singular values and condition number per angle, worst angle
+  conditioning.json  rank, singular values and condition number per angle, worst angle, and
+                     the motion combinations (harmonics >= 2) that the set-up-error removal
+                     makes invisible over a revolution (reported as zero in motions.csv)
   polar_<EXC..EBC>.svg, time_<EXC..EBC>.svg   polar plots against C and change with time
 With --json the same content is printed as one JSON object (files only if --out is given).
 
@@ -201,6 +203,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
             c.worst_angle_deg,
             c.worst_noise_gain
         );
+        for u in &c.revolution.unobservable {
+            println!("note: invisible once the set-up error is removed (reported as zero): {u}");
+        }
         if let Some(dir) = &out_dir {
             println!(
                 "wrote {}/motions.csv, conditioning.json and the polar/time plots",

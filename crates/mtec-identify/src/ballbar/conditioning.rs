@@ -14,7 +14,7 @@
 use super::model::{first_order_row, identification_matrix, OBSERVABLE_NAMES};
 use super::setup::{PresetDims, Setup};
 use super::BallbarError;
-use nalgebra::{Matrix5, SVD};
+use nalgebra::{DMatrix, Matrix5, SVD};
 
 /// Relative threshold under which a singular value is treated as zero.
 pub const RANK_RTOL: f64 = 1e-9;
@@ -44,7 +44,96 @@ pub struct ConditioningReport {
     /// Largest |coefficient| of ECC (µm/µrad) in any mode at any angle; 0 when bars lie in axial
     /// planes. A nonzero value means an ECC motion would leak into the identified five.
     pub ecc_coefficient_max: f64,
+    /// What stays invisible over a whole revolution once each mode's mean and first harmonic are
+    /// removed (harmonics 2 and up of the motions).
+    pub revolution: RevolutionObservability,
     pub per_angle: Vec<AngleConditioning>,
+}
+
+/// Observability of the motions' harmonics 2..=`max_harmonic` over one revolution when every mode
+/// signal also carries an unknown mean and first harmonic (the set-up error).
+///
+/// Least-squares system over `n_angles` evenly spaced angles: rows (mode, angle), columns the
+/// cosine and sine coefficients of each motion's harmonics 2..=`max_harmonic` plus three set-up
+/// terms per mode. Its null space (SVD, same rank rule as per angle) is the set of motion
+/// combinations that change no cleaned reading; each is named by its largest coefficients.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RevolutionObservability {
+    pub max_harmonic: usize,
+    pub unknowns: usize,
+    pub rank: usize,
+    /// One entry per null-space direction, e.g. `+0.70·EBC·cos2C −0.70·EAC·sin2C …`.
+    pub unobservable: Vec<String>,
+}
+
+/// See [`RevolutionObservability`].
+pub fn revolution_observability(
+    setup: &Setup,
+    n_angles: usize,
+    max_harmonic: usize,
+) -> RevolutionObservability {
+    let n_angles = n_angles.max(2 * max_harmonic + 4);
+    let harmonics: Vec<usize> = (2..=max_harmonic).collect();
+    let n_motion = 5 * 2 * harmonics.len();
+    let cols = n_motion + 15;
+    let rows = 5 * n_angles;
+    let mut m = DMatrix::<f64>::zeros(rows, cols);
+    for j in 0..n_angles {
+        let c_deg = 360.0 * j as f64 / n_angles as f64;
+        let c = c_deg.to_radians();
+        for (i, mode) in setup.modes.iter().enumerate() {
+            let r = i * n_angles + j;
+            let g = first_order_row(mode, c_deg);
+            for k in 0..5 {
+                for (hi, &n) in harmonics.iter().enumerate() {
+                    let col = (k * harmonics.len() + hi) * 2;
+                    m[(r, col)] = g[k] * (n as f64 * c).cos();
+                    m[(r, col + 1)] = g[k] * (n as f64 * c).sin();
+                }
+            }
+            let base = n_motion + 3 * i;
+            m[(r, base)] = 1.0;
+            m[(r, base + 1)] = c.cos();
+            m[(r, base + 2)] = c.sin();
+        }
+    }
+    let svd = SVD::new(m, false, true);
+    let smax = svd.singular_values.max();
+    let v_t = svd.v_t.expect("v_t was requested");
+    let mut unobservable = Vec::new();
+    let mut rank = 0;
+    for (idx, &sv) in svd.singular_values.iter().enumerate() {
+        if sv > RANK_RTOL * smax {
+            rank += 1;
+            continue;
+        }
+        let v: Vec<f64> = (0..cols).map(|c| v_t[(idx, c)]).collect();
+        let mut terms: Vec<(f64, String)> = Vec::new();
+        for k in 0..5 {
+            for (hi, &n) in harmonics.iter().enumerate() {
+                let col = (k * harmonics.len() + hi) * 2;
+                for (o, f) in [(0, "cos"), (1, "sin")] {
+                    terms.push((v[col + o], format!("{}·{f}{n}C", OBSERVABLE_NAMES[k])));
+                }
+            }
+        }
+        terms.sort_by(|a, b| b.0.abs().total_cmp(&a.0.abs()));
+        let named: Vec<String> = terms
+            .iter()
+            .filter(|t| t.0.abs() > 0.05)
+            .map(|(c, n)| format!("{c:+.3}·{n}"))
+            .collect();
+        unobservable.push(named.join(" "));
+    }
+    // Columns beyond the number of rows cannot be resolved either (never the case for n_angles ≥
+    // 2·max_harmonic + 4 and five modes).
+    rank = rank.min(cols);
+    RevolutionObservability {
+        max_harmonic,
+        unknowns: cols,
+        rank,
+        unobservable,
+    }
 }
 
 /// SVD of the identification matrix at one angle.
@@ -105,6 +194,7 @@ pub fn conditioning_report(setup: &Setup, angles_deg: &[f64]) -> ConditioningRep
             .map(|a| 1.0 / a.singular_values[4])
             .fold(0.0, f64::max),
         ecc_coefficient_max,
+        revolution: revolution_observability(setup, angles_deg.len().max(36), 6),
         per_angle,
     }
 }
@@ -270,6 +360,54 @@ pub fn search_preset(r: &PresetRanges) -> Result<DesignResult, BallbarError> {
 mod tests {
     use super::*;
     use crate::ballbar::setup::Mode;
+
+    /// With the preset, exactly the hand-derived family is invisible (two directions: the real
+    /// and imaginary scale of `EBC + i·EAC = s·e^{−2iC}`, with `EXC = −h·EBC`, `EYC = h·EAC`).
+    #[test]
+    fn revolution_observability_names_the_minus_two_wobble() {
+        let s = Setup::preset(Setup::default_dims()).unwrap();
+        let r = revolution_observability(&s, 72, 6);
+        assert_eq!(r.unknowns, 5 * 2 * 5 + 15);
+        assert_eq!(r.rank, r.unknowns - 2, "{:?}", r.unobservable);
+        for u in &r.unobservable {
+            assert!(
+                u.contains("EBC") && u.contains("EAC") && u.contains("2C"),
+                "{u}"
+            );
+            assert!(!u.contains("EZC") && !u.contains("3C"), "{u}");
+        }
+        // the direction is the hand-derived one: per unit EBC·cos2C, EXC·cos2C = −h·1e-3 = −0.1
+        let mut fam = vec![0.0; 50];
+        let h = Setup::default_dims().h_mm * 1e-3;
+        // column order: motion k, harmonic index (n − 2), cos/sin
+        let col = |k: usize, n: usize, o: usize| (k * 5 + (n - 2)) * 2 + o;
+        fam[col(4, 2, 0)] = 1.0; // EBC cos2C
+        fam[col(3, 2, 1)] = -1.0; // EAC −sin2C
+        fam[col(0, 2, 0)] = -h; // EXC = −h·EBC
+        fam[col(1, 2, 1)] = -h; // EYC = h·EAC
+        let mut max_reading: f64 = 0.0;
+        for j in 0..72 {
+            let c = j as f64 * 5.0;
+            let cr = c.to_radians();
+            for (i, mode) in s.modes.iter().enumerate() {
+                let g = first_order_row(mode, c);
+                let mut v = 0.0;
+                for k in 0..5 {
+                    for n in 2..=6 {
+                        v += g[k]
+                            * (fam[col(k, n, 0)] * (n as f64 * cr).cos()
+                                + fam[col(k, n, 1)] * (n as f64 * cr).sin());
+                    }
+                }
+                // modes 1–2 read nothing; modes 3–5 read only a first harmonic
+                if i < 2 {
+                    assert!(v.abs() < 1e-12);
+                }
+                max_reading = max_reading.max(v.abs());
+            }
+        }
+        assert!(max_reading > 0.1);
+    }
 
     #[test]
     fn preset_is_full_rank_everywhere() {

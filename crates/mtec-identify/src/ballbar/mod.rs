@@ -53,8 +53,9 @@ pub mod model;
 pub mod setup;
 
 pub use conditioning::{
-    check_identifiable, conditioning_report, score_mode_set, search_preset, AngleConditioning,
-    ConditioningReport, DesignResult, DesignScore, PresetRanges,
+    check_identifiable, conditioning_report, revolution_observability, score_mode_set,
+    search_preset, AngleConditioning, ConditioningReport, DesignResult, DesignScore, PresetRanges,
+    RevolutionObservability,
 };
 pub use harmonics::remove_mean_and_first_harmonic;
 pub use identify::{identify, Identification, IdentifiedRow, Measurements};
