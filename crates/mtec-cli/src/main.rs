@@ -16,6 +16,9 @@ The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
   identify ballbar  rotary-axis error motions (EXC EYC EZC EAC EBC) from ballbar readings in 5 modes
+  map           volumetric error maps: fit a grid (trilinear) and evaluate it at points
+  compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
+                (`compensate table`)
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
 Every CSV column name carries its unit suffix (x_mm, ex_um, ...). Exit codes: 0 success,
@@ -37,6 +40,20 @@ enum Command {
     /// Identify error elements or error motions from measurements.
     #[command(subcommand)]
     Identify(Identify),
+    /// Volumetric error maps: `map fit` (grid CSV -> map JSON), `map eval` (errors at points).
+    Map(cmd::map::Args),
+    /// Compensation outputs: corrected NC programs, controller tables.
+    #[command(subcommand)]
+    Compensate(CompensateCommand),
+}
+
+#[derive(Subcommand)]
+enum CompensateCommand {
+    /// Rewrite an NC program (G-code) so the machine reaches the programmed points.
+    Gcode(cmd::compensate_gcode::Args),
+    /// Controller compensation tables (LinuxCNC, Siemens CEC/LEC, Fanuc, Heidenhain, Beckhoff).
+    #[command(long_about = cmd::compensate_table::HELP)]
+    Table(cmd::compensate_table::Args),
 }
 
 #[derive(Subcommand)]
@@ -48,10 +65,13 @@ enum Identify {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
+    let result: Result<(), error::CliError> = match cli.command {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Volumetric(a) => cmd::volumetric::run(a),
         Command::Identify(Identify::Ballbar(a)) => cmd::identify_ballbar::run(a),
+        Command::Map(a) => cmd::map::run(a),
+        Command::Compensate(CompensateCommand::Gcode(a)) => cmd::compensate_gcode::run(a),
+        Command::Compensate(CompensateCommand::Table(a)) => cmd::compensate_table::run(a),
     };
     error::exit(result)
 }

@@ -1,5 +1,9 @@
 //! One module per subcommand: its clap `Args` and a `run(args) -> Result<(), CliError>`.
 
+pub mod compensate_gcode;
+pub mod compensate_table;
 pub mod identify_ballbar;
+pub mod map;
+pub mod model_loader;
 pub mod simulate;
 pub mod volumetric;
