@@ -84,11 +84,11 @@ pub fn revolution_observability(
         for (i, mode) in setup.modes.iter().enumerate() {
             let r = i * n_angles + j;
             let g = first_order_row(mode, c_deg);
-            for k in 0..5 {
+            for (k, gk) in g.iter().take(5).enumerate() {
                 for (hi, &n) in harmonics.iter().enumerate() {
                     let col = (k * harmonics.len() + hi) * 2;
-                    m[(r, col)] = g[k] * (n as f64 * c).cos();
-                    m[(r, col + 1)] = g[k] * (n as f64 * c).sin();
+                    m[(r, col)] = gk * (n as f64 * c).cos();
+                    m[(r, col + 1)] = gk * (n as f64 * c).sin();
                 }
             }
             let base = n_motion + 3 * i;
@@ -109,11 +109,11 @@ pub fn revolution_observability(
         }
         let v: Vec<f64> = (0..cols).map(|c| v_t[(idx, c)]).collect();
         let mut terms: Vec<(f64, String)> = Vec::new();
-        for k in 0..5 {
+        for (k, name) in OBSERVABLE_NAMES.iter().enumerate() {
             for (hi, &n) in harmonics.iter().enumerate() {
                 let col = (k * harmonics.len() + hi) * 2;
                 for (o, f) in [(0, "cos"), (1, "sin")] {
-                    terms.push((v[col + o], format!("{}·{f}{n}C", OBSERVABLE_NAMES[k])));
+                    terms.push((v[col + o], format!("{name}·{f}{n}C")));
                 }
             }
         }
