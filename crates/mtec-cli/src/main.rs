@@ -19,6 +19,7 @@ The workflow, and the commands for each step:
   map           volumetric error maps: fit a grid (trilinear) and evaluate it at points
   compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
                 (`compensate table`)
+  thermal       thermal drift models from temperature logs: select sensors, fit, predict
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
 Every CSV column name carries its unit suffix (x_mm, ex_um, ...). Exit codes: 0 success,
@@ -45,6 +46,8 @@ enum Command {
     /// Compensation outputs: corrected NC programs, controller tables.
     #[command(subcommand)]
     Compensate(CompensateCommand),
+    /// Thermal error models: ridge-trace sensor selection, MLR/ridge/exp-ambient fit, predict.
+    Thermal(cmd::thermal::Args),
 }
 
 #[derive(Subcommand)]
@@ -72,6 +75,7 @@ fn main() -> ExitCode {
         Command::Map(a) => cmd::map::run(a),
         Command::Compensate(CompensateCommand::Gcode(a)) => cmd::compensate_gcode::run(a),
         Command::Compensate(CompensateCommand::Table(a)) => cmd::compensate_table::run(a),
+        Command::Thermal(a) => cmd::thermal::run(a),
     };
     error::exit(result)
 }

@@ -9,9 +9,11 @@
 
 pub mod circular_test;
 pub mod dbb_rotary;
+pub mod feed_axis_ambient;
 pub mod instruments;
 pub mod iso230_2;
 pub mod scenario;
+pub mod spindle_sensors;
 pub mod thermal_network;
 pub mod truth;
 pub mod vmc_9line;

@@ -6,4 +6,5 @@ pub mod identify_ballbar;
 pub mod map;
 pub mod model_loader;
 pub mod simulate;
+pub mod thermal;
 pub mod volumetric;
