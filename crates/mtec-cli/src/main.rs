@@ -15,6 +15,7 @@ geometric and thermal errors.
 The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
+  identify ballbar  rotary-axis error motions (EXC EYC EZC EAC EBC) from ballbar readings in 5 modes
   map           volumetric error maps: fit a grid (trilinear) and evaluate it at points
   compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
                 (`compensate table`)
@@ -38,6 +39,9 @@ enum Command {
     Simulate(cmd::simulate::Args),
     /// Volumetric error at commanded points (HTM or POE, exact or first-order).
     Volumetric(cmd::volumetric::Args),
+    /// Identify error elements or error motions from measurements.
+    #[command(subcommand)]
+    Identify(Identify),
     /// Volumetric error maps: `map fit` (grid CSV -> map JSON), `map eval` (errors at points).
     Map(cmd::map::Args),
     /// Compensation outputs: corrected NC programs, controller tables.
@@ -49,11 +53,19 @@ enum Command {
     Sensitivity(cmd::sensitivity::Args),
 }
 
+#[derive(Subcommand)]
+enum Identify {
+    /// Rotary-axis error motions from ballbar readings in five installation modes.
+    #[command(long_about = cmd::identify_ballbar::LONG_ABOUT)]
+    Ballbar(cmd::identify_ballbar::Args),
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result: Result<(), error::CliError> = match cli.command {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Volumetric(a) => cmd::volumetric::run(a),
+        Command::Identify(Identify::Ballbar(a)) => cmd::identify_ballbar::run(a),
         Command::Map(a) => cmd::map::run(a),
         Command::Compensate(cmd::compensate::Command::Gcode(a)) => cmd::compensate_gcode::run(a),
         Command::Compensate(cmd::compensate::Command::Table(a)) => cmd::compensate_table::run(a),

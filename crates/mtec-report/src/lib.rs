@@ -6,6 +6,7 @@
 
 pub mod html;
 pub mod plot;
+pub mod rotary;
 
 pub use html::{Report, Section};
 pub use plot::{bar_chart, line_chart, scatter_chart, Band, Series};

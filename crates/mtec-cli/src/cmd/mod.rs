@@ -2,6 +2,7 @@
 
 pub mod compensate_gcode;
 pub mod compensate_table;
+pub mod identify_ballbar;
 pub mod map;
 pub mod model_loader;
 pub mod sensitivity;
