@@ -51,6 +51,10 @@ enum Command {
     Thermal(cmd::thermal::Args),
     /// Global sensitivity (EFAST, Sobol, Morris) of the volumetric error to the error elements.
     Sensitivity(cmd::sensitivity::Args),
+    /// Run the whole pipeline of a project file and write an HTML report.
+    Run(cmd::run::Args),
+    /// Simulate a machine, run the whole pipeline on it, write the report.
+    Demo(cmd::demo::Args),
 }
 
 #[derive(Subcommand)]
@@ -71,6 +75,8 @@ fn main() -> ExitCode {
         Command::Compensate(cmd::compensate::Command::Table(a)) => cmd::compensate_table::run(a),
         Command::Thermal(a) => cmd::thermal::run(a),
         Command::Sensitivity(a) => cmd::sensitivity::run(a),
+        Command::Run(a) => cmd::run::run(a),
+        Command::Demo(a) => cmd::demo::run(a),
     };
     error::exit(result)
 }

@@ -13,6 +13,7 @@
 
 pub mod correction;
 pub mod gcode;
+pub mod kinematic;
 pub mod load;
 pub mod map;
 pub mod model;

@@ -9,7 +9,7 @@ use mtec_io::InputError;
 use std::path::Path;
 
 /// The model formats this build can load, for messages.
-pub const KNOWN_FORMATS: &[&str] = &[MAP_FORMAT];
+pub const KNOWN_FORMATS: &[&str] = &[MAP_FORMAT, crate::kinematic::KINEMATIC_FORMAT];
 
 /// Loads an error model file, whatever its kind, as an [`ErrorModel`].
 pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> {
@@ -19,6 +19,13 @@ pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> 
     let format = model_format(path, &text, &value)?;
     match format.as_str() {
         MAP_FORMAT => Ok(Box::new(load_map_text(path, &text)?)),
+        crate::kinematic::KINEMATIC_FORMAT => {
+            let f: crate::kinematic::KinematicFile = serde_json::from_str(&text)
+                .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
+            let m = crate::kinematic::KinematicModel::from_file(f, path.display().to_string())
+                .map_err(|e| InputError::file(path, e))?;
+            Ok(Box::new(m))
+        }
         other => Err(located_format_error(
             path,
             &text,

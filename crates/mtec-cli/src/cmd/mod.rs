@@ -11,3 +11,11 @@ pub mod thermal;
 pub mod volumetric;
 
 pub mod compensate;
+pub mod demo;
+pub mod pipeline;
+pub mod run;
+
+/// Whether this build has these subcommands (the demo project uses only what exists).
+pub const HAS_ISO230_2: bool = false;
+pub const HAS_CIRCULAR: bool = false;
+pub const HAS_IDENTIFY_LINES: bool = false;

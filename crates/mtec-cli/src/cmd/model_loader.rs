@@ -29,7 +29,7 @@ pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> 
     let format = doc.get("format").and_then(|f| f.as_str()).ok_or_else(|| {
         InputError::file(
             path,
-            "no \"format\" string: expected \"mtec.zero-model/1\" or \"mtec.poly-model/1\"",
+            "no \"format\" string: expected a model such as \"mtec.map/1\", \"mtec.kinematic-model/1\", \"mtec.zero-model/1\" or \"mtec.poly-model/1\"",
         )
     })?;
     match format {
@@ -41,10 +41,8 @@ pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> 
             let model = PolyModel::new(file, path)?;
             Ok(Box::new(model))
         }
-        other => Err(InputError::file(
-            path,
-            format!("model format \"{other}\" is not known: expected \"mtec.zero-model/1\" or \"mtec.poly-model/1\""),
-        )),
+        // every other model kind (maps, kinematic models, ...) is read by mtec-comp
+        _ => mtec_comp::load_error_model(path),
     }
 }
 

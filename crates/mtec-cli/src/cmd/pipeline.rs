@@ -1,0 +1,742 @@
+//! The stages of `mtec run`: each calls one subcommand and turns its result into a report section.
+
+use super::run::{
+    BallbarStage, CompensationStage, LinesStage, MapStage, Pipeline, SensitivityStage, ThermalStage,
+};
+use crate::error::CliError;
+use mtec_report::{bar_chart, line_chart, scatter_chart, Section, Series};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+fn fmt(v: &Value) -> String {
+    match v {
+        Value::Number(n) => match n.as_f64() {
+            Some(x) if x.fract() == 0.0 && x.abs() < 1e9 => format!("{x:.0}"),
+            Some(x) if x.abs() >= 1e4 || (x != 0.0 && x.abs() < 1e-3) => format!("{x:.4e}"),
+            Some(x) => format!("{x:.4}"),
+            None => n.to_string(),
+        },
+        Value::String(s) => s.clone(),
+        Value::Bool(b) => b.to_string(),
+        Value::Null => "—".into(),
+        Value::Array(a) if a.iter().all(|x| !x.is_object() && !x.is_array()) && a.len() <= 12 => {
+            a.iter().map(fmt).collect::<Vec<_>>().join(", ")
+        }
+        Value::Array(a) => format!("[{} values]", a.len()),
+        Value::Object(_) => "{…}".into(),
+    }
+}
+
+/// Puts a command's JSON result into a section: its scalar values as a table, each array of
+/// records (≤ 60 rows) as a table, one level of nested objects likewise.
+pub fn json_tables(sec: &mut Section, v: &Value, depth: usize) {
+    let Some(obj) = v.as_object() else { return };
+    let scalars: Vec<Vec<String>> = obj
+        .iter()
+        .filter(|(k, x)| {
+            *k != "format"
+                && !x.is_object()
+                && !(x.is_array()
+                    && x.as_array()
+                        .is_some_and(|a| a.iter().any(|e| e.is_object())))
+        })
+        .map(|(k, x)| vec![k.clone(), fmt(x)])
+        .collect();
+    if !scalars.is_empty() {
+        sec.table(&["quantity", "value"], scalars);
+    }
+    for (k, x) in obj {
+        match x {
+            Value::Array(a) if !a.is_empty() && a.iter().all(|e| e.is_object()) => {
+                if a.len() > 60 {
+                    sec.text(format!("{k}: {} records (see the JSON file).", a.len()));
+                    continue;
+                }
+                let mut cols: Vec<String> = Vec::new();
+                for e in a {
+                    for (c, val) in e.as_object().into_iter().flatten() {
+                        if !val.is_object() && !cols.contains(c) {
+                            cols.push(c.clone());
+                        }
+                    }
+                }
+                let rows = a
+                    .iter()
+                    .map(|e| {
+                        cols.iter()
+                            .map(|c| e.get(c).map(fmt).unwrap_or_default())
+                            .collect()
+                    })
+                    .collect();
+                sec.text(k.replace('_', " "));
+                let header: Vec<&str> = cols.iter().map(String::as_str).collect();
+                sec.table(&header, rows);
+            }
+            Value::Object(_) if depth < 1 && k != "options" => {
+                sec.text(k.replace('_', " "));
+                json_tables(sec, x, depth + 1);
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Machine summary.
+pub fn machine_section(p: &mut Pipeline, machine: Option<&Path>) -> Result<(), CliError> {
+    let Some(m) = machine else { return Ok(()) };
+    let mach = crate::inputs::read_machine(m)?;
+    let sec = p.report.section("Machine");
+    let mut rows = vec![
+        vec!["name".into(), mach.name.clone()],
+        vec!["chain".into(), mach.chain.text.clone()],
+        vec![
+            "tool offset (mm)".into(),
+            format!("{:?}", mach.tool_offset_mm),
+        ],
+    ];
+    for a in &mach.axes {
+        let t = mach.travel(*a);
+        rows.push(vec![
+            format!("travel {a}"),
+            format!(
+                "{} … {} {}",
+                t[0],
+                t[1],
+                if a.is_rotary() { "deg" } else { "mm" }
+            ),
+        ]);
+    }
+    sec.table(&["", ""], rows);
+    Ok(())
+}
+
+/// ISO 230-2 positioning statistics.
+pub fn iso230_2(p: &mut Pipeline, data: &Path) -> Result<(), CliError> {
+    let f = p.path_of(data);
+    p.progress_of(&format!("ISO 230-2 statistics of {}", f.display()));
+    let name = format!("iso230-2-{}.json", stem(&f));
+    let v = p.json_stage_of(&name, vec!["iso230-2".into(), s(&f), "--json".into()])?;
+    let sec = p
+        .report
+        .section(format!("Positioning (ISO 230-2): {}", stem(&f)));
+    sec.text("Bidirectional positioning accuracy A, repeatability R, reversal B, systematic deviation E and mean reversal per ISO 230-2:2014, from the laser runs.");
+    if let Some(t) = mtec_io::Table::read(&f).ok() {
+        // mean deviation per target and direction with its ±2s band, drawn from the runs
+        let (tg, dir, dev) = (
+            t.f64_column("target_mm"),
+            t.str_column("direction"),
+            t.f64_column("deviation_um"),
+        );
+        if let (Ok(tg), Ok(dir), Ok(dev)) = (tg, dir, dev) {
+            let mut series = Vec::new();
+            for d in ["+", "-"] {
+                let mut targets: Vec<f64> = tg
+                    .iter()
+                    .zip(&dir)
+                    .filter(|(_, x)| x.as_str() == d)
+                    .map(|(t, _)| *t)
+                    .collect();
+                targets.sort_by(f64::total_cmp);
+                targets.dedup();
+                let pts: Vec<(f64, f64)> = targets
+                    .iter()
+                    .map(|&x| {
+                        let v: Vec<f64> = tg
+                            .iter()
+                            .zip(&dir)
+                            .zip(&dev)
+                            .filter(|((t, di), _)| **t == x && di.as_str() == d)
+                            .map(|(_, v)| *v)
+                            .collect();
+                        (x, v.iter().sum::<f64>() / v.len() as f64)
+                    })
+                    .collect();
+                series.push(Series::new(format!("mean deviation, direction {d}"), pts));
+            }
+            let raw: Vec<(f64, f64)> = tg.iter().zip(&dev).map(|(a, b)| (*a, *b)).collect();
+            series.push(Series::new("single readings", raw.clone()));
+            sec.figure(
+                line_chart(
+                    "Positioning deviation",
+                    "target (mm)",
+                    "deviation (µm)",
+                    &series[..2],
+                    &[],
+                ),
+                "Mean unidirectional positioning deviation per target (ISO 230-2).",
+            );
+            sec.figure(
+                scatter_chart(
+                    "All readings",
+                    "target (mm)",
+                    "deviation (µm)",
+                    &[Series::new("readings", raw)],
+                ),
+                "Every reading of every run.",
+            );
+        }
+    }
+    json_tables(sec, &v, 0);
+    Ok(())
+}
+
+fn stem(p: &Path) -> String {
+    p.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// Line-set identification; returns the identified errors file.
+pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> Result<PathBuf, CliError> {
+    let data = p.path_of(&l.data);
+    p.progress_of("identification of the error elements from the line measurements");
+    let errors = p.out.join("identified-errors.json");
+    let mut args = vec![
+        "identify".into(),
+        "lines".into(),
+        "--machine".into(),
+        s(machine),
+        "--data".into(),
+        s(&data),
+        "--json".into(),
+        "-o".into(),
+        s(&errors),
+    ];
+    if let Some(d) = l.degree {
+        args.extend(["--degree".into(), d.to_string()]);
+    }
+    let v = p.json_stage_of("identify-lines.json", args)?;
+    p.outputs.push(s(&errors));
+    let sec = p
+        .report
+        .section("Identified geometric errors (line measurements)");
+    sec.text("Error elements identified by least squares from the laser-interferometer lines; the identifiability report names what the design cannot determine.");
+    let mach = crate::inputs::read_machine(machine)?;
+    if let Ok(set) = crate::inputs::read_errors(&errors) {
+        for group in [
+            ["EXX", "EYY", "EZZ"],
+            ["EYX", "EZX", "EXY"],
+            ["EZY", "EXZ", "EYZ"],
+            ["EAX", "EBX", "ECX"],
+            ["EAY", "EBY", "ECY"],
+        ] {
+            let mut series = Vec::new();
+            for n in group {
+                let Ok(el) = mtec_model::ErrorElement::parse(n) else {
+                    continue;
+                };
+                let Some(f) = set.get(&el) else { continue };
+                let [lo, hi] = mach.travel(el.axis);
+                let pts = (0..=60).map(|k| {
+                    let q = lo + (hi - lo) * k as f64 / 60.0;
+                    ((q - lo) / (hi - lo), f.value(q))
+                });
+                series.push(Series::new(format!("{n} ({})", el.unit()), pts.collect()));
+            }
+            if !series.is_empty() {
+                sec.figure(
+                    line_chart(
+                        &format!("{} against position", group.join(", ")),
+                        "position (fraction of travel)",
+                        "error (µm or µrad)",
+                        &series,
+                        &[],
+                    ),
+                    "Identified error functions over each axis' travel.",
+                );
+            }
+        }
+        if !set.unidentifiable.is_empty() {
+            sec.note(format!(
+                "Not identifiable from this design (no numbers given): {}",
+                set.unidentifiable.join(", ")
+            ));
+        }
+    }
+    json_tables(sec, &v, 0);
+    Ok(errors)
+}
+
+/// Writes error statistics (element, mean, std over the travel) of an error set for sensitivity.
+fn stats_from_errors(machine: &Path, errors: &Path, out: &Path) -> Result<(), CliError> {
+    let mach = crate::inputs::read_machine(machine)?;
+    let set = crate::inputs::read_errors(errors)?;
+    let mut csv = String::from("# statistics of each identified error function over its axis travel (mean, std of 101 samples)\nelement,mean,std,unit\n");
+    for el in mtec_model::three_axis_elements() {
+        let Some(f) = set.get(&el) else { continue };
+        let [lo, hi] = mach.travel(el.axis);
+        let v: Vec<f64> = (0..=100)
+            .map(|k| f.value(lo + (hi - lo) * k as f64 / 100.0))
+            .collect();
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt();
+        csv.push_str(&format!(
+            "{},{m:.6},{:.6},{}\n",
+            el.name(),
+            sd.max(1e-6),
+            el.unit()
+        ));
+    }
+    mtec_io::write_atomic(out, csv.as_bytes())?;
+    Ok(())
+}
+
+/// Global sensitivity of the volumetric error.
+pub fn sensitivity(
+    p: &mut Pipeline,
+    machine: &Path,
+    st: &SensitivityStage,
+    identified: Option<&Path>,
+) -> Result<(), CliError> {
+    p.progress_of(&format!("global sensitivity ({})", st.method));
+    let stats = match (&st.stats, identified) {
+        (Some(f), _) => p.path_of(f),
+        (None, Some(errors)) => {
+            let f = p.out.join("error-statistics.csv");
+            stats_from_errors(machine, errors, &f)?;
+            p.outputs.push(s(&f));
+            f
+        }
+        (None, None) => return Err(CliError::usage("[sensitivity] needs `stats` or a [lines] stage whose identified errors give the statistics")),
+    };
+    let mut args = vec![
+        "sensitivity".into(),
+        "--machine".into(),
+        s(machine),
+        "--stats".into(),
+        s(&stats),
+        "--method".into(),
+        st.method.clone(),
+        "--json".into(),
+    ];
+    if let Some(n) = st.samples {
+        args.extend(["--samples".into(), n.to_string()]);
+    }
+    let v = p.json_stage_of("sensitivity.json", args)?;
+    let sec = p
+        .report
+        .section("Global sensitivity of the volumetric error");
+    sec.text("First-order index S1 (key errors) and total index ST (ST − S1: coupling) of each error element for the volumetric error, inputs drawn from the statistics of the error functions.");
+    if let (Some(inputs), Some(outputs)) = (
+        v.get("inputs").and_then(Value::as_array),
+        v.get("outputs").and_then(Value::as_object),
+    ) {
+        let names: Vec<String> = inputs.iter().map(fmt).collect();
+        for (out, idx) in outputs {
+            let get = |k: &str| {
+                idx.get(k).and_then(Value::as_array).map(|a| {
+                    a.iter()
+                        .map(|x| x.as_f64().unwrap_or(0.0))
+                        .collect::<Vec<_>>()
+                })
+            };
+            if let (Some(s1), Some(st)) = (get("S1"), get("ST")) {
+                sec.figure(
+                    bar_chart(
+                        &format!("Sensitivity of {out}"),
+                        "index",
+                        &names,
+                        &[("S1".into(), s1), ("ST".into(), st)],
+                    ),
+                    format!("EFAST indices for {out}."),
+                );
+            }
+        }
+    }
+    json_tables(sec, &v, 0);
+    Ok(())
+}
+
+/// ISO 230-4 circular test.
+pub fn circular(p: &mut Pipeline, data: &Path) -> Result<(), CliError> {
+    let f = p.path_of(data);
+    p.progress_of(&format!("circular test {}", f.display()));
+    let v = p.json_stage_of(
+        &format!("circular-{}.json", stem(&f)),
+        vec!["circular".into(), s(&f), "--json".into()],
+    )?;
+    let sec = p
+        .report
+        .section(format!("Circular test (ISO 230-4): {}", stem(&f)));
+    sec.text("Circular deviation G, circular hysteresis H and the ballbar diagnostics fitted from the trace, ranked by their contribution to the circularity.");
+    if let Ok(t) = mtec_io::Table::read(&f) {
+        if let (Ok(a), Ok(d)) = (t.f64_column("angle_deg"), t.f64_column("dl_um")) {
+            let radius: f64 = t
+                .comment_value("radius_mm")
+                .and_then(|r| r.parse().ok())
+                .unwrap_or(100.0);
+            let trace: Vec<(f64, f64)> = a.iter().zip(&d).map(|(a, d)| (*a, *d)).collect();
+            if let Some(svg) = polar_svg(&trace, radius) {
+                sec.figure(svg, "Polar plot of the bar-length deviation.");
+            }
+        }
+    }
+    json_tables(sec, &v, 0);
+    Ok(())
+}
+
+fn polar_svg(trace: &[(f64, f64)], radius_mm: f64) -> Option<String> {
+    let _ = radius_mm;
+    let pts: Vec<(f64, f64)> = trace.to_vec();
+    Some(line_chart(
+        "Bar-length deviation against angle",
+        "angle (deg)",
+        "ΔL (µm)",
+        &[Series::new("ΔL", pts)],
+        &[],
+    ))
+}
+
+/// Ballbar identification of rotary-axis error motions.
+pub fn ballbar(p: &mut Pipeline, b: &BallbarStage) -> Result<(), CliError> {
+    p.progress_of("ballbar identification of the rotary axis");
+    let dir = p.out.join("ballbar");
+    let mut args = vec![
+        "identify".into(),
+        "ballbar".into(),
+        "--setup".into(),
+        s(&p.path_of(&b.setup)),
+        "--data".into(),
+        s(&p.path_of(&b.data)),
+        "--out".into(),
+        s(&dir),
+        "--json".into(),
+    ];
+    if let Some(t) = &b.temps {
+        args.extend(["--temps".into(), s(&p.path_of(t))]);
+    }
+    let v = p.json_stage_of("ballbar.json", args)?;
+    let sec = p
+        .report
+        .section("Rotary axis: ballbar identification (5 installation modes)");
+    sec.text("Error motions EXC, EYC, EZC (µm), EAC, EBC (µrad) identified per angle and time from five installation modes, after removal of each mode's mean and first harmonic (set-up errors). ECC is not observable by a ballbar.");
+    let mut svgs: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .map(|d| {
+            d.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "svg"))
+                .collect()
+        })
+        .unwrap_or_default();
+    svgs.sort();
+    for f in svgs {
+        if let Ok(svg) = std::fs::read_to_string(&f) {
+            sec.figure(svg, stem(&f).replace('_', " "));
+        }
+    }
+    if let Some(c) = v.get("conditioning") {
+        let mut summary = serde_json::Map::new();
+        for (k, x) in c.as_object().into_iter().flatten() {
+            if k != "per_angle" {
+                summary.insert(k.clone(), x.clone());
+            }
+        }
+        json_tables(sec, &Value::Object(summary), 0);
+    }
+    Ok(())
+}
+
+/// A thermal model: sensor selection, fit, prediction.
+pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> Result<(), CliError> {
+    let data = p.path_of(&t.data);
+    p.progress_of(&format!("thermal model of {} ({})", t.target, t.model));
+    let tag = format!("{}-{}", stem(&data), t.target);
+    let sel = p.json_stage_of(
+        &format!("thermal-select-{tag}.json"),
+        vec![
+            "thermal".into(),
+            "select".into(),
+            "--data".into(),
+            s(&data),
+            "--target".into(),
+            t.target.clone(),
+            "--json".into(),
+        ],
+    )?;
+    let model = p.out.join(format!("thermal-model-{tag}.json"));
+    let mut fit = vec![
+        "thermal".into(),
+        "fit".into(),
+        "--data".into(),
+        s(&data),
+        "--target".into(),
+        t.target.clone(),
+        "--model".into(),
+        t.model.clone(),
+        "-o".into(),
+        s(&model),
+    ];
+    if let (Some(tr), Some(te)) = (&t.train, &t.test) {
+        fit.extend(["--train".into(), tr.clone(), "--test".into(), te.clone()]);
+    } else if let Some(u) = t.train_until_min {
+        fit.extend(["--train-until".into(), u.to_string()]);
+    }
+    super::run::call_checked(&fit)?;
+    p.outputs.push(s(&model));
+    let pred = p.json_stage_of(
+        &format!("thermal-predict-{tag}.json"),
+        vec![
+            "thermal".into(),
+            "predict".into(),
+            "--model".into(),
+            s(&model),
+            "--data".into(),
+            s(&data),
+            "--json".into(),
+        ],
+    )?;
+    let sec = p
+        .report
+        .section(format!("Thermal model: {} from {}", t.target, stem(&data)));
+    sec.text("Sensor selection by the ridge trace (VIF, elimination steps, chosen k), then the fitted model's prediction against the measured drift.");
+    if let Ok(tab) = mtec_io::Table::read(&data) {
+        if let (Ok(y), Some(pr)) = (
+            tab.f64_column(&t.target),
+            pred.get("predictions").and_then(Value::as_array),
+        ) {
+            let pr: Vec<f64> = pr.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect();
+            let xs: Vec<f64> = (0..y.len()).map(|i| i as f64).collect();
+            let meas = Series::new(
+                "measured",
+                xs.iter().zip(&y).map(|(a, b)| (*a, *b)).collect(),
+            );
+            let model_s = Series::new(
+                "predicted",
+                xs.iter().zip(&pr).map(|(a, b)| (*a, *b)).collect(),
+            );
+            let res = Series::new(
+                "residual",
+                xs.iter()
+                    .zip(y.iter().zip(&pr))
+                    .map(|(a, (m, q))| (*a, m - q))
+                    .collect(),
+            );
+            sec.figure(
+                line_chart(
+                    "Measured and predicted drift",
+                    "sample",
+                    "drift (µm)",
+                    &[meas, model_s, res],
+                    &[],
+                ),
+                "Measured thermal drift, the model's prediction and the residual.",
+            );
+            let temps: Vec<Series> = tab
+                .columns_with_suffix("_c")
+                .iter()
+                .take(8)
+                .filter_map(|c| {
+                    tab.f64_column(c).ok().map(|v| {
+                        Series::new(
+                            c.clone(),
+                            v.iter().enumerate().map(|(i, t)| (i as f64, *t)).collect(),
+                        )
+                    })
+                })
+                .collect();
+            if !temps.is_empty() {
+                sec.figure(
+                    line_chart("Temperatures", "sample", "°C", &temps, &[]),
+                    "Temperature sensors (up to 8 shown).",
+                );
+            }
+        }
+    }
+    if let Some(trace) = sel.get("trace") {
+        if let (Some(k), Some(names), Some(coefs)) = (
+            trace.get("k").and_then(Value::as_array),
+            trace.get("sensors").and_then(Value::as_array),
+            trace.get("coefficients").and_then(Value::as_array),
+        ) {
+            let k: Vec<f64> = k.iter().filter_map(Value::as_f64).collect();
+            let series: Vec<Series> = names
+                .iter()
+                .zip(coefs)
+                .map(|(n, c)| {
+                    Series::new(
+                        fmt(n),
+                        k.iter()
+                            .zip(c.as_array().into_iter().flatten())
+                            .map(|(k, c)| (k.log10(), c.as_f64().unwrap_or(0.0)))
+                            .collect(),
+                    )
+                })
+                .collect();
+            if !series.is_empty() {
+                sec.figure(
+                    line_chart(
+                        "Ridge trace",
+                        "log10 k",
+                        "standardised coefficient",
+                        &series,
+                        &[],
+                    ),
+                    "Ridge trace: standardised coefficients against the ridge parameter k.",
+                );
+            }
+        }
+    }
+    let mut sel_small = sel.clone();
+    if let Some(o) = sel_small.as_object_mut() {
+        o.remove("trace");
+    }
+    json_tables(sec, &sel_small, 0);
+    let mut pred_small = pred.clone();
+    if let Some(o) = pred_small.as_object_mut() {
+        o.remove("predictions");
+    }
+    json_tables(sec, &pred_small, 0);
+    Ok(())
+}
+
+/// A volumetric map from a grid; returns the map file.
+pub fn map(p: &mut Pipeline, m: &MapStage) -> Result<PathBuf, CliError> {
+    let grid = p.path_of(&m.grid);
+    p.progress_of("volumetric map (trilinear)");
+    let map = p.out.join("map.json");
+    super::run::call_checked(&[
+        "map".into(),
+        "fit".into(),
+        "--grid".into(),
+        s(&grid),
+        "--model".into(),
+        "trilinear".into(),
+        "-o".into(),
+        s(&map),
+    ])?;
+    p.outputs.push(s(&map));
+    let mut figures = Vec::new();
+    if let Some(check) = &m.check {
+        let pts = p.path_of(check);
+        let out = p.out.join("map-check.csv");
+        super::run::call_checked(&[
+            "map".into(),
+            "eval".into(),
+            "--map".into(),
+            s(&map),
+            "--points".into(),
+            s(&pts),
+            "-o".into(),
+            s(&out),
+        ])?;
+        p.outputs.push(s(&out));
+        if let (Ok(meas), Ok(pred)) = (mtec_io::Table::read(&pts), mtec_io::Table::read(&out)) {
+            for (c, name) in ["ex_um", "ey_um", "ez_um"].iter().zip(["Ex", "Ey", "Ez"]) {
+                if let (Ok(a), Ok(b)) = (meas.f64_column(c), pred.f64_column(c)) {
+                    let rms = (a.iter().zip(&b).map(|(x, y)| (x - y).powi(2)).sum::<f64>()
+                        / a.len() as f64)
+                        .sqrt();
+                    let xs = 0..a.len();
+                    figures.push((
+                        line_chart(&format!("{name} along the check points"), "point", "µm", &[Series::new("measured", xs.clone().map(|i| (i as f64, a[i])).collect()), Series::new("map", xs.map(|i| (i as f64, b[i])).collect())], &[]),
+                        format!("{name}: map against measurement off the grid, RMS difference {rms:.2} µm."),
+                    ));
+                }
+            }
+        }
+    }
+    let sec = p.report.section("Volumetric error map");
+    sec.text("A regular grid of measured volumetric errors, interpolated trilinearly (the controller-style compensation baseline).");
+    for (svg, cap) in figures {
+        sec.figure(svg, cap);
+    }
+    Ok(map)
+}
+
+/// Compensation outputs: corrected programs and controller tables.
+pub fn compensation(
+    p: &mut Pipeline,
+    c: &CompensationStage,
+    map: Option<&Path>,
+    machine: Option<&Path>,
+    identified: Option<&Path>,
+) -> Result<(), CliError> {
+    p.progress_of("compensation outputs");
+    // the model: the map if there is one, else the identified kinematic model
+    let model = match (map, machine, identified) {
+        (Some(m), _, _) => m.to_path_buf(),
+        (None, Some(mach), Some(errors)) => {
+            let spec: mtec_model::MachineSpec = mtec_io::read_toml(mach)?;
+            let set = crate::inputs::read_errors(errors)?;
+            let f = p.out.join("kinematic-model.json");
+            let doc = serde_json::json!({ "format": mtec_comp::kinematic::KINEMATIC_FORMAT, "machine": spec, "errors": set });
+            mtec_io::write_atomic(
+                &f,
+                serde_json::to_string_pretty(&doc)
+                    .unwrap_or_default()
+                    .as_bytes(),
+            )?;
+            p.outputs.push(s(&f));
+            f
+        }
+        _ => {
+            return Err(CliError::usage(
+                "[compensation] needs a [map] stage or a machine with a [lines] stage",
+            ))
+        }
+    };
+    let mut rows = Vec::new();
+    for g in &c.gcode {
+        let input = p.path_of(g);
+        let out = p.out.join(format!("{}-compensated.ngc", stem(&input)));
+        let said = super::run::call_checked(&[
+            "compensate".into(),
+            "gcode".into(),
+            "--model".into(),
+            s(&model),
+            s(&input),
+            "-o".into(),
+            s(&out),
+        ])?;
+        p.outputs.push(s(&out));
+        let lines_in = std::fs::read_to_string(&input)
+            .map(|t| t.lines().count())
+            .unwrap_or(0);
+        let lines_out = std::fs::read_to_string(&out)
+            .map(|t| t.lines().count())
+            .unwrap_or(0);
+        rows.push(vec![
+            stem(&input),
+            format!("{lines_in}"),
+            format!("{lines_out}"),
+            said.lines().last().unwrap_or("").to_string(),
+        ]);
+    }
+    let mut tables = Vec::new();
+    for f in &c.tables {
+        let out = p.out.join(format!("comp-{f}.txt"));
+        super::run::call_checked(&[
+            "compensate".into(),
+            "table".into(),
+            "--model".into(),
+            s(&model),
+            "--format".into(),
+            f.clone(),
+            "-o".into(),
+            s(&out),
+        ])?;
+        p.outputs.push(s(&out));
+        let head: String = std::fs::read_to_string(&out)
+            .unwrap_or_default()
+            .lines()
+            .take(6)
+            .collect::<Vec<_>>()
+            .join(" | ");
+        tables.push(vec![f.clone(), s(&out), head]);
+    }
+    let sec = p.report.section("Compensation outputs");
+    sec.text(format!("Model used: {}. NC programs are rewritten so that every commanded point is corrected (long moves split where the correction changes); controller tables carry the negative of the predicted error.", model.display()));
+    if !rows.is_empty() {
+        sec.table(
+            &["program", "lines in", "lines out", "rewriter summary"],
+            rows,
+        );
+    }
+    if !tables.is_empty() {
+        sec.table(&["format", "file", "first lines"], tables);
+    }
+    Ok(())
+}

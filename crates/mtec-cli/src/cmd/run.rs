@@ -1,0 +1,439 @@
+//! `mtec run PROJECT.toml`: the whole pipeline a project file asks for, with an HTML report.
+//!
+//! Each stage runs the same subcommand a user would type (this binary, as a child process, with
+//! `--json`), so a project exercises exactly the command-line paths; its JSON result is saved in
+//! the output folder and turned into a report section (tables of its numbers, plots). A stage
+//! that fails stops the run with that stage's message and exit code: a report never hides a
+//! failed analysis.
+//!
+//! Project file (paths relative to the project file):
+//! ```toml
+//! name = "VMC acceptance 2026-11"
+//! machine = "machine.toml"
+//! [[iso230_2]]                 # one table per positioning run file
+//! data = "x-axis.csv"
+//! [lines]                      # 9-line identification
+//! data = "lines.csv"
+//! [sensitivity]                # EFAST of the identified (or given) error statistics
+//! method = "efast"
+//! [[circular]]
+//! data = "circular.csv"
+//! [ballbar]
+//! setup = "setup.toml"
+//! data = "dbb.csv"
+//! temps = "temps.csv"
+//! [[thermal]]
+//! data = "thermal.csv"
+//! target = "drift_um"
+//! model = "ridge-select"
+//! [map]
+//! grid = "grid.csv"
+//! [compensation]
+//! gcode = ["part.ngc"]
+//! tables = ["linuxcnc"]
+//! ```
+
+use crate::error::CliError;
+use mtec_io::{InputError, OutputGuard};
+use mtec_report::Report;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Run the whole pipeline of a project file and write report.html.
+///
+/// The project file (TOML) names the machine and the measurement files, and which analyses,
+/// models and compensation outputs to produce; see `mtec demo` for a complete example it writes.
+///
+/// Example:
+///   mtec run project.toml --out results
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Project file (TOML).
+    pub project: PathBuf,
+    /// Output folder (default: <project name>-results beside the project file).
+    #[arg(long, short)]
+    pub out: Option<PathBuf>,
+    /// Print nothing but errors.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Print a JSON summary (the stages and their output files) on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Project {
+    #[serde(default)]
+    pub name: String,
+    pub machine: Option<PathBuf>,
+    #[serde(default)]
+    pub iso230_2: Vec<DataStage>,
+    pub lines: Option<LinesStage>,
+    pub sensitivity: Option<SensitivityStage>,
+    #[serde(default)]
+    pub circular: Vec<DataStage>,
+    pub ballbar: Option<BallbarStage>,
+    #[serde(default)]
+    pub thermal: Vec<ThermalStage>,
+    pub map: Option<MapStage>,
+    pub compensation: Option<CompensationStage>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DataStage {
+    pub data: PathBuf,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinesStage {
+    pub data: PathBuf,
+    pub degree: Option<usize>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensitivityStage {
+    /// Error statistics CSV; default: derived from the identified error set.
+    pub stats: Option<PathBuf>,
+    #[serde(default = "default_method")]
+    pub method: String,
+    pub samples: Option<usize>,
+}
+
+fn default_method() -> String {
+    "efast".into()
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BallbarStage {
+    pub setup: PathBuf,
+    pub data: PathBuf,
+    pub temps: Option<PathBuf>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ThermalStage {
+    pub data: PathBuf,
+    pub target: String,
+    #[serde(default = "default_thermal_model")]
+    pub model: String,
+    pub train: Option<String>,
+    pub test: Option<String>,
+    pub train_until_min: Option<f64>,
+}
+
+fn default_thermal_model() -> String {
+    "ridge-select".into()
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapStage {
+    pub grid: PathBuf,
+    /// Points to evaluate the map at (CSV with x_mm, y_mm, z_mm; extra columns are ignored).
+    pub check: Option<PathBuf>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CompensationStage {
+    #[serde(default)]
+    pub gcode: Vec<PathBuf>,
+    #[serde(default)]
+    pub tables: Vec<String>,
+}
+
+/// A failed stage: its command line and what it said.
+struct StageError {
+    code: i32,
+    message: String,
+}
+
+/// Runs `mtec <args>` (this binary) and returns its stdout.
+fn call(args: &[String]) -> Result<String, StageError> {
+    let exe = std::env::current_exe().map_err(|e| StageError {
+        code: 1,
+        message: e.to_string(),
+    })?;
+    let out = Command::new(exe)
+        .args(args)
+        .output()
+        .map_err(|e| StageError {
+            code: 1,
+            message: e.to_string(),
+        })?;
+    if out.status.success() {
+        Ok(String::from_utf8_lossy(&out.stdout).into_owned())
+    } else {
+        let stderr = String::from_utf8_lossy(&out.stderr).trim().to_string();
+        Err(StageError {
+            code: out.status.code().unwrap_or(1),
+            message: format!("`mtec {}` failed: {stderr}", args.join(" ")),
+        })
+    }
+}
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+/// The pipeline state shared by the stages.
+pub struct Pipeline {
+    pub base: PathBuf,
+    pub out: PathBuf,
+    pub quiet: bool,
+    pub report: Report,
+    pub outputs: Vec<String>,
+    guard: OutputGuard,
+    step: usize,
+    steps: usize,
+}
+
+/// Runs a stage command and returns its stdout, mapping failure to the stage's exit code.
+pub fn call_checked(args: &[String]) -> Result<String, CliError> {
+    call(args).map_err(stage_error)
+}
+
+impl Pipeline {
+    pub fn path_of(&self, p: &Path) -> PathBuf {
+        self.path(p)
+    }
+    pub fn progress_of(&mut self, what: &str) {
+        self.progress(what)
+    }
+    pub fn json_stage_of(
+        &mut self,
+        file: &str,
+        args: Vec<String>,
+    ) -> Result<serde_json::Value, CliError> {
+        self.json_stage(file, args)
+    }
+
+    fn path(&self, p: &Path) -> PathBuf {
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            self.base.join(p)
+        }
+    }
+
+    fn progress(&mut self, what: &str) {
+        self.step += 1;
+        if !self.quiet {
+            eprintln!("[{}/{}] {what}", self.step, self.steps);
+        }
+    }
+
+    fn save(&mut self, name: &str, text: &str) -> Result<PathBuf, CliError> {
+        let p = self.out.join(name);
+        self.guard.write(&p, text.as_bytes())?;
+        self.outputs.push(s(&p));
+        Ok(p)
+    }
+
+    /// Runs a stage command with --json, saves its JSON, returns it parsed.
+    fn json_stage(&mut self, file: &str, args: Vec<String>) -> Result<serde_json::Value, CliError> {
+        let text = call(&args).map_err(stage_error)?;
+        self.save(file, &text)?;
+        serde_json::from_str(&text).map_err(|e| {
+            CliError::Internal(anyhow::anyhow!(
+                "`mtec {}` printed no JSON: {e}",
+                args.join(" ")
+            ))
+        })
+    }
+}
+
+fn stage_error(e: StageError) -> CliError {
+    if e.code == 2 {
+        CliError::Usage(e.message)
+    } else {
+        CliError::Internal(anyhow::anyhow!(e.message))
+    }
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    let project: Project = mtec_io::read_toml(&args.project)?;
+    let base = args
+        .project
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
+    let name = if project.name.is_empty() {
+        "project".to_string()
+    } else {
+        project.name.clone()
+    };
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| base.join(format!("{}-results", slug(&name))));
+    let report_path = run_project(&project, &args.project, &base, &out, args.quiet, &name)?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({ "format": "mtec.run/1", "report": s(&report_path), "out": s(&out) })
+        );
+    } else if !args.quiet {
+        println!("report: {}", report_path.display());
+    }
+    Ok(())
+}
+
+fn slug(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '-'
+            }
+        })
+        .collect()
+}
+
+/// Runs a parsed project; returns the path of report.html.
+pub fn run_project(
+    project: &Project,
+    project_path: &Path,
+    base: &Path,
+    out: &Path,
+    quiet: bool,
+    name: &str,
+) -> Result<PathBuf, CliError> {
+    run_project_with(project, project_path, base, out, quiet, name, |_| Ok(()))
+}
+
+/// Runs a parsed project, letting `extra` add report sections before the report is written.
+pub fn run_project_with(
+    project: &Project,
+    project_path: &Path,
+    base: &Path,
+    out: &Path,
+    quiet: bool,
+    name: &str,
+    extra: impl FnOnce(&mut Pipeline) -> Result<(), CliError>,
+) -> Result<PathBuf, CliError> {
+    let mut inputs = vec![project_path.to_path_buf()];
+    let steps = project.iso230_2.len()
+        + project.lines.is_some() as usize
+        + project.sensitivity.is_some() as usize
+        + project.circular.len()
+        + project.ballbar.is_some() as usize
+        + project.thermal.len()
+        + project.map.is_some() as usize
+        + project.compensation.is_some() as usize;
+    let mut p = Pipeline {
+        base: base.to_path_buf(),
+        out: out.to_path_buf(),
+        quiet,
+        report: Report::new(
+            format!("mtec report: {name}"),
+            format!(
+                "mtec {} — measure, identify, model, compensate",
+                env!("CARGO_PKG_VERSION")
+            ),
+        ),
+        outputs: vec![],
+        guard: OutputGuard::default(),
+        step: 0,
+        steps,
+    };
+    // every file the project names is an input that no output may overwrite
+    let check = |f: &Path, what: &str| -> Result<PathBuf, InputError> {
+        let f = if f.is_absolute() {
+            f.to_path_buf()
+        } else {
+            base.join(f)
+        };
+        if !f.is_file() {
+            return Err(InputError::file(
+                project_path,
+                format!("{what} `{}` does not exist", f.display()),
+            ));
+        }
+        Ok(f)
+    };
+    let machine = project
+        .machine
+        .as_ref()
+        .map(|m| check(m, "machine"))
+        .transpose()?;
+    for st in &project.iso230_2 {
+        inputs.push(check(&st.data, "iso230_2 data")?);
+    }
+    for st in &project.circular {
+        inputs.push(check(&st.data, "circular data")?);
+    }
+    if let Some(l) = &project.lines {
+        inputs.push(check(&l.data, "lines data")?);
+        if machine.is_none() {
+            return Err(InputError::file(project_path, "[lines] needs `machine`").into());
+        }
+    }
+    if let Some(b) = &project.ballbar {
+        inputs.push(check(&b.setup, "ballbar setup")?);
+        inputs.push(check(&b.data, "ballbar data")?);
+        if let Some(t) = &b.temps {
+            inputs.push(check(t, "ballbar temps")?);
+        }
+    }
+    for t in &project.thermal {
+        inputs.push(check(&t.data, "thermal data")?);
+    }
+    if let Some(m) = &project.map {
+        inputs.push(check(&m.grid, "map grid")?);
+    }
+    if let Some(c) = &project.compensation {
+        for g in &c.gcode {
+            inputs.push(check(g, "gcode")?);
+        }
+    }
+    inputs.extend(machine.clone());
+    p.guard = OutputGuard::new(&inputs);
+    std::fs::create_dir_all(out)?;
+
+    crate::cmd::pipeline::machine_section(&mut p, machine.as_deref())?;
+    for st in &project.iso230_2 {
+        crate::cmd::pipeline::iso230_2(&mut p, &st.data)?;
+    }
+    let mut identified: Option<PathBuf> = None;
+    if let (Some(l), Some(m)) = (&project.lines, &machine) {
+        identified = Some(crate::cmd::pipeline::lines(&mut p, m, l)?);
+    }
+    if let (Some(st), Some(m)) = (&project.sensitivity, &machine) {
+        crate::cmd::pipeline::sensitivity(&mut p, m, st, identified.as_deref())?;
+    }
+    for st in &project.circular {
+        crate::cmd::pipeline::circular(&mut p, &st.data)?;
+    }
+    if let Some(b) = &project.ballbar {
+        crate::cmd::pipeline::ballbar(&mut p, b)?;
+    }
+    for t in &project.thermal {
+        crate::cmd::pipeline::thermal(&mut p, t)?;
+    }
+    let mut map: Option<PathBuf> = None;
+    if let Some(m) = &project.map {
+        map = Some(crate::cmd::pipeline::map(&mut p, m)?);
+    }
+    if let Some(c) = &project.compensation {
+        crate::cmd::pipeline::compensation(
+            &mut p,
+            c,
+            map.as_deref(),
+            machine.as_deref(),
+            identified.as_deref(),
+        )?;
+    }
+    extra(&mut p)?;
+    let html = p.report.to_html();
+    let report = p.save("report.html", &html)?;
+    Ok(report)
+}
