@@ -14,6 +14,8 @@ geometric and thermal errors.
 The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
+  iso230-2      positioning statistics of a linear axis from laser runs (ISO 230-2, VDI 3441)
+  circular      circular test of two axes: ISO 230-4 G and H, ballbar diagnostics ranked
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
 Every CSV column name carries its unit suffix (x_mm, ex_um, ...). Exit codes: 0 success,
@@ -27,10 +29,19 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// ISO 230-2 positioning statistics of a linear axis (and VDI/DGQ 3441).
+    #[command(name = "iso230-2")]
+    Iso230_2(cmd::iso230_2::Args),
+    /// ISO 230-4 circular test and ballbar diagnostics.
+    Circular(cmd::circular::Args),
+}
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result: Result<(), error::CliError> = match cli.command {};
+    let result: Result<(), error::CliError> = match cli.command {
+        Command::Iso230_2(a) => cmd::iso230_2::run(a),
+        Command::Circular(a) => cmd::circular::run(a),
+    };
     error::exit(result)
 }

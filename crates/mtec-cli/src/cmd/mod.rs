@@ -1,1 +1,3 @@
 //! One module per subcommand: its clap `Args` and a `run(args) -> Result<(), CliError>`.
+pub mod circular;
+pub mod iso230_2;
