@@ -7,6 +7,8 @@ use mtec_measure::circular::{
 };
 use mtec_report::polar::{polar_svg, PolarOptions, PolarTrace};
 use serde_json::json;
+use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::PathBuf;
 
 const LONG: &str = "\
@@ -150,11 +152,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
         guard.write(&dir.join("polar.svg"), svg.as_bytes())?;
     }
     if args.json {
-        println!("{text}");
-        return Ok(());
+        return emit(&format!("{text}\n"));
     }
+    let mut o = String::new();
     let [a1, a2] = trace.plane.axes();
-    println!(
+    let _ = writeln!(
+        o,
         "ISO 230-4 circular test {} (plane {}{}, R = {} mm{})",
         args.run.display(),
         a1,
@@ -165,31 +168,41 @@ pub fn run(args: Args) -> Result<(), CliError> {
             .map(|f| format!(", F = {f} mm/min"))
             .unwrap_or_default()
     );
-    println!();
-    println!(
+    let _ = writeln!(o);
+    let _ = writeln!(
+        o,
         "  circular deviation G(ccw)          {:>9.3} um",
         iso.g_ccw_um
     );
-    println!(
+    let _ = writeln!(
+        o,
         "  circular deviation G(cw)           {:>9.3} um",
         iso.g_cw_um
     );
-    println!(
+    let _ = writeln!(
+        o,
         "  bidirectional circular dev. G(b)   {:>9.3} um",
         iso.g_bidirectional_um
     );
-    println!("  circular hysteresis H              {:>9.3} um", iso.h_um);
+    let _ = writeln!(
+        o,
+        "  circular hysteresis H              {:>9.3} um",
+        iso.h_um
+    );
     let c = &iso.circle_bidirectional;
-    println!(
+    let _ = writeln!(
+        o,
         "  least-squares centre ({a1}, {a2})      ({:.3}, {:.3}) um, radius deviation {:.3} um",
         c.centre_um[0], c.centre_um[1], c.radius_deviation_um
     );
-    println!();
-    println!(
+    let _ = writeln!(o);
+    let _ = writeln!(
+        o,
         "diagnostics, ranked by contribution to circularity (present: >= {} um and > 3 s.e.)",
         diag.threshold_um
     );
-    println!(
+    let _ = writeln!(
+        o,
         "  {:<40} {:>11} {:<5} {:>9} {:>8} {:>6}",
         "fault", "value", "unit", "+/- s.e.", "contrib", "%"
     );
@@ -198,7 +211,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
             Some(p) if d.present => format!("{} (pitch {p:.2} mm)", d.label),
             _ => d.label.clone(),
         };
-        println!(
+        let _ = writeln!(
+            o,
             "{} {:<40} {:>11.3} {:<5} {:>9.3} {:>8.3} {:>6.1}",
             if d.present { "*" } else { " " },
             label,
@@ -209,12 +223,21 @@ pub fn run(args: Args) -> Result<(), CliError> {
             d.contribution_percent
         );
     }
-    println!(
+    let _ = writeln!(
+        o,
         "  residual RMS after the fit: {:.3} um",
         diag.residual_rms_um
     );
     for n in &diag.notes {
-        println!("  note: {n}");
+        let _ = writeln!(o, "  note: {n}");
     }
-    Ok(())
+    emit(&o)
+}
+
+/// Writes the report to stdout; a reader that closed the pipe early (`| head`) is not an error.
+fn emit(text: &str) -> Result<(), CliError> {
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
 }

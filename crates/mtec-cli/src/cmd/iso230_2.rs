@@ -4,6 +4,8 @@ use crate::error::CliError;
 use mtec_io::OutputGuard;
 use mtec_measure::{evaluate_iso230_2, vdi3441, PositioningData};
 use serde_json::json;
+use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::PathBuf;
 
 const LONG: &str = "\
@@ -69,22 +71,25 @@ pub fn run(args: Args) -> Result<(), CliError> {
         OutputGuard::new(&[&args.run]).write(&dir.join("iso230-2.json"), text.as_bytes())?;
     }
     if args.json {
-        println!("{text}");
-        return Ok(());
+        return emit(&format!("{text}\n"));
     }
-    println!(
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
         "ISO 230-2:2014 positioning of {} ({} runs +, {} runs -)",
         args.run.display(),
         iso.runs_up,
         iso.runs_down
     );
-    println!();
-    println!(
+    let _ = writeln!(o);
+    let _ = writeln!(
+        o,
         "{:>10} {:>9} {:>9} {:>7} {:>7} {:>8} {:>8} {:>7}",
         "target_mm", "mean+_um", "mean-_um", "s+_um", "s-_um", "B_i_um", "mean_um", "R_i_um"
     );
     for t in &iso.targets {
-        println!(
+        let _ = writeln!(
+            o,
             "{:>10.3} {:>9.3} {:>9.3} {:>7.3} {:>7.3} {:>8.3} {:>8.3} {:>7.3}",
             t.target_mm,
             t.mean_up_um,
@@ -97,36 +102,51 @@ pub fn run(args: Args) -> Result<(), CliError> {
         );
     }
     let a = &iso.axis;
-    println!();
-    println!("axis values (um)        up      down     bidirectional");
-    println!(
+    let _ = writeln!(o);
+    let _ = writeln!(o, "axis values (um)        up      down     bidirectional");
+    let _ = writeln!(
+        o,
         "  A  accuracy      {:>8.3}  {:>8.3}  {:>8.3}",
         a.a_up_um, a.a_down_um, a.a_um
     );
-    println!(
+    let _ = writeln!(
+        o,
         "  E  systematic    {:>8.3}  {:>8.3}  {:>8.3}",
         a.e_up_um, a.e_down_um, a.e_um
     );
-    println!(
+    let _ = writeln!(
+        o,
         "  R  repeatability {:>8.3}  {:>8.3}  {:>8.3}",
         a.r_up_um, a.r_down_um, a.r_um
     );
-    println!(
+    let _ = writeln!(
+        o,
         "  M  range of mean bidirectional deviation       {:>8.3}",
         a.m_um
     );
-    println!(
+    let _ = writeln!(
+        o,
         "  B  reversal value (max |B_i|)                  {:>8.3}",
         a.b_um
     );
-    println!(
+    let _ = writeln!(
+        o,
         "  mean reversal value                            {:>8.3}",
         a.mean_b_um
     );
-    println!();
-    println!(
+    let _ = writeln!(o);
+    let _ = writeln!(
+        o,
         "VDI/DGQ 3441 (um): Ps = {:.3}  U = {:.3}  Pa = {:.3}  P = {:.3}",
         vdi.ps_um, vdi.u_um, vdi.pa_um, vdi.p_um
     );
-    Ok(())
+    emit(&o)
+}
+
+/// Writes the report to stdout; a reader that closed the pipe early (`| head`) is not an error.
+fn emit(text: &str) -> Result<(), CliError> {
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
 }
