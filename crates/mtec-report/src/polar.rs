@@ -67,7 +67,7 @@ fn backend<E: std::fmt::Debug>(e: E) -> PlotError {
 
 /// A 1-2-5 step at least `x`.
 pub fn nice_step(x: f64) -> f64 {
-    if !(x > 0.0) || !x.is_finite() {
+    if x.is_nan() || x <= 0.0 || !x.is_finite() {
         return 1.0;
     }
     let p = 10f64.powf(x.log10().floor());
@@ -244,7 +244,7 @@ mod tests {
             .collect();
         let ccw: Vec<f64> = a
             .iter()
-            .map(|t| -1.0 * (3.0 * t.to_radians()).sin())
+            .map(|t| -(3.0 * t.to_radians()).sin())
             .collect();
         let svg = polar_svg(
             &[
