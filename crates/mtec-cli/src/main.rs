@@ -3,6 +3,7 @@
 
 mod cmd;
 mod error;
+mod inputs;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -30,6 +31,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Simulate measurements on the virtual machine (known truth).
+    Simulate(cmd::simulate::Args),
+    /// Volumetric error at commanded points (HTM or POE, exact or first-order).
+    Volumetric(cmd::volumetric::Args),
     /// ISO 230-2 positioning statistics of a linear axis (and VDI/DGQ 3441).
     #[command(name = "iso230-2")]
     Iso230_2(cmd::iso230_2::Args),
@@ -39,7 +44,9 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result: Result<(), error::CliError> = match cli.command {
+    let result = match cli.command {
+        Command::Simulate(a) => cmd::simulate::run(a),
+        Command::Volumetric(a) => cmd::volumetric::run(a),
         Command::Iso230_2(a) => cmd::iso230_2::run(a),
         Command::Circular(a) => cmd::circular::run(a),
     };
