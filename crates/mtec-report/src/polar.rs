@@ -242,10 +242,7 @@ mod tests {
             .iter()
             .map(|t| 2.0 * (2.0 * t.to_radians()).cos())
             .collect();
-        let ccw: Vec<f64> = a
-            .iter()
-            .map(|t| -(3.0 * t.to_radians()).sin())
-            .collect();
+        let ccw: Vec<f64> = a.iter().map(|t| -(3.0 * t.to_radians()).sin()).collect();
         let svg = polar_svg(
             &[
                 PolarTrace {
