@@ -17,6 +17,10 @@ The workflow, and the commands for each step:
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
   iso230-2      positioning statistics of a linear axis from laser runs (ISO 230-2, VDI 3441)
   circular      circular test of two axes: ISO 230-4 G and H, ballbar diagnostics ranked
+  map           volumetric error maps: fit a grid (trilinear) and evaluate it at points
+  compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
+                (`compensate table`)
+  thermal       thermal drift models from temperature logs: select sensors, fit, predict
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
 Every CSV column name carries its unit suffix (x_mm, ex_um, ...). Exit codes: 0 success,
@@ -40,15 +44,35 @@ enum Command {
     Iso230_2(cmd::iso230_2::Args),
     /// ISO 230-4 circular test and ballbar diagnostics.
     Circular(cmd::circular::Args),
+    /// Volumetric error maps: `map fit` (grid CSV -> map JSON), `map eval` (errors at points).
+    Map(cmd::map::Args),
+    /// Compensation outputs: corrected NC programs, controller tables.
+    #[command(subcommand)]
+    Compensate(CompensateCommand),
+    /// Thermal error models: ridge-trace sensor selection, MLR/ridge/exp-ambient fit, predict.
+    Thermal(cmd::thermal::Args),
+}
+
+#[derive(Subcommand)]
+enum CompensateCommand {
+    /// Rewrite an NC program (G-code) so the machine reaches the programmed points.
+    Gcode(cmd::compensate_gcode::Args),
+    /// Controller compensation tables (LinuxCNC, Siemens CEC/LEC, Fanuc, Heidenhain, Beckhoff).
+    #[command(long_about = cmd::compensate_table::HELP)]
+    Table(cmd::compensate_table::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
+    let result: Result<(), error::CliError> = match cli.command {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Volumetric(a) => cmd::volumetric::run(a),
         Command::Iso230_2(a) => cmd::iso230_2::run(a),
         Command::Circular(a) => cmd::circular::run(a),
+        Command::Map(a) => cmd::map::run(a),
+        Command::Compensate(CompensateCommand::Gcode(a)) => cmd::compensate_gcode::run(a),
+        Command::Compensate(CompensateCommand::Table(a)) => cmd::compensate_table::run(a),
+        Command::Thermal(a) => cmd::thermal::run(a),
     };
     error::exit(result)
 }

@@ -29,6 +29,8 @@ pub const SCENARIOS: &[(&str, &str)] = &[
     ("volumetric-grid", "laser-tracker volumetric error grid (11x11x11) and body diagonals, for `mtec map fit`"),
     ("iso230-2", "laser-interferometer positioning runs of one axis (ISO 230-2: 11 targets, 5 bidirectional runs)"),
     ("circular-test", "ISO 230-4 ballbar circular test of X and Y with injected faults, and a fault-free run"),
+    ("spindle-sensors", "8 collinear spindle temperature sensors and the radial drift (ridge-trace sensor selection)"),
+    ("feed-axis-ambient", "Z-axis thermal error along the axis at ambient 15/20/25/30 C (exp-ambient model)"),
 ];
 
 /// Runs the named scenario with a seed.
@@ -56,6 +58,8 @@ pub fn run_scenario(name: &str, seed: u64) -> Result<ScenarioOutput, SimError> {
                 truth,
             })
         }
+        "spindle-sensors" => crate::spindle_sensors::run(seed),
+        "feed-axis-ambient" => crate::feed_axis_ambient::run(seed),
         _ => Err(SimError::UnknownScenario(name.to_string())),
     }
 }

@@ -1,6 +1,11 @@
 //! One module per subcommand: its clap `Args` and a `run(args) -> Result<(), CliError>`.
 
 pub mod circular;
+pub mod compensate_gcode;
+pub mod compensate_table;
 pub mod iso230_2;
+pub mod map;
+pub mod model_loader;
 pub mod simulate;
+pub mod thermal;
 pub mod volumetric;
