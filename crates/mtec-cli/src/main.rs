@@ -21,6 +21,7 @@ The workflow, and the commands for each step:
   compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
                 (`compensate table`)
   thermal       thermal drift models from temperature logs: select sensors, fit, predict
+  sensitivity   which error elements drive the volumetric error (EFAST/Sobol/Morris), tolerances
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
 Every CSV column name carries its unit suffix (x_mm, ex_um, ...). Exit codes: 0 success,
@@ -48,18 +49,11 @@ enum Command {
     Map(cmd::map::Args),
     /// Compensation outputs: corrected NC programs, controller tables.
     #[command(subcommand)]
-    Compensate(CompensateCommand),
+    Compensate(cmd::compensate::Command),
     /// Thermal error models: ridge-trace sensor selection, MLR/ridge/exp-ambient fit, predict.
     Thermal(cmd::thermal::Args),
-}
-
-#[derive(Subcommand)]
-enum CompensateCommand {
-    /// Rewrite an NC program (G-code) so the machine reaches the programmed points.
-    Gcode(cmd::compensate_gcode::Args),
-    /// Controller compensation tables (LinuxCNC, Siemens CEC/LEC, Fanuc, Heidenhain, Beckhoff).
-    #[command(long_about = cmd::compensate_table::HELP)]
-    Table(cmd::compensate_table::Args),
+    /// Global sensitivity (EFAST, Sobol, Morris) of the volumetric error to the error elements.
+    Sensitivity(cmd::sensitivity::Args),
 }
 
 fn main() -> ExitCode {
@@ -70,9 +64,10 @@ fn main() -> ExitCode {
         Command::Iso230_2(a) => cmd::iso230_2::run(a),
         Command::Circular(a) => cmd::circular::run(a),
         Command::Map(a) => cmd::map::run(a),
-        Command::Compensate(CompensateCommand::Gcode(a)) => cmd::compensate_gcode::run(a),
-        Command::Compensate(CompensateCommand::Table(a)) => cmd::compensate_table::run(a),
+        Command::Compensate(cmd::compensate::Command::Gcode(a)) => cmd::compensate_gcode::run(a),
+        Command::Compensate(cmd::compensate::Command::Table(a)) => cmd::compensate_table::run(a),
         Command::Thermal(a) => cmd::thermal::run(a),
+        Command::Sensitivity(a) => cmd::sensitivity::run(a),
     };
     error::exit(result)
 }

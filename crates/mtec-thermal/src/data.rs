@@ -89,8 +89,14 @@ impl ThermalData {
                 if table.has(&col) {
                     Some((col.clone(), table.f64_column(&col)?))
                 } else if require_target {
-                    table.column(&col)?;
-                    unreachable_missing(table, &col)?
+                    // `column` explains what is there instead (e.g. the wrong unit suffix)
+                    return Err(table.column(&col).err().unwrap_or_else(|| {
+                        InputError::line(
+                            &table.path,
+                            table.header_line,
+                            format!("missing target column `{col}`"),
+                        )
+                    }));
                 } else {
                     None
                 }
@@ -211,12 +217,4 @@ impl ThermalData {
             None => InputError::file(std::path::Path::new("<data>"), message),
         }
     }
-}
-
-fn unreachable_missing<T>(table: &Table, col: &str) -> Result<T, InputError> {
-    Err(InputError::line(
-        &table.path,
-        table.header_line,
-        format!("missing target column `{col}`"),
-    ))
 }

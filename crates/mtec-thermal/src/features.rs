@@ -9,6 +9,7 @@
 //!   L starts at the experiment's first reading (the machine starts in equilibrium);
 //! - `rate`: the temperature rate dT/dt (°C/min) as the backward difference over a window w,
 //!   (T(t) − T(t − w))/w, clamped at the start of the experiment.
+//!
 //! Both are causal: they use only past temperatures, so a controller can compute them on line.
 //! The time constants are fitted (see [`fit_time_constants`]): coordinate descent over a log
 //! grid of τ minimising the training SSE of the linear model that uses the features.

@@ -18,6 +18,9 @@ use crate::linear::ols;
 use crate::model::{target_rows, Fit, LinearMethod, LinearModel};
 use nalgebra::DMatrix;
 
+/// A scored candidate step: score, its features, their columns, the sensor index.
+type Candidate = (f64, Vec<Feature>, Vec<Vec<f64>>, usize);
+
 /// The fitter (see module docs).
 #[derive(Debug, Clone)]
 pub struct LagSelect {
@@ -108,7 +111,7 @@ impl Fit for LagSelect {
         let mut best_score = f64::INFINITY;
         let mut used: Vec<usize> = Vec::new();
         for _ in 0..self.max_sensors.max(1) {
-            let mut best: Option<(f64, Vec<Feature>, Vec<Vec<f64>>, usize)> = None;
+            let mut best: Option<Candidate> = None;
             for &j in candidates.iter().filter(|j| !used.contains(j)) {
                 let name = data.sensor_names[j].clone();
                 let t = data.sensor(j);

@@ -203,7 +203,40 @@ impl RidgeProblem {
 /// all other regressors with an intercept (the definition statsmodels'
 /// `variance_inflation_factor` applies to a design with a constant). An exactly dependent
 /// regressor has VIF = ∞.
+///
+/// Computed from one QR of the centred design X_c = QR: VIF_j = [(X_cᵀX_c)⁻¹]_jj·(X_cᵀX_c)_jj,
+/// with (X_cᵀX_c)⁻¹ = R⁻¹R⁻ᵀ (the same number as the auxiliary regressions, p times cheaper).
+/// A rank-deficient design falls back to the auxiliary regressions to tell which regressors
+/// are the dependent ones.
 pub fn vif(x: &DMatrix<f64>, names: &[String]) -> Result<Vec<f64>, ThermalError> {
+    let (n, p) = x.shape();
+    if n <= p + 1 {
+        return Err(ThermalError::TooFewRows {
+            rows: n,
+            params: p + 1,
+        });
+    }
+    let mut xc = x.clone();
+    for j in 0..p {
+        let m = xc.column(j).sum() / n as f64;
+        xc.column_mut(j).add_scalar_mut(-m);
+        if xc.column(j).norm() <= 1e-12 * m.abs().max(1.0) * (n as f64).sqrt() {
+            return Err(ThermalError::ConstantColumn(names[j].clone()));
+        }
+    }
+    let ss: Vec<f64> = (0..p).map(|j| xc.column(j).norm_squared()).collect();
+    let r = xc.qr().r();
+    let rmax = (0..p).map(|i| r[(i, i)].abs()).fold(0.0, f64::max);
+    if (0..p).all(|i| r[(i, i)].abs() > RANK_TOL * rmax * 1e3) {
+        if let Some(rinv) = r.solve_upper_triangular(&DMatrix::identity(p, p)) {
+            return Ok((0..p).map(|j| rinv.row(j).norm_squared() * ss[j]).collect());
+        }
+    }
+    vif_by_regressions(x, names)
+}
+
+/// VIF by the definition: one auxiliary OLS regression per regressor.
+pub fn vif_by_regressions(x: &DMatrix<f64>, names: &[String]) -> Result<Vec<f64>, ThermalError> {
     let (n, p) = x.shape();
     let mut out = Vec::with_capacity(p);
     for j in 0..p {
@@ -236,7 +269,22 @@ pub fn vif(x: &DMatrix<f64>, names: &[String]) -> Result<Vec<f64>, ThermalError>
                 }
                 1.0 - sse / sst
             }
-            Err(ThermalError::RankDeficient { .. }) => 1.0,
+            Err(ThermalError::RankDeficient { .. }) => {
+                // the other regressors are themselves dependent: minimum-norm least squares
+                // (SVD) of the centred x_j on the centred others gives the same fitted values
+                let mut oc = others.clone();
+                for c in 0..p - 1 {
+                    let m = oc.column(c).sum() / n as f64;
+                    oc.column_mut(c).add_scalar_mut(-m);
+                }
+                let yc = DVector::from_iterator(n, xj.iter().map(|v| v - mean));
+                let svd = oc.clone().svd(true, true);
+                let eps = 1e-10 * svd.singular_values.max();
+                let b = svd
+                    .solve(&yc, eps)
+                    .map_err(|e| ThermalError::Invalid(e.to_string()))?;
+                1.0 - (&yc - &oc * b).norm_squared() / sst
+            }
             Err(e) => return Err(e),
         };
         out.push(if r2 >= 1.0 {

@@ -17,10 +17,11 @@
 //!   rule `unstable-to-zero`: drop every sensor that is unstable and small at k* (it fell to zero
 //!   quickly as k grew);
 //!   rule `unstable`: when neither fired, drop the one sensor with the largest swing.
-//! (Tried and rejected on the `spindle-sensors` scenario over seeds 1–8: dropping one sensor per
-//! step instead of all that a rule names, lower thresholds, and continuing while max VIF > 10 —
-//! the last always ends at two sensors and loses test accuracy.)
 //! - repeat on the remaining sensors (new trace, new k*) until no rule fires.
+//!
+//! Tried and rejected on the `spindle-sensors` scenario over seeds 1–8: dropping one sensor per
+//! step instead of all that a rule names, lower thresholds, and continuing while max VIF > 10 —
+//! the last always ends at two sensors and loses test accuracy.
 //!
 //! The comparison table then fits: the full MLR (all sensors), the ridge model at the final k*
 //! on the selected sensors, and the MLR on the n sensors with the largest simple correlation

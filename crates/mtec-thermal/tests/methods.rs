@@ -191,3 +191,26 @@ fn a_log_without_experiment_column_is_one_experiment() {
     assert_eq!(d.sensor_names, vec!["a_c"]);
     assert_eq!(d.target_um().unwrap(), &[2.0, 3.0]);
 }
+
+/// An exactly dependent sensor (c = a + b) has infinite VIF, and so do the sensors it depends on;
+/// an independent one stays finite.
+#[test]
+fn vif_of_exactly_dependent_sensors_is_infinite() {
+    let mut csv = String::from("time_min,a_c,b_c,c_c,d_c,y_um\n");
+    for i in 0..30 {
+        let t = i as f64;
+        let (a, b, d) = (
+            20.0 + (t / 7.0).sin(),
+            21.0 + 0.1 * t,
+            19.0 + (t / 3.0).cos(),
+        );
+        csv.push_str(&format!("{t},{a},{b},{},{d},{t}\n", a + b));
+    }
+    let data = parse(&csv, "y_um");
+    let v = mtec_thermal::linear::vif(&data.temps_c, &data.sensor_names).unwrap();
+    assert!(
+        v[0].is_infinite() && v[1].is_infinite() && v[2].is_infinite(),
+        "{v:?}"
+    );
+    assert!(v[3].is_finite() && v[3] < 10.0, "{v:?}");
+}

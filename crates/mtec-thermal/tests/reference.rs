@@ -3,7 +3,7 @@
 //! whose library versions are recorded in the JSON). Tolerance 1e-8, relative to the value's size.
 
 use mtec_io::Table;
-use mtec_thermal::linear::{ols, vif, RidgeProblem};
+use mtec_thermal::linear::{ols, vif, vif_by_regressions, RidgeProblem};
 use mtec_thermal::{Fit, Metrics, Mlr, Predict, ThermalData};
 use serde_json::Value;
 use std::path::PathBuf;
@@ -83,8 +83,10 @@ fn mlr_equals_statsmodels_ols() {
 fn vif_equals_statsmodels() {
     let (d, r) = load();
     let v = vif(&d.temps_c, &d.sensor_names).unwrap();
-    for (a, b) in v.iter().zip(nums(&r["vif"])) {
+    let by_definition = vif_by_regressions(&d.temps_c, &d.sensor_names).unwrap();
+    for ((a, c), b) in v.iter().zip(&by_definition).zip(nums(&r["vif"])) {
         close(*a, b, "VIF");
+        close(*c, b, "VIF by auxiliary regressions");
     }
     assert!(v.iter().any(|x| *x > 10.0), "fixture must be collinear");
 }

@@ -6,6 +6,9 @@ pub mod compensate_table;
 pub mod iso230_2;
 pub mod map;
 pub mod model_loader;
+pub mod sensitivity;
 pub mod simulate;
 pub mod thermal;
 pub mod volumetric;
+
+pub mod compensate;

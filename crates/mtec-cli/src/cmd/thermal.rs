@@ -488,6 +488,25 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
             m.compensation_rate.map(|c| format!("{:.1} %", 100.0 * c)).unwrap_or_else(|| "-".into())
         )
     };
+    if let ThermalModel::ExpAmbient(m) = &file.model {
+        println!(
+            "exp-ambient: δ = k·x + b, b = b_a(1 − exp(−ΔT_up/b_b)), k = k_a(1 − exp(−ΔT_nut/k_b)); polynomials of degree {} in u = (T_a − 20 °C)/10 °C (coefficient ± standard uncertainty, ascending powers)",
+            m.degree
+        );
+        for (name, c, sd) in [
+            ("b_a [um]", &m.b_a, &m.b_a_sd),
+            ("b_b [C]", &m.b_b, &m.b_b_sd),
+            ("k_a [um/mm]", &m.k_a, &m.k_a_sd),
+            ("k_b [C]", &m.k_b, &m.k_b_sd),
+        ] {
+            let terms: Vec<String> = c
+                .iter()
+                .zip(sd)
+                .map(|(c, s)| format!("{c:.5} ± {s:.5}"))
+                .collect();
+            println!("  {name:<12} {}", terms.join(", "));
+        }
+    }
     show("train", &file.train_metrics);
     if let Some(m) = &file.test_metrics {
         show("test", m);
