@@ -16,6 +16,8 @@ The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
   identify ballbar  rotary-axis error motions (EXC EYC EZC EAC EBC) from ballbar readings in 5 modes
+  iso230-2      positioning statistics of a linear axis from laser runs (ISO 230-2, VDI 3441)
+  circular      circular test of two axes: ISO 230-4 G and H, ballbar diagnostics ranked
   map           volumetric error maps: fit a grid (trilinear) and evaluate it at points
   compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
                 (`compensate table`)
@@ -42,6 +44,11 @@ enum Command {
     /// Identify error elements or error motions from measurements.
     #[command(subcommand)]
     Identify(Identify),
+    /// ISO 230-2 positioning statistics of a linear axis (and VDI/DGQ 3441).
+    #[command(name = "iso230-2")]
+    Iso230_2(cmd::iso230_2::Args),
+    /// ISO 230-4 circular test and ballbar diagnostics.
+    Circular(cmd::circular::Args),
     /// Volumetric error maps: `map fit` (grid CSV -> map JSON), `map eval` (errors at points).
     Map(cmd::map::Args),
     /// Compensation outputs: corrected NC programs, controller tables.
@@ -70,6 +77,8 @@ fn main() -> ExitCode {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Volumetric(a) => cmd::volumetric::run(a),
         Command::Identify(Identify::Ballbar(a)) => cmd::identify_ballbar::run(a),
+        Command::Iso230_2(a) => cmd::iso230_2::run(a),
+        Command::Circular(a) => cmd::circular::run(a),
         Command::Map(a) => cmd::map::run(a),
         Command::Compensate(cmd::compensate::Command::Gcode(a)) => cmd::compensate_gcode::run(a),
         Command::Compensate(cmd::compensate::Command::Table(a)) => cmd::compensate_table::run(a),

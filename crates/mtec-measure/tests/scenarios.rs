@@ -122,7 +122,13 @@ fn um_per_unit(id: &str) -> f64 {
 /// trace), every fault not injected is absent, and the fault-free run reports none.
 #[test]
 fn circular_test_faults_are_recovered() {
-    let out = mtec_sim::run_scenario("circular-test", 7).unwrap();
+    for seed in [7, 8] {
+        circular_recovery(seed);
+    }
+}
+
+fn circular_recovery(seed: u64) {
+    let out = mtec_sim::run_scenario("circular-test", seed).unwrap();
     let truth = &out.truth["diagnostics"];
     let (iso, diag) = analyse(file(&out, "circular.csv"));
     for d in &diag.faults {
@@ -186,4 +192,18 @@ fn circular_test_faults_are_recovered() {
         .map(|d| d.id.as_str())
         .collect();
     assert!(present.is_empty(), "fault-free run reports {present:?}");
+}
+
+/// The same faults in the ZX plane (axis 1 = Z, axis 2 = X) are named after those axes.
+#[test]
+fn plane_names_the_axes() {
+    let out = mtec_sim::run_scenario("circular-test", 3).unwrap();
+    let text = file(&out, "circular.csv").replace("# plane = XY", "# plane = ZX");
+    let table = Table::parse(Path::new("zx.csv"), &text).unwrap();
+    let trace = CircularTrace::from_table(&table, &TraceOptions::default()).unwrap();
+    let d = diagnose(&trace, &DiagnosticsConfig::default()).unwrap();
+    let b = d.get("backlash_Z_pos").expect("axis 1 is Z");
+    assert!((b.value - 6.0).abs() < 0.6, "{b:?}");
+    assert!(d.get("backlash_X_neg").unwrap().present);
+    assert!(d.get("cyclic_Z").unwrap().present);
 }

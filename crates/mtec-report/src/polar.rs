@@ -67,7 +67,7 @@ fn backend<E: std::fmt::Debug>(e: E) -> PlotError {
 
 /// A 1-2-5 step at least `x`.
 pub fn nice_step(x: f64) -> f64 {
-    if !(x > 0.0) || !x.is_finite() {
+    if x.is_nan() || x <= 0.0 || !x.is_finite() {
         return 1.0;
     }
     let p = 10f64.powf(x.log10().floor());
@@ -122,10 +122,22 @@ pub fn polar_svg(traces: &[PolarTrace], opts: &PolarOptions) -> Result<String, P
     {
         let root = SVGBackend::with_string(&mut svg, (opts.width, opts.height)).into_drawing_area();
         root.fill(&WHITE).map_err(backend)?;
-        let (root, footer) = root.split_vertically(opts.height.saturating_sub(40));
-        let mut chart = ChartBuilder::on(&root)
-            .caption(&opts.title, ("sans-serif", 20))
-            .margin(10)
+        // title on top, scale note at the bottom, a square plot area between (so circles stay round)
+        let (title, rest) = root.split_vertically(36);
+        let (body, footer) = rest.split_vertically(opts.height.saturating_sub(36 + 30));
+        title
+            .draw(&Text::new(
+                opts.title.clone(),
+                (opts.width as i32 / 2, 10),
+                TextStyle::from(("sans-serif", 20).into_font())
+                    .pos(Pos::new(HPos::Center, VPos::Top)),
+            ))
+            .map_err(backend)?;
+        let (w, h) = body.dim_in_pixel();
+        let side = w.min(h);
+        let square = body.shrink(((w - side) / 2, (h - side) / 2), (side, side));
+        let mut chart = ChartBuilder::on(&square)
+            .margin(8)
             .build_cartesian_2d(-lim..lim, -lim..lim)
             .map_err(backend)?;
         let grid = RGBColor(200, 200, 200);
@@ -230,10 +242,7 @@ mod tests {
             .iter()
             .map(|t| 2.0 * (2.0 * t.to_radians()).cos())
             .collect();
-        let ccw: Vec<f64> = a
-            .iter()
-            .map(|t| -1.0 * (3.0 * t.to_radians()).sin())
-            .collect();
+        let ccw: Vec<f64> = a.iter().map(|t| -(3.0 * t.to_radians()).sin()).collect();
         let svg = polar_svg(
             &[
                 PolarTrace {

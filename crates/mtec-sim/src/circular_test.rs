@@ -148,7 +148,7 @@ fn run_direction(
     let mut out = Vec::with_capacity(setup.samples_per_rev);
     let mut theta = theta0;
     for step in 0..=total_steps {
-        if step >= first_record && (step - first_record) % sub == 0 {
+        if step >= first_record && (step - first_record).is_multiple_of(sub) {
             let k = (step - first_record) / sub;
             if k < setup.samples_per_rev {
                 let ex = f.scale_x_ppm * 1e-6 * q[0]

@@ -1,7 +1,7 @@
 //! `mtec demo`: simulate a machine, run the whole pipeline on it, write the report.
 
 use crate::error::CliError;
-use mtec_comp::{command_for_target, CorrectionOptions, ErrorModel};
+use mtec_comp::{command_for_target, CorrectionOptions};
 use mtec_model::{Formalism, Order, VolumetricModel};
 use rand::{Rng, SeedableRng};
 use std::fmt::Write as _;

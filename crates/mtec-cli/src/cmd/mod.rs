@@ -1,8 +1,10 @@
 //! One module per subcommand: its clap `Args` and a `run(args) -> Result<(), CliError>`.
 
+pub mod circular;
 pub mod compensate_gcode;
 pub mod compensate_table;
 pub mod identify_ballbar;
+pub mod iso230_2;
 pub mod map;
 pub mod model_loader;
 pub mod sensitivity;
@@ -16,6 +18,6 @@ pub mod pipeline;
 pub mod run;
 
 /// Whether this build has these subcommands (the demo project uses only what exists).
-pub const HAS_ISO230_2: bool = false;
-pub const HAS_CIRCULAR: bool = false;
+pub const HAS_ISO230_2: bool = true;
+pub const HAS_CIRCULAR: bool = true;
 pub const HAS_IDENTIFY_LINES: bool = false;

@@ -460,7 +460,7 @@ fn solve(cols: &[&[f64]], y: &[f64]) -> Result<Fit, DiagnosticsError> {
     let smax = svd.singular_values.max();
     let smin = svd.singular_values.min();
     let cond = smax / smin.max(1e-300);
-    if !(cond < 1e8) {
+    if cond.is_nan() || cond >= 1e8 {
         return Err(DiagnosticsError::IllConditioned(cond));
     }
     let yv = DVector::from_column_slice(y);
@@ -705,4 +705,77 @@ pub fn diagnose(
         threshold_um: cfg.threshold_um,
         notes,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::circular::trace::{Plane, Sample};
+
+    fn trace_from(f: impl Fn(f64, f64) -> f64, n: usize) -> CircularTrace {
+        let dir = |d: f64| -> Vec<Sample> {
+            (0..n)
+                .map(|k| {
+                    let a = 360.0 * k as f64 / n as f64;
+                    Sample {
+                        angle_deg: a,
+                        dl_um: f(a.to_radians(), d),
+                    }
+                })
+                .collect()
+        };
+        CircularTrace {
+            radius_mm: 100.0,
+            plane: Plane::XY,
+            feed_mm_min: Some(1000.0),
+            ccw: dir(1.0),
+            cw: dir(-1.0),
+        }
+    }
+
+    /// Worked by hand: an elliptical trace dl = 2 cos 2θ µm in both directions at R = 100 mm is
+    /// a scale mismatch R(s₁ − s₂)/2 = 2 µm → s₁ − s₂ = 4 µm / 100 mm = 40 ppm; it adds its
+    /// peak-to-valley 2·2 = 4 µm to the circularity; nothing else is present.
+    #[test]
+    fn pure_scale_mismatch_by_hand() {
+        let t = trace_from(|th, _| 2.0 * (2.0 * th).cos(), 720);
+        let d = diagnose(&t, &DiagnosticsConfig::default()).unwrap();
+        let s = d.get("scale_mismatch").unwrap();
+        assert!((s.value - 40.0).abs() < 1e-6, "{s:?}");
+        assert!((s.contribution_um - 4.0).abs() < 1e-6, "{s:?}");
+        assert_eq!(d.faults[0].id, "scale_mismatch");
+        assert_eq!(
+            d.present().count(),
+            1,
+            "{:?}",
+            d.present().collect::<Vec<_>>()
+        );
+    }
+
+    /// Worked by hand: dl = d·1.5 sin 2θ + 0.8 sin 2θ. The part that changes sign with the
+    /// direction is servo mismatch: d·v_f·Δτ/2 = 1.5 µm with v_f = 1000/60 mm/s → Δτ = 0.18 ms;
+    /// the part that does not is squareness: αR/2 = 0.8 µm → α = 1.6 µm / 100 mm = 16 µm/m.
+    /// Contributions: 2·1.5 = 3 µm and 2·0.8 = 1.6 µm.
+    #[test]
+    fn servo_mismatch_and_squareness_by_hand() {
+        let t = trace_from(|th, d| (d * 1.5 + 0.8) * (2.0 * th).sin(), 720);
+        let d = diagnose(&t, &DiagnosticsConfig::default()).unwrap();
+        let servo = d.get("servo_mismatch").unwrap();
+        assert!((servo.value - 0.18).abs() < 1e-9, "{servo:?}");
+        assert!((servo.contribution_um - 3.0).abs() < 1e-6, "{servo:?}");
+        let sq = d.get("squareness").unwrap();
+        assert!((sq.value - 16.0).abs() < 1e-6, "{sq:?}");
+        assert!((sq.contribution_um - 1.6).abs() < 1e-6, "{sq:?}");
+        let ids: Vec<&str> = d.present().map(|f| f.id.as_str()).collect();
+        assert_eq!(ids, ["servo_mismatch", "squareness"]);
+    }
+
+    #[test]
+    fn too_few_samples_is_refused() {
+        let t = trace_from(|_, _| 0.0, 36);
+        assert!(matches!(
+            diagnose(&t, &DiagnosticsConfig::default()),
+            Err(DiagnosticsError::TooFewSamples { .. })
+        ));
+    }
 }
