@@ -153,13 +153,20 @@ pub fn sample(
                 let s = std::f64::consts::TAU * k as f64 / n as f64;
                 for j in 0..d {
                     // Search curve, Saltelli et al. 1999 eq. 19.
-                    row[j] =
-                        0.5 + (omega[j] as f64 * s + phi[j]).sin().asin() / std::f64::consts::PI;
+                    row[j] = search_curve(omega[j] as f64 * s + phi[j]);
                 }
                 problem.scale_row(row);
             }
         });
     SampleMatrix::from_rows(d, data)
+}
+
+/// The search curve ½ + arcsin(sin θ)/π (Saltelli et al. 1999 eq. 19), evaluated through the
+/// identity arcsin(sin θ) = |((θ − π/2) mod 2π) − π| − π/2 (a triangle wave): one remainder
+/// instead of a sine and an arcsine.
+pub fn search_curve(theta: f64) -> f64 {
+    use std::f64::consts::{FRAC_PI_2, PI, TAU};
+    ((theta - FRAC_PI_2).rem_euclid(TAU) - PI).abs() / PI
 }
 
 /// S1 and ST of the input of interest from the outputs along one curve (eqs. 21–24; SALib's
@@ -248,4 +255,19 @@ pub fn analyze(
         st_conf,
         variance,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn search_curve_is_the_arcsine_of_the_sine() {
+        for k in -2000..2000 {
+            let theta = k as f64 * 0.0173;
+            let direct = 0.5 + theta.sin().asin() / std::f64::consts::PI;
+            assert!(
+                (super::search_curve(theta) - direct).abs() < 1e-12,
+                "θ = {theta}"
+            );
+        }
+    }
 }
