@@ -15,6 +15,10 @@ geometric and thermal errors.
 The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
+  map           volumetric error maps: fit a grid (trilinear) and evaluate it at points
+  compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
+                (`compensate table`)
+  thermal       thermal drift models from temperature logs: select sensors, fit, predict
   sensitivity   which error elements drive the volumetric error (EFAST/Sobol/Morris), tolerances
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
@@ -34,15 +38,26 @@ enum Command {
     Simulate(cmd::simulate::Args),
     /// Volumetric error at commanded points (HTM or POE, exact or first-order).
     Volumetric(cmd::volumetric::Args),
+    /// Volumetric error maps: `map fit` (grid CSV -> map JSON), `map eval` (errors at points).
+    Map(cmd::map::Args),
+    /// Compensation outputs: corrected NC programs, controller tables.
+    #[command(subcommand)]
+    Compensate(cmd::compensate::Command),
+    /// Thermal error models: ridge-trace sensor selection, MLR/ridge/exp-ambient fit, predict.
+    Thermal(cmd::thermal::Args),
     /// Global sensitivity (EFAST, Sobol, Morris) of the volumetric error to the error elements.
     Sensitivity(cmd::sensitivity::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
+    let result: Result<(), error::CliError> = match cli.command {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Volumetric(a) => cmd::volumetric::run(a),
+        Command::Map(a) => cmd::map::run(a),
+        Command::Compensate(cmd::compensate::Command::Gcode(a)) => cmd::compensate_gcode::run(a),
+        Command::Compensate(cmd::compensate::Command::Table(a)) => cmd::compensate_table::run(a),
+        Command::Thermal(a) => cmd::thermal::run(a),
         Command::Sensitivity(a) => cmd::sensitivity::run(a),
     };
     error::exit(result)
