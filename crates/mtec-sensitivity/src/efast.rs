@@ -215,7 +215,7 @@ pub fn analyze(
         .par_chunks_exact(n)
         .map(|c| curve_indices(c, m, omega_max))
         .collect();
-    if let Some(c) = per_curve.iter().position(|r| !(r.2 > 0.0)) {
+    if let Some(c) = per_curve.iter().position(|r| r.2.is_nan() || r.2 <= 0.0) {
         return Err(SensitivityError::Outputs(format!(
             "the output does not vary along curve {c} (input `{}`): indices are undefined",
             names[c % d]
