@@ -421,7 +421,7 @@ pub fn analyze(
             let y = &columns[4 * p + k];
             let mean = y.iter().sum::<f64>() / y.len() as f64;
             let var = y.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / y.len() as f64;
-            if !(var > 1e-20 * (1.0 + mean * mean)) {
+            if var.is_nan() || var <= 1e-20 * (1.0 + mean * mean) {
                 acc.add_constant();
                 continue;
             }
@@ -637,7 +637,7 @@ pub fn allocate(
         for &i in &active {
             // σ_i,a = σ_T / (√n_a · c_{i,a})
             let s = sigma_target / (n.sqrt() * c[i]);
-            if allowed[i].is_none_or(|(cur, _)| s < cur) {
+            if allowed[i].map_or(true, |(cur, _)| s < cur) {
                 allowed[i] = Some((s, a));
             }
         }

@@ -89,6 +89,9 @@ impl Default for Bootstrap {
     }
 }
 
+/// One bootstrap replicate: (S1, ST) per input.
+type Replicate = (Vec<f64>, Vec<f64>);
+
 /// Sobol indices with bootstrap intervals.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct SobolIndices {
@@ -160,7 +163,7 @@ pub fn analyze(
     let y = &centred[..];
     let all: Vec<usize> = (0..n).collect();
     let (s1, st, variance) = estimate(y, d, &all);
-    if !(variance > 0.0) {
+    if variance.is_nan() || variance <= 0.0 {
         return Err(SensitivityError::Outputs(
             "the output does not vary over the design: indices are undefined".into(),
         ));
@@ -178,7 +181,7 @@ pub fn analyze(
         st_interval: Vec::new(),
     };
     if bootstrap.resamples >= 2 {
-        if !(bootstrap.confidence > 0.0 && bootstrap.confidence < 1.0) {
+        if !(0.0..1.0).contains(&bootstrap.confidence) || bootstrap.confidence == 0.0 {
             return Err(SensitivityError::Settings(format!(
                 "confidence level {} is not in (0, 1)",
                 bootstrap.confidence
@@ -197,7 +200,7 @@ pub fn analyze(
             .collect();
         let z = crate::distribution::standard_normal_quantile(0.5 + bootstrap.confidence / 2.0);
         let alpha = (1.0 - bootstrap.confidence) / 2.0;
-        let summarize = |pick: &dyn Fn(&(Vec<f64>, Vec<f64>)) -> &Vec<f64>| {
+        let summarize = |pick: &dyn Fn(&Replicate) -> &Vec<f64>| {
             let mut conf = vec![0.0; d];
             let mut interval = vec![[0.0; 2]; d];
             for i in 0..d {

@@ -409,3 +409,77 @@ fn run_function(args: &Args, name: &str) -> Result<(), CliError> {
     }
     emit(&s)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    fn args(extra: &[&str]) -> Args {
+        let mut v = vec!["mtec-sensitivity"];
+        v.extend_from_slice(extra);
+        Cli::try_parse_from(v).expect("valid command line").args
+    }
+
+    fn files(stats: &str) -> (tempfile::TempDir, String, String) {
+        let dir = tempfile::tempdir().unwrap();
+        let m = dir.path().join("m.toml");
+        std::fs::write(
+            &m,
+            "chain = \"WXYFZT\"\ntool_offset_mm = [0, 0, 100]\n[axes.X]\ntravel = [0, 600]\n[axes.Y]\ntravel = [0, 800]\n[axes.Z]\ntravel = [0, 300]\n",
+        )
+        .unwrap();
+        let s = dir.path().join("stats.csv");
+        std::fs::write(&s, stats).unwrap();
+        let (m, s) = (m.display().to_string(), s.display().to_string());
+        (dir, m, s)
+    }
+
+    #[test]
+    fn bad_inputs_are_usage_or_located_input_errors() {
+        let good = "element,mean,std,unit\nEXX,1,2,um\nECX,0,5,urad\n";
+        let (_d, m, s) = files(good);
+        // wrong number of --at values, and a pose outside the travel: usage errors (exit 2)
+        let e = run(args(&["--machine", &m, "--stats", &s, "--at", "1,2"])).unwrap_err();
+        assert!(
+            matches!(e, CliError::Usage(ref t) if t.contains("3 axes")),
+            "{e}"
+        );
+        let e = run(args(&["--machine", &m, "--stats", &s, "--at", "1,2,400"])).unwrap_err();
+        assert!(
+            matches!(e, CliError::Usage(ref t) if t.contains("outside the travel")),
+            "{e}"
+        );
+        // no pose at all
+        let e = run(args(&["--machine", &m, "--stats", &s])).unwrap_err();
+        assert!(matches!(e, CliError::Usage(_)), "{e}");
+        // a unit that does not fit the element: located at line 3, column 4
+        let (_d2, m2, s2) = files("element,mean,std,unit\nEXX,1,2,um\nECX,0,5,um\n");
+        let e = run(args(&["--machine", &m2, "--stats", &s2, "--at", "1,2,3"])).unwrap_err();
+        match e {
+            CliError::Input(i) => assert_eq!((i.line, i.column), (Some(3), Some(4))),
+            other => panic!("{other}"),
+        }
+        // unknown test function
+        let e = run(args(&["--function", "rosenbrock"])).unwrap_err();
+        assert!(matches!(e, CliError::Usage(_)));
+        // a good run succeeds
+        run(args(&[
+            "--machine",
+            &m,
+            "--stats",
+            &s,
+            "--at",
+            "100,200,50",
+            "--samples",
+            "300",
+        ]))
+        .unwrap();
+    }
+}
