@@ -3,7 +3,7 @@
 
 use super::arc::{self, Arc, Plane};
 use super::block::{Block, Issue};
-use super::format::{apply_edits, format_number, Edit};
+use super::format::{apply_edits, decimal_value, format_number, to_decimal, write_decimal, Edit};
 use super::lexer::{lex_line, Token, TokenKind, Value};
 use super::offsets::{work_system_index, Offsets};
 use super::solve::{correction_mm, SolveError};
@@ -240,6 +240,12 @@ struct Rewriter<'a> {
     lower: bool,
     /// The motion of the current block was written (by `emit_pieces` or as an uncorrected rapid).
     emitted: bool,
+    /// The pieces of the current move (reused).
+    pieces: Vec<Piece>,
+    /// The current block's words (buffers reused from line to line).
+    block: Block,
+    /// Work list of the move splitting, kept to avoid an allocation per move.
+    split_stack: Vec<(f64, [f64; 3], f64, [f64; 3])>,
 }
 
 /// A target point with the correction to apply there.
@@ -277,6 +283,9 @@ impl<'a> Rewriter<'a> {
             seen_content: false,
             lower: false,
             emitted: false,
+            split_stack: Vec::new(),
+            block: Block::default(),
+            pieces: Vec::new(),
         }
     }
 
@@ -378,7 +387,20 @@ impl<'a> Rewriter<'a> {
             self.poison_all();
             return self.write_verbatim(body, ending, output);
         }
-        let block = Block::read(&self.tokens, body);
+        let mut block = std::mem::take(&mut self.block);
+        block.read_into(&self.tokens, body);
+        let r = self.line_block(&block, body, ending, output);
+        self.block = block;
+        r
+    }
+
+    fn line_block<W: Write>(
+        &mut self,
+        block: &Block,
+        body: &[u8],
+        ending: &[u8],
+        output: &mut W,
+    ) -> Result<(), GcodeError> {
         self.lower = self
             .tokens
             .iter()
@@ -399,7 +421,7 @@ impl<'a> Rewriter<'a> {
         }
         self.edits.clear();
         self.extra_lines.clear();
-        let handled = self.block(&block, body)?;
+        let handled = self.block(block, body)?;
         if !handled || (self.edits.is_empty() && self.extra_lines.is_empty()) {
             return self.write_verbatim(body, ending, output);
         }
@@ -867,9 +889,11 @@ impl<'a> Rewriter<'a> {
 
         match (m, c_start) {
             (Motion::Linear, Some(c0)) if !g53 => {
-                let mut pieces = Vec::new();
+                let mut pieces = std::mem::take(&mut self.pieces);
+                pieces.clear();
                 self.split_linear(start_p, target, c0, c_end, &mut pieces, col)?;
                 self.emit_pieces(b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false)?;
+                self.pieces = pieces;
             }
             (Motion::Cw | Motion::Ccw, Some(c0)) => {
                 let arc = match self.arc_of(b, start_p, target, m == Motion::Cw, absolute, scale, offsets) {
@@ -901,10 +925,12 @@ impl<'a> Rewriter<'a> {
                             if let Some(w) = b.word(*l) {
                                 if c0[a] != 0.0 {
                                     let Value::Number(v) = w.value else { continue };
-                                    let mut s = String::new();
-                                    format_number(v + c0[a] / scale, self.decimals(), &mut s);
+                                    let d = self.decimals();
+                                    let (r, n) = rounded(v + c0[a] / scale, d);
                                     let span = self.tokens[w.token].value_span.clone();
-                                    if super::lexer::parse_number(s.as_bytes()) != Some(v) {
+                                    if r != v {
+                                        let mut s = String::new();
+                                        write_rounded(v + c0[a] / scale, d, n, &mut s);
                                         self.edits.push(Edit { span, text: s, order: 0 });
                                     }
                                 }
@@ -1005,7 +1031,9 @@ impl<'a> Rewriter<'a> {
             let t1 = if k == n0 { 1.0 } else { k as f64 / n0 as f64 };
             let c1 = if k == n0 { c_b } else { self.correct(lerp(t1), col)? };
             // depth-first bisection of [t_prev, t1], left half first
-            let mut stack = vec![(t_prev, c_prev, t1, c1)];
+            let mut stack = std::mem::take(&mut self.split_stack);
+            stack.clear();
+            stack.push((t_prev, c_prev, t1, c1));
             while let Some((t0, c0, t1, c1)) = stack.pop() {
                 let tm = 0.5 * (t0 + t1);
                 let cm = if n0 == 1 && t0 == 0.0 && t1 == 1.0 {
@@ -1024,6 +1052,7 @@ impl<'a> Rewriter<'a> {
                     stack.push((t0, c0, tm, cm));
                 }
             }
+            self.split_stack = stack;
             t_prev = t1;
             c_prev = c1;
         }
@@ -1218,10 +1247,10 @@ impl<'a> Rewriter<'a> {
                     } else {
                         (want - out_prev.unwrap_or(0.0)) / scale
                     };
-                    let mut s = String::new();
-                    format_number(w, decimals, &mut s);
-                    let r = super::lexer::parse_number(s.as_bytes()).unwrap_or(w);
+                    let (r, n) = rounded(w, decimals);
                     if r != v {
+                        let mut s = String::new();
+                        write_rounded(w, decimals, n, &mut s);
                         self.edits.push(Edit { span, text: s, order: 0 });
                     }
                     self.st.out[a] = if absolute {
@@ -1281,23 +1310,25 @@ impl<'a> Rewriter<'a> {
         }
         let mut s = String::new();
         if absolute {
-            format_number((want_mm - offset) / scale, decimals, &mut s);
-            let r = super::lexer::parse_number(s.as_bytes()).unwrap_or(0.0);
+            let w = (want_mm - offset) / scale;
+            let (r, n) = rounded(w, decimals);
             if let Some(p) = prev {
-                let mut q = String::new();
-                format_number((p - offset) / scale, decimals, &mut q);
-                if q == s {
+                // unchanged after rounding: no word
+                let (rp, _) = rounded((p - offset) / scale, decimals);
+                if rp == r {
                     return None;
                 }
             }
+            write_rounded(w, decimals, n, &mut s);
             self.st.out[a] = Some(r * scale + offset);
         } else {
             let p = prev?;
-            format_number((want_mm - p) / scale, decimals, &mut s);
-            let r = super::lexer::parse_number(s.as_bytes()).unwrap_or(0.0);
+            let w = (want_mm - p) / scale;
+            let (r, n) = rounded(w, decimals);
             if r == 0.0 {
                 return None;
             }
+            write_rounded(w, decimals, n, &mut s);
             self.st.out[a] = Some(p + r * scale);
         }
         Some(s)
@@ -1323,6 +1354,21 @@ impl<'a> Rewriter<'a> {
 }
 
 
+
+/// `v` rounded to `decimals` digits: the value the written word stands for, and its count.
+fn rounded(v: f64, decimals: usize) -> (f64, Option<i64>) {
+    match to_decimal(v, decimals) {
+        Some(n) => (decimal_value(n, decimals), Some(n)),
+        None => (v, None),
+    }
+}
+
+fn write_rounded(v: f64, decimals: usize, n: Option<i64>, out: &mut String) {
+    match n {
+        Some(n) => write_decimal(n, decimals, out),
+        None => format_number(v, decimals, out),
+    }
+}
 
 fn case(code: &str, lower: bool) -> String {
     if lower {
