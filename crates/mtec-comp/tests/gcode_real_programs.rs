@@ -7,7 +7,7 @@
 
 mod gcode_support;
 use gcode_support::*;
-use mtec_comp::gcode::{rewrite, GcodeError, OnUnsupported, Offsets, RewriteOptions};
+use mtec_comp::gcode::{rewrite, GcodeError, Offsets, OnUnsupported, RewriteOptions};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -80,7 +80,10 @@ fn zero_model_round_trips_every_real_program_or_refuses_its_first_unsupported_li
             let res = rewrite(&input[..], &mut out, &ZeroModel, &RewriteOptions::default());
             match (&res, expected(&name)) {
                 (Ok(_), Some(None)) | (Ok(_), None) => {
-                    assert!(out == input, "{name}: zero model output differs from the input")
+                    assert!(
+                        out == input,
+                        "{name}: zero model output differs from the input"
+                    )
                 }
                 (Err(GcodeError::At(d)), Some(Some((line, col, words)))) => {
                     assert_eq!((d.line, d.column), (line, col), "{name}: {d}");
@@ -99,11 +102,17 @@ fn zero_model_round_trips_every_real_program_or_refuses_its_first_unsupported_li
             };
             let mut out = Vec::new();
             let rep = rewrite(&input[..], &mut out, &ZeroModel, &opts).unwrap();
-            assert!(out == input, "{name}: pass-through output differs from the input");
+            assert!(
+                out == input,
+                "{name}: pass-through output differs from the input"
+            );
             assert_eq!(rep.lines_read, rep.lines_written);
             assert!(!rep.header_written);
             if res.is_err() {
-                assert!(rep.warnings_total > 0, "{name}: refused, yet no warning in pass-through mode");
+                assert!(
+                    rep.warnings_total > 0,
+                    "{name}: refused, yet no warning in pass-through mode"
+                );
             }
             checked += 1;
         }
@@ -152,7 +161,11 @@ fn compensated_real_programs_land_on_target() {
         let input = std::fs::read_to_string(&path).unwrap();
         let output = compensate(&input, &o);
         // 5 decimals in inch: rounding ≤ 0.127 um per axis
-        let round = if input.to_ascii_uppercase().contains("G20") { 0.127e-3 } else { 0.05e-3 } * 3f64.sqrt();
+        let round = if input.to_ascii_uppercase().contains("G20") {
+            0.127e-3
+        } else {
+            0.05e-3
+        } * 3f64.sqrt();
         let tol = o.tolerance_um * 1e-3;
         let (end, path_dev) = check_lands_on_target(
             &input,

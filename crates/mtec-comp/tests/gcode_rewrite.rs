@@ -3,7 +3,7 @@
 mod gcode_support;
 use gcode_support::*;
 use mtec_comp::gcode::{
-    correction_mm, rewrite, GcodeError, OnUnsupported, Offsets, ProblemKind, RewriteOptions,
+    correction_mm, rewrite, GcodeError, Offsets, OnUnsupported, ProblemKind, RewriteOptions,
     RewriteReport,
 };
 use mtec_comp::ErrorModel;
@@ -15,7 +15,11 @@ fn run(input: &str, model: &dyn ErrorModel, opts: &RewriteOptions) -> (String, R
     (String::from_utf8(out).unwrap(), rep)
 }
 
-fn refuse(input: &str, model: &dyn ErrorModel, opts: &RewriteOptions) -> mtec_comp::gcode::Diagnostic {
+fn refuse(
+    input: &str,
+    model: &dyn ErrorModel,
+    opts: &RewriteOptions,
+) -> mtec_comp::gcode::Diagnostic {
     let mut out = Vec::new();
     match rewrite(input.as_bytes(), &mut out, model, opts) {
         Err(GcodeError::At(d)) => d,
@@ -38,7 +42,8 @@ fn zero_model_is_byte_identical_with_crlf_bom_and_no_final_newline() {
 fn constant_error_shifts_every_point_and_keeps_arcs() {
     // e = [+10, -20, +5] um everywhere ⇒ the command is the target minus e: c = [-0.01, +0.02, -0.005] mm
     let model = ConstModel([10.0, -20.0, 5.0]);
-    let input = "G21 G90\nG0 X0 Y0 Z5\nG1 Z-1 F100\nX100 (cut)\nG2 X120 Y20 R20\nG3 X100 Y40 I-20 J0\n";
+    let input =
+        "G21 G90\nG0 X0 Y0 Z5\nG1 Z-1 F100\nX100 (cut)\nG2 X120 Y20 R20\nG3 X100 Y40 I-20 J0\n";
     // no max-segment split here (it applies to every compensated feed move)
     let opts = RewriteOptions {
         max_segment_mm: 1e6,
@@ -82,7 +87,10 @@ fn long_move_is_split_and_ends_exactly_at_target_plus_correction() {
     assert_eq!(lines[3], "G1 X9.9998 F500");
     assert_eq!(lines.len(), 4 + 9);
     let c100: f64 = -2e-5 * 100.0 / (1.0 + 2e-5);
-    assert_eq!(*lines.last().unwrap(), format!("G1 X{}", 100.0 + (c100 * 1e4).round() / 1e4));
+    assert_eq!(
+        *lines.last().unwrap(),
+        format!("G1 X{}", 100.0 + (c100 * 1e4).round() / 1e4)
+    );
     assert_eq!(rep.lines_added, 9);
     // a tighter tolerance splits by the correction's change instead: 0.02 um/mm · L < 0.05 um
     let opts = RewriteOptions {
@@ -94,12 +102,19 @@ fn long_move_is_split_and_ends_exactly_at_target_plus_correction() {
     let xs: Vec<f64> = out
         .lines()
         .skip(3)
-        .map(|l| l.split_whitespace().find(|w| w.starts_with('X')).unwrap()[1..].parse().unwrap())
+        .map(|l| {
+            l.split_whitespace().find(|w| w.starts_with('X')).unwrap()[1..]
+                .parse()
+                .unwrap()
+        })
         .collect();
     let mut prev = 0.0;
     for &x in &xs {
         let step = x - prev;
-        assert!(0.02 * step < 0.05 + 1e-9, "piece of {step} mm changes the correction by more than 0.05 um");
+        assert!(
+            0.02 * step < 0.05 + 1e-9,
+            "piece of {step} mm changes the correction by more than 0.05 um"
+        );
         prev = x;
     }
     // bisection: 100 mm / 2^6 = 1.5625 mm is the first power-of-two piece under 2.5 mm
@@ -156,8 +171,20 @@ fn incremental_and_inch_programs_do_not_drift() {
     let got = interpret(&out, &work, &BTreeMap::new(), start);
     // the last output point, through the machine, is back at the origin within inch rounding
     let end = machine(&PolyModel, got.last().unwrap().end);
-    assert!(dist(end, want.last().unwrap().end) < 0.127e-3 * 3f64.sqrt(), "{out}");
-    check_lands_on_target(input, &out, &PolyModel, &work, &BTreeMap::new(), start, 0.23e-3, 0.8e-3);
+    assert!(
+        dist(end, want.last().unwrap().end) < 0.127e-3 * 3f64.sqrt(),
+        "{out}"
+    );
+    check_lands_on_target(
+        input,
+        &out,
+        &PolyModel,
+        &work,
+        &BTreeMap::new(),
+        start,
+        0.23e-3,
+        0.8e-3,
+    );
 }
 
 #[test]
@@ -167,9 +194,15 @@ fn arcs_are_linearised_when_the_correction_varies_and_modal_g2_is_restored() {
     assert_eq!(rep.arcs_linearised, 2);
     let lines: Vec<&str> = out.lines().collect();
     // the first arc's own line became its first chord
-    let arc1 = lines.iter().position(|l| l.starts_with("G1 X") && l.ends_with("")).unwrap();
+    let arc1 = lines
+        .iter()
+        .position(|l| l.starts_with("G1 X") && l.ends_with(""))
+        .unwrap();
     assert!(arc1 > 0);
-    assert!(!out.contains("R25"), "R words are gone with the arcs:\n{out}");
+    assert!(
+        !out.contains("R25"),
+        "R words are gone with the arcs:\n{out}"
+    );
     // the modal arc line got a G1 (output was G1 already: nothing inserted) -- and the path holds
     check_lands_on_target(
         input,
@@ -183,7 +216,11 @@ fn arcs_are_linearised_when_the_correction_varies_and_modal_g2_is_restored() {
     );
     // an arc kept as an arc after a linearised one gets its G2 back
     let input = "G21 G90 G17\nG0 X0 Y0 Z0\nG2 X50 Y0 R25 F100\nX50.001 Y0.001 R0.001\n";
-    let (out, _) = run(input, &ConstModel([1.0, 1.0, 1.0]), &RewriteOptions::default());
+    let (out, _) = run(
+        input,
+        &ConstModel([1.0, 1.0, 1.0]),
+        &RewriteOptions::default(),
+    );
     assert_eq!(out.lines().nth(4), Some("X50.0 Y0.0 R0.001"), "{out}");
 }
 
@@ -191,7 +228,14 @@ fn arcs_are_linearised_when_the_correction_varies_and_modal_g2_is_restored() {
 fn restores_modal_arc_after_linearisation() {
     // first arc linearised (the model varies), the second tiny one is kept: it needs its G2 back
     let input = "G21 G90\nG0 X0 Y0 Z0\nG2 X50 Y0 R25 F100\nX50.01 Y0.01 R0.01\n";
-    let (out, _) = run(input, &PolyModel, &RewriteOptions { tolerance_um: 5.0, ..RewriteOptions::default() });
+    let (out, _) = run(
+        input,
+        &PolyModel,
+        &RewriteOptions {
+            tolerance_um: 5.0,
+            ..RewriteOptions::default()
+        },
+    );
     let last = out.lines().last().unwrap();
     assert!(last.starts_with("G2 X"), "{out}");
 }
@@ -199,7 +243,12 @@ fn restores_modal_arc_after_linearisation() {
 #[test]
 fn unsupported_constructs_are_refused_with_line_and_column_or_passed_through() {
     let cases: &[(&str, usize, usize, &str)] = &[
-        ("G21\nG0 X0 Y0 Z0\nG1 X[1+2]\n", 3, 4, "parameter or expression"),
+        (
+            "G21\nG0 X0 Y0 Z0\nG1 X[1+2]\n",
+            3,
+            4,
+            "parameter or expression",
+        ),
         ("G21\n#5221 = 3\n", 2, 1, "#5221"),
         ("G21\no100 sub\n", 2, 1, "O-word"),
         ("G21 G0 X0 Y0 Z0\nG81 X1 Y1 Z-1 R1\n", 2, 1, "G81"),
@@ -230,13 +279,20 @@ fn unsupported_constructs_are_refused_with_line_and_column_or_passed_through() {
         let (out, rep) = run(input, &PolyModel, &opts);
         assert!(rep.warnings_total >= 1);
         let bad_line = input.lines().nth(line - 1).unwrap();
-        assert!(out.lines().any(|l| l == bad_line), "{input:?}: the line was not copied:\n{out}");
+        assert!(
+            out.lines().any(|l| l == bad_line),
+            "{input:?}: the line was not copied:\n{out}"
+        );
     }
 }
 
 #[test]
 fn correction_failures_are_errors_at_the_line() {
-    let d = refuse("G21\nG0 X0 Y0 Z0\nG0 X30000\n", &ScaleX, &RewriteOptions::default());
+    let d = refuse(
+        "G21\nG0 X0 Y0 Z0\nG0 X30000\n",
+        &ScaleX,
+        &RewriteOptions::default(),
+    );
     assert_eq!((d.line, d.kind), (3, ProblemKind::Correction));
     assert!(d.message.contains("exceeds --max-correction-um"), "{d}");
     struct Nan;

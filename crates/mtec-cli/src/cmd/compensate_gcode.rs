@@ -2,9 +2,7 @@
 
 use crate::cmd::model_loader::load_error_model;
 use crate::error::CliError;
-use mtec_comp::gcode::{
-    rewrite, GcodeError, OffsetsFile, OnUnsupported, RewriteOptions, Units,
-};
+use mtec_comp::gcode::{rewrite, GcodeError, OffsetsFile, OnUnsupported, RewriteOptions, Units};
 use mtec_io::InputError;
 use std::io::{BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -122,9 +120,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
             .split(',')
             .map(|x| x.trim().parse::<f64>())
             .collect::<Result<_, _>>()
-            .map_err(|_| CliError::usage(format!("--start-position-mm '{s}': expected x,y,z in mm")))?;
+            .map_err(|_| {
+                CliError::usage(format!("--start-position-mm '{s}': expected x,y,z in mm"))
+            })?;
         if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
-            return Err(CliError::usage(format!("--start-position-mm '{s}': expected three numbers x,y,z")));
+            return Err(CliError::usage(format!(
+                "--start-position-mm '{s}': expected three numbers x,y,z"
+            )));
         }
         options.start_position_mm = Some([v[0], v[1], v[2]]);
     }
@@ -156,10 +158,15 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let result = (|| -> Result<_, CliError> {
         let file = std::fs::File::create(&tmp)?;
         let mut writer = BufWriter::with_capacity(1 << 16, file);
-        let report = rewrite(reader, &mut writer, model.as_ref(), &options).map_err(|e| match e {
-            GcodeError::At(d) => CliError::Input(InputError::at(&args.input, d.line, d.column, d.message)),
-            GcodeError::Io(e) => CliError::Internal(anyhow::anyhow!("{}: {e}", args.input.display())),
-        })?;
+        let report =
+            rewrite(reader, &mut writer, model.as_ref(), &options).map_err(|e| match e {
+                GcodeError::At(d) => {
+                    CliError::Input(InputError::at(&args.input, d.line, d.column, d.message))
+                }
+                GcodeError::Io(e) => {
+                    CliError::Internal(anyhow::anyhow!("{}: {e}", args.input.display()))
+                }
+            })?;
         let file = writer.into_inner().map_err(|e| e.into_error())?;
         file.sync_all()?;
         std::fs::rename(&tmp, &args.output)?;
@@ -175,10 +182,21 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let stderr = std::io::stderr();
     let mut err = stderr.lock();
     for w in &report.warnings {
-        let _ = writeln!(err, "warning: {}:{}:{}: {} (line copied unchanged)", args.input.display(), w.line, w.column, w.message);
+        let _ = writeln!(
+            err,
+            "warning: {}:{}:{}: {} (line copied unchanged)",
+            args.input.display(),
+            w.line,
+            w.column,
+            w.message
+        );
     }
     if report.warnings_total > report.warnings.len() {
-        let _ = writeln!(err, "warning: … and {} more", report.warnings_total - report.warnings.len());
+        let _ = writeln!(
+            err,
+            "warning: … and {} more",
+            report.warnings_total - report.warnings.len()
+        );
     }
     println!(
         "{}: {} lines read, {} written ({} added by splitting); {} moves corrected, {} arcs linearised, largest correction {:.2} um; {} warnings",

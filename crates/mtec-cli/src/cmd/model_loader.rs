@@ -26,10 +26,12 @@ use std::path::Path;
 /// Reads a model file and returns the model it describes.
 pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> {
     let doc: serde_json::Value = mtec_io::read_json(path)?;
-    let format = doc
-        .get("format")
-        .and_then(|f| f.as_str())
-        .ok_or_else(|| InputError::file(path, "no \"format\" string: expected \"mtec.zero-model/1\" or \"mtec.poly-model/1\""))?;
+    let format = doc.get("format").and_then(|f| f.as_str()).ok_or_else(|| {
+        InputError::file(
+            path,
+            "no \"format\" string: expected \"mtec.zero-model/1\" or \"mtec.poly-model/1\"",
+        )
+    })?;
     match format {
         "mtec.zero-model/1" => Ok(Box::new(ZeroModel {
             source: path.display().to_string(),
@@ -87,17 +89,25 @@ impl PolyModel {
     fn new(file: PolyFile, path: &Path) -> Result<Self, InputError> {
         for (n, t) in file.terms.iter().enumerate() {
             if !t.coef_um.iter().all(|c| c.is_finite()) {
-                return Err(InputError::file(path, format!("terms[{n}]: coef_um is not finite")));
+                return Err(InputError::file(
+                    path,
+                    format!("terms[{n}]: coef_um is not finite"),
+                ));
             }
             if t.powers.iter().sum::<u32>() > 12 {
-                return Err(InputError::file(path, format!("terms[{n}]: total degree above 12")));
+                return Err(InputError::file(
+                    path,
+                    format!("terms[{n}]: total degree above 12"),
+                ));
             }
         }
         let describe = format!(
             "mtec.poly-model/1 from {} ({} terms){}",
             path.display(),
             file.terms.len(),
-            file.description.map(|d| format!(": {d}")).unwrap_or_default()
+            file.description
+                .map(|d| format!(": {d}"))
+                .unwrap_or_default()
         );
         Ok(PolyModel {
             terms: file.terms,
@@ -110,7 +120,9 @@ impl ErrorModel for PolyModel {
     fn error_um(&self, p: [f64; 3]) -> [f64; 3] {
         let mut e = [0.0; 3];
         for t in &self.terms {
-            let m = p[0].powi(t.powers[0] as i32) * p[1].powi(t.powers[1] as i32) * p[2].powi(t.powers[2] as i32);
+            let m = p[0].powi(t.powers[0] as i32)
+                * p[1].powi(t.powers[1] as i32)
+                * p[2].powi(t.powers[2] as i32);
             for (ei, ci) in e.iter_mut().zip(t.coef_um) {
                 *ei += ci * m;
             }

@@ -209,14 +209,16 @@ mod tests {
 
     #[test]
     fn full_circle_helix_and_zx_plane() {
-        let a = Arc::from_center([1.0, 0.0, 0.0], [1.0, 0.0, -2.0], [0.0, 0.0], XY, true, 2).unwrap();
+        let a =
+            Arc::from_center([1.0, 0.0, 0.0], [1.0, 0.0, -2.0], [0.0, 0.0], XY, true, 2).unwrap();
         assert!((a.sweep + 4.0 * PI).abs() < 1e-12);
         assert!(close(a.point(0.25), [-1.0, 0.0, -0.5]));
         assert!(close(a.point(0.5), [1.0, 0.0, -1.0]));
         assert_eq!(a.point(1.0), [1.0, 0.0, -2.0]);
         // G18 G3 from X1 Z0 about the origin: plane (Z, X); a quarter turn CCW moves to Z1? the
         // point (z, x) = (0, 1) at 90° goes to 180° = (-1, 0): Z-1, X0.
-        let b = Arc::from_center([1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 0.0], ZX, false, 1).unwrap();
+        let b =
+            Arc::from_center([1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 0.0], ZX, false, 1).unwrap();
         assert!((b.sweep - PI / 2.0).abs() < 1e-12);
         let mid = b.point(0.5);
         let s = 0.5f64.sqrt();
@@ -225,11 +227,14 @@ mod tests {
 
     #[test]
     fn chord_count_meets_sagitta() {
-        let a = Arc::from_center([10.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 0.0], XY, false, 1).unwrap();
+        let a =
+            Arc::from_center([10.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 0.0], XY, false, 1).unwrap();
         let n = a.chord_count(0.5e-3);
         let dtheta = a.sweep / n as f64;
         assert!(10.0 * (1.0 - (dtheta / 2.0).cos()) <= 0.5e-3 + 1e-15);
-        assert!(Arc::from_center([1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0], XY, false, 1).is_err());
+        assert!(
+            Arc::from_center([1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0], XY, false, 1).is_err()
+        );
         assert!(Arc::from_radius([0.0, 0.0, 0.0], [3.0, 0.0, 0.0], 1.0, XY, false).is_err());
     }
 }

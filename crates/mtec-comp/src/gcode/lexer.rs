@@ -180,12 +180,20 @@ pub fn lex_line(line: &[u8], start: usize, out: &mut Vec<Token>) -> Result<(), L
                 i = end;
             }
             c if c.is_ascii_digit() || c == b'.' || c == b'+' || c == b'-' => {
-                return Err(err(i, "number without a letter (blanks inside a number are not supported)"));
+                return Err(err(
+                    i,
+                    "number without a letter (blanks inside a number are not supported)",
+                ));
             }
             c if c.is_ascii() => {
                 return Err(err(i, format!("unexpected character '{}'", c as char)));
             }
-            c => return Err(err(i, format!("non-ASCII byte 0x{c:02x} outside a comment"))),
+            c => {
+                return Err(err(
+                    i,
+                    format!("non-ASCII byte 0x{c:02x} outside a comment"),
+                ))
+            }
         }
         first = false;
     }
@@ -300,8 +308,8 @@ fn lex_value(line: &[u8], i: usize) -> Result<(Value, usize), LexError> {
             if digits == 0 {
                 return Err(err(i.saturating_sub(1), "word without a number"));
             }
-            let value = parse_number(&line[i..end])
-                .ok_or_else(|| err(i, "number cannot be read"))?;
+            let value =
+                parse_number(&line[i..end]).ok_or_else(|| err(i, "number cannot be read"))?;
             Ok((Value::Number(value), end))
         }
     }
@@ -374,7 +382,10 @@ mod tests {
                 value: Value::Computed
             }
         );
-        assert_eq!(kinds("o100 while [ #100 le 180 ]"), vec![TokenKind::OWord { keyword: true }]);
+        assert_eq!(
+            kinds("o100 while [ #100 le 180 ]"),
+            vec![TokenKind::OWord { keyword: true }]
+        );
         assert_eq!(kinds("O1234"), vec![TokenKind::OWord { keyword: false }]);
         assert_eq!(kinds("/G1 X1")[0], TokenKind::BlockDelete);
         assert_eq!(kinds(" % ")[0], TokenKind::Percent);

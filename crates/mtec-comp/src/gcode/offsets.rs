@@ -77,9 +77,7 @@ impl OffsetsFile {
     pub fn validate(&self) -> Result<Offsets, String> {
         if let Some(f) = &self.format {
             if f != "mtec.gcode-offsets/1" {
-                return Err(format!(
-                    "format '{f}' is not 'mtec.gcode-offsets/1'"
-                ));
+                return Err(format!("format '{f}' is not 'mtec.gcode-offsets/1'"));
             }
         }
         let find = |name: &str| {

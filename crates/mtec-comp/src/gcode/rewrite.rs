@@ -257,8 +257,14 @@ impl<'a> Rewriter<'a> {
             model,
             opt,
             st: State {
-                prog: opt.start_position_mm.map(|p| p.map(Some)).unwrap_or([None; 3]),
-                out: opt.start_position_mm.map(|p| p.map(Some)).unwrap_or([None; 3]),
+                prog: opt
+                    .start_position_mm
+                    .map(|p| p.map(Some))
+                    .unwrap_or([None; 3]),
+                out: opt
+                    .start_position_mm
+                    .map(|p| p.map(Some))
+                    .unwrap_or([None; 3]),
                 units: Some(opt.default_units),
                 absolute: Some(true),
                 arc_absolute: Some(false),
@@ -369,7 +375,12 @@ impl<'a> Rewriter<'a> {
         Ok(())
     }
 
-    fn line<W: Write>(&mut self, body: &[u8], ending: &[u8], output: &mut W) -> Result<(), GcodeError> {
+    fn line<W: Write>(
+        &mut self,
+        body: &[u8],
+        ending: &[u8],
+        output: &mut W,
+    ) -> Result<(), GcodeError> {
         if self.tape_ended {
             return self.write_verbatim(body, ending, output);
         }
@@ -580,7 +591,8 @@ impl<'a> Rewriter<'a> {
                         },
                         None => st.current_tool,
                     };
-                    st.tool_length_mm = tool.and_then(|t| self.opt.offsets.tool_length_mm.get(&t).copied());
+                    st.tool_length_mm =
+                        tool.and_then(|t| self.opt.offsets.tool_length_mm.get(&t).copied());
                     if st.tool_length_mm.is_none() {
                         let what = match tool {
                             Some(t) => format!("tool {t} has no length in the offsets file (--offsets, [tool_lengths_mm])"),
@@ -619,7 +631,10 @@ impl<'a> Rewriter<'a> {
             let mut why: Option<String> = None;
             match m {
                 Motion::Cancelled => {
-                    why = Some("axis words with no motion mode in effect (after G80 or at program start)".into())
+                    why = Some(
+                        "axis words with no motion mode in effect (after G80 or at program start)"
+                            .into(),
+                    )
                 }
                 Motion::Unknown => {
                     if motion_word.is_none() {
@@ -632,7 +647,10 @@ impl<'a> Rewriter<'a> {
                 why = Some("cutter radius compensation (G41/G42) is active: the controller offsets this path".into());
             }
             if why.is_none() && st.inverse_time && m != Motion::Rapid {
-                why = Some("inverse-time feed (G93) is active: a split move would change its duration".into());
+                why = Some(
+                    "inverse-time feed (G93) is active: a split move would change its duration"
+                        .into(),
+                );
             }
             if why.is_none() {
                 if let Some(l) = other_axis {
@@ -692,7 +710,10 @@ impl<'a> Rewriter<'a> {
             if has_axis
                 && motion_word.is_none()
                 && axis_consumer.is_none()
-                && matches!(self.st.motion, Motion::Rapid | Motion::Linear | Motion::Cw | Motion::Ccw)
+                && matches!(
+                    self.st.motion,
+                    Motion::Rapid | Motion::Linear | Motion::Cw | Motion::Ccw
+                )
                 && self.st.out_motion != self.st.motion
             {
                 // the line is copied, but it must still move in the program's mode
@@ -704,7 +725,9 @@ impl<'a> Rewriter<'a> {
                 self.poison_all();
             } else {
                 for (a, l) in axis_letters.iter().enumerate() {
-                    if b.word(*l).is_some() || (has_axis && matches!(motion, Some(Motion::Cw | Motion::Ccw))) {
+                    if b.word(*l).is_some()
+                        || (has_axis && matches!(motion, Some(Motion::Cw | Motion::Ccw)))
+                    {
                         self.st.prog[a] = None;
                         self.st.out[a] = None;
                     }
@@ -768,7 +791,11 @@ impl<'a> Rewriter<'a> {
             return Some(0.0);
         }
         let w = self.opt.offsets.work_mm[self.st.work?][axis];
-        Some(if axis == 2 { w + self.st.tool_length_mm? } else { w })
+        Some(if axis == 2 {
+            w + self.st.tool_length_mm?
+        } else {
+            w
+        })
     }
 
     fn decimals(&self) -> usize {
@@ -792,14 +819,22 @@ impl<'a> Rewriter<'a> {
             .map(|w| w.token);
         let col = self.column_of(first_axis_tok.or(motion_tok));
         let (Some(units), Some(absolute)) = (self.st.units, self.st.absolute) else {
-            let d = self.diag(col, ProblemKind::Unsupported, "units or distance mode not known here (after an unsupported line)".into());
+            let d = self.diag(
+                col,
+                ProblemKind::Unsupported,
+                "units or distance mode not known here (after an unsupported line)".into(),
+            );
             self.unsupported(d)?;
             self.st.prog = [None; 3];
             self.st.out = [None; 3];
             return Ok(());
         };
         if g53 && !absolute {
-            let d = self.diag(col, ProblemKind::Syntax, "G53 needs absolute distance mode (G90)".into());
+            let d = self.diag(
+                col,
+                ProblemKind::Syntax,
+                "G53 needs absolute distance mode (G90)".into(),
+            );
             return self.unsupported(d);
         }
         let scale = units.mm_per_unit();
@@ -808,7 +843,12 @@ impl<'a> Rewriter<'a> {
             match self.offset_mm(a, g53) {
                 Some(o) => *off = o,
                 None => {
-                    let d = self.diag(col, ProblemKind::Unsupported, "work offset or tool length not known here (after an unsupported line)".into());
+                    let d = self.diag(
+                        col,
+                        ProblemKind::Unsupported,
+                        "work offset or tool length not known here (after an unsupported line)"
+                            .into(),
+                    );
                     self.unsupported(d)?;
                     self.st.prog = [None; 3];
                     self.st.out = [None; 3];
@@ -824,7 +864,11 @@ impl<'a> Rewriter<'a> {
             if let Some(w) = b.word(*l) {
                 let Value::Number(v) = w.value else {
                     // refused in `block` before motion is interpreted; kept safe here
-                    let d = self.diag(col, ProblemKind::Unsupported, "parameter or expression in an axis word".into());
+                    let d = self.diag(
+                        col,
+                        ProblemKind::Unsupported,
+                        "parameter or expression in an axis word".into(),
+                    );
                     return self.unsupported(d);
                 };
                 words[a] = Some((v, w.token));
@@ -838,7 +882,8 @@ impl<'a> Rewriter<'a> {
         let is_arc = matches!(m, Motion::Cw | Motion::Ccw);
         let uses_modal = motion_tok.is_none();
         let target_known = target.iter().all(|t| t.is_some());
-        let start_known = start.iter().all(|t| t.is_some()) && self.st.out.iter().all(|t| t.is_some());
+        let start_known =
+            start.iter().all(|t| t.is_some()) && self.st.out.iter().all(|t| t.is_some());
 
         if !target_known || (is_arc && !start_known) {
             if m == Motion::Rapid {
@@ -892,11 +937,21 @@ impl<'a> Rewriter<'a> {
                 let mut pieces = std::mem::take(&mut self.pieces);
                 pieces.clear();
                 self.split_linear(start_p, target, c0, c_end, &mut pieces, col)?;
-                self.emit_pieces(b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false)?;
+                self.emit_pieces(
+                    b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false,
+                )?;
                 self.pieces = pieces;
             }
             (Motion::Cw | Motion::Ccw, Some(c0)) => {
-                let arc = match self.arc_of(b, start_p, target, m == Motion::Cw, absolute, scale, offsets) {
+                let arc = match self.arc_of(
+                    b,
+                    start_p,
+                    target,
+                    m == Motion::Cw,
+                    absolute,
+                    scale,
+                    offsets,
+                ) {
                     Ok(a) => a,
                     Err(msg) => {
                         let d = self.diag(col, ProblemKind::Syntax, msg);
@@ -931,14 +986,20 @@ impl<'a> Rewriter<'a> {
                                     if r != v {
                                         let mut s = String::new();
                                         write_rounded(v + c0[a] / scale, d, n, &mut s);
-                                        self.edits.push(Edit { span, text: s, order: 0 });
+                                        self.edits.push(Edit {
+                                            span,
+                                            text: s,
+                                            order: 0,
+                                        });
                                     }
                                 }
                             }
                         }
                     }
                     let pieces = [(target, c_end)];
-                    self.emit_pieces(b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false)?;
+                    self.emit_pieces(
+                        b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false,
+                    )?;
                 } else {
                     let n = arc.chord_count(self.opt.chord_tolerance_um * 1e-3);
                     let mut pieces = Vec::new();
@@ -952,7 +1013,9 @@ impl<'a> Rewriter<'a> {
                         c_prev = cv;
                     }
                     self.report.arcs_linearised += 1;
-                    self.emit_pieces(b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, true)?;
+                    self.emit_pieces(
+                        b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, true,
+                    )?;
                 }
             }
             _ => {
@@ -961,7 +1024,9 @@ impl<'a> Rewriter<'a> {
                     self.report.moves_end_point_only += 1;
                 }
                 let pieces = [(target, c_end)];
-                self.emit_pieces(b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false)?;
+                self.emit_pieces(
+                    b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false,
+                )?;
             }
         }
         self.st.prog = target.map(Some);
@@ -980,7 +1045,9 @@ impl<'a> Rewriter<'a> {
             }
             Err(e) => {
                 let msg = match e {
-                    SolveError::NotFinite { .. } | SolveError::NotConverged { .. } | SolveError::TooLarge { .. } => {
+                    SolveError::NotFinite { .. }
+                    | SolveError::NotConverged { .. }
+                    | SolveError::TooLarge { .. } => {
                         format!(
                             "{e} (target [{:.4}, {:.4}, {:.4}] mm, machine frame)",
                             target[0], target[1], target[2]
@@ -1029,7 +1096,11 @@ impl<'a> Rewriter<'a> {
         let mut c_prev = c_a;
         for k in 1..=n0 {
             let t1 = if k == n0 { 1.0 } else { k as f64 / n0 as f64 };
-            let c1 = if k == n0 { c_b } else { self.correct(lerp(t1), col)? };
+            let c1 = if k == n0 {
+                c_b
+            } else {
+                self.correct(lerp(t1), col)?
+            };
             // depth-first bisection of [t_prev, t1], left half first
             let mut stack = std::mem::take(&mut self.split_stack);
             stack.clear();
@@ -1194,7 +1265,11 @@ impl<'a> Rewriter<'a> {
             match b.g.iter().find(|(c, _)| *c == 20 || *c == 30) {
                 Some(&(_, tok)) if !uses_modal => {
                     let span = self.tokens[tok].span.clone();
-                    self.edits.push(Edit { span, text: g1, order: 0 });
+                    self.edits.push(Edit {
+                        span,
+                        text: g1,
+                        order: 0,
+                    });
                 }
                 _ => {
                     if self.st.out_motion != Motion::Linear {
@@ -1251,7 +1326,11 @@ impl<'a> Rewriter<'a> {
                     if r != v {
                         let mut s = String::new();
                         write_rounded(w, decimals, n, &mut s);
-                        self.edits.push(Edit { span, text: s, order: 0 });
+                        self.edits.push(Edit {
+                            span,
+                            text: s,
+                            order: 0,
+                        });
                     }
                     self.st.out[a] = if absolute {
                         Some(r * scale + offsets[a])
@@ -1260,7 +1339,9 @@ impl<'a> Rewriter<'a> {
                     };
                 }
                 None => {
-                    if let Some(text) = self.new_word(a, want, offsets[a], absolute, scale, decimals) {
+                    if let Some(text) =
+                        self.new_word(a, want, offsets[a], absolute, scale, decimals)
+                    {
                         self.edits.push(Edit {
                             span: insert_at..insert_at,
                             text: format!("{sep}{}{text}", case_letter(letter, lower) as char),
@@ -1278,7 +1359,9 @@ impl<'a> Rewriter<'a> {
             let mut line = case("G1", lower);
             let mut moved = false;
             for a in 0..3 {
-                if let Some(text) = self.new_word(a, t[a] + c[a], offsets[a], absolute, scale, decimals) {
+                if let Some(text) =
+                    self.new_word(a, t[a] + c[a], offsets[a], absolute, scale, decimals)
+                {
                     line.push(' ');
                     line.push(case_letter([b'X', b'Y', b'Z'][a], lower) as char);
                     line.push_str(&text);
@@ -1353,8 +1436,6 @@ impl<'a> Rewriter<'a> {
     }
 }
 
-
-
 /// `v` rounded to `decimals` digits: the value the written word stands for, and its count.
 fn rounded(v: f64, decimals: usize) -> (f64, Option<i64>) {
     match to_decimal(v, decimals) {
@@ -1420,4 +1501,3 @@ pub fn header_comment(model: &dyn ErrorModel, opt: &RewriteOptions) -> String {
         opt.chord_tolerance_um
     )
 }
-

@@ -72,7 +72,11 @@ pub fn correction_mm(
         step = (0..3).map(|i| (next[i] - p[i]).abs()).fold(0.0, f64::max);
         p = next;
         if step < CONVERGED_MM {
-            let c = [p[0] - target_mm[0], p[1] - target_mm[1], p[2] - target_mm[2]];
+            let c = [
+                p[0] - target_mm[0],
+                p[1] - target_mm[1],
+                p[2] - target_mm[2],
+            ];
             let norm_um = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() * 1e3;
             if norm_um > max_correction_um {
                 return Err(SolveError::TooLarge {

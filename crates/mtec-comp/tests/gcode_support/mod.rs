@@ -94,7 +94,11 @@ pub fn interpret(
         let mut w: BTreeMap<u8, f64> = BTreeMap::new();
         let mut gs = Vec::new();
         for t in &toks {
-            if let TokenKind::Word { letter, value: Value::Number(v) } = t.kind {
+            if let TokenKind::Word {
+                letter,
+                value: Value::Number(v),
+            } = t.kind
+            {
                 if letter == b'G' {
                     gs.push((v * 10.0).round() as i32);
                 } else {
@@ -168,11 +172,19 @@ pub fn interpret(
             let mut sweep = a1 - a0;
             let full = (e[f] - s[f]).hypot(e[g2] - s[g2]) < 1e-9;
             if mode == 3 {
-                if full { sweep = 2.0 * std::f64::consts::PI; }
-                while sweep <= 0.0 { sweep += 2.0 * std::f64::consts::PI; }
+                if full {
+                    sweep = 2.0 * std::f64::consts::PI;
+                }
+                while sweep <= 0.0 {
+                    sweep += 2.0 * std::f64::consts::PI;
+                }
             } else {
-                if full { sweep = -2.0 * std::f64::consts::PI; }
-                while sweep >= 0.0 { sweep -= 2.0 * std::f64::consts::PI; }
+                if full {
+                    sweep = -2.0 * std::f64::consts::PI;
+                }
+                while sweep >= 0.0 {
+                    sweep -= 2.0 * std::f64::consts::PI;
+                }
             }
             let turns = w.get(&b'P').copied().unwrap_or(1.0);
             sweep += sweep.signum() * 2.0 * std::f64::consts::PI * (turns - 1.0);
@@ -215,9 +227,13 @@ pub fn dist_to_path(p: [f64; 3], path: &[[f64; 3]]) -> f64 {
         let t = if l2 == 0.0 {
             0.0
         } else {
-            (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1] + (p[2] - a[2]) * ab[2]) / l2).clamp(0.0, 1.0)
+            (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1] + (p[2] - a[2]) * ab[2]) / l2)
+                .clamp(0.0, 1.0)
         };
-        best = best.min(dist(p, [a[0] + ab[0] * t, a[1] + ab[1] * t, a[2] + ab[2] * t]));
+        best = best.min(dist(
+            p,
+            [a[0] + ab[0] * t, a[1] + ab[1] * t, a[2] + ab[2] * t],
+        ));
     }
     if path.len() == 1 {
         best = dist(p, path[0]);
@@ -232,7 +248,10 @@ pub fn shared_dir() -> Option<PathBuf> {
         std::env::var_os("MTEC_SHARED_DIR").map(PathBuf::from),
         Some(root.join("../shared")),
     ];
-    candidates.into_iter().flatten().find(|p| p.join("data/gcode").is_dir())
+    candidates
+        .into_iter()
+        .flatten()
+        .find(|p| p.join("data/gcode").is_dir())
 }
 
 /// Pushes the rewritten program through the machine and checks it against the original:
@@ -258,10 +277,7 @@ pub fn check_lands_on_target(
     let mut ends_hit = vec![false; want.len()];
     for g in &got {
         let reached = machine(model, g.end);
-        let mid = machine(
-            model,
-            [0, 1, 2].map(|i| 0.5 * (g.start[i] + g.end[i])),
-        );
+        let mid = machine(model, [0, 1, 2].map(|i| 0.5 * (g.start[i] + g.end[i])));
         // advance to the original move this output move belongs to
         let mut k = j;
         loop {
