@@ -4,7 +4,8 @@
 //! lost (output lines = input lines + added lines + header).
 //!
 //! Run for 10 minutes (nightly toolchain, `cargo install cargo-fuzz`):
-//!   cd fuzz && cargo +nightly fuzz run gcode_rewrite -- -max_total_time=600 -max_len=4096
+//!   cd fuzz && cargo +nightly fuzz run gcode_rewrite corpus/gcode_rewrite seeds/gcode_rewrite -- \
+//!       -max_total_time=600 -max_len=4096
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -65,5 +66,9 @@ fuzz_target!(|data: &[u8]| {
         }
     }
     let mut out = Vec::new();
-    let _ = rewrite(data, &mut out, &Poly, &RewriteOptions::default());
+    let strict = RewriteOptions {
+        max_pieces_per_move: 10_000,
+        ..RewriteOptions::default()
+    };
+    let _ = rewrite(data, &mut out, &Poly, &strict);
 });

@@ -74,7 +74,7 @@ impl Default for RewriteOptions {
             decimals_inch: 5,
             default_units: Units::Mm,
             offsets: Offsets::default(),
-            max_pieces_per_move: 1_000_000,
+            max_pieces_per_move: 100_000,
             start_position_mm: None,
         }
     }
@@ -1002,6 +1002,9 @@ impl<'a> Rewriter<'a> {
                     )?;
                 } else {
                     let n = arc.chord_count(self.opt.chord_tolerance_um * 1e-3);
+                    if n > self.opt.max_pieces_per_move {
+                        return Err(self.too_many(col));
+                    }
                     let mut pieces = Vec::new();
                     let mut prev = start_p;
                     let mut c_prev = c0;
@@ -1091,7 +1094,6 @@ impl<'a> Rewriter<'a> {
         if n0 > self.opt.max_pieces_per_move {
             return Err(self.too_many(col));
         }
-        let start_count = pieces.len();
         let mut t_prev = 0.0;
         let mut c_prev = c_a;
         for k in 1..=n0 {
@@ -1115,7 +1117,7 @@ impl<'a> Rewriter<'a> {
                 let ok = dist(c1, c0) < tol && dist(cm, c0) < tol && dist(cm, c1) < tol;
                 if ok || (t1 - t0) * len < 1e-9 {
                     pieces.push((lerp(t1), c1));
-                    if pieces.len() - start_count > self.opt.max_pieces_per_move {
+                    if pieces.len() > self.opt.max_pieces_per_move {
                         return Err(self.too_many(col));
                     }
                 } else {
