@@ -58,7 +58,7 @@ fn op() -> impl Strategy<Value = Op> {
         (
             any::<bool>(),
             [small(), small()],
-            0.0f64..6.28,
+            0.0f64..std::f64::consts::TAU,
             any::<bool>()
         )
             .prop_map(|(cw, c, a, h)| Op::Arc(cw, c, a, h)),

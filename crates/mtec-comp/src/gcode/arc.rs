@@ -136,7 +136,9 @@ impl Arc {
         let h2 = r * r - half * half;
         let h = if h2 >= 0.0 {
             h2.sqrt()
-        } else if half - r.abs() <= RADIUS_MISMATCH_MM || half - r.abs() <= RADIUS_MISMATCH_REL * r.abs() {
+        } else if half - r.abs() <= RADIUS_MISMATCH_MM
+            || half - r.abs() <= RADIUS_MISMATCH_REL * r.abs()
+        {
             0.0
         } else {
             return Err(format!(

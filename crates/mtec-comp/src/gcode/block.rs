@@ -126,7 +126,7 @@ impl Block {
                             }
                             if letter == b'G' {
                                 b.g.push((code10 as u32, i));
-                            } else if code10 as u32 % 10 != 0 {
+                            } else if (code10 as u32 / 10) * 10 != code10 as u32 {
                                 b.issue(i, format!("M code {v} is not a known code", ), true);
                             } else {
                                 b.m.push((code10 as u32 / 10, i));

@@ -1,6 +1,9 @@
 //! The streaming rewriter: reads a program line by line, tracks the modal state, and writes each
 //! line either byte for byte or with only the changed words edited, plus the lines of split moves.
 
+// axis loops index several per-axis arrays at once (target, correction, offsets, words)
+#![allow(clippy::needless_range_loop)]
+
 use super::arc::{self, Arc, Plane};
 use super::block::{Block, Issue};
 use super::format::{apply_edits, decimal_value, format_number, to_decimal, write_decimal, Edit};
@@ -93,7 +96,7 @@ impl RewriteOptions {
         pos(self.tolerance_um, "--tolerance-um")?;
         pos(self.chord_tolerance_um, "--chord-tolerance-um")?;
         pos(self.max_correction_um, "--max-correction-um")?;
-        if !(self.max_segment_mm > 0.0) {
+        if self.max_segment_mm.is_nan() || self.max_segment_mm <= 0.0 {
             return Err(format!(
                 "--max-segment-mm must be positive, not {}",
                 self.max_segment_mm
@@ -636,10 +639,8 @@ impl<'a> Rewriter<'a> {
                             .into(),
                     )
                 }
-                Motion::Unknown => {
-                    if motion_word.is_none() {
-                        why = Some("axis words in a motion mode the rewriter cannot follow (a canned cycle repeats, or the mode was set by an unsupported line)".into())
-                    }
+                Motion::Unknown if motion_word.is_none() => {
+                    why = Some("axis words in a motion mode the rewriter cannot follow (a canned cycle repeats, or the mode was set by an unsupported line)".into())
                 }
                 _ => {}
             }
@@ -1474,7 +1475,7 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 fn g_name(code10: u32) -> String {
-    if code10 % 10 == 0 {
+    if (code10 / 10) * 10 == code10 {
         format!("G{}", code10 / 10)
     } else {
         format!("G{}.{}", code10 / 10, code10 % 10)
