@@ -36,7 +36,6 @@ enum Command {
 
 #[derive(Subcommand)]
 enum CompensateCommand {
-    /// Rewrite an NC program (G-code) so the machine reaches the programmed points.
     Gcode(cmd::compensate_gcode::Args),
 }
 
