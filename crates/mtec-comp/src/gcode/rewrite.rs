@@ -439,8 +439,13 @@ impl<'a> Rewriter<'a> {
         if !handled || (self.edits.is_empty() && self.extra_lines.is_empty()) {
             return self.write_verbatim(body, ending, output);
         }
+        let bom = self.line_no == 1 && body.starts_with(b"\xEF\xBB\xBF");
         if !self.report.header_written {
             self.report.header_written = true;
+            if bom {
+                // the byte-order mark stays the first bytes of the file
+                output.write_all(b"\xEF\xBB\xBF")?;
+            }
             let header = header_comment(self.model, self.opt);
             output.write_all(header.as_bytes())?;
             output.write_all(if ending.is_empty() { b"\n" } else { ending })?;
@@ -450,6 +455,9 @@ impl<'a> Rewriter<'a> {
         let mut edits = std::mem::take(&mut self.edits);
         apply_edits(body, &mut edits, &mut self.out_buf);
         self.edits = edits;
+        if bom {
+            self.out_buf.drain(..3); // no edit touches the mark: the lexer starts after it
+        }
         let sep: &[u8] = if ending.is_empty() { b"\n" } else { ending };
         for l in &self.extra_lines {
             self.out_buf.extend_from_slice(sep);
