@@ -58,7 +58,7 @@ fn op() -> impl Strategy<Value = Op> {
         (
             any::<bool>(),
             [small(), small()],
-            0.0f64..6.28,
+            0.0f64..std::f64::consts::TAU,
             any::<bool>()
         )
             .prop_map(|(cw, c, a, h)| Op::Arc(cw, c, a, h)),
@@ -211,8 +211,54 @@ fn config() -> ProptestConfig {
     }
 }
 
+fn count_lines(b: &[u8]) -> usize {
+    b.split(|&c| c == b'\n').count() - usize::from(b.last() == Some(&b'\n'))
+}
+
+/// Bytes that look like G-code often enough to reach deep into the rewriter: words, numbers,
+/// parameters, brackets, comments, line endings and some arbitrary bytes.
+fn gcode_soup() -> impl Strategy<Value = Vec<u8>> {
+    let piece = prop_oneof![
+        4 => proptest::sample::select(vec![
+            "G0", "G1", "G2", "G3", "G17", "G18", "G19", "G20", "G21", "G90", "G91", "G90.1",
+            "G43", "H1", "G49", "G53", "G54", "G55", "G28", "G80", "G81", "G41", "G40", "G93",
+            "G94", "M2", "M6", "T1", "X", "Y", "Z", "I", "J", "K", "R", "P", "F", "N10", "O100",
+            "sub", "#1", "#<a>", "=", "[", "]", "(", ")", ";", "/", "%", " ", "\n", "\r\n",
+            "-", ".", "+", "A", "@", "^",
+        ]).prop_map(|s| s.as_bytes().to_vec()),
+        3 => (-100000i32..100000).prop_map(|v| format!("{}", v as f64 / 1000.0).into_bytes()),
+        1 => proptest::collection::vec(any::<u8>(), 1..3),
+    ];
+    proptest::collection::vec(piece, 0..60).prop_map(|v| v.concat())
+}
+
 proptest! {
     #![proptest_config(config())]
+
+    /// The fuzz target's checks, bounded for CI: any bytes give a result or a located error,
+    /// never a panic; a zero model copies them exactly; a model never loses a line.
+    #[test]
+    fn arbitrary_bytes_never_panic_and_keep_their_lines(data in gcode_soup()) {
+        let pass = RewriteOptions {
+            on_unsupported: OnUnsupported::PassThroughWithWarning,
+            max_pieces_per_move: 10_000,
+            ..RewriteOptions::default()
+        };
+        let mut out = Vec::new();
+        let rep = rewrite(&data[..], &mut out, &ZeroModel, &pass).unwrap();
+        prop_assert_eq!(&out, &data);
+        prop_assert!(!rep.header_written);
+        let mut out = Vec::new();
+        if let Ok(rep) = rewrite(&data[..], &mut out, &PolyModel, &pass) {
+            if !data.is_empty() {
+                prop_assert_eq!(count_lines(&out), count_lines(&data) + rep.lines_added + usize::from(rep.header_written));
+            }
+        }
+        let mut out = Vec::new();
+        if let Err(mtec_comp::gcode::GcodeError::At(d)) = rewrite(&data[..], &mut out, &PolyModel, &RewriteOptions::default()) {
+            prop_assert!(d.line >= 1 && d.line <= count_lines(&data).max(1) && d.column >= 1);
+        }
+    }
 
     #[test]
     fn zero_model_output_is_byte_identical(
@@ -234,7 +280,8 @@ proptest! {
     ) {
         let model = Scaled(k);
         let input = render(&ops, crlf, lower, compact, nl);
-        let opts = RewriteOptions::default();
+        // a coarser chord tolerance keeps arcs to tens of chords: the test stays within seconds
+        let opts = RewriteOptions { chord_tolerance_um: 5.0, ..RewriteOptions::default() };
         let mut out = Vec::new();
         let rep = rewrite(input.as_bytes(), &mut out, &model, &opts).unwrap();
         let output = String::from_utf8(out).unwrap();

@@ -311,3 +311,17 @@ fn correction_failures_are_errors_at_the_line() {
     let c = correction_mm(&ScaleX, [210.0, 0.0, 0.0], 500.0).unwrap();
     assert!((c[0] + 2e-5 * 210.0 / (1.0 + 2e-5)).abs() < 1e-9);
 }
+
+#[test]
+fn byte_order_mark_stays_first_when_the_first_line_changes() {
+    let input = "\u{feff}G21 G90 G0 X0 Y0 Z0\nG1 X1\n";
+    let (out, rep) = run(
+        input,
+        &ConstModel([1.0, 0.0, 0.0]),
+        &RewriteOptions::default(),
+    );
+    assert!(rep.header_written);
+    assert!(out.starts_with("\u{feff}(mtec compensate gcode"), "{out:?}");
+    assert_eq!(out.lines().nth(1), Some("G21 G90 G0 X-0.001 Y0 Z0"));
+    assert_eq!(out.matches('\u{feff}').count(), 1);
+}

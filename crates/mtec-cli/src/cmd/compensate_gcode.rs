@@ -53,7 +53,10 @@ pub enum UnitsArg {
 }
 
 #[derive(clap::Args, Debug)]
-#[command(long_about = LONG_ABOUT)]
+#[command(
+    about = "Rewrite an NC program (G-code) so the machine reaches the programmed points",
+    long_about = LONG_ABOUT
+)]
 pub struct Args {
     /// Error model (JSON): mtec.zero-model/1 or mtec.poly-model/1.
     #[arg(long, value_name = "MODEL.json")]

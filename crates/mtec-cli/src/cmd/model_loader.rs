@@ -29,7 +29,7 @@ pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> 
     let format = doc.get("format").and_then(|f| f.as_str()).ok_or_else(|| {
         InputError::file(
             path,
-            "no \"format\" string: expected a model such as \"mtec.map/1\", \"mtec.kinematic-model/1\", \"mtec.zero-model/1\" or \"mtec.poly-model/1\"",
+            "no \"format\" string: expected \"mtec.zero-model/1\" or \"mtec.poly-model/1\"",
         )
     })?;
     match format {

@@ -51,8 +51,9 @@ pub struct Arc {
     pub sweep: f64,
 }
 
-/// Largest radius difference accepted between start and end (mm), and its relative part.
-const RADIUS_MISMATCH_MM: f64 = 0.002;
+/// An arc is refused when its start and end radii differ by more than both of these (mm, and
+/// relative to the radius) — LinuxCNC's rule, with its millimetre tolerance (0.02 mm, 0.1 %).
+const RADIUS_MISMATCH_MM: f64 = 0.02;
 const RADIUS_MISMATCH_REL: f64 = 0.001;
 
 fn in_plane(p: &[f64; 3], pl: Plane) -> [f64; 2] {
@@ -77,7 +78,8 @@ impl Arc {
         if r_start < 1e-9 {
             return Err("arc radius is zero (the centre is the start point)".into());
         }
-        if (r_end - r_start).abs() > RADIUS_MISMATCH_MM.max(RADIUS_MISMATCH_REL * r_start) {
+        let mismatch = (r_end - r_start).abs();
+        if mismatch > RADIUS_MISMATCH_MM && mismatch > RADIUS_MISMATCH_REL * r_start {
             return Err(format!(
                 "arc end point is not on the circle: radius {r_start:.6} mm at the start, {r_end:.6} mm at the end"
             ));
@@ -134,7 +136,9 @@ impl Arc {
         let h2 = r * r - half * half;
         let h = if h2 >= 0.0 {
             h2.sqrt()
-        } else if half - r.abs() <= RADIUS_MISMATCH_MM.max(RADIUS_MISMATCH_REL * r.abs()) {
+        } else if half - r.abs() <= RADIUS_MISMATCH_MM
+            || half - r.abs() <= RADIUS_MISMATCH_REL * r.abs()
+        {
             0.0
         } else {
             return Err(format!(

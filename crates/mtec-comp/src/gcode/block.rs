@@ -63,6 +63,21 @@ impl Block {
     /// collected in `issues` (in order of appearance), not refused here.
     pub fn read(tokens: &[Token], line: &[u8]) -> Block {
         let mut b = Block::default();
+        b.read_into(tokens, line);
+        b
+    }
+
+    /// As [`Block::read`], reusing this block's buffers (no allocation per line).
+    pub fn read_into(&mut self, tokens: &[Token], line: &[u8]) {
+        let b = self;
+        b.block_delete = false;
+        b.percent = false;
+        b.g.clear();
+        b.m.clear();
+        b.letters = [None; 26];
+        b.polar = None;
+        b.issues.clear();
+        b.first_word = None;
         for (i, t) in tokens.iter().enumerate() {
             match t.kind {
                 TokenKind::BlockDelete => b.block_delete = true,
@@ -111,7 +126,7 @@ impl Block {
                             }
                             if letter == b'G' {
                                 b.g.push((code10 as u32, i));
-                            } else if code10 as u32 % 10 != 0 {
+                            } else if (code10 as u32 / 10) * 10 != code10 as u32 {
                                 b.issue(i, format!("M code {v} is not a known code", ), true);
                             } else {
                                 b.m.push((code10 as u32 / 10, i));
@@ -140,6 +155,5 @@ impl Block {
             }
         }
         let _ = line;
-        b
     }
 }

@@ -2,21 +2,53 @@
 
 use std::ops::Range;
 
-/// Formats `v` with at most `decimals` digits after the point (correctly rounded), trailing
-/// zeros trimmed to one, and no negative zero: `1.23400` → `1.234`, `-0.00001` → `0.0`.
-pub fn format_number(v: f64, decimals: usize, out: &mut String) {
-    use std::fmt::Write;
-    let start = out.len();
-    let _ = write!(out, "{:.*}", decimals, v);
-    if decimals > 0 {
-        let trimmed = out[start..].trim_end_matches('0').len();
-        out.truncate(start + trimmed);
-        if out.ends_with('.') {
-            out.push('0');
-        }
+const POW10: [f64; 10] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
+
+/// `v` rounded to `decimals` digits, as an integer count of 10^-decimals (None when too large
+/// to count exactly). The value it stands for is [`decimal_value`].
+pub fn to_decimal(v: f64, decimals: usize) -> Option<i64> {
+    let x = (v * POW10[decimals.min(9)]).round();
+    if x.is_finite() && x.abs() < 4e15 {
+        Some(x as i64)
+    } else {
+        None
     }
-    if out[start..].starts_with('-') && out[start + 1..].bytes().all(|c| c == b'0' || c == b'.') {
-        out.remove(start);
+}
+
+/// The f64 nearest to n·10^-decimals: the division of two exact integers is correctly
+/// rounded, so this equals parsing the written decimal.
+pub fn decimal_value(n: i64, decimals: usize) -> f64 {
+    n as f64 / POW10[decimals.min(9)]
+}
+
+/// Writes n·10^-decimals in plain decimal, trailing zeros trimmed to one: 12340, 4 → `1.234`.
+pub fn write_decimal(n: i64, decimals: usize, out: &mut String) {
+    use std::fmt::Write;
+    let d = decimals.min(9);
+    let p = 10u64.pow(d as u32);
+    let a = n.unsigned_abs();
+    if n < 0 {
+        out.push('-');
+    }
+    let _ = write!(out, "{}", a / p);
+    if d > 0 {
+        out.push('.');
+        let start = out.len();
+        let _ = write!(out, "{:0width$}", a % p, width = d);
+        let trimmed = out[start..].trim_end_matches('0').len().max(1);
+        out.truncate(start + trimmed);
+    }
+}
+
+/// Formats `v` with at most `decimals` digits after the point, trailing zeros trimmed to one,
+/// and no negative zero: `1.23400` → `1.234`, `-0.00001` → `0.0`.
+pub fn format_number(v: f64, decimals: usize, out: &mut String) {
+    match to_decimal(v, decimals) {
+        Some(n) => write_decimal(n, decimals, out),
+        None => {
+            use std::fmt::Write;
+            let _ = write!(out, "{:.*}", decimals.min(9), v);
+        }
     }
 }
 

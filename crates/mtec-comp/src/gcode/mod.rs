@@ -38,6 +38,21 @@
 //!   copied uncorrected; feed moves to a known end point from an unknown start are corrected at
 //!   their end point only; arcs from an unknown start are unsupported.
 //! - Lines after a closing `%` tape mark are copied untouched (the controller never reads them).
+//! - **Units and start**: before the first G20/G21 the units are `default_units` (mm unless
+//!   told); the machine position at program start is unknown unless `start_position_mm` is
+//!   given (a lathe program never states Y: give the fixed Y there).
+//! - **Errors**: a correction that does not converge, is not finite, or exceeds
+//!   `max_correction_um` always stops the run (whatever `--on-unsupported` says), naming
+//!   `line:column` of the block.
+//!
+//! Robustness (issue 10): `tests/gcode_properties.rs` checks the invariants on generated
+//! programs and on arbitrary bytes in CI; the cargo-fuzz target `fuzz/fuzz_targets/gcode_rewrite.rs`
+//! checks the same without a time bound:
+//! `cd fuzz && cargo +nightly fuzz run gcode_rewrite corpus/gcode_rewrite seeds/gcode_rewrite -- -max_total_time=600 -max_len=4096`.
+//!
+//! Speed (one core, `cargo bench -p mtec-comp --bench gcode`, and the release CLI on a
+//! 1 M-line program): pass-through ≈ 4 M lines/s and compensation ≈ 1.6 M lines/s of CPU time;
+//! memory stays at a few MB whatever the file size.
 
 pub mod arc;
 pub mod block;

@@ -1,9 +1,12 @@
 //! The streaming rewriter: reads a program line by line, tracks the modal state, and writes each
 //! line either byte for byte or with only the changed words edited, plus the lines of split moves.
 
+// axis loops index several per-axis arrays at once (target, correction, offsets, words)
+#![allow(clippy::needless_range_loop)]
+
 use super::arc::{self, Arc, Plane};
 use super::block::{Block, Issue};
-use super::format::{apply_edits, format_number, Edit};
+use super::format::{apply_edits, decimal_value, format_number, to_decimal, write_decimal, Edit};
 use super::lexer::{lex_line, Token, TokenKind, Value};
 use super::offsets::{work_system_index, Offsets};
 use super::solve::{correction_mm, SolveError};
@@ -74,7 +77,7 @@ impl Default for RewriteOptions {
             decimals_inch: 5,
             default_units: Units::Mm,
             offsets: Offsets::default(),
-            max_pieces_per_move: 1_000_000,
+            max_pieces_per_move: 100_000,
             start_position_mm: None,
         }
     }
@@ -93,7 +96,7 @@ impl RewriteOptions {
         pos(self.tolerance_um, "--tolerance-um")?;
         pos(self.chord_tolerance_um, "--chord-tolerance-um")?;
         pos(self.max_correction_um, "--max-correction-um")?;
-        if !(self.max_segment_mm > 0.0) {
+        if self.max_segment_mm.is_nan() || self.max_segment_mm <= 0.0 {
             return Err(format!(
                 "--max-segment-mm must be positive, not {}",
                 self.max_segment_mm
@@ -240,6 +243,12 @@ struct Rewriter<'a> {
     lower: bool,
     /// The motion of the current block was written (by `emit_pieces` or as an uncorrected rapid).
     emitted: bool,
+    /// The pieces of the current move (reused).
+    pieces: Vec<Piece>,
+    /// The current block's words (buffers reused from line to line).
+    block: Block,
+    /// Work list of the move splitting, kept to avoid an allocation per move.
+    split_stack: Vec<(f64, [f64; 3], f64, [f64; 3])>,
 }
 
 /// A target point with the correction to apply there.
@@ -283,6 +292,9 @@ impl<'a> Rewriter<'a> {
             seen_content: false,
             lower: false,
             emitted: false,
+            split_stack: Vec::new(),
+            block: Block::default(),
+            pieces: Vec::new(),
         }
     }
 
@@ -389,7 +401,20 @@ impl<'a> Rewriter<'a> {
             self.poison_all();
             return self.write_verbatim(body, ending, output);
         }
-        let block = Block::read(&self.tokens, body);
+        let mut block = std::mem::take(&mut self.block);
+        block.read_into(&self.tokens, body);
+        let r = self.line_block(&block, body, ending, output);
+        self.block = block;
+        r
+    }
+
+    fn line_block<W: Write>(
+        &mut self,
+        block: &Block,
+        body: &[u8],
+        ending: &[u8],
+        output: &mut W,
+    ) -> Result<(), GcodeError> {
         self.lower = self
             .tokens
             .iter()
@@ -410,12 +435,17 @@ impl<'a> Rewriter<'a> {
         }
         self.edits.clear();
         self.extra_lines.clear();
-        let handled = self.block(&block, body)?;
+        let handled = self.block(block, body)?;
         if !handled || (self.edits.is_empty() && self.extra_lines.is_empty()) {
             return self.write_verbatim(body, ending, output);
         }
+        let bom = self.line_no == 1 && body.starts_with(b"\xEF\xBB\xBF");
         if !self.report.header_written {
             self.report.header_written = true;
+            if bom {
+                // the byte-order mark stays the first bytes of the file
+                output.write_all(b"\xEF\xBB\xBF")?;
+            }
             let header = header_comment(self.model, self.opt);
             output.write_all(header.as_bytes())?;
             output.write_all(if ending.is_empty() { b"\n" } else { ending })?;
@@ -425,6 +455,9 @@ impl<'a> Rewriter<'a> {
         let mut edits = std::mem::take(&mut self.edits);
         apply_edits(body, &mut edits, &mut self.out_buf);
         self.edits = edits;
+        if bom {
+            self.out_buf.drain(..3); // no edit touches the mark: the lexer starts after it
+        }
         let sep: &[u8] = if ending.is_empty() { b"\n" } else { ending };
         for l in &self.extra_lines {
             self.out_buf.extend_from_slice(sep);
@@ -614,10 +647,8 @@ impl<'a> Rewriter<'a> {
                             .into(),
                     )
                 }
-                Motion::Unknown => {
-                    if motion_word.is_none() {
-                        why = Some("axis words in a motion mode the rewriter cannot follow (a canned cycle repeats, or the mode was set by an unsupported line)".into())
-                    }
+                Motion::Unknown if motion_word.is_none() => {
+                    why = Some("axis words in a motion mode the rewriter cannot follow (a canned cycle repeats, or the mode was set by an unsupported line)".into())
                 }
                 _ => {}
             }
@@ -912,11 +943,13 @@ impl<'a> Rewriter<'a> {
 
         match (m, c_start) {
             (Motion::Linear, Some(c0)) if !g53 => {
-                let mut pieces = Vec::new();
+                let mut pieces = std::mem::take(&mut self.pieces);
+                pieces.clear();
                 self.split_linear(start_p, target, c0, c_end, &mut pieces, col)?;
                 self.emit_pieces(
                     b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false,
                 )?;
+                self.pieces = pieces;
             }
             (Motion::Cw | Motion::Ccw, Some(c0)) => {
                 let arc = match self.arc_of(
@@ -956,10 +989,12 @@ impl<'a> Rewriter<'a> {
                             if let Some(w) = b.word(*l) {
                                 if c0[a] != 0.0 {
                                     let Value::Number(v) = w.value else { continue };
-                                    let mut s = String::new();
-                                    format_number(v + c0[a] / scale, self.decimals(), &mut s);
+                                    let d = self.decimals();
+                                    let (r, n) = rounded(v + c0[a] / scale, d);
                                     let span = self.tokens[w.token].value_span.clone();
-                                    if super::lexer::parse_number(s.as_bytes()) != Some(v) {
+                                    if r != v {
+                                        let mut s = String::new();
+                                        write_rounded(v + c0[a] / scale, d, n, &mut s);
                                         self.edits.push(Edit {
                                             span,
                                             text: s,
@@ -976,6 +1011,9 @@ impl<'a> Rewriter<'a> {
                     )?;
                 } else {
                     let n = arc.chord_count(self.opt.chord_tolerance_um * 1e-3);
+                    if n > self.opt.max_pieces_per_move {
+                        return Err(self.too_many(col));
+                    }
                     let mut pieces = Vec::new();
                     let mut prev = start_p;
                     let mut c_prev = c0;
@@ -1065,7 +1103,6 @@ impl<'a> Rewriter<'a> {
         if n0 > self.opt.max_pieces_per_move {
             return Err(self.too_many(col));
         }
-        let start_count = pieces.len();
         let mut t_prev = 0.0;
         let mut c_prev = c_a;
         for k in 1..=n0 {
@@ -1076,7 +1113,9 @@ impl<'a> Rewriter<'a> {
                 self.correct(lerp(t1), col)?
             };
             // depth-first bisection of [t_prev, t1], left half first
-            let mut stack = vec![(t_prev, c_prev, t1, c1)];
+            let mut stack = std::mem::take(&mut self.split_stack);
+            stack.clear();
+            stack.push((t_prev, c_prev, t1, c1));
             while let Some((t0, c0, t1, c1)) = stack.pop() {
                 let tm = 0.5 * (t0 + t1);
                 let cm = if n0 == 1 && t0 == 0.0 && t1 == 1.0 {
@@ -1087,7 +1126,7 @@ impl<'a> Rewriter<'a> {
                 let ok = dist(c1, c0) < tol && dist(cm, c0) < tol && dist(cm, c1) < tol;
                 if ok || (t1 - t0) * len < 1e-9 {
                     pieces.push((lerp(t1), c1));
-                    if pieces.len() - start_count > self.opt.max_pieces_per_move {
+                    if pieces.len() > self.opt.max_pieces_per_move {
                         return Err(self.too_many(col));
                     }
                 } else {
@@ -1095,6 +1134,7 @@ impl<'a> Rewriter<'a> {
                     stack.push((t0, c0, tm, cm));
                 }
             }
+            self.split_stack = stack;
             t_prev = t1;
             c_prev = c1;
         }
@@ -1293,10 +1333,10 @@ impl<'a> Rewriter<'a> {
                     } else {
                         (want - out_prev.unwrap_or(0.0)) / scale
                     };
-                    let mut s = String::new();
-                    format_number(w, decimals, &mut s);
-                    let r = super::lexer::parse_number(s.as_bytes()).unwrap_or(w);
+                    let (r, n) = rounded(w, decimals);
                     if r != v {
+                        let mut s = String::new();
+                        write_rounded(w, decimals, n, &mut s);
                         self.edits.push(Edit {
                             span,
                             text: s,
@@ -1364,23 +1404,25 @@ impl<'a> Rewriter<'a> {
         }
         let mut s = String::new();
         if absolute {
-            format_number((want_mm - offset) / scale, decimals, &mut s);
-            let r = super::lexer::parse_number(s.as_bytes()).unwrap_or(0.0);
+            let w = (want_mm - offset) / scale;
+            let (r, n) = rounded(w, decimals);
             if let Some(p) = prev {
-                let mut q = String::new();
-                format_number((p - offset) / scale, decimals, &mut q);
-                if q == s {
+                // unchanged after rounding: no word
+                let (rp, _) = rounded((p - offset) / scale, decimals);
+                if rp == r {
                     return None;
                 }
             }
+            write_rounded(w, decimals, n, &mut s);
             self.st.out[a] = Some(r * scale + offset);
         } else {
             let p = prev?;
-            format_number((want_mm - p) / scale, decimals, &mut s);
-            let r = super::lexer::parse_number(s.as_bytes()).unwrap_or(0.0);
+            let w = (want_mm - p) / scale;
+            let (r, n) = rounded(w, decimals);
             if r == 0.0 {
                 return None;
             }
+            write_rounded(w, decimals, n, &mut s);
             self.st.out[a] = Some(p + r * scale);
         }
         Some(s)
@@ -1405,6 +1447,21 @@ impl<'a> Rewriter<'a> {
     }
 }
 
+/// `v` rounded to `decimals` digits: the value the written word stands for, and its count.
+fn rounded(v: f64, decimals: usize) -> (f64, Option<i64>) {
+    match to_decimal(v, decimals) {
+        Some(n) => (decimal_value(n, decimals), Some(n)),
+        None => (v, None),
+    }
+}
+
+fn write_rounded(v: f64, decimals: usize, n: Option<i64>, out: &mut String) {
+    match n {
+        Some(n) => write_decimal(n, decimals, out),
+        None => format_number(v, decimals, out),
+    }
+}
+
 fn case(code: &str, lower: bool) -> String {
     if lower {
         code.to_ascii_lowercase()
@@ -1426,7 +1483,7 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 fn g_name(code10: u32) -> String {
-    if code10 % 10 == 0 {
+    if (code10 / 10) * 10 == code10 {
         format!("G{}", code10 / 10)
     } else {
         format!("G{}.{}", code10 / 10, code10 % 10)

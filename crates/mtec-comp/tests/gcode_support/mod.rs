@@ -258,6 +258,7 @@ pub fn shared_dir() -> Option<PathBuf> {
 /// the machine's end point of every original move lies within `end_tol_mm` of its target, and
 /// every output vertex and piece midpoint lies within `path_tol_mm` of the original path (the
 /// moves are matched in order). Returns the largest end and path deviations (mm).
+#[allow(clippy::too_many_arguments)]
 pub fn check_lands_on_target(
     input: &str,
     output: &str,

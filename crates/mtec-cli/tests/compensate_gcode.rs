@@ -1,0 +1,178 @@
+//! `mtec compensate gcode` end to end: exit codes, located messages, byte-identical zero model,
+//! never overwriting the input, no partial output on failure.
+
+use std::path::Path;
+use std::process::Command;
+
+fn mtec() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mtec"))
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const PROGRAM: &str = "%\nO0001 (TEST)\nN10 G21 G90 G17\nN20 G0 X0 Y0 Z5\nN30 G1 Z-1 F200 ; plunge\nN40 X120 Y30\nN50 G2 X150 Y0 R30\nM30\n%\n";
+
+#[test]
+fn zero_model_copies_the_program_and_poly_model_corrects_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let prog = write(dir.path(), "part.ngc", PROGRAM);
+    let zero = write(
+        dir.path(),
+        "zero.json",
+        r#"{"format": "mtec.zero-model/1"}"#,
+    );
+    let out = dir.path().join("out.ngc");
+    let st = mtec()
+        .args(["compensate", "gcode", "--model"])
+        .arg(&zero)
+        .arg(&prog)
+        .arg("-o")
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert_eq!(st.code(), Some(0));
+    assert_eq!(std::fs::read(&out).unwrap(), PROGRAM.as_bytes());
+
+    // e_x = 10 um + 0.05 um/mm · x: the correction grows along X, the long move is split
+    let poly = write(
+        dir.path(),
+        "poly.json",
+        r#"{"format": "mtec.poly-model/1", "description": "scale error",
+            "terms": [{"powers": [0,0,0], "coef_um": [10.0, 0.0, 0.0]},
+                      {"powers": [1,0,0], "coef_um": [0.05, 0.0, 0.0]}]}"#,
+    );
+    let o = mtec()
+        .args(["compensate", "gcode", "--model"])
+        .arg(&poly)
+        .arg(&prog)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        text.starts_with("%\nO0001 (TEST)\nN10 G21 G90 G17\n(mtec compensate gcode"),
+        "{text}"
+    );
+    // X0 → c = -0.01 mm; the last piece of N40 ends at 120 + c(120) = 120 - 0.016/1.00005
+    assert!(text.contains("N20 G0 X-0.01 Y0 Z5"), "{text}");
+    assert!(
+        text.contains("\nG1 X119.984 Y30.0\nN50 G1 X120.3279 Y29.998\n"),
+        "{text}"
+    );
+    assert!(text.contains("N30 G1 Z-1 F200 ; plunge"), "{text}");
+    assert!(text.ends_with("M30\n%\n"));
+}
+
+#[test]
+fn unsupported_line_exits_2_with_file_line_column_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let prog = write(dir.path(), "p.ngc", "G21\nG0 X0 Y0 Z0\nG1 X[#1*2] F100\n");
+    let zero = write(
+        dir.path(),
+        "zero.json",
+        r#"{"format": "mtec.zero-model/1"}"#,
+    );
+    let out = dir.path().join("out.ngc");
+    let o = mtec()
+        .args(["compensate", "gcode", "--model"])
+        .arg(&zero)
+        .arg(&prog)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("p.ngc:3:4:"), "{err}");
+    assert!(!out.exists(), "a refused run must leave no output");
+    assert!(std::fs::read_dir(dir.path()).unwrap().all(|e| !e
+        .unwrap()
+        .file_name()
+        .to_string_lossy()
+        .contains("mtec-tmp")));
+    // pass-through: copied, with a warning, exit 0
+    let o = mtec()
+        .args([
+            "compensate",
+            "gcode",
+            "--on-unsupported",
+            "pass-through-with-warning",
+            "--model",
+        ])
+        .arg(&zero)
+        .arg(&prog)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("warning:"));
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&prog).unwrap());
+}
+
+#[test]
+fn bad_model_bad_offsets_and_overwriting_the_input_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let prog = write(dir.path(), "p.ngc", "G21\n");
+    let bad = write(dir.path(), "bad.json", "{\"format\": \"mtec.poly-model/1\",\n \"terms\": [{\"powers\": [1,0], \"coef_um\": [1,2,3]}]}");
+    let o = mtec()
+        .args(["compensate", "gcode", "--model"])
+        .arg(&bad)
+        .arg(&prog)
+        .arg("-o")
+        .arg(dir.path().join("o.ngc"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("bad.json:2:"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+
+    let zero = write(
+        dir.path(),
+        "zero.json",
+        r#"{"format": "mtec.zero-model/1"}"#,
+    );
+    let offs = write(
+        dir.path(),
+        "o.toml",
+        "[work_offsets_mm]\nG60 = [1.0, 2.0, 3.0]\n",
+    );
+    let o = mtec()
+        .args(["compensate", "gcode", "--model"])
+        .arg(&zero)
+        .arg(&prog)
+        .arg("--offsets")
+        .arg(&offs)
+        .arg("-o")
+        .arg(dir.path().join("o.ngc"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("G60"));
+
+    let o = mtec()
+        .args(["compensate", "gcode", "--model"])
+        .arg(&zero)
+        .arg(&prog)
+        .arg("-o")
+        .arg(&prog)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("overwrite"));
+    assert_eq!(std::fs::read_to_string(&prog).unwrap(), "G21\n");
+}
