@@ -6,7 +6,7 @@ import numpy as np
 import torch
 from torch import nn
 
-WINDOW, C, K, H = 12, 16, 3, 32
+WINDOW, C, K, H = 16, 16, 3, 32
 BATCH, LR, VAL_FRACTION = 64, 3e-3, 0.15
 TRAIN, TEST = [1, 2, 4], [3]
 

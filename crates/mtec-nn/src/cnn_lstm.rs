@@ -67,15 +67,15 @@ pub struct CnnLstmConfig {
 }
 
 impl Default for CnnLstmConfig {
-    /// The "source-sized" network: 16 filters of width 3, LSTM of 32 units over 12 time steps.
+    /// The "source-sized" network: 16 filters of width 3, LSTM of 32 units over 16 time steps.
     fn default() -> Self {
         CnnLstmConfig {
-            architecture: Architecture { window: 12, conv_channels: 16, kernel: 3, lstm_hidden: 32 },
-            max_epochs: 200,
+            architecture: Architecture { window: 16, conv_channels: 16, kernel: 3, lstm_hidden: 32 },
+            max_epochs: 60,
             batch_size: 64,
             learning_rate: 3e-3,
             validation_fraction: 0.15,
-            patience: 25,
+            patience: 15,
             seed: 42,
             progress: false,
         }

@@ -32,7 +32,7 @@ impl Default for RotaryThermalSpec {
             angles: 12,
             steps: 49,
             dt_min: 5.0,
-            structural_lag_min: 45.0,
+            structural_lag_min: 60.0,
             temperature_noise_c: 0.02,
             error_noise_um: 0.2,
             seed: 1,
@@ -54,7 +54,8 @@ fn duty(experiment: u32, t_min: f64) -> f64 {
 pub fn rotary_thermal(spec: &RotaryThermalSpec) -> ThermalDataset {
     let mut rng = crate::rng::seeded(spec.seed);
     let gains_c = [4.0, 3.0, 6.0, 2.5, 5.0, 1.5, 3.5, 2.0, 4.5];
-    let taus_min = [20.0, 35.0, 50.0, 70.0, 90.0, 110.0, 30.0, 60.0, 140.0];
+    // fast sensors, slow structure: the current temperatures do not tell how far the drift is
+    let taus_min = [5.0, 8.0, 10.0, 12.0, 15.0, 6.0, 9.0, 20.0, 25.0];
     // A_ki in µm/°C, B_k, C_k in µm (µrad for EAC, EBC)
     let a: Vec<Vec<f64>> = (0..5)
         .map(|_| (0..9).map(|_| rng.random_range(-0.8..0.8)).collect())

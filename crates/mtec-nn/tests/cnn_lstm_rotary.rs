@@ -10,7 +10,7 @@ use mtec_nn::{compare_on_split, train_cnn_lstm, BpnnTrainConfig, CnnLstm, CnnLst
 
 fn small_config(epochs: usize) -> CnnLstmConfig {
     CnnLstmConfig {
-        architecture: Architecture { window: 12, conv_channels: 8, kernel: 3, lstm_hidden: 16 },
+        architecture: Architecture { window: 16, conv_channels: 8, kernel: 3, lstm_hidden: 16 },
         max_epochs: epochs,
         batch_size: 64,
         learning_rate: 5e-3,
@@ -21,14 +21,14 @@ fn small_config(epochs: usize) -> CnnLstmConfig {
 }
 
 fn data() -> mtec_nn::ThermalDataset {
-    rotary_thermal(&RotaryThermalSpec { angles: 8, ..RotaryThermalSpec::default() })
+    rotary_thermal(&RotaryThermalSpec { angles: 4, ..RotaryThermalSpec::default() })
 }
 
 #[test]
 fn cnn_lstm_beats_the_bpnn_on_the_held_out_experiment() {
     let d = data();
-    let bpnn_cfg = BpnnTrainConfig { hidden: 10, max_epochs: 100, seed: 5, ..BpnnTrainConfig::default() };
-    let (_, _, cmp) = compare_on_split(&d, &[1, 2, 4], &[3], &small_config(80), &bpnn_cfg).unwrap();
+    let bpnn_cfg = BpnnTrainConfig { hidden: 10, max_epochs: 50, seed: 5, ..BpnnTrainConfig::default() };
+    let (_, _, cmp) = compare_on_split(&d, &[1, 2, 4], &[3], &small_config(60), &bpnn_cfg).unwrap();
     let (c, b) = (SplitComparison::overall_rmse(&cmp.cnn_lstm), SplitComparison::overall_rmse(&cmp.bpnn));
     for (m, n) in cmp.cnn_lstm.iter().zip(&cmp.bpnn) {
         eprintln!(
@@ -50,14 +50,25 @@ fn training_is_reproducible_and_the_model_file_round_trips() {
     let cfg = CnnLstmConfig { max_epochs: 3, ..small_config(3) };
     let (a, ra) = train_cnn_lstm(&train, &cfg).unwrap();
     let (b, _) = train_cnn_lstm(&train, &cfg).unwrap();
-    assert_eq!(a.weights, b.weights, "same seed must give identical weights");
+    assert!(a.weights == b.weights, "same seed must give identical weights");
     assert_eq!(ra.epochs, 3);
     let other = train_cnn_lstm(&train, &CnnLstmConfig { seed: 6, ..cfg.clone() }).unwrap().0;
-    assert_ne!(a.weights, other.weights);
+    assert!(a.weights != other.weights);
 
+    // weights are f32 and round-trip exactly; the f64 normalisation to the last bit or so
+    // (serde_json's default float parser), so predictions agree to far below a nanometre
     let back = CnnLstm::from_json(&a.to_json()).unwrap();
-    assert_eq!(back, a);
-    assert_eq!(back.predict(&test).unwrap(), a.predict(&test).unwrap());
+    assert!(back.weights == a.weights && back.architecture == a.architecture);
+    for (p, q) in back.feature_offset.iter().zip(&a.feature_offset) {
+        assert!((p - q).abs() <= 1e-12 * q.abs().max(1.0));
+    }
+    let (pb, pa) = (back.predict(&test).unwrap(), a.predict(&test).unwrap());
+    assert_eq!(pb.len(), test.scored_rows());
+    for (rb, ra) in pb.iter().zip(&pa) {
+        for (u, v) in rb.iter().zip(ra) {
+            assert!((u - v).abs() < 1e-4, "{u} vs {v}");
+        }
+    }
 
     let mut v: serde_json::Value = serde_json::from_str(&a.to_json()).unwrap();
     v["weights"]["fc.weight"]["shape"] = serde_json::json!([2, 2]);

@@ -142,8 +142,12 @@ fn bpnn_3_10_3_fits_the_grid_within_2_um_and_predicts_the_diagonals() {
     }
 
     // the saved model evaluates identically after a round trip through mtec.bpnn/1
+    // (to the last bit or so: serde_json's default float parser is not always correctly rounded)
     let back = Bpnn::load_volumetric(&net.to_json()).unwrap();
-    assert_eq!(back.error_um([123.0, 456.0, 78.0]), net.error_um([123.0, 456.0, 78.0]));
+    let (u, v) = (back.error_um([123.0, 456.0, 78.0]), net.error_um([123.0, 456.0, 78.0]));
+    for d in 0..3 {
+        assert!((u[d] - v[d]).abs() < 1e-9);
+    }
 }
 
 #[test]
