@@ -6,21 +6,26 @@
 //!
 //!     cargo run --release -p mtec-nn --example fl_thermal -- PATH/train.csv
 //!
-//! Features: the 16 temperatures, resampled to 1 min (every 4th row of the 15 s log); targets:
+//! Features: the 16 temperatures, resampled to 2 min (every 8th row of the 15 s log); targets:
 //! ch1..ch5 (µm). A held-out cycle's windows see the temperatures of the preceding 30 min
 //! (`warmup`), never a displacement of the held-out cycle.
 
 use mtec_io::Table;
 use mtec_nn::cnn_lstm::Architecture;
-use mtec_nn::{evaluate_bpnn, train_bpnn_baseline, train_cnn_lstm, BpnnTrainConfig, CnnLstmConfig, Experiment, Sequence, ThermalDataset};
+use mtec_nn::{
+    evaluate_bpnn, train_bpnn_baseline, train_cnn_lstm, BpnnTrainConfig, CnnLstmConfig, Experiment,
+    Sequence, ThermalDataset,
+};
 use nalgebra::{DMatrix, DVector};
 use std::path::Path;
 
-const STEP: usize = 4; // 15 s → 1 min
-const WINDOW: usize = 30;
+const STEP: usize = 8; // 15 s → 2 min
+const WINDOW: usize = 15; // 30 min of history
 
 fn main() {
-    let path = std::env::args().nth(1).unwrap_or_else(|| "/work/shared/data/fl-thermal/train.csv".into());
+    let path = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "/work/shared/data/fl-thermal/train.csv".into());
     let table = Table::read(Path::new(&path)).unwrap_or_else(|e| panic!("{e}"));
     let temps: Vec<String> = (1..=16).map(|i| format!("t{i}_c")).collect();
     let chans: Vec<String> = (1..=5).map(|i| format!("ch{i}_um")).collect();
@@ -34,12 +39,16 @@ fn main() {
     // cycles: a cycle starts where the spindle starts after a rest (or at row 0)
     let mut starts = vec![0usize];
     for (k, w) in rows.windows(2).enumerate() {
-        if rpm[w[0]] == 0.0 && rpm[w[1]] > 0.0 && k + 1 > 60 {
+        if rpm[w[0]] == 0.0 && rpm[w[1]] > 0.0 && k + 1 > 30 {
             starts.push(k + 1);
         }
     }
     starts.push(rows.len());
-    println!("{} rows at 1 min; cycles start at minutes {:?}", rows.len(), &starts[..starts.len() - 1]);
+    println!(
+        "{} rows at 2 min; cycles start at rows {:?}",
+        rows.len(),
+        &starts[..starts.len() - 1]
+    );
     let n_cycles = starts.len() - 1;
     let cycle = |c: usize| -> Experiment {
         let (a, b) = (starts[c], starts[c + 1]);
@@ -60,15 +69,24 @@ fn main() {
         experiments: (0..n_cycles).map(cycle).collect(),
     };
     let cfg = CnnLstmConfig {
-        architecture: Architecture { window: WINDOW, conv_channels: 8, kernel: 3, lstm_hidden: 24 },
-        max_epochs: 60,
+        architecture: Architecture {
+            window: WINDOW,
+            conv_channels: 8,
+            kernel: 3,
+            lstm_hidden: 24,
+        },
+        max_epochs: 25,
         batch_size: 64,
         learning_rate: 3e-3,
-        patience: 12,
+        patience: 6,
         progress: true,
         ..CnnLstmConfig::default()
     };
-    let bpnn_cfg = BpnnTrainConfig { hidden: 10, max_epochs: 100, ..BpnnTrainConfig::default() };
+    let bpnn_cfg = BpnnTrainConfig {
+        hidden: 10,
+        max_epochs: 30,
+        ..BpnnTrainConfig::default()
+    };
     let mut sq = [[0.0f64; 5]; 3];
     let mut n_total = 0usize;
     for c in 1..=n_cycles as u32 {
@@ -81,7 +99,10 @@ fn main() {
         let m_mlr = mlr(&train, &test);
         let n = m_cnn[0].n;
         n_total += n;
-        println!("left out cycle {c} ({n} min; CNN-LSTM {} epochs, {:.1} s):", rep.epochs, rep.seconds);
+        println!(
+            "left out cycle {c} ({n} rows; CNN-LSTM {} epochs, {:.1} s):",
+            rep.epochs, rep.seconds
+        );
         for ch in 0..5 {
             println!(
                 "  {}  CNN-LSTM {:6.3}  BPNN {:6.3}  MLR(16) {:6.3} µm RMSE",
@@ -105,7 +126,13 @@ fn mlr(train: &ThermalDataset, test: &ThermalDataset) -> Vec<f64> {
     let (x, y) = train.rows();
     let (xt, yt) = test.rows();
     let design = |x: &[Vec<f64>]| {
-        DMatrix::from_fn(x.len(), x[0].len() + 1, |i, j| if j == 0 { 1.0 } else { x[i][j - 1] })
+        DMatrix::from_fn(x.len(), x[0].len() + 1, |i, j| {
+            if j == 0 {
+                1.0
+            } else {
+                x[i][j - 1]
+            }
+        })
     };
     let a = design(&x);
     let at = design(&xt);
@@ -115,7 +142,11 @@ fn mlr(train: &ThermalDataset, test: &ThermalDataset) -> Vec<f64> {
             let b = DVector::from_iterator(y.len(), y.iter().map(|r| r[ch]));
             let coef = svd.solve(&b, 1e-12).expect("svd solve");
             let pred = &at * coef;
-            let se: f64 = yt.iter().enumerate().map(|(i, r)| (pred[i] - r[ch]).powi(2)).sum();
+            let se: f64 = yt
+                .iter()
+                .enumerate()
+                .map(|(i, r)| (pred[i] - r[ch]).powi(2))
+                .sum();
             (se / yt.len() as f64).sqrt()
         })
         .collect()

@@ -34,21 +34,36 @@ fn export(d: &ThermalDataset, dir: &str) {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let arg = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).cloned();
+    let arg = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+    };
     let fixed = args.iter().any(|a| a == "--fixed");
-    let spec = RotaryThermalSpec { angles: 24, ..RotaryThermalSpec::default() };
+    let spec = RotaryThermalSpec {
+        angles: 24,
+        ..RotaryThermalSpec::default()
+    };
     let data = rotary_thermal(&spec);
     if let Some(dir) = arg("--export") {
         export(&data, &dir);
     }
-    let mut cfg = CnnLstmConfig { progress: true, ..CnnLstmConfig::default() };
+    let mut cfg = CnnLstmConfig {
+        progress: true,
+        ..CnnLstmConfig::default()
+    };
     if let Some(n) = arg("--epochs") {
         cfg.max_epochs = n.parse().expect("--epochs N");
     }
     if fixed {
         cfg.patience = usize::MAX / 2;
     }
-    let bpnn_cfg = BpnnTrainConfig { hidden: 10, max_epochs: 200, ..BpnnTrainConfig::default() };
+    let bpnn_cfg = BpnnTrainConfig {
+        hidden: 10,
+        max_epochs: 200,
+        ..BpnnTrainConfig::default()
+    };
     let (_, _, cmp) = compare_on_split(&data, &[1, 2, 4], &[3], &cfg, &bpnn_cfg).expect("training");
     let r = &cmp.cnn_lstm_training;
     println!(
@@ -68,5 +83,8 @@ fn main() {
         SplitComparison::overall_rmse(&cmp.bpnn)
     );
     println!("MTEC_SECONDS_PER_EPOCH={:.6}", r.seconds_per_epoch);
-    println!("MTEC_TEST_RMSE={:.6}", SplitComparison::overall_rmse(&cmp.cnn_lstm));
+    println!(
+        "MTEC_TEST_RMSE={:.6}",
+        SplitComparison::overall_rmse(&cmp.cnn_lstm)
+    );
 }

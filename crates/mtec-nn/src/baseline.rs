@@ -15,7 +15,10 @@ use serde::Serialize;
 
 /// Trains the BPNN baseline on the scored rows of `train` (current features → targets), holding
 /// out the last `config.validation_fraction` of each sequence for early stopping.
-pub fn train_bpnn_baseline(train: &ThermalDataset, config: &BpnnTrainConfig) -> Result<(Bpnn, TrainReport)> {
+pub fn train_bpnn_baseline(
+    train: &ThermalDataset,
+    config: &BpnnTrainConfig,
+) -> Result<(Bpnn, TrainReport)> {
     train.validate()?;
     let (mut xt, mut yt, mut xv, mut yv) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for seq in train.experiments.iter().flat_map(|e| &e.sequences) {
@@ -23,13 +26,19 @@ pub fn train_bpnn_baseline(train: &ThermalDataset, config: &BpnnTrainConfig) -> 
         let n_val = ((rows.len() as f64) * config.validation_fraction).round() as usize;
         let split = rows.end - n_val;
         for t in rows {
-            let (x, y) = if t < split { (&mut xt, &mut yt) } else { (&mut xv, &mut yv) };
+            let (x, y) = if t < split {
+                (&mut xt, &mut yt)
+            } else {
+                (&mut xv, &mut yv)
+            };
             x.push(seq.features[t].clone());
             y.push(seq.targets[t].clone());
         }
     }
     if xt.is_empty() {
-        return Err(NnError::Data("no training rows left after the validation split".into()));
+        return Err(NnError::Data(
+            "no training rows left after the validation split".into(),
+        ));
     }
     let (mut net, report) = train_bpnn_with_validation(&xt, &yt, &xv, &yv, config)?;
     net.input_names = train.feature_names.clone();
@@ -41,7 +50,10 @@ pub fn train_bpnn_baseline(train: &ThermalDataset, config: &BpnnTrainConfig) -> 
 pub fn evaluate_bpnn(net: &Bpnn, data: &ThermalDataset) -> Result<Vec<ChannelMetrics>> {
     data.validate()?;
     let (x, y) = data.rows();
-    let pred = x.iter().map(|r| net.predict(r)).collect::<Result<Vec<_>>>()?;
+    let pred = x
+        .iter()
+        .map(|r| net.predict(r))
+        .collect::<Result<Vec<_>>>()?;
     Ok(channel_metrics(&data.target_names, &pred, &y))
 }
 

@@ -238,7 +238,11 @@ impl Bpnn {
             hidden[h] = self.activation.apply(a);
         }
         for (o, (row, b)) in self.w2.iter().zip(&self.b2).enumerate() {
-            yn[o] = b + row.iter().zip(hidden.iter()).map(|(w, s)| w * s).sum::<f64>();
+            yn[o] = b + row
+                .iter()
+                .zip(hidden.iter())
+                .map(|(w, s)| w * s)
+                .sum::<f64>();
         }
     }
 
@@ -256,8 +260,8 @@ impl Bpnn {
         Ok(out)
     }
 
-    /// Prediction without allocation for nets of up to 64 hidden units (otherwise one
-    /// allocation); `x.len()` must be `n_in` and `out.len()` `n_out`.
+    /// Prediction without allocation for nets of up to 8 inputs and 64 hidden units (otherwise
+    /// one allocation); `x.len()` must be `n_in` and `out.len()` `n_out`.
     pub fn predict_into(&self, x: &[f64], out: &mut [f64]) {
         let n_h = self.n_hidden();
         let mut stack = [0.0f64; 64];
@@ -268,19 +272,31 @@ impl Bpnn {
             heap.resize(n_h, 0.0);
             &mut heap
         };
+        // normalise the inputs once (n_in divisions), then the dot products
+        let mut xn_stack = [0.0f64; 8];
+        let mut xn_heap = Vec::new();
+        let xn: &mut [f64] = if x.len() <= 8 {
+            &mut xn_stack[..x.len()]
+        } else {
+            xn_heap.resize(x.len(), 0.0);
+            &mut xn_heap
+        };
+        for (v, (xi, (o, s))) in xn.iter_mut().zip(
+            x.iter()
+                .zip(self.input_offset.iter().zip(&self.input_scale)),
+        ) {
+            *v = (xi - o) / s;
+        }
         for (h, (row, b)) in self.w1.iter().zip(&self.b1).enumerate() {
-            let mut a = *b;
-            for ((w, xi), (o, s)) in row
-                .iter()
-                .zip(x)
-                .zip(self.input_offset.iter().zip(&self.input_scale))
-            {
-                a += w * (xi - o) / s;
-            }
+            let a = b + row.iter().zip(xn.iter()).map(|(w, v)| w * v).sum::<f64>();
             hidden[h] = self.activation.apply(a);
         }
         for (o, (row, b)) in self.w2.iter().zip(&self.b2).enumerate() {
-            let yn = b + row.iter().zip(hidden.iter()).map(|(w, s)| w * s).sum::<f64>();
+            let yn = b + row
+                .iter()
+                .zip(hidden.iter())
+                .map(|(w, s)| w * s)
+                .sum::<f64>();
             out[o] = self.output_offset[o] + self.output_scale[o] * yn;
         }
     }

@@ -102,7 +102,8 @@ pub fn train_bpnn(
     let n_val = ((x.len() as f64) * config.validation_fraction).round() as usize;
     let n_val = if x.len() - n_val < 2 { 0 } else { n_val };
     let (val_idx, train_idx) = idx.split_at(n_val);
-    let pick = |ids: &[usize], rows: &[Vec<f64>]| ids.iter().map(|&i| rows[i].clone()).collect::<Vec<_>>();
+    let pick =
+        |ids: &[usize], rows: &[Vec<f64>]| ids.iter().map(|&i| rows[i].clone()).collect::<Vec<_>>();
     let (xt, yt) = (pick(train_idx, x), pick(train_idx, y));
     let (xv, yv) = (pick(val_idx, x), pick(val_idx, y));
     train_bpnn_with_validation(&xt, &yt, &xv, &yv, config)
@@ -123,7 +124,9 @@ pub fn train_bpnn_with_validation(
     if !xv.is_empty() {
         check_rows(xv, yv)?;
         if xv[0].len() != xt[0].len() || yv[0].len() != yt[0].len() {
-            return Err(NnError::Data("validation rows have another width than training rows".into()));
+            return Err(NnError::Data(
+                "validation rows have another width than training rows".into(),
+            ));
         }
     }
     if config.hidden == 0 {
@@ -135,7 +138,8 @@ pub fn train_bpnn_with_validation(
     let (n_in, n_out) = (xt[0].len(), yt[0].len());
     let in_norm = Affine::min_max(xt, n_in);
     let out_norm = Affine::z_score(yt, n_out);
-    let normalise = |rows: &[Vec<f64>], a: &Affine| rows.iter().map(|r| a.forward(r)).collect::<Vec<_>>();
+    let normalise =
+        |rows: &[Vec<f64>], a: &Affine| rows.iter().map(|r| a.forward(r)).collect::<Vec<_>>();
     let train = Normalised {
         x: normalise(xt, &in_norm),
         y: normalise(yt, &out_norm),
@@ -145,7 +149,15 @@ pub fn train_bpnn_with_validation(
         y: normalise(yv, &out_norm),
     };
     let theta0 = glorot_init(n_in, config.hidden, n_out, config.seed);
-    let template = Bpnn::from_params(n_in, config.hidden, n_out, config.activation, &in_norm, &out_norm, &theta0);
+    let template = Bpnn::from_params(
+        n_in,
+        config.hidden,
+        n_out,
+        config.activation,
+        &in_norm,
+        &out_norm,
+        &theta0,
+    );
     let (theta, report) = match config.optimizer {
         Optimizer::LevenbergMarquardt => train_lm(&template, &train, &val, theta0, config),
         Optimizer::Adam => train_adam(&template, &train, &val, theta0, config)?,
@@ -169,15 +181,23 @@ fn check_rows(x: &[Vec<f64>], y: &[Vec<f64>]) -> Result<()> {
         return Err(NnError::Data("no training rows".into()));
     }
     if x.len() != y.len() {
-        return Err(NnError::Data(format!("{} input rows but {} target rows", x.len(), y.len())));
+        return Err(NnError::Data(format!(
+            "{} input rows but {} target rows",
+            x.len(),
+            y.len()
+        )));
     }
     let (ni, no) = (x[0].len(), y[0].len());
     if ni == 0 || no == 0 {
-        return Err(NnError::Data("rows must have at least one input and one output".into()));
+        return Err(NnError::Data(
+            "rows must have at least one input and one output".into(),
+        ));
     }
     for (k, (a, b)) in x.iter().zip(y).enumerate() {
         if a.len() != ni || b.len() != no {
-            return Err(NnError::Data(format!("row {k} has another width than row 0")));
+            return Err(NnError::Data(format!(
+                "row {k} has another width than row 0"
+            )));
         }
         if a.iter().chain(b).any(|v| !v.is_finite()) {
             return Err(NnError::Data(format!("row {k} holds a non-finite value")));
@@ -195,9 +215,17 @@ struct Normalised {
 fn glorot_init(n_in: usize, n_h: usize, n_out: usize, seed: u64) -> Vec<f64> {
     let mut r = rng::seeded(seed);
     let mut theta = Vec::with_capacity(param_count(n_in, n_h, n_out));
-    theta.extend(rng::uniform(&mut r, n_h * n_in, (6.0 / (n_in + n_h) as f64).sqrt()));
+    theta.extend(rng::uniform(
+        &mut r,
+        n_h * n_in,
+        (6.0 / (n_in + n_h) as f64).sqrt(),
+    ));
     theta.extend(std::iter::repeat(0.0).take(n_h));
-    theta.extend(rng::uniform(&mut r, n_out * n_h, (6.0 / (n_h + n_out) as f64).sqrt()));
+    theta.extend(rng::uniform(
+        &mut r,
+        n_out * n_h,
+        (6.0 / (n_h + n_out) as f64).sqrt(),
+    ));
     theta.extend(std::iter::repeat(0.0).take(n_out));
     theta
 }
@@ -304,7 +332,13 @@ impl EarlyStop {
 
     /// Records an epoch; returns a reason to stop when validation has not improved for
     /// `patience` epochs. Without validation rows the training loss plays its role.
-    fn record(&mut self, epoch: usize, theta: &[f64], train: f64, val: Option<f64>) -> Option<String> {
+    fn record(
+        &mut self,
+        epoch: usize,
+        theta: &[f64],
+        train: f64,
+        val: Option<f64>,
+    ) -> Option<String> {
         self.history.push((train, val));
         let watch = val.unwrap_or(train);
         if watch < self.best {
@@ -328,8 +362,14 @@ fn train_lm(
     theta0: Vec<f64>,
     config: &BpnnTrainConfig,
 ) -> (Vec<f64>, TrainReport) {
-    let problem = BpnnLeastSquares { net: template.clone(), data: train };
-    let lm_config = LmConfig { max_iterations: config.max_epochs, ..LmConfig::default() };
+    let problem = BpnnLeastSquares {
+        net: template.clone(),
+        data: train,
+    };
+    let lm_config = LmConfig {
+        max_iterations: config.max_epochs,
+        ..LmConfig::default()
+    };
     let n_rows = (train.x.len() * template.n_out()) as f64;
     let mut stop = EarlyStop::new(config.patience.unwrap_or(6), &theta0);
     let progress = Progress::new(config.progress, config.max_epochs, "BPNN (LM)");
@@ -344,7 +384,11 @@ fn train_lm(
     });
     progress.finish(&outcome.stop_reason);
     // LM may stop (μ at maximum, gradient) before the first callback: keep the start then.
-    let best_theta = if stop.history.is_empty() { outcome.theta.clone() } else { stop.best_theta.clone() };
+    let best_theta = if stop.history.is_empty() {
+        outcome.theta.clone()
+    } else {
+        stop.best_theta.clone()
+    };
     let best = problem.with(&best_theta);
     let report = TrainReport {
         epochs: outcome.iterations,
@@ -379,17 +423,24 @@ fn train_adam(
     let b2 = Var::from_tensor(&Tensor::from_vec(init.b2.clone(), n_out, &dev)?)?;
     let activation = template.activation;
     let forward = |x: &Tensor| -> candle_core::Result<Tensor> {
-        let a = x.matmul(&w1.as_tensor().t()?)?.broadcast_add(b1.as_tensor())?;
+        let a = x
+            .matmul(&w1.as_tensor().t()?)?
+            .broadcast_add(b1.as_tensor())?;
         let s = match activation {
             Activation::Sigmoid => candle_nn::ops::sigmoid(&a)?,
             Activation::Tanh => a.tanh()?,
             Activation::Relu => a.relu()?,
         };
-        s.matmul(&w2.as_tensor().t()?)?.broadcast_add(b2.as_tensor())
+        s.matmul(&w2.as_tensor().t()?)?
+            .broadcast_add(b2.as_tensor())
     };
     let xt = to_tensor(&train.x, &dev)?;
     let yt = to_tensor(&train.y, &dev)?;
-    let params = ParamsAdamW { lr: config.learning_rate, weight_decay: 0.0, ..ParamsAdamW::default() };
+    let params = ParamsAdamW {
+        lr: config.learning_rate,
+        weight_decay: 0.0,
+        ..ParamsAdamW::default()
+    };
     let mut adam = AdamW::new(vec![w1.clone(), b1.clone(), w2.clone(), b2.clone()], params)?;
     let n = train.x.len();
     let batch = config.batch_size.unwrap_or(n).clamp(1, n);
@@ -493,7 +544,12 @@ mod tests {
                 tm[k] -= h;
                 let col = (p.residuals(&tp) - p.residuals(&tm)) / (2.0 * h);
                 for r in 0..col.len() {
-                    assert!((col[r] - j[(r, k)]).abs() < 1e-7, "{act:?} θ{k} row {r}: {} vs {}", col[r], j[(r, k)]);
+                    assert!(
+                        (col[r] - j[(r, k)]).abs() < 1e-7,
+                        "{act:?} θ{k} row {r}: {} vs {}",
+                        col[r],
+                        j[(r, k)]
+                    );
                 }
             }
         }
@@ -513,12 +569,33 @@ mod tests {
             };
             let (a, ra) = train_bpnn(&x, &y, &cfg).unwrap();
             let (b, _) = train_bpnn(&x, &y, &cfg).unwrap();
-            assert_eq!(a.params(), b.params(), "{opt:?}: same seed must give identical weights");
+            assert_eq!(
+                a.params(),
+                b.params(),
+                "{opt:?}: same seed must give identical weights"
+            );
             // the targets have std ≈ 0.8: a normalised MSE of 1e-2 means a ~0.08 RMS fit
             assert!(ra.train_mse < 1e-2, "{opt:?}: {ra:?}");
-            assert!(ra.validation_mse.unwrap() < 2e-2, "{opt:?}: {:?}", ra.validation_mse);
-            let c = train_bpnn(&x, &y, &BpnnTrainConfig { seed: 8, ..cfg.clone() }).unwrap().0;
-            assert_ne!(a.params(), c.params(), "{opt:?}: another seed, other weights");
+            assert!(
+                ra.validation_mse.unwrap() < 2e-2,
+                "{opt:?}: {:?}",
+                ra.validation_mse
+            );
+            let c = train_bpnn(
+                &x,
+                &y,
+                &BpnnTrainConfig {
+                    seed: 8,
+                    ..cfg.clone()
+                },
+            )
+            .unwrap()
+            .0;
+            assert_ne!(
+                a.params(),
+                c.params(),
+                "{opt:?}: another seed, other weights"
+            );
         }
     }
 

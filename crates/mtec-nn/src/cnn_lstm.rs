@@ -70,7 +70,12 @@ impl Default for CnnLstmConfig {
     /// The "source-sized" network: 16 filters of width 3, LSTM of 32 units over 16 time steps.
     fn default() -> Self {
         CnnLstmConfig {
-            architecture: Architecture { window: 16, conv_channels: 16, kernel: 3, lstm_hidden: 32 },
+            architecture: Architecture {
+                window: 16,
+                conv_channels: 16,
+                kernel: 3,
+                lstm_hidden: 32,
+            },
             max_epochs: 60,
             batch_size: 64,
             learning_rate: 3e-3,
@@ -123,7 +128,11 @@ pub struct CnnLstm {
 }
 
 /// The parameter shapes of the architecture for F features and O outputs, PyTorch names.
-fn param_shapes(a: &Architecture, n_features: usize, n_out: usize) -> Vec<(&'static str, Vec<usize>, f64)> {
+fn param_shapes(
+    a: &Architecture,
+    n_features: usize,
+    n_out: usize,
+) -> Vec<(&'static str, Vec<usize>, f64)> {
     let (c, k, h) = (a.conv_channels, a.kernel, a.lstm_hidden);
     let d = c * (n_features / 2);
     let conv_bound = 1.0 / (k as f64).sqrt();
@@ -143,13 +152,20 @@ fn param_shapes(a: &Architecture, n_features: usize, n_out: usize) -> Vec<(&'sta
 
 fn check_architecture(a: &Architecture, n_features: usize) -> Result<()> {
     if a.window == 0 || a.conv_channels == 0 || a.lstm_hidden == 0 {
-        return Err(NnError::Config("window, conv_channels and lstm_hidden must be at least 1".into()));
+        return Err(NnError::Config(
+            "window, conv_channels and lstm_hidden must be at least 1".into(),
+        ));
     }
     if a.kernel % 2 == 0 {
-        return Err(NnError::Config(format!("the kernel size must be odd (same padding), got {}", a.kernel)));
+        return Err(NnError::Config(format!(
+            "the kernel size must be odd (same padding), got {}",
+            a.kernel
+        )));
     }
     if n_features < 2 {
-        return Err(NnError::Config("the convolution and pooling need at least 2 features".into()));
+        return Err(NnError::Config(
+            "the convolution and pooling need at least 2 features".into(),
+        ));
     }
     Ok(())
 }
@@ -168,8 +184,12 @@ impl Net {
         let (c, h) = (a.conv_channels, a.lstm_hidden);
         let p = |n: &str| &self.p[n];
         // 1-D convolution over the feature vector of each time step
-        let z = x.reshape((b * w, 1, f))?.conv1d(p("conv.weight"), a.kernel / 2, 1, 1, 1)?;
-        let z = z.broadcast_add(&p("conv.bias").reshape((1, c, 1))?)?.relu()?;
+        let z = x
+            .reshape((b * w, 1, f))?
+            .conv1d(p("conv.weight"), a.kernel / 2, 1, 1, 1)?;
+        let z = z
+            .broadcast_add(&p("conv.bias").reshape((1, c, 1))?)?
+            .relu()?;
         // max pooling by 2 along the features: [B·W, C, 1, F] → [B·W, C, 1, ⌊F/2⌋]
         let z = z.reshape((b * w, c, 1, f))?.max_pool2d((1, 2))?;
         let d = c * (f / 2);
@@ -207,7 +227,11 @@ struct Windows {
 
 impl Windows {
     fn new() -> Self {
-        Windows { x: Vec::new(), y: Vec::new(), n: 0 }
+        Windows {
+            x: Vec::new(),
+            y: Vec::new(),
+            n: 0,
+        }
     }
     fn push(&mut self, seq: &Sequence, t: usize, window: usize, fnorm: &Affine, tnorm: &Affine) {
         for k in 0..window {
@@ -215,10 +239,17 @@ impl Windows {
             let f = fnorm.forward(&seq.features[row]);
             self.x.extend(f.iter().map(|v| *v as f32));
         }
-        self.y.extend(tnorm.forward(&seq.targets[t]).iter().map(|v| *v as f32));
+        self.y
+            .extend(tnorm.forward(&seq.targets[t]).iter().map(|v| *v as f32));
         self.n += 1;
     }
-    fn tensors(&self, window: usize, nf: usize, no: usize, dev: &Device) -> Result<(Tensor, Tensor)> {
+    fn tensors(
+        &self,
+        window: usize,
+        nf: usize,
+        no: usize,
+        dev: &Device,
+    ) -> Result<(Tensor, Tensor)> {
         Ok((
             Tensor::from_slice(&self.x, (self.n, window, nf), dev)?,
             Tensor::from_slice(&self.y, (self.n, no), dev)?,
@@ -239,16 +270,23 @@ fn all_rows(d: &ThermalDataset, targets: bool) -> Vec<Vec<f64>> {
 
 /// Trains a CNN-LSTM on every experiment of `train` (split the dataset first with
 /// [`ThermalDataset::split`]). Prints a progress bar when `config.progress`.
-pub fn train_cnn_lstm(train: &ThermalDataset, config: &CnnLstmConfig) -> Result<(CnnLstm, CnnLstmReport)> {
+pub fn train_cnn_lstm(
+    train: &ThermalDataset,
+    config: &CnnLstmConfig,
+) -> Result<(CnnLstm, CnnLstmReport)> {
     train.validate()?;
     let arch = config.architecture;
     let (nf, no) = (train.feature_names.len(), train.target_names.len());
     check_architecture(&arch, nf)?;
     if config.batch_size == 0 || config.max_epochs == 0 {
-        return Err(NnError::Config("batch_size and max_epochs must be at least 1".into()));
+        return Err(NnError::Config(
+            "batch_size and max_epochs must be at least 1".into(),
+        ));
     }
     if !(0.0..0.9).contains(&config.validation_fraction) {
-        return Err(NnError::Config("validation_fraction must be in [0, 0.9)".into()));
+        return Err(NnError::Config(
+            "validation_fraction must be in [0, 0.9)".into(),
+        ));
     }
     let start = Instant::now();
     let fnorm = Affine::z_score(&all_rows(train, false), nf);
@@ -265,25 +303,44 @@ pub fn train_cnn_lstm(train: &ThermalDataset, config: &CnnLstmConfig) -> Result<
         }
     }
     if tr.n == 0 {
-        return Err(NnError::Data("no training windows left after the validation split".into()));
+        return Err(NnError::Data(
+            "no training windows left after the validation split".into(),
+        ));
     }
     let dev = Device::Cpu;
     let (xt, yt) = tr.tensors(arch.window, nf, no, &dev)?;
-    let val = if va.n > 0 { Some(va.tensors(arch.window, nf, no, &dev)?) } else { None };
+    let val = if va.n > 0 {
+        Some(va.tensors(arch.window, nf, no, &dev)?)
+    } else {
+        None
+    };
 
     // seeded PyTorch-style initialisation
     let mut r = rng::seeded(config.seed);
     let mut vars = BTreeMap::new();
     for (name, shape, bound) in param_shapes(&arch, nf, no) {
         let n: usize = shape.iter().product();
-        let data: Vec<f32> = rng::uniform(&mut r, n, bound).into_iter().map(|v| v as f32).collect();
-        vars.insert(name.to_string(), Var::from_tensor(&Tensor::from_vec(data, shape, &dev)?)?);
+        let data: Vec<f32> = rng::uniform(&mut r, n, bound)
+            .into_iter()
+            .map(|v| v as f32)
+            .collect();
+        vars.insert(
+            name.to_string(),
+            Var::from_tensor(&Tensor::from_vec(data, shape, &dev)?)?,
+        );
     }
     let net_of = |vars: &BTreeMap<String, Var>| Net {
         arch,
-        p: vars.iter().map(|(k, v)| (k.clone(), v.as_tensor().clone())).collect(),
+        p: vars
+            .iter()
+            .map(|(k, v)| (k.clone(), v.as_tensor().clone()))
+            .collect(),
     };
-    let params = ParamsAdamW { lr: config.learning_rate, weight_decay: 0.0, ..ParamsAdamW::default() };
+    let params = ParamsAdamW {
+        lr: config.learning_rate,
+        weight_decay: 0.0,
+        ..ParamsAdamW::default()
+    };
     let mut adam = AdamW::new(vars.values().cloned().collect(), params)?;
     let mut order: Vec<u32> = (0..tr.n as u32).collect();
     let mut shuffle = rng::seeded(config.seed.wrapping_add(0x9e37_79b9));
@@ -305,7 +362,12 @@ pub fn train_cnn_lstm(train: &ThermalDataset, config: &CnnLstmConfig) -> Result<
         }
         let train_loss = loss_sum / tr.n as f64;
         let val_loss = match &val {
-            Some((xv, yv)) => Some((net_of(&vars).forward(xv)? - yv)?.sqr()?.mean_all()?.to_scalar::<f32>()? as f64),
+            Some((xv, yv)) => Some(
+                (net_of(&vars).forward(xv)? - yv)?
+                    .sqr()?
+                    .mean_all()?
+                    .to_scalar::<f32>()? as f64,
+            ),
             None => None,
         };
         history.push((train_loss, val_loss));
@@ -341,9 +403,17 @@ pub fn train_cnn_lstm(train: &ThermalDataset, config: &CnnLstmConfig) -> Result<
         provenance: serde_json::Value::Null,
     };
     let net = model.net(&dev)?;
-    let train_loss = (net.forward(&xt)? - &yt)?.sqr()?.mean_all()?.to_scalar::<f32>()? as f64;
+    let train_loss = (net.forward(&xt)? - &yt)?
+        .sqr()?
+        .mean_all()?
+        .to_scalar::<f32>()? as f64;
     let validation_loss = match &val {
-        Some((xv, yv)) => Some((net.forward(xv)? - yv)?.sqr()?.mean_all()?.to_scalar::<f32>()? as f64),
+        Some((xv, yv)) => Some(
+            (net.forward(xv)? - yv)?
+                .sqr()?
+                .mean_all()?
+                .to_scalar::<f32>()? as f64,
+        ),
         None => None,
     };
     model.provenance = serde_json::json!({
@@ -375,7 +445,10 @@ fn snapshot(vars: &BTreeMap<String, Var>) -> Result<BTreeMap<String, StoredTenso
         let t = v.as_tensor();
         out.insert(
             k.clone(),
-            StoredTensor { shape: t.dims().to_vec(), data: t.flatten_all()?.to_vec1::<f32>()? },
+            StoredTensor {
+                shape: t.dims().to_vec(),
+                data: t.flatten_all()?.to_vec1::<f32>()?,
+            },
         );
     }
     Ok(out)
@@ -385,9 +458,15 @@ impl CnnLstm {
     fn net(&self, dev: &Device) -> Result<Net> {
         let mut p = BTreeMap::new();
         for (k, t) in &self.weights {
-            p.insert(k.clone(), Tensor::from_slice(&t.data, t.shape.as_slice(), dev)?);
+            p.insert(
+                k.clone(),
+                Tensor::from_slice(&t.data, t.shape.as_slice(), dev)?,
+            );
         }
-        Ok(Net { arch: self.architecture, p })
+        Ok(Net {
+            arch: self.architecture,
+            p,
+        })
     }
 
     pub fn param_count(&self) -> usize {
@@ -405,9 +484,15 @@ impl CnnLstm {
                 data.feature_names.join(", ")
             )));
         }
-        let fnorm = Affine { offset: self.feature_offset.clone(), scale: self.feature_scale.clone() };
+        let fnorm = Affine {
+            offset: self.feature_offset.clone(),
+            scale: self.feature_scale.clone(),
+        };
         let no = self.target_names.len();
-        let tnorm = Affine { offset: vec![0.0; no], scale: vec![1.0; no] };
+        let tnorm = Affine {
+            offset: vec![0.0; no],
+            scale: vec![1.0; no],
+        };
         let dev = Device::Cpu;
         let net = self.net(&dev)?;
         let w = self.architecture.window;
@@ -454,27 +539,47 @@ impl CnnLstm {
 
     /// Parses and validates an `mtec.cnn-lstm/1` document.
     pub fn from_json(text: &str) -> Result<CnnLstm> {
-        let m: CnnLstm = serde_json::from_str(text)
-            .map_err(|e| NnError::Model(format!("line {}, column {}: {e}", e.line(), e.column())))?;
+        let m: CnnLstm = serde_json::from_str(text).map_err(|e| {
+            NnError::Model(format!("line {}, column {}: {e}", e.line(), e.column()))
+        })?;
         if m.format != FORMAT {
-            return Err(NnError::Model(format!("format is \"{}\", expected \"{FORMAT}\"", m.format)));
+            return Err(NnError::Model(format!(
+                "format is \"{}\", expected \"{FORMAT}\"",
+                m.format
+            )));
         }
         let (nf, no) = (m.feature_names.len(), m.target_names.len());
         check_architecture(&m.architecture, nf).map_err(|e| NnError::Model(e.to_string()))?;
-        if m.feature_offset.len() != nf || m.feature_scale.len() != nf || m.target_offset.len() != no || m.target_scale.len() != no {
-            return Err(NnError::Model("normalisation vectors do not match the feature/target names".into()));
+        if m.feature_offset.len() != nf
+            || m.feature_scale.len() != nf
+            || m.target_offset.len() != no
+            || m.target_scale.len() != no
+        {
+            return Err(NnError::Model(
+                "normalisation vectors do not match the feature/target names".into(),
+            ));
         }
         for (name, shape, _) in param_shapes(&m.architecture, nf, no) {
-            let t = m.weights.get(name).ok_or_else(|| NnError::Model(format!("weight \"{name}\" is missing")))?;
+            let t = m
+                .weights
+                .get(name)
+                .ok_or_else(|| NnError::Model(format!("weight \"{name}\" is missing")))?;
             if t.shape != shape || t.data.len() != shape.iter().product::<usize>() {
-                return Err(NnError::Model(format!("weight \"{name}\" has shape {:?}, expected {shape:?}", t.shape)));
+                return Err(NnError::Model(format!(
+                    "weight \"{name}\" has shape {:?}, expected {shape:?}",
+                    t.shape
+                )));
             }
             if t.data.iter().any(|v| !v.is_finite()) {
-                return Err(NnError::Model(format!("weight \"{name}\" holds a non-finite value")));
+                return Err(NnError::Model(format!(
+                    "weight \"{name}\" holds a non-finite value"
+                )));
             }
         }
         if m.weights.len() != param_shapes(&m.architecture, nf, no).len() {
-            return Err(NnError::Model("the file holds weights this architecture does not have".into()));
+            return Err(NnError::Model(
+                "the file holds weights this architecture does not have".into(),
+            ));
         }
         Ok(m)
     }

@@ -52,7 +52,9 @@ impl ThermalDataset {
     pub fn validate(&self) -> Result<()> {
         let (nf, nt) = (self.feature_names.len(), self.target_names.len());
         if nf == 0 || nt == 0 {
-            return Err(NnError::Data("a dataset needs at least one feature and one target".into()));
+            return Err(NnError::Data(
+                "a dataset needs at least one feature and one target".into(),
+            ));
         }
         if self.experiments.is_empty() {
             return Err(NnError::Data("the dataset holds no experiment".into()));
@@ -102,10 +104,18 @@ impl ThermalDataset {
     pub fn select(&self, ids: &[u32]) -> Result<ThermalDataset> {
         let mut experiments = Vec::new();
         for id in ids {
-            let e = self.experiments.iter().find(|e| e.id == *id).ok_or_else(|| {
-                let known: Vec<String> = self.experiments.iter().map(|e| e.id.to_string()).collect();
-                NnError::Data(format!("no experiment {id} (the data holds {})", known.join(", ")))
-            })?;
+            let e = self
+                .experiments
+                .iter()
+                .find(|e| e.id == *id)
+                .ok_or_else(|| {
+                    let known: Vec<String> =
+                        self.experiments.iter().map(|e| e.id.to_string()).collect();
+                    NnError::Data(format!(
+                        "no experiment {id} (the data holds {})",
+                        known.join(", ")
+                    ))
+                })?;
             experiments.push(e.clone());
         }
         Ok(ThermalDataset {
@@ -118,10 +128,14 @@ impl ThermalDataset {
     /// Train/test split by whole experiments; the two id sets must not overlap.
     pub fn split(&self, train: &[u32], test: &[u32]) -> Result<(ThermalDataset, ThermalDataset)> {
         if let Some(id) = train.iter().find(|id| test.contains(id)) {
-            return Err(NnError::Config(format!("experiment {id} is both in the training and the test set")));
+            return Err(NnError::Config(format!(
+                "experiment {id} is both in the training and the test set"
+            )));
         }
         if train.is_empty() || test.is_empty() {
-            return Err(NnError::Config("both the training and the test set need an experiment".into()));
+            return Err(NnError::Config(
+                "both the training and the test set need an experiment".into(),
+            ));
         }
         Ok((self.select(train)?, self.select(test)?))
     }
@@ -153,7 +167,12 @@ mod tests {
         ThermalDataset {
             feature_names: vec!["t1_c".into(), "angle_deg".into()],
             target_names: vec!["exc_um".into()],
-            experiments: (1..=4).map(|id| Experiment { id, sequences: vec![seq(id as f64)] }).collect(),
+            experiments: (1..=4)
+                .map(|id| Experiment {
+                    id,
+                    sequences: vec![seq(id as f64)],
+                })
+                .collect(),
         }
     }
 
@@ -162,7 +181,10 @@ mod tests {
         let d = ds();
         d.validate().unwrap();
         let (tr, te) = d.split(&[1, 2, 4], &[3]).unwrap();
-        assert_eq!(tr.experiments.iter().map(|e| e.id).collect::<Vec<_>>(), vec![1, 2, 4]);
+        assert_eq!(
+            tr.experiments.iter().map(|e| e.id).collect::<Vec<_>>(),
+            vec![1, 2, 4]
+        );
         assert_eq!(te.experiments[0].id, 3);
         assert_eq!(tr.scored_rows(), 6);
         assert_eq!(te.rows().0, vec![vec![3.0, 2.0], vec![3.0, 3.0]]);

@@ -3,9 +3,9 @@
 //! and the parameter count next to the number of values a grid table stores (3 per point: the
 //! source's 73 parameters against 3993 values for 11³ points).
 
+use crate::bpnn::Activation;
 use crate::bpnn::Bpnn;
 use crate::bpnn_train::{train_bpnn, BpnnTrainConfig, Optimizer, TrainReport};
-use crate::bpnn::Activation;
 use crate::error::{NnError, Result};
 use serde::Serialize;
 
@@ -72,12 +72,23 @@ pub struct GridFitReport {
 }
 
 /// Trains a 3-`hidden`-3 BPNN on the grid points (`p_mm` → `e_um`).
-pub fn fit_grid(p_mm: &[[f64; 3]], e_um: &[[f64; 3]], config: &GridFitConfig) -> Result<(Bpnn, GridFitReport)> {
+pub fn fit_grid(
+    p_mm: &[[f64; 3]],
+    e_um: &[[f64; 3]],
+    config: &GridFitConfig,
+) -> Result<(Bpnn, GridFitReport)> {
     if p_mm.len() != e_um.len() {
-        return Err(NnError::Data(format!("{} points but {} error rows", p_mm.len(), e_um.len())));
+        return Err(NnError::Data(format!(
+            "{} points but {} error rows",
+            p_mm.len(),
+            e_um.len()
+        )));
     }
     if p_mm.len() < 8 {
-        return Err(NnError::Data(format!("a grid needs at least 8 points, got {}", p_mm.len())));
+        return Err(NnError::Data(format!(
+            "a grid needs at least 8 points, got {}",
+            p_mm.len()
+        )));
     }
     let x: Vec<Vec<f64>> = p_mm.iter().map(|p| p.to_vec()).collect();
     let y: Vec<Vec<f64>> = e_um.iter().map(|e| e.to_vec()).collect();

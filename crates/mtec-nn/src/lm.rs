@@ -142,9 +142,12 @@ mod tests {
 
     #[test]
     fn finds_the_rosenbrock_minimum() {
-        let out = minimise(&Rosenbrock, &[-1.2, 1.0], &LmConfig::default(), |_, _, _| {
-            Control::Continue
-        });
+        let out = minimise(
+            &Rosenbrock,
+            &[-1.2, 1.0],
+            &LmConfig::default(),
+            |_, _, _| Control::Continue,
+        );
         assert!((out.theta[0] - 1.0).abs() < 1e-8, "{out:?}");
         assert!((out.theta[1] - 1.0).abs() < 1e-8, "{out:?}");
         assert!(out.sse < 1e-16);

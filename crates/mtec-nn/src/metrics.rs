@@ -22,7 +22,11 @@ pub struct ChannelMetrics {
 }
 
 /// Metrics per channel; `pred` and `meas` are rows × channels.
-pub fn channel_metrics(names: &[String], pred: &[Vec<f64>], meas: &[Vec<f64>]) -> Vec<ChannelMetrics> {
+pub fn channel_metrics(
+    names: &[String],
+    pred: &[Vec<f64>],
+    meas: &[Vec<f64>],
+) -> Vec<ChannelMetrics> {
     names
         .iter()
         .enumerate()
@@ -40,7 +44,11 @@ pub fn channel_metrics(names: &[String], pred: &[Vec<f64>], meas: &[Vec<f64>]) -
                 mae: r.iter().map(|v| v.abs()).sum::<f64>() / n,
                 max_abs_residual: max_abs,
                 range,
-                residual_ratio: if range > 0.0 { max_abs / range } else { f64::INFINITY },
+                residual_ratio: if range > 0.0 {
+                    max_abs / range
+                } else {
+                    f64::INFINITY
+                },
             }
         })
         .collect()
@@ -54,7 +62,11 @@ mod tests {
     fn metrics_by_hand() {
         // measured 0, 2, 4; predicted 1, 2, 2 → r = 1, 0, −2
         let names = vec!["a".to_string()];
-        let m = channel_metrics(&names, &[vec![1.0], vec![2.0], vec![2.0]], &[vec![0.0], vec![2.0], vec![4.0]]);
+        let m = channel_metrics(
+            &names,
+            &[vec![1.0], vec![2.0], vec![2.0]],
+            &[vec![0.0], vec![2.0], vec![4.0]],
+        );
         assert!((m[0].rmse - (5.0f64 / 3.0).sqrt()).abs() < 1e-15);
         assert!((m[0].mae - 1.0).abs() < 1e-15);
         assert_eq!(m[0].max_abs_residual, 2.0);

@@ -13,11 +13,10 @@ impl Progress {
             return Progress { bar: None };
         }
         let bar = ProgressBar::new(epochs as u64);
-        let style = ProgressStyle::with_template(
-            "{prefix} [{bar:30}] epoch {pos}/{len} {msg} ({elapsed})",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
+        let style =
+            ProgressStyle::with_template("{prefix} [{bar:30}] epoch {pos}/{len} {msg} ({elapsed})")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> ");
         bar.set_style(style);
         bar.set_prefix(what.to_string());
         Progress { bar: Some(bar) }

@@ -43,10 +43,22 @@ impl Default for RotaryThermalSpec {
 /// Heat input of experiment 1..=4 at time t (0..1): four different duty cycles.
 fn duty(experiment: u32, t_min: f64) -> f64 {
     match experiment {
-        1 => 1.0,                                   // full speed throughout
-        2 => 0.5,                                   // half speed throughout
-        3 => if t_min < 150.0 { 0.75 } else { 0.0 }, // 3/4 speed, then stop and cool
-        _ => if t_min < 120.0 { 1.0 } else { 0.2 }, // full speed, then idle
+        1 => 1.0, // full speed throughout
+        2 => 0.5, // half speed throughout
+        3 => {
+            if t_min < 150.0 {
+                0.75
+            } else {
+                0.0
+            }
+        } // 3/4 speed, then stop and cool
+        _ => {
+            if t_min < 120.0 {
+                1.0
+            } else {
+                0.2
+            }
+        } // full speed, then idle
     }
 }
 
@@ -107,7 +119,11 @@ pub fn rotary_thermal(spec: &RotaryThermalSpec) -> ThermalDataset {
                     .collect();
                 targets.push(e);
             }
-            sequences.push(Sequence { features, targets, warmup: 0 });
+            sequences.push(Sequence {
+                features,
+                targets,
+                warmup: 0,
+            });
         }
         experiments.push(Experiment { id, sequences });
     }
@@ -116,7 +132,9 @@ pub fn rotary_thermal(spec: &RotaryThermalSpec) -> ThermalDataset {
     feature_names.push("sin_angle".into());
     ThermalDataset {
         feature_names,
-        target_names: ["exc_um", "eyc_um", "ezc_um", "eac_urad", "ebc_urad"].map(String::from).to_vec(),
+        target_names: ["exc_um", "eyc_um", "ezc_um", "eac_urad", "ebc_urad"]
+            .map(String::from)
+            .to_vec(),
         experiments,
     }
 }

@@ -15,7 +15,11 @@ const N: usize = 11;
 
 /// Noise-free volumetric error field [ex, ey, ez] in µm.
 fn field_um(p: [f64; 3]) -> [f64; 3] {
-    let (u, v, w) = (p[0] / TRAVEL_MM[0], p[1] / TRAVEL_MM[1], p[2] / TRAVEL_MM[2]);
+    let (u, v, w) = (
+        p[0] / TRAVEL_MM[0],
+        p[1] / TRAVEL_MM[1],
+        p[2] / TRAVEL_MM[2],
+    );
     let pi = std::f64::consts::PI;
     [
         14.0 * u - 5.0 * u * u + 8.0 * v + 3.0 * u * w + 2.0 * (pi * v).sin(),
@@ -39,7 +43,11 @@ fn grid(seed: u64) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
                 ];
                 let f = field_um(q);
                 p.push(q);
-                e.push([f[0] + noise.sample(&mut rng), f[1] + noise.sample(&mut rng), f[2] + noise.sample(&mut rng)]);
+                e.push([
+                    f[0] + noise.sample(&mut rng),
+                    f[1] + noise.sample(&mut rng),
+                    f[2] + noise.sample(&mut rng),
+                ]);
             }
         }
     }
@@ -95,7 +103,13 @@ fn rms(v: &[f64]) -> f64 {
 #[test]
 fn trilinear_reference_reproduces_grid_nodes_and_linear_fields() {
     // A trilinear field is reproduced exactly by trilinear interpolation.
-    let lin = |p: [f64; 3]| [p[0] * 0.01 + p[1] * p[2] * 1e-5, p[1] * 0.02 - p[0] * p[1] * 1e-6, 1.0];
+    let lin = |p: [f64; 3]| {
+        [
+            p[0] * 0.01 + p[1] * p[2] * 1e-5,
+            p[1] * 0.02 - p[0] * p[1] * 1e-6,
+            1.0,
+        ]
+    };
     let mut e = Vec::new();
     for i in 0..N {
         for j in 0..N {
@@ -120,22 +134,52 @@ fn trilinear_reference_reproduces_grid_nodes_and_linear_fields() {
 fn bpnn_3_10_3_fits_the_grid_within_2_um_and_predicts_the_diagonals() {
     let (p, e) = grid(11);
     let (net, report) = fit_grid(&p, &e, &GridFitConfig::default()).unwrap();
-    eprintln!("{}", serde_json::to_string_pretty(&report).unwrap().lines().take(40).collect::<Vec<_>>().join("\n"));
+    eprintln!(
+        "{}",
+        serde_json::to_string_pretty(&report)
+            .unwrap()
+            .lines()
+            .take(40)
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
     assert_eq!(report.parameters, 73);
     assert_eq!(report.grid_values, 3993);
     for s in [report.fit_error_x, report.fit_error_y, report.fit_error_z] {
-        assert!(s.min_um >= -2.0 && s.max_um <= 2.0, "fit error outside ±2 µm: {s:?}");
+        assert!(
+            s.min_um >= -2.0 && s.max_um <= 2.0,
+            "fit error outside ±2 µm: {s:?}"
+        );
         assert!(s.mean_um.abs() < 0.1, "{s:?}");
     }
     // the noise is 0.3 µm: a fit much better than that would be over-fitting, much worse under-fitting
-    assert!(report.fit_error_x.std_um > 0.2 && report.fit_error_x.std_um < 0.8, "{:?}", report.fit_error_x);
+    assert!(
+        report.fit_error_x.std_um > 0.2 && report.fit_error_x.std_um < 0.8,
+        "{:?}",
+        report.fit_error_x
+    );
 
-    for (name, dir) in [("PPP", [true; 3]), ("NPP", [false, true, true]), ("NPN", [false, true, false]), ("PPN", [true, true, false])] {
+    for (name, dir) in [
+        ("PPP", [true; 3]),
+        ("NPP", [false, true, true]),
+        ("NPN", [false, true, false]),
+        ("PPN", [true, true, false]),
+    ] {
         let pts = diagonal(dir);
         for d in 0..3 {
-            let nn: Vec<f64> = pts.iter().map(|q| net.error_um(*q)[d] - field_um(*q)[d]).collect();
-            let tri: Vec<f64> = pts.iter().map(|q| trilinear(&e, *q)[d] - field_um(*q)[d]).collect();
-            eprintln!("{name} axis {d}: BPNN RMS {:.3} µm, trilinear RMS {:.3} µm", rms(&nn), rms(&tri));
+            let nn: Vec<f64> = pts
+                .iter()
+                .map(|q| net.error_um(*q)[d] - field_um(*q)[d])
+                .collect();
+            let tri: Vec<f64> = pts
+                .iter()
+                .map(|q| trilinear(&e, *q)[d] - field_um(*q)[d])
+                .collect();
+            eprintln!(
+                "{name} axis {d}: BPNN RMS {:.3} µm, trilinear RMS {:.3} µm",
+                rms(&nn),
+                rms(&tri)
+            );
             assert!(rms(&nn) <= rms(&tri) + 1.0, "{name} axis {d}");
             assert!(nn.iter().all(|r| r.abs() < 2.0), "{name} axis {d}: {nn:?}");
         }
@@ -144,7 +188,10 @@ fn bpnn_3_10_3_fits_the_grid_within_2_um_and_predicts_the_diagonals() {
     // the saved model evaluates identically after a round trip through mtec.bpnn/1
     // (to the last bit or so: serde_json's default float parser is not always correctly rounded)
     let back = Bpnn::load_volumetric(&net.to_json()).unwrap();
-    let (u, v) = (back.error_um([123.0, 456.0, 78.0]), net.error_um([123.0, 456.0, 78.0]));
+    let (u, v) = (
+        back.error_um([123.0, 456.0, 78.0]),
+        net.error_um([123.0, 456.0, 78.0]),
+    );
     for d in 0..3 {
         assert!((u[d] - v[d]).abs() < 1e-9);
     }
@@ -153,7 +200,10 @@ fn bpnn_3_10_3_fits_the_grid_within_2_um_and_predicts_the_diagonals() {
 #[test]
 fn same_seed_same_weights_on_the_grid() {
     let (p, e) = grid(3);
-    let cfg = GridFitConfig { max_epochs: 15, ..GridFitConfig::default() };
+    let cfg = GridFitConfig {
+        max_epochs: 15,
+        ..GridFitConfig::default()
+    };
     let (a, _) = fit_grid(&p, &e, &cfg).unwrap();
     let (b, _) = fit_grid(&p, &e, &cfg).unwrap();
     assert_eq!(a.params(), b.params());

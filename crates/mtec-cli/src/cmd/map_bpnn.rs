@@ -19,19 +19,32 @@ use std::path::Path;
 /// Reads the grid, fits the BPNN, prints the report and writes the model to `out`.
 pub fn fit_bpnn(grid_path: &Path, hidden: usize, out: &Path) -> Result<(), CliError> {
     if hidden == 0 || hidden > 1000 {
-        return Err(CliError::usage(format!("--hidden must be between 1 and 1000, got {hidden}")));
+        return Err(CliError::usage(format!(
+            "--hidden must be between 1 and 1000, got {hidden}"
+        )));
     }
     let table = Table::read(grid_path)?;
     let cols = ["x_mm", "y_mm", "z_mm", "ex_um", "ey_um", "ez_um"];
     table.require(&cols)?;
-    let c: Vec<Vec<f64>> = cols.iter().map(|n| table.f64_column(n)).collect::<Result<_, _>>()?;
+    let c: Vec<Vec<f64>> = cols
+        .iter()
+        .map(|n| table.f64_column(n))
+        .collect::<Result<_, _>>()?;
     let n = table.rows.len();
     if n < 8 {
-        return Err(InputError::file(grid_path, format!("a grid needs at least 8 points, the file has {n}")).into());
+        return Err(InputError::file(
+            grid_path,
+            format!("a grid needs at least 8 points, the file has {n}"),
+        )
+        .into());
     }
     let p: Vec<[f64; 3]> = (0..n).map(|i| [c[0][i], c[1][i], c[2][i]]).collect();
     let e: Vec<[f64; 3]> = (0..n).map(|i| [c[3][i], c[4][i], c[5][i]]).collect();
-    let config = GridFitConfig { hidden, progress: true, ..GridFitConfig::default() };
+    let config = GridFitConfig {
+        hidden,
+        progress: true,
+        ..GridFitConfig::default()
+    };
     let (mut net, report) = fit_grid(&p, &e, &config).map_err(|e| match e {
         mtec_nn::NnError::Data(m) => CliError::Input(InputError::file(grid_path, m)),
         other => CliError::Internal(anyhow::anyhow!(other)),
@@ -46,8 +59,15 @@ pub fn fit_bpnn(grid_path: &Path, hidden: usize, out: &Path) -> Result<(), CliEr
         net.activation, report.points, report.parameters, report.grid_values
     );
     println!("fit error (model - grid), um:   min      max     mean      std");
-    for (axis, s) in [("x", report.fit_error_x), ("y", report.fit_error_y), ("z", report.fit_error_z)] {
-        println!("  e{axis}                       {:8.3} {:8.3} {:8.3} {:8.3}", s.min_um, s.max_um, s.mean_um, s.std_um);
+    for (axis, s) in [
+        ("x", report.fit_error_x),
+        ("y", report.fit_error_y),
+        ("z", report.fit_error_z),
+    ] {
+        println!(
+            "  e{axis}                       {:8.3} {:8.3} {:8.3} {:8.3}",
+            s.min_um, s.max_um, s.mean_um, s.std_um
+        );
     }
     println!(
         "training: {} Levenberg-Marquardt iterations, best {}, {}",
