@@ -1,1 +1,43 @@
-//! mtec-nn: Neural error models on CPU: BPNN and CNN-LSTM. The only crate with the neural-network dependency.
+//! mtec-nn: neural error models trained and evaluated on the CPU.
+//!
+//! What it is for:
+//! - [`bpnn`]: a one-hidden-layer back-propagation network (e.g. 3-10-3, sigmoid) with input and
+//!   output normalisation, trained by Levenberg–Marquardt ([`lm`], small nets) or Adam (candle),
+//!   early stopping on a validation split, reproducible by seed. The trained network is a plain
+//!   Rust struct: evaluating it ([`Bpnn::predict`], [`Bpnn::error_um`]) needs no neural-network
+//!   library, so compensation can call it every interpolation cycle. Saved as `mtec.bpnn/1` JSON.
+//! - [`grid_fit`]: fits a BPNN to a volumetric error grid (`x_mm,y_mm,z_mm,ex_um,ey_um,ez_um`)
+//!   and reports fit-error statistics per axis and the parameter count against the grid size.
+//! - [`cnn_lstm`]: a CNN-LSTM (1-D convolution over the feature vector of each time step,
+//!   max pooling, LSTM over a window of time steps, dense output) that predicts any set of error
+//!   channels from temperatures (+ angle / position), trained with candle on the CPU; saved as
+//!   `mtec.cnn-lstm/1` JSON with its weights. [`dataset`] holds the plain data structure
+//!   (experiments × sequences × time × features) and the split by experiment; [`metrics`] the
+//!   RMSE / MAE / residual-ratio report shared with the BPNN baseline.
+//!
+//! What it is not for: reading measurement files or choosing which columns are features (the CLI
+//! and the thermal crate do that), and GPU training. This is the only crate of the workspace
+//! that depends on the neural-network library (candle, see `NN_CHOICE.md`); everything it
+//! exports is plain Rust data.
+
+pub mod baseline;
+pub mod bpnn;
+pub mod bpnn_train;
+pub mod cnn_lstm;
+pub mod dataset;
+pub mod error;
+pub mod grid_fit;
+pub mod lm;
+pub mod metrics;
+mod progress;
+mod rng;
+pub mod synthetic;
+
+pub use baseline::{compare_on_split, evaluate_bpnn, train_bpnn_baseline, SplitComparison};
+pub use bpnn::{Activation, Bpnn};
+pub use bpnn_train::{train_bpnn, BpnnTrainConfig, Optimizer, TrainReport};
+pub use cnn_lstm::{train_cnn_lstm, CnnLstm, CnnLstmConfig, CnnLstmReport};
+pub use dataset::{Experiment, Sequence, ThermalDataset};
+pub use error::NnError;
+pub use grid_fit::{fit_grid, GridFitConfig, GridFitReport};
+pub use metrics::ChannelMetrics;

@@ -56,6 +56,8 @@ enum MapCommand {
 pub enum MapModel {
     /// Trilinear interpolation between grid nodes.
     Trilinear,
+    /// A one-hidden-layer back-propagation network (x, y, z → ex, ey, ez), see --hidden.
+    Bpnn,
 }
 
 #[derive(clap::Args)]
@@ -75,6 +77,9 @@ struct FitArgs {
     /// Largest number of grid points per axis (overrides the controller's).
     #[arg(long)]
     max_points_per_axis: Option<usize>,
+    /// Hidden neurons of the BPNN (--model bpnn): 10 gives the source's 3-10-3 network.
+    #[arg(long, default_value_t = 10)]
+    hidden: usize,
     /// Output map JSON.
     #[arg(short = 'o', long = "out")]
     out: PathBuf,
@@ -113,6 +118,7 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
     }
     let map = match a.model {
         MapModel::Trilinear => GridMap::read_csv(&a.grid, &limits, outside)?,
+        MapModel::Bpnn => return super::map_bpnn::fit_bpnn(&a.grid, a.hidden, &a.out),
     };
     let mut json =
         serde_json::to_string_pretty(&map.to_file()).map_err(|e| CliError::Internal(e.into()))?;
@@ -131,7 +137,7 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
 }
 
 fn eval(a: EvalArgs) -> Result<(), CliError> {
-    let model = mtec_comp::load_error_model(&a.map)?;
+    let model = super::model_loader::load_error_model(&a.map)?;
     let table = Table::read(&a.points)?;
     let cols = [
         table.column("x_mm")?,

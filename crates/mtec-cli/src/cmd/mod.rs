@@ -21,3 +21,4 @@ pub mod run;
 pub const HAS_ISO230_2: bool = true;
 pub const HAS_CIRCULAR: bool = true;
 pub const HAS_IDENTIFY_LINES: bool = false;
+pub mod map_bpnn;

@@ -1,0 +1,90 @@
+//! The source-sized CNN-LSTM on rotary-axis thermal data of the `dbb-rotary` shape (synthetic,
+//! see `mtec_nn::synthetic`): trained on experiments 1, 2, 4, tested on 3, against the BPNN
+//! baseline. Prints the training time (goal: < 60 s on 2 cores in release).
+//!
+//!     cargo run --release -p mtec-nn --example rotary_cnn_lstm [-- --epochs N --fixed --export DIR]
+//!
+//! `--fixed` trains exactly N epochs (no early stopping) for timing against PyTorch;
+//! `--export DIR` writes the data as CSV for `bench/cnn_lstm.sh`.
+
+use mtec_nn::synthetic::{rotary_thermal, RotaryThermalSpec};
+use mtec_nn::{compare_on_split, BpnnTrainConfig, CnnLstmConfig, SplitComparison, ThermalDataset};
+use std::fmt::Write as _;
+
+fn export(d: &ThermalDataset, dir: &str) {
+    std::fs::create_dir_all(dir).expect("create export dir");
+    let mut s = String::from("experiment,sequence,step,");
+    s += &d.feature_names.join(",");
+    s += ",";
+    s += &d.target_names.join(",");
+    s += "\n";
+    for e in &d.experiments {
+        for (k, seq) in e.sequences.iter().enumerate() {
+            for t in 0..seq.len() {
+                let _ = write!(s, "{},{},{}", e.id, k, t);
+                for v in seq.features[t].iter().chain(&seq.targets[t]) {
+                    let _ = write!(s, ",{v}");
+                }
+                s.push('\n');
+            }
+        }
+    }
+    std::fs::write(format!("{dir}/rotary.csv"), s).expect("write export");
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let arg = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+    };
+    let fixed = args.iter().any(|a| a == "--fixed");
+    let spec = RotaryThermalSpec {
+        angles: 24,
+        ..RotaryThermalSpec::default()
+    };
+    let data = rotary_thermal(&spec);
+    if let Some(dir) = arg("--export") {
+        export(&data, &dir);
+    }
+    let mut cfg = CnnLstmConfig {
+        progress: true,
+        ..CnnLstmConfig::default()
+    };
+    if let Some(n) = arg("--epochs") {
+        cfg.max_epochs = n.parse().expect("--epochs N");
+    }
+    if fixed {
+        cfg.patience = usize::MAX / 2;
+    }
+    let bpnn_cfg = BpnnTrainConfig {
+        hidden: 10,
+        max_epochs: 200,
+        ..BpnnTrainConfig::default()
+    };
+    let (_, _, cmp) = compare_on_split(&data, &[1, 2, 4], &[3], &cfg, &bpnn_cfg).expect("training");
+    let r = &cmp.cnn_lstm_training;
+    println!(
+        "CNN-LSTM: {} parameters, {} train windows, {} epochs (best {}), {:.2} s, {:.4} s/epoch",
+        r.parameters, r.train_windows, r.epochs, r.best_epoch, r.seconds, r.seconds_per_epoch
+    );
+    println!("channel    CNN-LSTM rmse  mae  ratio | BPNN rmse  mae  ratio | range");
+    for (m, n) in cmp.cnn_lstm.iter().zip(&cmp.bpnn) {
+        println!(
+            "{:9} {:8.3} {:6.3} {:6.3} | {:8.3} {:6.3} {:6.3} | {:6.2}",
+            m.channel, m.rmse, m.mae, m.residual_ratio, n.rmse, n.mae, n.residual_ratio, m.range
+        );
+    }
+    println!(
+        "overall test RMSE: CNN-LSTM {:.4}, BPNN {:.4}",
+        SplitComparison::overall_rmse(&cmp.cnn_lstm),
+        SplitComparison::overall_rmse(&cmp.bpnn)
+    );
+    println!("MTEC_SECONDS_PER_EPOCH={:.6}", r.seconds_per_epoch);
+    println!(
+        "MTEC_TEST_RMSE={:.6}",
+        SplitComparison::overall_rmse(&cmp.cnn_lstm)
+    );
+}

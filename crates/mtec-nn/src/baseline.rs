@@ -1,0 +1,105 @@
+//! The BPNN baseline on a sequence dataset and the side-by-side comparison with the CNN-LSTM on
+//! the same split by experiment: what `mtec thermal fit --model cnn-lstm|bpnn` needs.
+//!
+//! The BPNN sees only the features of the current row (no history), as in the source's
+//! comparison. Its early-stopping rows are, like the CNN-LSTM's, the tail of every training
+//! sequence (block-wise, never random rows).
+
+use crate::bpnn::Bpnn;
+use crate::bpnn_train::{train_bpnn_with_validation, BpnnTrainConfig, TrainReport};
+use crate::cnn_lstm::{train_cnn_lstm, CnnLstm, CnnLstmConfig, CnnLstmReport};
+use crate::dataset::ThermalDataset;
+use crate::error::{NnError, Result};
+use crate::metrics::{channel_metrics, ChannelMetrics};
+use serde::Serialize;
+
+/// Trains the BPNN baseline on the scored rows of `train` (current features → targets), holding
+/// out the last `config.validation_fraction` of each sequence for early stopping.
+pub fn train_bpnn_baseline(
+    train: &ThermalDataset,
+    config: &BpnnTrainConfig,
+) -> Result<(Bpnn, TrainReport)> {
+    train.validate()?;
+    let (mut xt, mut yt, mut xv, mut yv) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for seq in train.experiments.iter().flat_map(|e| &e.sequences) {
+        let rows = seq.scored_rows();
+        let n_val = ((rows.len() as f64) * config.validation_fraction).round() as usize;
+        let split = rows.end - n_val;
+        for t in rows {
+            let (x, y) = if t < split {
+                (&mut xt, &mut yt)
+            } else {
+                (&mut xv, &mut yv)
+            };
+            x.push(seq.features[t].clone());
+            y.push(seq.targets[t].clone());
+        }
+    }
+    if xt.is_empty() {
+        return Err(NnError::Data(
+            "no training rows left after the validation split".into(),
+        ));
+    }
+    let (mut net, report) = train_bpnn_with_validation(&xt, &yt, &xv, &yv, config)?;
+    net.input_names = train.feature_names.clone();
+    net.output_names = train.target_names.clone();
+    Ok((net, report))
+}
+
+/// RMSE, MAE and residual ratio per channel of the BPNN on the scored rows of `data`.
+pub fn evaluate_bpnn(net: &Bpnn, data: &ThermalDataset) -> Result<Vec<ChannelMetrics>> {
+    data.validate()?;
+    let (x, y) = data.rows();
+    let pred = x
+        .iter()
+        .map(|r| net.predict(r))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(channel_metrics(&data.target_names, &pred, &y))
+}
+
+/// Both models trained on the same experiments and scored on the same held-out ones.
+#[derive(Debug, Clone, Serialize)]
+pub struct SplitComparison {
+    pub train_experiments: Vec<u32>,
+    pub test_experiments: Vec<u32>,
+    pub cnn_lstm: Vec<ChannelMetrics>,
+    pub bpnn: Vec<ChannelMetrics>,
+    pub cnn_lstm_training: CnnLstmReport,
+    pub bpnn_training: TrainReport,
+}
+
+impl SplitComparison {
+    /// RMSE over all channels together (√ of the mean of the squared per-channel RMSEs).
+    pub fn overall_rmse(metrics: &[ChannelMetrics]) -> f64 {
+        (metrics.iter().map(|m| m.rmse * m.rmse).sum::<f64>() / metrics.len().max(1) as f64).sqrt()
+    }
+}
+
+/// Splits `data` by experiment, trains the CNN-LSTM and the BPNN baseline on `train_ids` and
+/// scores both on `test_ids`.
+pub fn compare_on_split(
+    data: &ThermalDataset,
+    train_ids: &[u32],
+    test_ids: &[u32],
+    cnn_config: &CnnLstmConfig,
+    bpnn_config: &BpnnTrainConfig,
+) -> Result<(CnnLstm, Bpnn, SplitComparison)> {
+    let (train, test) = data.split(train_ids, test_ids)?;
+    let (cnn, cnn_report) = train_cnn_lstm(&train, cnn_config)?;
+    let (bpnn, bpnn_report) = train_bpnn_baseline(&train, bpnn_config)?;
+    let cmp = SplitComparison {
+        train_experiments: train_ids.to_vec(),
+        test_experiments: test_ids.to_vec(),
+        cnn_lstm: cnn.evaluate(&test)?,
+        bpnn: evaluate_bpnn(&bpnn, &test)?,
+        cnn_lstm_training: cnn_report,
+        bpnn_training: bpnn_report,
+    };
+    Ok((cnn, bpnn, cmp))
+}
+
+/// Per-channel metrics of any predictions against the scored rows of `data`.
+pub fn metrics_of(data: &ThermalDataset, pred: &[Vec<f64>]) -> Vec<ChannelMetrics> {
+    let (_, y) = data.rows();
+    channel_metrics(&data.target_names, pred, &y)
+}

@@ -1,0 +1,586 @@
+//! CNN-LSTM sequence model (candle, CPU): for each time step a 1-D convolution over the feature
+//! vector (temperatures, angle/position), ReLU and max pooling extract local features; an LSTM
+//! runs over a window of `window` time steps; a dense layer maps its last hidden state to the
+//! error channels.
+//!
+//! Shapes: window [B, W, F] → [B·W, 1, F] → Conv1d(1→C, k, same padding) → ReLU →
+//! MaxPool(2) (as `max_pool2d((1,2))` on [B·W, C, 1, F]: candle has no `max_pool1d`) →
+//! [B, W, C·⌊F/2⌋] → LSTM(H) → h_W [B, H] → Linear(H → O). Parameter names and layouts are
+//! PyTorch's (`conv.weight`, `lstm.weight_ih_l0`, gate order i, f, g, o, `fc.weight`), so the
+//! same network can be rebuilt in PyTorch (`bench/cnn_lstm.sh`).
+//!
+//! Decisions where the source is silent:
+//! - Features and targets are z-scored with the training rows' mean/std; the loss is the MSE in
+//!   normalised units.
+//! - A window ending at row t uses rows t−W+1..=t; rows before the start of a sequence repeat
+//!   its first row (the machine was at its initial state before the log started).
+//! - Early stopping holds out the last `validation_fraction` of the scored rows of every
+//!   training sequence (a block at the end of each series, never random rows) and keeps the
+//!   weights of the best validation epoch.
+//! - Initialisation as PyTorch's defaults (uniform ±1/√fan_in), drawn from a seeded StdRng;
+//!   mini-batch order from a seeded shuffle: the same seed gives the same weights.
+//!
+//! File format `mtec.cnn-lstm/1` (JSON): `format`, `architecture` (window, conv_channels,
+//! kernel, lstm_hidden), `feature_names`, `target_names`, `feature_offset/scale`,
+//! `target_offset/scale`, `weights` (name → `{shape, data}` row-major f32), `provenance`.
+
+use crate::bpnn::Affine;
+use crate::dataset::{Sequence, ThermalDataset};
+use crate::error::{NnError, Result};
+use crate::metrics::{channel_metrics, ChannelMetrics};
+use crate::progress::Progress;
+use crate::rng;
+use candle_core::{DType, Device, Tensor, Var};
+use candle_nn::optim::{AdamW, Optimizer as _, ParamsAdamW};
+use rand::seq::SliceRandom;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+pub const FORMAT: &str = "mtec.cnn-lstm/1";
+
+/// The network's shape.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Architecture {
+    /// Time steps per window.
+    pub window: usize,
+    /// Convolution filters C.
+    pub conv_channels: usize,
+    /// Convolution kernel size k (odd: "same" padding k/2).
+    pub kernel: usize,
+    /// LSTM hidden size H.
+    pub lstm_hidden: usize,
+}
+
+/// How to train.
+#[derive(Debug, Clone)]
+pub struct CnnLstmConfig {
+    pub architecture: Architecture,
+    pub max_epochs: usize,
+    pub batch_size: usize,
+    pub learning_rate: f64,
+    pub validation_fraction: f64,
+    /// Epochs without validation improvement before stopping.
+    pub patience: usize,
+    pub seed: u64,
+    pub progress: bool,
+}
+
+impl Default for CnnLstmConfig {
+    /// The "source-sized" network: 16 filters of width 3, LSTM of 32 units over 16 time steps.
+    fn default() -> Self {
+        CnnLstmConfig {
+            architecture: Architecture {
+                window: 16,
+                conv_channels: 16,
+                kernel: 3,
+                lstm_hidden: 32,
+            },
+            max_epochs: 60,
+            batch_size: 64,
+            learning_rate: 3e-3,
+            validation_fraction: 0.15,
+            patience: 15,
+            seed: 42,
+            progress: false,
+        }
+    }
+}
+
+/// What happened during training (losses are MSE in normalised units).
+#[derive(Debug, Clone, Serialize)]
+pub struct CnnLstmReport {
+    pub epochs: usize,
+    pub best_epoch: usize,
+    pub train_loss: f64,
+    pub validation_loss: Option<f64>,
+    pub stop_reason: String,
+    pub seconds: f64,
+    pub seconds_per_epoch: f64,
+    pub train_windows: usize,
+    pub validation_windows: usize,
+    pub parameters: usize,
+    /// (train loss, validation loss) per epoch.
+    pub history: Vec<(f64, Option<f64>)>,
+}
+
+/// A tensor stored in the model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StoredTensor {
+    pub shape: Vec<usize>,
+    pub data: Vec<f32>,
+}
+
+/// A trained CNN-LSTM with its normalisation; see the module docs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CnnLstm {
+    pub format: String,
+    pub architecture: Architecture,
+    pub feature_names: Vec<String>,
+    pub target_names: Vec<String>,
+    pub feature_offset: Vec<f64>,
+    pub feature_scale: Vec<f64>,
+    pub target_offset: Vec<f64>,
+    pub target_scale: Vec<f64>,
+    pub weights: BTreeMap<String, StoredTensor>,
+    #[serde(default)]
+    pub provenance: serde_json::Value,
+}
+
+/// The parameter shapes of the architecture for F features and O outputs, PyTorch names.
+fn param_shapes(
+    a: &Architecture,
+    n_features: usize,
+    n_out: usize,
+) -> Vec<(&'static str, Vec<usize>, f64)> {
+    let (c, k, h) = (a.conv_channels, a.kernel, a.lstm_hidden);
+    let d = c * (n_features / 2);
+    let conv_bound = 1.0 / (k as f64).sqrt();
+    let lstm_bound = 1.0 / (h as f64).sqrt();
+    let fc_bound = 1.0 / (h as f64).sqrt();
+    vec![
+        ("conv.weight", vec![c, 1, k], conv_bound),
+        ("conv.bias", vec![c], conv_bound),
+        ("lstm.weight_ih_l0", vec![4 * h, d], lstm_bound),
+        ("lstm.weight_hh_l0", vec![4 * h, h], lstm_bound),
+        ("lstm.bias_ih_l0", vec![4 * h], lstm_bound),
+        ("lstm.bias_hh_l0", vec![4 * h], lstm_bound),
+        ("fc.weight", vec![n_out, h], fc_bound),
+        ("fc.bias", vec![n_out], fc_bound),
+    ]
+}
+
+fn check_architecture(a: &Architecture, n_features: usize) -> Result<()> {
+    if a.window == 0 || a.conv_channels == 0 || a.lstm_hidden == 0 {
+        return Err(NnError::Config(
+            "window, conv_channels and lstm_hidden must be at least 1".into(),
+        ));
+    }
+    if a.kernel % 2 == 0 {
+        return Err(NnError::Config(format!(
+            "the kernel size must be odd (same padding), got {}",
+            a.kernel
+        )));
+    }
+    if n_features < 2 {
+        return Err(NnError::Config(
+            "the convolution and pooling need at least 2 features".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// The network's tensors (Vars while training, plain tensors when predicting).
+struct Net {
+    arch: Architecture,
+    p: BTreeMap<String, Tensor>,
+}
+
+impl Net {
+    /// Forward pass of windows x [B, W, F] (normalised) → [B, O].
+    fn forward(&self, x: &Tensor) -> candle_core::Result<Tensor> {
+        let (b, w, f) = x.dims3()?;
+        let a = &self.arch;
+        let (c, h) = (a.conv_channels, a.lstm_hidden);
+        let p = |n: &str| &self.p[n];
+        // 1-D convolution over the feature vector of each time step
+        let z = x
+            .reshape((b * w, 1, f))?
+            .conv1d(p("conv.weight"), a.kernel / 2, 1, 1, 1)?;
+        let z = z
+            .broadcast_add(&p("conv.bias").reshape((1, c, 1))?)?
+            .relu()?;
+        // max pooling by 2 along the features: [B·W, C, 1, F] → [B·W, C, 1, ⌊F/2⌋]
+        let z = z.reshape((b * w, c, 1, f))?.max_pool2d((1, 2))?;
+        let d = c * (f / 2);
+        let seq = z.reshape((b * w, d))?;
+        // LSTM (Hochreiter & Schmidhuber 1997; PyTorch's gate order i, f, g, o):
+        // the input projection of all steps at once, then the recurrence step by step.
+        let xp = seq
+            .matmul(&p("lstm.weight_ih_l0").t()?)?
+            .broadcast_add(p("lstm.bias_ih_l0"))?
+            .broadcast_add(p("lstm.bias_hh_l0"))?
+            .reshape((b, w, 4 * h))?;
+        let w_hh_t = p("lstm.weight_hh_l0").t()?;
+        let mut hs = Tensor::zeros((b, h), x.dtype(), x.device())?;
+        let mut cs = Tensor::zeros((b, h), x.dtype(), x.device())?;
+        for t in 0..w {
+            let gates = (xp.narrow(1, t, 1)?.squeeze(1)? + hs.matmul(&w_hh_t)?)?;
+            let i = candle_nn::ops::sigmoid(&gates.narrow(1, 0, h)?)?;
+            let fg = candle_nn::ops::sigmoid(&gates.narrow(1, h, h)?)?;
+            let g = gates.narrow(1, 2 * h, h)?.tanh()?;
+            let o = candle_nn::ops::sigmoid(&gates.narrow(1, 3 * h, h)?)?;
+            cs = ((fg * &cs)? + (i * g)?)?; // c_t = f ⊙ c_{t−1} + i ⊙ g
+            hs = (o * cs.tanh()?)?; // h_t = o ⊙ tanh(c_t)
+        }
+        hs.matmul(&p("fc.weight").t()?)?.broadcast_add(p("fc.bias"))
+    }
+}
+
+/// Windows of normalised features [N, W, F] (flattened) and normalised targets [N, O], plus
+/// each window's (experiment index, sequence index, row) for mapping predictions back.
+struct Windows {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    n: usize,
+}
+
+impl Windows {
+    fn new() -> Self {
+        Windows {
+            x: Vec::new(),
+            y: Vec::new(),
+            n: 0,
+        }
+    }
+    fn push(&mut self, seq: &Sequence, t: usize, window: usize, fnorm: &Affine, tnorm: &Affine) {
+        for k in 0..window {
+            let row = (t + k + 1).saturating_sub(window);
+            let f = fnorm.forward(&seq.features[row]);
+            self.x.extend(f.iter().map(|v| *v as f32));
+        }
+        self.y
+            .extend(tnorm.forward(&seq.targets[t]).iter().map(|v| *v as f32));
+        self.n += 1;
+    }
+    fn tensors(
+        &self,
+        window: usize,
+        nf: usize,
+        no: usize,
+        dev: &Device,
+    ) -> Result<(Tensor, Tensor)> {
+        Ok((
+            Tensor::from_slice(&self.x, (self.n, window, nf), dev)?,
+            Tensor::from_slice(&self.y, (self.n, no), dev)?,
+        ))
+    }
+}
+
+fn all_rows(d: &ThermalDataset, targets: bool) -> Vec<Vec<f64>> {
+    d.experiments
+        .iter()
+        .flat_map(|e| &e.sequences)
+        .flat_map(|s| {
+            let rows = if targets { &s.targets } else { &s.features };
+            s.scored_rows().map(move |t| rows[t].clone())
+        })
+        .collect()
+}
+
+/// Trains a CNN-LSTM on every experiment of `train` (split the dataset first with
+/// [`ThermalDataset::split`]). Prints a progress bar when `config.progress`.
+pub fn train_cnn_lstm(
+    train: &ThermalDataset,
+    config: &CnnLstmConfig,
+) -> Result<(CnnLstm, CnnLstmReport)> {
+    train.validate()?;
+    let arch = config.architecture;
+    let (nf, no) = (train.feature_names.len(), train.target_names.len());
+    check_architecture(&arch, nf)?;
+    if config.batch_size == 0 || config.max_epochs == 0 {
+        return Err(NnError::Config(
+            "batch_size and max_epochs must be at least 1".into(),
+        ));
+    }
+    if !(0.0..0.9).contains(&config.validation_fraction) {
+        return Err(NnError::Config(
+            "validation_fraction must be in [0, 0.9)".into(),
+        ));
+    }
+    let start = Instant::now();
+    let fnorm = Affine::z_score(&all_rows(train, false), nf);
+    let tnorm = Affine::z_score(&all_rows(train, true), no);
+    // block-wise validation: the tail of each training sequence
+    let (mut tr, mut va) = (Windows::new(), Windows::new());
+    for seq in train.experiments.iter().flat_map(|e| &e.sequences) {
+        let rows = seq.scored_rows();
+        let n_val = ((rows.len() as f64) * config.validation_fraction).round() as usize;
+        let split = rows.end - n_val;
+        for t in rows {
+            let target = if t < split { &mut tr } else { &mut va };
+            target.push(seq, t, arch.window, &fnorm, &tnorm);
+        }
+    }
+    if tr.n == 0 {
+        return Err(NnError::Data(
+            "no training windows left after the validation split".into(),
+        ));
+    }
+    let dev = Device::Cpu;
+    let (xt, yt) = tr.tensors(arch.window, nf, no, &dev)?;
+    let val = if va.n > 0 {
+        Some(va.tensors(arch.window, nf, no, &dev)?)
+    } else {
+        None
+    };
+
+    // seeded PyTorch-style initialisation
+    let mut r = rng::seeded(config.seed);
+    let mut vars = BTreeMap::new();
+    for (name, shape, bound) in param_shapes(&arch, nf, no) {
+        let n: usize = shape.iter().product();
+        let data: Vec<f32> = rng::uniform(&mut r, n, bound)
+            .into_iter()
+            .map(|v| v as f32)
+            .collect();
+        vars.insert(
+            name.to_string(),
+            Var::from_tensor(&Tensor::from_vec(data, shape, &dev)?)?,
+        );
+    }
+    let net_of = |vars: &BTreeMap<String, Var>| Net {
+        arch,
+        p: vars
+            .iter()
+            .map(|(k, v)| (k.clone(), v.as_tensor().clone()))
+            .collect(),
+    };
+    let params = ParamsAdamW {
+        lr: config.learning_rate,
+        weight_decay: 0.0,
+        ..ParamsAdamW::default()
+    };
+    let mut adam = AdamW::new(vars.values().cloned().collect(), params)?;
+    let mut order: Vec<u32> = (0..tr.n as u32).collect();
+    let mut shuffle = rng::seeded(config.seed.wrapping_add(0x9e37_79b9));
+    let progress = Progress::new(config.progress, config.max_epochs, "CNN-LSTM");
+    let mut best = (f64::INFINITY, 0usize, snapshot(&vars)?);
+    let mut history = Vec::new();
+    let mut stop_reason = format!("maximum of {} epochs", config.max_epochs);
+    let mut epochs = 0;
+    for epoch in 1..=config.max_epochs {
+        epochs = epoch;
+        order.shuffle(&mut shuffle);
+        let mut loss_sum = 0.0;
+        for chunk in order.chunks(config.batch_size) {
+            let ids = Tensor::from_slice(chunk, chunk.len(), &dev)?;
+            let (xb, yb) = (xt.index_select(&ids, 0)?, yt.index_select(&ids, 0)?);
+            let loss = (net_of(&vars).forward(&xb)? - yb)?.sqr()?.mean_all()?;
+            adam.backward_step(&loss)?;
+            loss_sum += loss.to_scalar::<f32>()? as f64 * chunk.len() as f64;
+        }
+        let train_loss = loss_sum / tr.n as f64;
+        let val_loss = match &val {
+            Some((xv, yv)) => Some(
+                (net_of(&vars).forward(xv)? - yv)?
+                    .sqr()?
+                    .mean_all()?
+                    .to_scalar::<f32>()? as f64,
+            ),
+            None => None,
+        };
+        history.push((train_loss, val_loss));
+        progress.epoch(epoch, train_loss, val_loss);
+        if !train_loss.is_finite() {
+            stop_reason = "training diverged (non-finite loss)".into();
+            break;
+        }
+        let watch = val_loss.unwrap_or(train_loss);
+        if watch < best.0 {
+            best = (watch, epoch, snapshot(&vars)?);
+        } else if epoch - best.1 >= config.patience {
+            stop_reason = format!(
+                "early stop: no validation improvement for {} epochs (best epoch {})",
+                config.patience, best.1
+            );
+            break;
+        }
+    }
+    progress.finish(&stop_reason);
+    let seconds = start.elapsed().as_secs_f64();
+    let (_, best_epoch, weights) = best;
+    let mut model = CnnLstm {
+        format: FORMAT.into(),
+        architecture: arch,
+        feature_names: train.feature_names.clone(),
+        target_names: train.target_names.clone(),
+        feature_offset: fnorm.offset,
+        feature_scale: fnorm.scale,
+        target_offset: tnorm.offset,
+        target_scale: tnorm.scale,
+        weights,
+        provenance: serde_json::Value::Null,
+    };
+    let net = model.net(&dev)?;
+    let train_loss = (net.forward(&xt)? - &yt)?
+        .sqr()?
+        .mean_all()?
+        .to_scalar::<f32>()? as f64;
+    let validation_loss = match &val {
+        Some((xv, yv)) => Some(
+            (net.forward(xv)? - yv)?
+                .sqr()?
+                .mean_all()?
+                .to_scalar::<f32>()? as f64,
+        ),
+        None => None,
+    };
+    model.provenance = serde_json::json!({
+        "trainer": "adam (candle)",
+        "seed": config.seed,
+        "epochs": epochs,
+        "best_epoch": best_epoch,
+        "experiments": train.experiments.iter().map(|e| e.id).collect::<Vec<_>>(),
+    });
+    let report = CnnLstmReport {
+        epochs,
+        best_epoch,
+        train_loss,
+        validation_loss,
+        stop_reason,
+        seconds,
+        seconds_per_epoch: seconds / epochs as f64,
+        train_windows: tr.n,
+        validation_windows: va.n,
+        parameters: model.param_count(),
+        history,
+    };
+    Ok((model, report))
+}
+
+fn snapshot(vars: &BTreeMap<String, Var>) -> Result<BTreeMap<String, StoredTensor>> {
+    let mut out = BTreeMap::new();
+    for (k, v) in vars {
+        let t = v.as_tensor();
+        out.insert(
+            k.clone(),
+            StoredTensor {
+                shape: t.dims().to_vec(),
+                data: t.flatten_all()?.to_vec1::<f32>()?,
+            },
+        );
+    }
+    Ok(out)
+}
+
+impl CnnLstm {
+    fn net(&self, dev: &Device) -> Result<Net> {
+        let mut p = BTreeMap::new();
+        for (k, t) in &self.weights {
+            p.insert(
+                k.clone(),
+                Tensor::from_slice(&t.data, t.shape.as_slice(), dev)?,
+            );
+        }
+        Ok(Net {
+            arch: self.architecture,
+            p,
+        })
+    }
+
+    pub fn param_count(&self) -> usize {
+        self.weights.values().map(|t| t.data.len()).sum()
+    }
+
+    /// Predictions for the scored rows of every sequence, in dataset order (experiment,
+    /// sequence, row): one vector of channels per row, physical units.
+    pub fn predict(&self, data: &ThermalDataset) -> Result<Vec<Vec<f64>>> {
+        data.validate()?;
+        if data.feature_names != self.feature_names {
+            return Err(NnError::Data(format!(
+                "the model was trained on features [{}], the data has [{}]",
+                self.feature_names.join(", "),
+                data.feature_names.join(", ")
+            )));
+        }
+        let fnorm = Affine {
+            offset: self.feature_offset.clone(),
+            scale: self.feature_scale.clone(),
+        };
+        let no = self.target_names.len();
+        let tnorm = Affine {
+            offset: vec![0.0; no],
+            scale: vec![1.0; no],
+        };
+        let dev = Device::Cpu;
+        let net = self.net(&dev)?;
+        let w = self.architecture.window;
+        let nf = self.feature_names.len();
+        let mut out = Vec::new();
+        for seq in data.experiments.iter().flat_map(|e| &e.sequences) {
+            // targets are not used for prediction; a zero row keeps the window code simple
+            let blind = Sequence {
+                features: seq.features.clone(),
+                targets: vec![vec![0.0; no]; seq.len()],
+                warmup: seq.warmup,
+            };
+            let rows: Vec<usize> = seq.scored_rows().collect();
+            for chunk in rows.chunks(1024) {
+                let mut win = Windows::new();
+                for &t in chunk {
+                    win.push(&blind, t, w, &fnorm, &tnorm);
+                }
+                let (x, _) = win.tensors(w, nf, no, &dev)?;
+                let yn = net.forward(&x)?.to_dtype(DType::F64)?.to_vec2::<f64>()?;
+                for r in yn {
+                    out.push(
+                        r.iter()
+                            .enumerate()
+                            .map(|(c, v)| self.target_offset[c] + self.target_scale[c] * v)
+                            .collect(),
+                    );
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// RMSE, MAE and residual ratio per channel on `data` (which must hold the targets).
+    pub fn evaluate(&self, data: &ThermalDataset) -> Result<Vec<ChannelMetrics>> {
+        let pred = self.predict(data)?;
+        let (_, meas) = data.rows();
+        Ok(channel_metrics(&self.target_names, &pred, &meas))
+    }
+
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).expect("a CnnLstm always serialises")
+    }
+
+    /// Parses and validates an `mtec.cnn-lstm/1` document.
+    pub fn from_json(text: &str) -> Result<CnnLstm> {
+        let m: CnnLstm = serde_json::from_str(text).map_err(|e| {
+            NnError::Model(format!("line {}, column {}: {e}", e.line(), e.column()))
+        })?;
+        if m.format != FORMAT {
+            return Err(NnError::Model(format!(
+                "format is \"{}\", expected \"{FORMAT}\"",
+                m.format
+            )));
+        }
+        let (nf, no) = (m.feature_names.len(), m.target_names.len());
+        check_architecture(&m.architecture, nf).map_err(|e| NnError::Model(e.to_string()))?;
+        if m.feature_offset.len() != nf
+            || m.feature_scale.len() != nf
+            || m.target_offset.len() != no
+            || m.target_scale.len() != no
+        {
+            return Err(NnError::Model(
+                "normalisation vectors do not match the feature/target names".into(),
+            ));
+        }
+        for (name, shape, _) in param_shapes(&m.architecture, nf, no) {
+            let t = m
+                .weights
+                .get(name)
+                .ok_or_else(|| NnError::Model(format!("weight \"{name}\" is missing")))?;
+            if t.shape != shape || t.data.len() != shape.iter().product::<usize>() {
+                return Err(NnError::Model(format!(
+                    "weight \"{name}\" has shape {:?}, expected {shape:?}",
+                    t.shape
+                )));
+            }
+            if t.data.iter().any(|v| !v.is_finite()) {
+                return Err(NnError::Model(format!(
+                    "weight \"{name}\" holds a non-finite value"
+                )));
+            }
+        }
+        if m.weights.len() != param_shapes(&m.architecture, nf, no).len() {
+            return Err(NnError::Model(
+                "the file holds weights this architecture does not have".into(),
+            ));
+        }
+        Ok(m)
+    }
+}

@@ -1,0 +1,204 @@
+//! The plain data a sequence model trains on: experiments × sequences × time × features, with
+//! targets, and the split by experiment (`--train 1,2,4 --test 3`).
+//!
+//! A *sequence* is one time series of equally spaced rows: for the rotary ballbar case one
+//! sequence per angle of one experiment (features = temperatures and the angle, constant along
+//! the sequence; targets = the error motions at that angle over time), for a thermal log one
+//! sequence per block. The first `warmup` rows of a sequence only serve as history for the
+//! windows (their targets are neither trained on nor scored): this is how a held-out block of a
+//! long record still sees the temperatures that preceded it.
+
+use crate::error::{NnError, Result};
+
+/// One time series: `features[t]` and `targets[t]` for t = 0..len.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sequence {
+    pub features: Vec<Vec<f64>>,
+    pub targets: Vec<Vec<f64>>,
+    /// Leading rows used as history only.
+    pub warmup: usize,
+}
+
+impl Sequence {
+    pub fn len(&self) -> usize {
+        self.features.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.features.is_empty()
+    }
+    /// Rows whose targets count: `warmup..len`.
+    pub fn scored_rows(&self) -> std::ops::Range<usize> {
+        self.warmup.min(self.len())..self.len()
+    }
+}
+
+/// One experiment (a measurement campaign under one duty cycle).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Experiment {
+    pub id: u32,
+    pub sequences: Vec<Sequence>,
+}
+
+/// Named features and targets over a set of experiments.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ThermalDataset {
+    pub feature_names: Vec<String>,
+    pub target_names: Vec<String>,
+    pub experiments: Vec<Experiment>,
+}
+
+impl ThermalDataset {
+    /// Checks widths, finiteness and that there is something to learn from.
+    pub fn validate(&self) -> Result<()> {
+        let (nf, nt) = (self.feature_names.len(), self.target_names.len());
+        if nf == 0 || nt == 0 {
+            return Err(NnError::Data(
+                "a dataset needs at least one feature and one target".into(),
+            ));
+        }
+        if self.experiments.is_empty() {
+            return Err(NnError::Data("the dataset holds no experiment".into()));
+        }
+        for e in &self.experiments {
+            for (s, seq) in e.sequences.iter().enumerate() {
+                if seq.features.len() != seq.targets.len() {
+                    return Err(NnError::Data(format!(
+                        "experiment {} sequence {s}: {} feature rows but {} target rows",
+                        e.id,
+                        seq.features.len(),
+                        seq.targets.len()
+                    )));
+                }
+                for (t, (f, y)) in seq.features.iter().zip(&seq.targets).enumerate() {
+                    if f.len() != nf || y.len() != nt {
+                        return Err(NnError::Data(format!(
+                            "experiment {} sequence {s} row {t}: expected {nf} features and {nt} targets",
+                            e.id
+                        )));
+                    }
+                    if f.iter().chain(y).any(|v| !v.is_finite()) {
+                        return Err(NnError::Data(format!(
+                            "experiment {} sequence {s} row {t}: non-finite value",
+                            e.id
+                        )));
+                    }
+                }
+            }
+        }
+        if self.scored_rows() == 0 {
+            return Err(NnError::Data("the dataset has no scored rows".into()));
+        }
+        Ok(())
+    }
+
+    /// Number of rows whose targets count.
+    pub fn scored_rows(&self) -> usize {
+        self.experiments
+            .iter()
+            .flat_map(|e| &e.sequences)
+            .map(|s| s.scored_rows().len())
+            .sum()
+    }
+
+    /// The experiments with the given ids, in the order given; an unknown id is an error.
+    pub fn select(&self, ids: &[u32]) -> Result<ThermalDataset> {
+        let mut experiments = Vec::new();
+        for id in ids {
+            let e = self
+                .experiments
+                .iter()
+                .find(|e| e.id == *id)
+                .ok_or_else(|| {
+                    let known: Vec<String> =
+                        self.experiments.iter().map(|e| e.id.to_string()).collect();
+                    NnError::Data(format!(
+                        "no experiment {id} (the data holds {})",
+                        known.join(", ")
+                    ))
+                })?;
+            experiments.push(e.clone());
+        }
+        Ok(ThermalDataset {
+            feature_names: self.feature_names.clone(),
+            target_names: self.target_names.clone(),
+            experiments,
+        })
+    }
+
+    /// Train/test split by whole experiments; the two id sets must not overlap.
+    pub fn split(&self, train: &[u32], test: &[u32]) -> Result<(ThermalDataset, ThermalDataset)> {
+        if let Some(id) = train.iter().find(|id| test.contains(id)) {
+            return Err(NnError::Config(format!(
+                "experiment {id} is both in the training and the test set"
+            )));
+        }
+        if train.is_empty() || test.is_empty() {
+            return Err(NnError::Config(
+                "both the training and the test set need an experiment".into(),
+            ));
+        }
+        Ok((self.select(train)?, self.select(test)?))
+    }
+
+    /// Scored rows flattened (features at time t → targets at t): the BPNN baseline's data.
+    pub fn rows(&self) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+        let mut x = Vec::new();
+        let mut y = Vec::new();
+        for seq in self.experiments.iter().flat_map(|e| &e.sequences) {
+            for t in seq.scored_rows() {
+                x.push(seq.features[t].clone());
+                y.push(seq.targets[t].clone());
+            }
+        }
+        (x, y)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ds() -> ThermalDataset {
+        let seq = |v: f64| Sequence {
+            features: vec![vec![v, 1.0], vec![v, 2.0], vec![v, 3.0]],
+            targets: vec![vec![0.0], vec![1.0], vec![2.0]],
+            warmup: 1,
+        };
+        ThermalDataset {
+            feature_names: vec!["t1_c".into(), "angle_deg".into()],
+            target_names: vec!["exc_um".into()],
+            experiments: (1..=4)
+                .map(|id| Experiment {
+                    id,
+                    sequences: vec![seq(id as f64)],
+                })
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn split_by_experiment() {
+        let d = ds();
+        d.validate().unwrap();
+        let (tr, te) = d.split(&[1, 2, 4], &[3]).unwrap();
+        assert_eq!(
+            tr.experiments.iter().map(|e| e.id).collect::<Vec<_>>(),
+            vec![1, 2, 4]
+        );
+        assert_eq!(te.experiments[0].id, 3);
+        assert_eq!(tr.scored_rows(), 6);
+        assert_eq!(te.rows().0, vec![vec![3.0, 2.0], vec![3.0, 3.0]]);
+        assert!(d.split(&[1, 3], &[3]).is_err());
+        assert!(d.split(&[1, 9], &[3]).is_err());
+    }
+
+    #[test]
+    fn inconsistent_data_is_refused() {
+        let mut d = ds();
+        d.experiments[1].sequences[0].features[2] = vec![1.0];
+        assert!(d.validate().is_err());
+        let mut d = ds();
+        d.experiments[0].sequences[0].targets[0][0] = f64::NAN;
+        assert!(d.validate().is_err());
+    }
+}
