@@ -15,6 +15,7 @@ geometric and thermal errors.
 The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
+  identify lines  the 21 error elements of a 3-axis machine from laser lines (9-line method)
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
 Every CSV column name carries its unit suffix (x_mm, ex_um, ...). Exit codes: 0 success,
@@ -33,6 +34,8 @@ enum Command {
     Simulate(cmd::simulate::Args),
     /// Volumetric error at commanded points (HTM or POE, exact or first-order).
     Volumetric(cmd::volumetric::Args),
+    /// Identify error elements from measurements (lines, ...).
+    Identify(cmd::identify::Args),
 }
 
 fn main() -> ExitCode {
@@ -40,6 +43,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Volumetric(a) => cmd::volumetric::run(a),
+        Command::Identify(a) => cmd::identify::run(a),
     };
     error::exit(result)
 }

@@ -100,6 +100,17 @@ pub fn analyse(
     y: &DVector<f64>,
     layout: &Layout,
 ) -> Result<Analysis, (usize, usize)> {
+    analyse_with(a, y, layout, None)
+}
+
+/// As [`analyse`]; with `known`, the elements to drop are taken from a previous analysis of the
+/// same columns (row weights do not change a rank), and only the kept design is decomposed.
+pub fn analyse_with(
+    a: &DMatrix<f64>,
+    y: &DVector<f64>,
+    layout: &Layout,
+    known: Option<&[Dropped]>,
+) -> Result<Analysis, (usize, usize)> {
     let n = a.ncols();
     let zero_col = |c: usize| a.column(c).iter().all(|v| *v == 0.0);
     let mut dropped = Vec::new();
@@ -148,9 +159,19 @@ pub fn analyse(
     // `active` holds positions into `cols` (= columns of R)
     let mut active: Vec<usize> = (0..k).collect();
     let mut first: Option<(Vec<f64>, usize)> = None;
+    if let Some(known) = known {
+        for d in known.iter().filter(|d| !d.zero_sensitivity) {
+            if let Some(b) = layout.block(&d.element) {
+                let bc = b.cols();
+                active.retain(|&p| !bc.contains(&cols[p]));
+            }
+            dropped.push(d.clone());
+        }
+    }
     loop {
         let rs = r.select_columns(active.iter());
-        let svd = SVD::new(rs, true, true);
+        // V alone while searching; U too for the final, full-rank design
+        let svd = SVD::new(rs.clone(), false, true);
         let order = sorted_desc(&svd.singular_values);
         let smax = svd.singular_values[order[0]];
         let tol = RANK_TOL * smax;
@@ -181,6 +202,8 @@ pub fn analyse(
         match choice {
             None => {
                 let (singular_values, rank) = first.expect("set on the first pass");
+                let svd = SVD::new(rs, true, true);
+                let order = sorted_desc(&svd.singular_values);
                 return Ok(Analysis {
                     kept_singular_values: order.iter().map(|&i| svd.singular_values[i]).collect(),
                     scale,

@@ -108,7 +108,14 @@ pub fn identify(
         Some(w) => {
             let aw = DMatrix::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)] * w[i]);
             let yw = y.component_mul(w);
-            let analysis = identifiability::analyse(&aw, &yw, &layout).map_err(too_few)?;
+            let analysis_w =
+                identifiability::analyse_with(&aw, &yw, &layout, Some(&analysis.dropped))
+                    .map_err(too_few)?;
+            // rank and singular values of the design itself (weights do not change the rank)
+            let mut analysis_w = analysis_w;
+            analysis_w.singular_values = analysis.singular_values.clone();
+            analysis_w.rank = analysis.rank;
+            let analysis = analysis_w;
             let mut fit = solve::solve(&aw, &yw, &analysis);
             // report residuals in µm (unweighted); σ̂ is the weighted fit's scale (≈ 1)
             fit.residual_um = &y - &a * &fit.theta;
