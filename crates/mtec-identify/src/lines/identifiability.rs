@@ -5,7 +5,8 @@
 //! Method: the columns of A are scaled to unit norm (so that µm, µrad and polynomial powers
 //! compare), A = QR once (Householder), and the singular values of A_S = Q·R_S for any column
 //! subset S are those of the small R_S (Golub & Van Loan §5.4.5: R-SVD). A singular value below
-//! `RANK_TOL`·σ_max counts as zero. While the kept columns are rank-deficient:
+//! `RANK_TOL`·σ_max counts as zero. One SVD of R gives the null space N; dropping an element's
+//! columns B leaves the null space {v ∈ N : v_B = 0}, found from N alone. While it is not empty:
 //! 1. N = the right singular vectors of the zero singular values (the null space);
 //! 2. the *weight* of an element is ‖N restricted to its columns‖²: how much of the null space
 //!    lives in its coefficients; elements with weight > 1e-6 are *touched*;
@@ -49,7 +50,7 @@ pub struct Analysis {
     pub scale: DVector<f64>,
     /// R of the scaled non-zero columns A_c·diag(1/scale) = QR (k × k).
     pub r: DMatrix<f64>,
-    /// Qᵀy (k).
+    /// Q_keptᵀy: the readings rotated by the kept design's orthogonal factor (k_kept).
     pub qty: DVector<f64>,
     /// Singular values of the full scaled design, descending.
     pub singular_values: Vec<f64>,
@@ -59,8 +60,8 @@ pub struct Analysis {
     pub active: Vec<usize>,
     /// Dropped elements, in the order they were dropped.
     pub dropped: Vec<Dropped>,
-    /// SVD of R restricted to the active columns (full rank).
-    pub svd: SVD<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    /// Upper-triangular R of the kept (full-rank, column-scaled) design.
+    pub kept_r: DMatrix<f64>,
     /// Singular values of the kept design, descending.
     pub kept_singular_values: Vec<f64>,
 }
@@ -104,7 +105,8 @@ pub fn analyse(
 }
 
 /// As [`analyse`]; with `known`, the elements to drop are taken from a previous analysis of the
-/// same columns (row weights do not change a rank), and only the kept design is decomposed.
+/// same columns (row weights do not change a rank) and no rank search is done: only the kept
+/// design is factorised (its singular values are then left empty).
 pub fn analyse_with(
     a: &DMatrix<f64>,
     y: &DVector<f64>,
@@ -123,6 +125,9 @@ pub fn analyse_with(
                 zero_sensitivity: true,
             });
         }
+    }
+    if let Some(known) = known {
+        dropped.extend(known.iter().filter(|d| !d.zero_sensitivity).cloned());
     }
     let is_dropped = |c: usize| {
         dropped
@@ -155,77 +160,97 @@ pub fn analyse_with(
     qr.q_tr_mul(&mut qty);
     let qty = qty.rows(0, k).into_owned();
     let r = qr.r();
+    if known.is_some() {
+        return Ok(Analysis {
+            scale,
+            r: r.clone(),
+            qty,
+            singular_values: vec![],
+            rank: k,
+            active: cols,
+            dropped,
+            kept_r: r,
+            kept_singular_values: vec![],
+        });
+    }
 
-    // `active` holds positions into `cols` (= columns of R)
+    // one SVD of R gives the singular values and the null space N of the whole design
+    let svd = SVD::new(r.clone(), false, true);
+    let order = sorted_desc(&svd.singular_values);
+    let smax = svd.singular_values[order[0]];
+    let tol = RANK_TOL * smax;
+    let rank = order
+        .iter()
+        .filter(|&&i| svd.singular_values[i] > tol)
+        .count();
+    // zero columns of never-reached elements are zero singular values of the full design
+    let mut singular_values: Vec<f64> = order.iter().map(|&i| svd.singular_values[i]).collect();
+    singular_values.resize(n, 0.0);
+    let v_t = svd.v_t.as_ref().expect("V requested");
+    let null: Vec<usize> = order[rank..].to_vec();
+    let mut nmat = DMatrix::from_fn(null.len(), k, |i, j| v_t[(null[i], j)]);
+    // `active` holds positions into `cols`; dropping a block B leaves the null space
+    // {v ∈ N : v_B = 0}, computed from N without decomposing A again
     let mut active: Vec<usize> = (0..k).collect();
-    let mut first: Option<(Vec<f64>, usize)> = None;
-    if let Some(known) = known {
-        for d in known.iter().filter(|d| !d.zero_sensitivity) {
-            if let Some(b) = layout.block(&d.element) {
-                let bc = b.cols();
-                active.retain(|&p| !bc.contains(&cols[p]));
-            }
-            dropped.push(d.clone());
-        }
-    }
-    loop {
-        let rs = r.select_columns(active.iter());
-        // V alone while searching; U too for the final, full-rank design
-        let svd = SVD::new(rs.clone(), false, true);
-        let order = sorted_desc(&svd.singular_values);
-        let smax = svd.singular_values[order[0]];
-        let tol = RANK_TOL * smax;
-        let rank = order
-            .iter()
-            .filter(|&&i| svd.singular_values[i] > tol)
-            .count();
-        if first.is_none() {
-            // zero columns of never-reached elements are zero singular values of the full design
-            let mut sv: Vec<f64> = order.iter().map(|&i| svd.singular_values[i]).collect();
-            sv.resize(n, 0.0);
-            first = Some((sv, rank));
-        }
-        let null: Vec<usize> = order
-            .iter()
-            .copied()
-            .filter(|&i| svd.singular_values[i] <= tol)
-            .collect();
+    while nmat.nrows() > 0 {
         let original: Vec<usize> = active.iter().map(|&p| cols[p]).collect();
-        let choice = if null.is_empty() {
-            None
-        } else {
-            let v_t = svd.v_t.as_ref().expect("V requested");
-            // null-space basis as rows over the active columns
-            let nmat = DMatrix::from_fn(null.len(), active.len(), |i, j| v_t[(null[i], j)]);
-            choose_drop(&nmat, &original, layout)
+        let Some(d) = choose_drop(&nmat, &original, layout) else {
+            break;
         };
-        match choice {
-            None => {
-                let (singular_values, rank) = first.expect("set on the first pass");
-                let svd = SVD::new(rs, true, true);
-                let order = sorted_desc(&svd.singular_values);
-                return Ok(Analysis {
-                    kept_singular_values: order.iter().map(|&i| svd.singular_values[i]).collect(),
-                    scale,
-                    r,
-                    qty,
-                    singular_values,
-                    rank,
-                    active: original,
-                    dropped,
-                    svd,
-                });
-            }
-            Some(d) => {
-                let bc = layout
-                    .block(&d.element)
-                    .expect("dropped element has a block")
-                    .cols();
-                active.retain(|&p| !bc.contains(&cols[p]));
-                dropped.push(d);
-            }
+        let bc = layout
+            .block(&d.element)
+            .expect("dropped element has a block")
+            .cols();
+        let in_b: Vec<usize> = (0..active.len())
+            .filter(|&j| bc.contains(&cols[active[j]]))
+            .collect();
+        let keep: Vec<usize> = (0..active.len())
+            .filter(|&j| !bc.contains(&cols[active[j]]))
+            .collect();
+        // combinations c with N_Bᵀ c = 0: the null space of N_Bᵀ (small SVD)
+        let nb = nmat.select_columns(in_b.iter());
+        let inner = SVD::new(nb.clone() * nb.transpose(), true, false);
+        let u = inner.u.as_ref().expect("U requested");
+        let comb: Vec<usize> = (0..inner.singular_values.len())
+            .filter(|&i| inner.singular_values[i] <= 1e-12)
+            .collect();
+        let rest = nmat.select_columns(keep.iter());
+        let mut next = DMatrix::zeros(comb.len(), keep.len());
+        for (r_i, &i) in comb.iter().enumerate() {
+            let row = u.column(i).transpose() * &rest;
+            next.row_mut(r_i).copy_from(&row);
         }
+        // re-orthonormalise the surviving null vectors (rows)
+        nmat = if next.nrows() > 0 {
+            let q = next.transpose().qr().q();
+            q.transpose()
+        } else {
+            next
+        };
+        active = keep.iter().map(|&j| active[j]).collect();
+        dropped.push(d);
     }
+    // Qᵀy of the kept design: the kept columns of R are re-triangularised by a small QR
+    let qr2 = r.select_columns(active.iter()).qr();
+    let mut qty2 = qty.clone();
+    qr2.q_tr_mul(&mut qty2);
+    let kept_r = qr2.r();
+    let kept_singular_values = {
+        let mut sv: Vec<f64> = kept_r.singular_values().iter().copied().collect();
+        sv.sort_by(|a, b| b.total_cmp(a));
+        sv
+    };
+    Ok(Analysis {
+        scale,
+        r,
+        qty: qty2.rows(0, active.len()).into_owned(),
+        singular_values,
+        rank,
+        active: active.iter().map(|&p| cols[p]).collect(),
+        dropped,
+        kept_r,
+        kept_singular_values,
+    })
 }
 
 /// Positions (within `active`) of a block's columns.

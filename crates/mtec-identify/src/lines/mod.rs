@@ -114,6 +114,7 @@ pub fn identify(
             // rank and singular values of the design itself (weights do not change the rank)
             let mut analysis_w = analysis_w;
             analysis_w.singular_values = analysis.singular_values.clone();
+            analysis_w.kept_singular_values = analysis.kept_singular_values.clone();
             analysis_w.rank = analysis.rank;
             let analysis = analysis_w;
             let mut fit = solve::solve(&aw, &yw, &analysis);

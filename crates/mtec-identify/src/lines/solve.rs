@@ -1,7 +1,7 @@
 //! Least-squares solution of the kept (full-rank) design and its statistics.
 //!
-//! θ = V Σ⁻¹ Uᵀ Qᵀy on the column-scaled design (the R-SVD of [`super::identifiability`]);
-//! residual variance σ̂² = ‖y − Aθ‖²/(m − k); covariance Cov(θ) = σ̂² (AᵀA)⁻¹ = σ̂² V Σ⁻² Vᵀ
+//! θ from R θ = Qᵀy on the column-scaled kept design (Householder QR, [`super::identifiability`]);
+//! residual variance σ̂² = ‖y − Aθ‖²/(m − k); covariance Cov(θ) = σ̂² (AᵀA)⁻¹ = σ̂² R⁻¹R⁻ᵀ
 //! (unscaled by the column norms); the uncertainty of an error function at q is
 //! σ_f(q) = √(b(q)ᵀ Cov_B b(q)), b the block's basis, and an element's reported uncertainty is
 //! max σ_f over its travel (101 positions).
@@ -26,30 +26,13 @@ pub struct Fit {
     pub dof: usize,
 }
 
-/// Solves the kept design.
+/// Solves the kept design: R θ_s = Qᵀy (back substitution), Cov_s = σ̂² R⁻¹R⁻ᵀ.
 pub fn solve(a: &DMatrix<f64>, y: &DVector<f64>, an: &Analysis) -> Fit {
-    let svd = &an.svd;
-    let u = svd.u.as_ref().expect("U requested");
-    let v_t = svd.v_t.as_ref().expect("V requested");
     let k = an.active.len();
-    let s = &svd.singular_values;
-    let smax = s.max();
-    // pseudo-inverse with the rank tolerance (the kept design is full rank; this is a guard)
-    let inv: Vec<f64> = s
-        .iter()
-        .map(|&x| {
-            if x > super::identifiability::RANK_TOL * smax {
-                1.0 / x
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let uty = u.transpose() * &an.qty;
-    let mut theta_s = DVector::zeros(k);
-    for (i, &w) in inv.iter().enumerate() {
-        theta_s += v_t.row(i).transpose() * (uty[i] * w);
-    }
+    let r = &an.kept_r;
+    let theta_s = r
+        .solve_upper_triangular(&an.qty)
+        .unwrap_or_else(|| DVector::from_element(k, f64::NAN));
     let mut theta = DVector::zeros(a.ncols());
     for (j, &c) in an.active.iter().enumerate() {
         theta[c] = theta_s[j] / an.scale[c];
@@ -62,12 +45,10 @@ pub fn solve(a: &DMatrix<f64>, y: &DVector<f64>, an: &Analysis) -> Fit {
     } else {
         f64::NAN
     };
-    // Cov_s = σ² V Σ⁻² Vᵀ, then unscale
-    let mut vs = v_t.transpose();
-    for (i, mut col) in vs.column_iter_mut().enumerate() {
-        col *= inv[i];
-    }
-    let mut cov = &vs * vs.transpose() * sigma2;
+    let r_inv = r
+        .solve_upper_triangular(&DMatrix::identity(k, k))
+        .unwrap_or_else(|| DMatrix::from_element(k, k, f64::NAN));
+    let mut cov = &r_inv * r_inv.transpose() * sigma2;
     for i in 0..k {
         for j in 0..k {
             cov[(i, j)] /= an.scale[an.active[i]] * an.scale[an.active[j]];
