@@ -29,13 +29,23 @@ criterion_main!(benches, stage_benches);
 
 fn stages(c: &mut Criterion) {
     let out = mtec_sim::run_scenario("vmc-9line", 1).expect("scenario");
-    let csv = &out.files.iter().find(|f| f.name == "lines.csv").expect("lines").contents;
-    let data = LineData::from_table(&Table::parse(Path::new("lines.csv"), csv).expect("csv")).expect("data");
+    let csv = &out
+        .files
+        .iter()
+        .find(|f| f.name == "lines.csv")
+        .expect("lines")
+        .contents;
+    let data = LineData::from_table(&Table::parse(Path::new("lines.csv"), csv).expect("csv"))
+        .expect("data");
     let m = Machine::vmc_xyfz(100.0);
     let layout = mtec_identify::lines::Layout::new(&m, 3, &data).unwrap();
-    c.bench_function("stage_design", |b| b.iter(|| mtec_identify::lines::model::design_matrix(&m, &layout, &data)));
+    c.bench_function("stage_design", |b| {
+        b.iter(|| mtec_identify::lines::model::design_matrix(&m, &layout, &data))
+    });
     let (a, y) = mtec_identify::lines::model::design_matrix(&m, &layout, &data);
-    c.bench_function("stage_analyse", |b| b.iter(|| mtec_identify::lines::identifiability::analyse(&a, &y, &layout)));
+    c.bench_function("stage_analyse", |b| {
+        b.iter(|| mtec_identify::lines::identifiability::analyse(&a, &y, &layout))
+    });
     c.bench_function("stage_qr", |b| b.iter(|| a.clone().qr()));
 }
 criterion_group!(stage_benches, stages);

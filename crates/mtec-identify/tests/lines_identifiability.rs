@@ -14,7 +14,12 @@ use std::path::Path;
 
 fn nine_line_data() -> (Machine, LineData) {
     let out = mtec_sim::run_scenario("vmc-9line", 1).unwrap();
-    let csv = &out.files.iter().find(|f| f.name == "lines.csv").unwrap().contents;
+    let csv = &out
+        .files
+        .iter()
+        .find(|f| f.name == "lines.csv")
+        .unwrap()
+        .contents;
     let data = LineData::from_table(&Table::parse(Path::new("lines.csv"), csv).unwrap()).unwrap();
     (Machine::vmc_xyfz(mtec_sim::vmc_9line::TOOL_LENGTH_MM), data)
 }
@@ -24,7 +29,11 @@ fn lost(m: &Machine, data: &LineData) -> Vec<(String, Vec<String>)> {
     // the error set never carries numbers for what the report calls unidentifiable
     for u in &id.report.unidentifiable {
         let e = mtec_model::ErrorElement::parse(&u.element).unwrap();
-        assert!(id.errors.get(&e).is_none(), "{} must have no number", u.element);
+        assert!(
+            id.errors.get(&e).is_none(),
+            "{} must have no number",
+            u.element
+        );
         assert!(id.errors.unidentifiable.contains(&u.element));
     }
     id.report
@@ -87,7 +96,11 @@ fn removing_a_diagonal_loses_its_squareness() {
     assert_eq!(names(&l), ["EAZ", "EB0Z", "EBZ", "ECY", "ECZ"], "{l:?}");
     // without YZ nothing sees the y·z lever of the roll of Y any more, nor the Z-to-Y squareness
     let l = lost(&m, &data.without_lines(&["YZ"]));
-    assert_eq!(names(&l), ["EA0Z", "EAZ", "EBY", "EBZ", "ECY", "ECZ"], "{l:?}");
+    assert_eq!(
+        names(&l),
+        ["EA0Z", "EAZ", "EBY", "EBZ", "ECY", "ECZ"],
+        "{l:?}"
+    );
 }
 
 #[test]
@@ -106,7 +119,11 @@ fn displacement_only_diagonals_lose_the_rolls() {
         !(["XY", "XZ", "YZ"].contains(&c.line.as_str()) && c.kind == ChannelKind::Straightness)
     });
     let l = lost(&m, &data);
-    assert_eq!(names(&l), ["EAX", "EAZ", "EBY", "EBZ", "ECY", "ECZ"], "{l:?}");
+    assert_eq!(
+        names(&l),
+        ["EAX", "EAZ", "EBY", "EBZ", "ECY", "ECZ"],
+        "{l:?}"
+    );
     assert_eq!(partners(&l, "EAX"), ["EB0Z", "EC0Y"]);
     // (removing X3 then does not lose the pitch EBX: the XZ diagonal's displacement still sees
     // it through the lever z + L that changes along the diagonal)

@@ -3,7 +3,9 @@
 
 use mtec_identify::lines::{identify, solve::polynomial_in_q, LineData, DEFAULT_DEGREE};
 use mtec_io::Table;
-use mtec_model::{ErrorElement, ErrorFunction, ErrorSet, Formalism, Machine, Order, VolumetricModel};
+use mtec_model::{
+    ErrorElement, ErrorFunction, ErrorSet, Formalism, Machine, Order, VolumetricModel,
+};
 use nalgebra::{DMatrix, DVector};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -13,7 +15,12 @@ const L_MM: f64 = mtec_sim::vmc_9line::TOOL_LENGTH_MM;
 
 fn scenario(seed: u64) -> (Machine, LineData, ErrorSet) {
     let out = mtec_sim::run_scenario("vmc-9line", seed).unwrap();
-    let csv = &out.files.iter().find(|f| f.name == "lines.csv").unwrap().contents;
+    let csv = &out
+        .files
+        .iter()
+        .find(|f| f.name == "lines.csv")
+        .unwrap()
+        .contents;
     let data = LineData::from_table(&Table::parse(Path::new("lines.csv"), csv).unwrap()).unwrap();
     let truth: ErrorSet = serde_json::from_value(out.truth["errors"].clone()).unwrap();
     (Machine::vmc_xyfz(L_MM), data, truth)
@@ -48,7 +55,12 @@ fn project(f: &dyn Fn(f64) -> f64, travel: [f64; 2], powers: &[i32]) -> Vec<f64>
     let s = |i: usize| (i as f64 + 0.5) / n as f64;
     let a = DMatrix::from_fn(n, powers.len(), |i, j| s(i).powi(powers[j]));
     let y = DVector::from_fn(n, |i, _| f(travel[0] + (travel[1] - travel[0]) * s(i)));
-    a.svd(true, true).solve(&y, 1e-12).unwrap().iter().copied().collect()
+    a.svd(true, true)
+        .solve(&y, 1e-12)
+        .unwrap()
+        .iter()
+        .copied()
+        .collect()
 }
 
 fn el(n: &str) -> ErrorElement {
@@ -136,9 +148,14 @@ fn truth_combination(m: &Machine, truth: &ErrorSet, e: ErrorElement, powers: &[i
     let name = e.name();
     let with_linear = |f: &dyn Fn(f64) -> f64| project(f, zt, &[1, 2, 3]);
     match name.as_str() {
-        "EXY" => project(&|y| v("EXY", y) - y * v("ECY", y) * 1e-3, m.travel(e.axis), powers),
+        "EXY" => project(
+            &|y| v("EXY", y) - y * v("ECY", y) * 1e-3,
+            m.travel(e.axis),
+            powers,
+        ),
         "EXZ" | "EB0Z" => {
-            let c = with_linear(&|z| v("EXZ", z) + L_MM * v("EBZ", z) * 1e-3 + z * v("EB0Z", z) * 1e-3);
+            let c =
+                with_linear(&|z| v("EXZ", z) + L_MM * v("EBZ", z) * 1e-3 + z * v("EB0Z", z) * 1e-3);
             if name == "EXZ" {
                 c[1..].to_vec()
             } else {
@@ -146,7 +163,8 @@ fn truth_combination(m: &Machine, truth: &ErrorSet, e: ErrorElement, powers: &[i
             }
         }
         "EYZ" | "EA0Z" => {
-            let c = with_linear(&|z| v("EYZ", z) - L_MM * v("EAZ", z) * 1e-3 - z * v("EA0Z", z) * 1e-3);
+            let c =
+                with_linear(&|z| v("EYZ", z) - L_MM * v("EAZ", z) * 1e-3 - z * v("EA0Z", z) * 1e-3);
             if name == "EYZ" {
                 c[1..].to_vec()
             } else {
@@ -171,12 +189,21 @@ fn absorbed_combinations_follow_the_exact_kinematics() {
     };
     let v = |n: &str, q: f64| truth.value(&el(n), q);
     for (x, y, z) in [(100.0, 700.0, 250.0), (500.0, 300.0, 40.0)] {
-        let e = only(&["EXY", "ECY"]).error(&[x, y, z], Formalism::Htm, Order::Exact).position_um;
-        assert!((e[0] - (-(v("EXY", y) - y * v("ECY", y) * 1e-3))).abs() < 1e-3, "{e:?}");
-        let e = only(&["EXZ", "EBZ", "EB0Z"]).error(&[x, y, z], Formalism::Htm, Order::Exact).position_um;
+        let e = only(&["EXY", "ECY"])
+            .error(&[x, y, z], Formalism::Htm, Order::Exact)
+            .position_um;
+        assert!(
+            (e[0] - (-(v("EXY", y) - y * v("ECY", y) * 1e-3))).abs() < 1e-3,
+            "{e:?}"
+        );
+        let e = only(&["EXZ", "EBZ", "EB0Z"])
+            .error(&[x, y, z], Formalism::Htm, Order::Exact)
+            .position_um;
         let g = v("EXZ", z) + L_MM * v("EBZ", z) * 1e-3 + z * v("EB0Z", z) * 1e-3;
         assert!((e[0] - g).abs() < 1e-3, "{e:?} vs {g}");
-        let e = only(&["EYZ", "EAZ", "EA0Z"]).error(&[x, y, z], Formalism::Htm, Order::Exact).position_um;
+        let e = only(&["EYZ", "EAZ", "EA0Z"])
+            .error(&[x, y, z], Formalism::Htm, Order::Exact)
+            .position_um;
         let h = v("EYZ", z) - L_MM * v("EAZ", z) * 1e-3 - z * v("EA0Z", z) * 1e-3;
         assert!((e[1] - h).abs() < 1e-3, "{e:?} vs {h}");
     }
@@ -215,7 +242,10 @@ fn identified_elements_lie_within_three_sigma_of_the_truth() {
                 worst = (ratio, format!("seed {seed} {}", er.element));
             }
             if ratio > 3.0 {
-                failures.push(format!("seed {seed} {}: |dev| {dev:.3} > 3 × {:.3}", er.element, er.uncertainty_1sigma));
+                failures.push(format!(
+                    "seed {seed} {}: |dev| {dev:.3} > 3 × {:.3}",
+                    er.element, er.uncertainty_1sigma
+                ));
             }
         }
     }

@@ -39,7 +39,10 @@ fn one_x_line_gives_positioning_plus_abbe_pitch_and_names_what_it_cannot_separat
     let exx = ErrorElement::parse("EXX").unwrap();
     // one line cannot separate the pitch from the positioning: EXX absorbs the Abbe term
     let (v, _) = id.value_sigma(&exx, 600.0).unwrap();
-    assert!((v - 13.0).abs() < 1e-9, "EXX(600) = {v}, by hand 10 + 20·0.15 = 13");
+    assert!(
+        (v - 13.0).abs() < 1e-9,
+        "EXX(600) = {v}, by hand 10 + 20·0.15 = 13"
+    );
     let (v, _) = id.value_sigma(&exx, 300.0).unwrap();
     assert!((v - 6.5).abs() < 1e-9);
     // EBX (lever z + L), ECX (lever y) and EXX all read as functions of x alone on this line:
@@ -90,9 +93,11 @@ fn two_x_lines_at_two_heights_separate_pitch_from_positioning() {
 /// σ̂²(AᵀA)⁻¹) are checked in. Our R-SVD solution must agree.
 #[test]
 fn least_squares_agrees_with_numpy_lstsq() {
-    let fx: serde_json::Value = serde_json::from_str(include_str!("fixtures/lines_lstsq_numpy.json")).unwrap();
+    let fx: serde_json::Value =
+        serde_json::from_str(include_str!("fixtures/lines_lstsq_numpy.json")).unwrap();
     let (a, y) = three_x_line_design();
-    let exported: serde_json::Value = serde_json::from_str(include_str!("fixtures/lines_lstsq_input.json")).unwrap();
+    let exported: serde_json::Value =
+        serde_json::from_str(include_str!("fixtures/lines_lstsq_input.json")).unwrap();
     let ea = exported["a"].as_array().unwrap();
     assert_eq!(ea.len(), a.nrows(), "fixture matches this design");
     for (i, row) in ea.iter().enumerate() {
@@ -106,9 +111,17 @@ fn least_squares_agrees_with_numpy_lstsq() {
     assert_eq!(theta.len(), ours.len());
     for j in 0..ours.len() {
         let t = theta[j].as_f64().unwrap();
-        assert!((t - ours[j]).abs() <= 1e-8 * (1.0 + t.abs()), "θ[{j}]: numpy {t}, ours {}", ours[j]);
+        assert!(
+            (t - ours[j]).abs() <= 1e-8 * (1.0 + t.abs()),
+            "θ[{j}]: numpy {t}, ours {}",
+            ours[j]
+        );
         let s = se[j].as_f64().unwrap();
-        assert!((s - ours_se[j]).abs() <= 1e-8 * (1.0 + s.abs()), "σ[{j}]: numpy {s}, ours {}", ours_se[j]);
+        assert!(
+            (s - ours_se[j]).abs() <= 1e-8 * (1.0 + s.abs()),
+            "σ[{j}]: numpy {s}, ours {}",
+            ours_se[j]
+        );
     }
     assert!((fx["rank"].as_u64().unwrap() as usize) == ours.len());
 }
@@ -116,9 +129,15 @@ fn least_squares_agrees_with_numpy_lstsq() {
 /// Kept design columns (in layout order) and readings of X1, X2, X3 of `vmc-9line` seed 1.
 fn three_x_line_design() -> (nalgebra::DMatrix<f64>, nalgebra::DVector<f64>) {
     let out = mtec_sim::run_scenario("vmc-9line", 1).unwrap();
-    let csv = &out.files.iter().find(|f| f.name == "lines.csv").unwrap().contents;
+    let csv = &out
+        .files
+        .iter()
+        .find(|f| f.name == "lines.csv")
+        .unwrap()
+        .contents;
     let mut d = data(csv);
-    d.channels.retain(|c| ["X1", "X2", "X3"].contains(&c.line.as_str()));
+    d.channels
+        .retain(|c| ["X1", "X2", "X3"].contains(&c.line.as_str()));
     let m = Machine::vmc_xyfz(100.0);
     let layout = mtec_identify::lines::Layout::new(&m, 3, &d).unwrap();
     let (a, y) = mtec_identify::lines::model::design_matrix(&m, &layout, &d);
@@ -152,10 +171,15 @@ fn solve_kept(a: &nalgebra::DMatrix<f64>, y: &nalgebra::DVector<f64>) -> (Vec<f6
 #[ignore]
 fn export_lstsq_fixture_input() {
     let (a, y) = three_x_line_design();
-    let rows: Vec<Vec<f64>> = (0..a.nrows()).map(|i| a.row(i).iter().copied().collect()).collect();
+    let rows: Vec<Vec<f64>> = (0..a.nrows())
+        .map(|i| a.row(i).iter().copied().collect())
+        .collect();
     let v = serde_json::json!({ "a": rows, "y": y.iter().copied().collect::<Vec<f64>>() });
     std::fs::write(
-        concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/lines_lstsq_input.json"),
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/fixtures/lines_lstsq_input.json"
+        ),
         serde_json::to_string(&v).unwrap(),
     )
     .unwrap();

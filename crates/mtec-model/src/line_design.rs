@@ -120,7 +120,11 @@ pub fn line_preset(
             let mut n = [0.0; 3];
             n[k] = 1.0;
             // in-plane straightness: n × d
-            let ip = [n[1] * d[2] - n[2] * d[1], n[2] * d[0] - n[0] * d[2], n[0] * d[1] - n[1] * d[0]];
+            let ip = [
+                n[1] * d[2] - n[2] * d[1],
+                n[2] * d[0] - n[0] * d[2],
+                n[0] * d[1] - n[1] * d[0],
+            ];
             l.channels.push(ip);
             l.channels.push(n);
         }

@@ -4,6 +4,7 @@ use crate::error::CliError;
 use crate::inputs::read_machine;
 use mtec_identify::lines::{self, LineData, LinesError, DEFAULT_DEGREE};
 use mtec_io::{InputError, OutputGuard};
+use std::io::Write;
 use std::path::PathBuf;
 
 /// Identify the 21 error elements of a three-axis machine from laser lines (9-line method).
@@ -65,26 +66,25 @@ pub fn run(args: Args) -> Result<(), CliError> {
         ),
         None => None,
     };
-    let data = match (&args.data, &preset) {
-        (Some(path), _) => {
-            let d = LineData::read(path)?;
-            if let Some(p) = &preset {
-                lines::check_design(&d, p).map_err(|m| {
-                    InputError::file(
-                        path,
-                        format!("{m} (--design {})", args.design.as_deref().unwrap_or("")),
-                    )
-                })?;
+    let data =
+        match (&args.data, &preset) {
+            (Some(path), _) => {
+                let d = LineData::read(path)?;
+                if let Some(p) = &preset {
+                    lines::check_design(&d, p).map_err(|m| {
+                        InputError::file(
+                            path,
+                            format!("{m} (--design {})", args.design.as_deref().unwrap_or("")),
+                        )
+                    })?;
+                }
+                d
             }
-            d
-        }
-        (None, Some(p)) => LineData::from_specs(p).map_err(CliError::Usage)?,
-        (None, None) => {
-            return Err(CliError::usage(
+            (None, Some(p)) => LineData::from_specs(p).map_err(CliError::Usage)?,
+            (None, None) => return Err(CliError::usage(
                 "give the measurements with --data LINES.csv, or a design to analyse with --design",
-            ))
-        }
-    };
+            )),
+        };
     let id = lines::identify(&machine, &data, args.degree).map_err(|e| match e {
         LinesError::Input(i) => CliError::Input(i),
         LinesError::Model(m) => CliError::Input(InputError::file(&args.machine, m.to_string())),
@@ -93,13 +93,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
             other.to_string(),
         )),
     })?;
+    // a closed pipe (`| head`) is not an error worth a panic: ignore write failures to stdout
+    let mut stdout = std::io::stdout().lock();
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&id.report).map_err(|e| CliError::Internal(e.into()))?
-        );
+        let text =
+            serde_json::to_string_pretty(&id.report).map_err(|e| CliError::Internal(e.into()))?;
+        let _ = writeln!(stdout, "{text}");
     } else {
-        print!("{}", id.report.to_text());
+        let _ = write!(stdout, "{}", id.report.to_text());
     }
     if let Some(out) = &args.output {
         if args.data.is_none() {
@@ -109,12 +110,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
         let mut inputs = vec![args.machine.clone()];
         inputs.extend(args.data.clone());
-        let bytes = serde_json::to_vec_pretty(&id.errors).map_err(|e| CliError::Internal(e.into()))?;
+        let bytes =
+            serde_json::to_vec_pretty(&id.errors).map_err(|e| CliError::Internal(e.into()))?;
         OutputGuard::new(&inputs)
             .write(out, &bytes)
             .map_err(|e| CliError::Internal(anyhow::anyhow!("writing {}: {e}", out.display())))?;
         if !args.json {
-            println!("Wrote {}", out.display());
+            let _ = writeln!(stdout, "Wrote {}", out.display());
         }
     }
     Ok(())

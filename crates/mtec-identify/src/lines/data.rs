@@ -207,7 +207,12 @@ impl LineData {
             let points: Vec<[f64; 3]> = r.iter().map(|x| x.1).collect();
             let file_lines: Vec<usize> = r.iter().map(|x| x.4).collect();
             let geometry = line_geometry(&points).map_err(|(k, msg)| {
-                InputError::at(&t.path, file_lines[k], c_xyz[0] + 1, format!("line `{name}`: {msg}"))
+                InputError::at(
+                    &t.path,
+                    file_lines[k],
+                    c_xyz[0] + 1,
+                    format!("line `{name}`: {msg}"),
+                )
             })?;
             channels.push(Channel::new(
                 name,
@@ -267,11 +272,20 @@ impl LineData {
                 let name = if k == 0 && along {
                     l.name.clone()
                 } else {
-                    let i = (0..3).max_by(|&a, &b| u[a].abs().total_cmp(&u[b].abs())).unwrap_or(0);
+                    let i = (0..3)
+                        .max_by(|&a, &b| u[a].abs().total_cmp(&u[b].abs()))
+                        .unwrap_or(0);
                     format!("{}.{}", l.name, ["x", "y", "z"][i])
                 };
                 let n = points.len();
-                channels.push(Channel::new(name, u, points.clone(), vec![0.0; n], vec![0; n], d));
+                channels.push(Channel::new(
+                    name,
+                    u,
+                    points.clone(),
+                    vec![0.0; n],
+                    vec![0; n],
+                    d,
+                ));
             }
         }
         Ok(LineData {
@@ -326,7 +340,10 @@ fn line_geometry(points: &[[f64; 3]]) -> Result<[f64; 3], (usize, String)> {
     let chord = sub(points[last], points[0]);
     let len = norm(chord);
     if len < 1e-6 {
-        return Err((last, "its first and last points coincide: a line must move".into()));
+        return Err((
+            last,
+            "its first and last points coincide: a line must move".into(),
+        ));
     }
     let d = chord.map(|v| v / len);
     for (k, p) in points.iter().enumerate() {

@@ -130,9 +130,11 @@ pub fn analyse_with(
         dropped.extend(known.iter().filter(|d| !d.zero_sensitivity).cloned());
     }
     let is_dropped = |c: usize| {
-        dropped
-            .iter()
-            .any(|d| layout.block(&d.element).is_some_and(|b| b.cols().contains(&c)))
+        dropped.iter().any(|d| {
+            layout
+                .block(&d.element)
+                .is_some_and(|b| b.cols().contains(&c))
+        })
     };
     // the columns that enter the factorisation, by original index
     let cols: Vec<usize> = (0..n).filter(|&c| !is_dropped(c)).collect();

@@ -220,7 +220,10 @@ pub fn check_design(data: &LineData, design: &[mtec_model::LineSpec]) -> Result<
     for l in design {
         let chans: Vec<&Channel> = data.channels.iter().filter(|c| c.line == l.name).collect();
         if chans.is_empty() {
-            return Err(format!("the design has line `{}` but the data do not", l.name));
+            return Err(format!(
+                "the design has line `{}` but the data do not",
+                l.name
+            ));
         }
         let d = l.direction();
         if data::dot(d, chans[0].direction).abs() < 0.999 {

@@ -213,7 +213,11 @@ impl LinesReport {
     pub fn to_text(&self) -> String {
         let mut s = String::new();
         let _ = writeln!(s, "Line identification: {}", self.data);
-        let _ = writeln!(s, "Machine: {}, tool offset {:?} mm", self.machine, self.tool_offset_mm);
+        let _ = writeln!(
+            s,
+            "Machine: {}, tool offset {:?} mm",
+            self.machine, self.tool_offset_mm
+        );
         let _ = writeln!(
             s,
             "Design: {} lines, {} readings; polynomial degree {}; {} parameters",
@@ -266,7 +270,11 @@ impl LinesReport {
             "\nFit: residual RMS {:.3} um, noise estimate {:.3} um ({} degrees of freedom)",
             self.residual_rms_um, self.sigma_um, self.dof
         );
-        let _ = writeln!(s, "\n{:<6} {:>12} {:>12}  {:<6} description", "element", "max |value|", "1 sigma", "unit");
+        let _ = writeln!(
+            s,
+            "\n{:<6} {:>12} {:>12}  {:<6} description",
+            "element", "max |value|", "1 sigma", "unit"
+        );
         for e in &self.elements {
             let _ = writeln!(
                 s,
@@ -286,7 +294,11 @@ impl LinesReport {
         if !self.alignment.is_empty() {
             let _ = writeln!(s, "\nStraightness alignment slopes (nuisance, urad):");
             for a in &self.alignment {
-                let _ = writeln!(s, "  {:<8} {:>9.3} +- {:.3}", a.channel, a.slope_urad, a.sigma_urad);
+                let _ = writeln!(
+                    s,
+                    "  {:<8} {:>9.3} +- {:.3}",
+                    a.channel, a.slope_urad, a.sigma_urad
+                );
             }
         }
         let _ = writeln!(s, "\nNote: {}", self.validity);

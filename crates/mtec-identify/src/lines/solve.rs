@@ -71,11 +71,7 @@ impl Fit {
             .cols()
             .map(|c| an.active.iter().position(|&x| x == c).expect("kept block"))
             .collect();
-        let value: f64 = b
-            .cols()
-            .zip(&basis)
-            .map(|(c, bv)| self.theta[c] * bv)
-            .sum();
+        let value: f64 = b.cols().zip(&basis).map(|(c, bv)| self.theta[c] * bv).sum();
         let mut var = 0.0;
         for (i, &pi) in pos.iter().enumerate() {
             for (j, &pj) in pos.iter().enumerate() {
@@ -118,7 +114,12 @@ impl Fit {
     }
 
     /// Alignment slope (µrad) and 1σ of each straightness channel.
-    pub fn slopes(&self, an: &Analysis, layout: &Layout, data: &LineData) -> Vec<(String, f64, f64)> {
+    pub fn slopes(
+        &self,
+        an: &Analysis,
+        layout: &Layout,
+        data: &LineData,
+    ) -> Vec<(String, f64, f64)> {
         layout
             .slopes
             .iter()
