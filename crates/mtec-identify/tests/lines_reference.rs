@@ -184,3 +184,30 @@ fn export_lstsq_fixture_input() {
     )
     .unwrap();
 }
+
+/// The design uses the Jacobian as an affine function of the pose (exact for X, Y, Z chains):
+/// it must equal the direct first-order Jacobian of mtec-model everywhere.
+#[test]
+fn affine_jacobian_equals_the_direct_one() {
+    use mtec_identify::lines::model::{direct_jacobian, AffineJacobian};
+    let m = Machine::vmc_xyfz(100.0);
+    let layout = mtec_identify::lines::Layout::new(&m, 3, &data(&hand_lines(false))).unwrap();
+    let aff = AffineJacobian::new(&m, &layout);
+    for q in [
+        [0.0, 0.0, 0.0],
+        [600.0, 800.0, 300.0],
+        [123.4, 567.8, 91.0],
+        [590.0, 10.0, 290.0],
+    ] {
+        let a = aff.at(&q);
+        let d = direct_jacobian(&m, &layout, &q);
+        for (x, y) in a.iter().zip(&d) {
+            for k in 0..3 {
+                assert!(
+                    (x[k] - y[k]).abs() < 1e-9 * (1.0 + y[k].abs()),
+                    "{q:?}: {x:?} vs {y:?}"
+                );
+            }
+        }
+    }
+}

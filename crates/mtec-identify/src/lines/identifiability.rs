@@ -157,6 +157,28 @@ pub fn analyse_with(
         c /= scale[cols[j]];
     }
     let k = cols.len();
+    if known.is_some() {
+        // the kept design is known to be full rank and well scaled: R from the Cholesky factor
+        // of the Gram matrix (AᵀA = RᵀR, Qᵀy = R⁻ᵀAᵀy), cheaper than Householder for m ≫ k
+        let gram = scaled.transpose() * &scaled;
+        if let Some(ch) = gram.cholesky() {
+            let r = ch.l().transpose();
+            let aty = scaled.transpose() * y;
+            if let Some(qty) = ch.l().solve_lower_triangular(&aty) {
+                return Ok(Analysis {
+                    scale,
+                    r: r.clone(),
+                    qty,
+                    singular_values: vec![],
+                    rank: k,
+                    active: cols,
+                    dropped,
+                    kept_r: r,
+                    kept_singular_values: vec![],
+                });
+            }
+        }
+    }
     let qr = scaled.qr();
     let mut qty = y.clone();
     qr.q_tr_mul(&mut qty);

@@ -206,13 +206,62 @@ fn jacobian_by_block(vm: &VolumetricModel, layout: &Layout, q: &[f64]) -> Vec<[f
         .collect()
 }
 
+/// The first-order Jacobian of an X, Y, Z machine as an affine function of the pose.
+///
+/// With no rotary axis the ideal chain is translations only, so every lever arm, and with it
+/// every column of the Jacobian (δ, ε × r, q·(ε₀ × u)), is affine in q: J(q) = J(0) + Σ_i q_i·D_i.
+/// Four evaluations of [`VolumetricModel::first_order_jacobian`] give it exactly (to rounding);
+/// `tests/lines_reference.rs` checks it against the direct evaluation.
+pub struct AffineJacobian {
+    j0: Vec<[f64; 3]>,
+    d: [Vec<[f64; 3]>; 3],
+}
+
+impl AffineJacobian {
+    /// Samples the Jacobian at the origin and 100 mm along each axis.
+    pub fn new(machine: &Machine, layout: &Layout) -> AffineJacobian {
+        let vm = VolumetricModel::new(machine, &mtec_model::ErrorSet::new("design"));
+        let j0 = jacobian_by_block(&vm, layout, &[0.0; 3]);
+        let d = [0, 1, 2].map(|i| {
+            let mut q = [0.0; 3];
+            q[i] = 100.0;
+            jacobian_by_block(&vm, layout, &q)
+                .iter()
+                .zip(&j0)
+                .map(|(a, b)| [0, 1, 2].map(|k| (a[k] - b[k]) / 100.0))
+                .collect()
+        });
+        AffineJacobian { j0, d }
+    }
+
+    /// One [Ex, Ey, Ez] row per block at pose q.
+    pub fn at(&self, q: &[f64; 3]) -> Vec<[f64; 3]> {
+        (0..self.j0.len())
+            .map(|b| {
+                [0, 1, 2].map(|k| {
+                    self.j0[b][k]
+                        + q[0] * self.d[0][b][k]
+                        + q[1] * self.d[1][b][k]
+                        + q[2] * self.d[2][b][k]
+                })
+            })
+            .collect()
+    }
+}
+
+/// The Jacobian evaluated directly (for checking [`AffineJacobian`]).
+pub fn direct_jacobian(machine: &Machine, layout: &Layout, q: &[f64; 3]) -> Vec<[f64; 3]> {
+    let vm = VolumetricModel::new(machine, &mtec_model::ErrorSet::new("design"));
+    jacobian_by_block(&vm, layout, q)
+}
+
 /// The design matrix (readings × parameters) and the reading vector.
 pub fn design_matrix(
     machine: &Machine,
     layout: &Layout,
     data: &LineData,
 ) -> (DMatrix<f64>, DVector<f64>) {
-    let vm = VolumetricModel::new(machine, &mtec_model::ErrorSet::new("design"));
+    let jac = AffineJacobian::new(machine, layout);
     let m = data.n_readings();
     let mut a = DMatrix::<f64>::zeros(m, layout.n_cols);
     let mut y = DVector::<f64>::zeros(m);
@@ -221,11 +270,7 @@ pub fn design_matrix(
     let mut cache: (Vec<[f64; 3]>, Vec<Vec<[f64; 3]>>) = (Vec::new(), Vec::new());
     for (ci, c) in data.channels.iter().enumerate() {
         if cache.0 != c.points_mm {
-            cache.1 = c
-                .points_mm
-                .iter()
-                .map(|p| jacobian_by_block(&vm, layout, p))
-                .collect();
+            cache.1 = c.points_mm.iter().map(|p| jac.at(p)).collect();
             cache.0 = c.points_mm.clone();
         }
         let jacs = &cache.1;
