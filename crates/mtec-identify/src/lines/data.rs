@@ -40,6 +40,9 @@ const STRAIGHT_TOL_MM: f64 = 1e-3;
 /// A channel with |u·d| at least this is a displacement channel.
 const ALONG_COS: f64 = 0.999;
 
+/// One parsed row: step, point (mm), direction, reading (µm), file line.
+type Reading = (i64, [f64; 3], [f64; 3], f64, usize);
+
 /// What a channel reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -112,7 +115,7 @@ impl LineData {
         let c_read = col("reading_um")?;
         // rows grouped by channel name, in order of first appearance
         let mut names: Vec<String> = Vec::new();
-        let mut rows: Vec<Vec<(i64, [f64; 3], [f64; 3], f64, usize)>> = Vec::new();
+        let mut rows: Vec<Vec<Reading>> = Vec::new();
         for row in &t.rows {
             let name = row.fields[c_line].trim().to_string();
             if name.is_empty() {

@@ -117,7 +117,7 @@ pub fn analyse_with(
     let zero_col = |c: usize| a.column(c).iter().all(|v| *v == 0.0);
     let mut dropped = Vec::new();
     for b in &layout.blocks {
-        if b.cols().len() > 0 && b.cols().all(zero_col) {
+        if !b.cols().is_empty() && b.cols().all(zero_col) {
             dropped.push(Dropped {
                 element: b.element,
                 confounded_with: vec![],

@@ -144,8 +144,8 @@ pub fn polynomial_in_q(coeffs: &[(i32, f64)], travel: [f64; 2]) -> Vec<f64> {
         let p = p as usize;
         // ((q − lo)/L)^p = Σ_k C(p,k) q^k (−lo)^(p−k) / L^p
         let mut binom = 1.0;
-        for k in 0..=p {
-            out[k] += c * binom * (-lo).powi((p - k) as i32) / len.powi(p as i32);
+        for (k, o) in out.iter_mut().enumerate().take(p + 1) {
+            *o += c * binom * (-lo).powi((p - k) as i32) / len.powi(p as i32);
             binom = binom * (p - k) as f64 / (k + 1) as f64;
         }
     }
