@@ -13,13 +13,20 @@ pub fn read_machine(path: &Path) -> Result<Machine, InputError> {
 /// Reads an error set: a `mtec.errors/1` file, or a simulation's `truth.json` (its `errors`).
 pub fn read_errors(path: &Path) -> Result<ErrorSet, InputError> {
     let v: serde_json::Value = read_json(path)?;
-    let inner = if v.get("format").and_then(|f| f.as_str()) == Some("mtec.truth/1") {
-        v.get("errors").cloned().unwrap_or_default()
+    let set: ErrorSet = if v.get("format").and_then(|f| f.as_str()) == Some("mtec.truth/1") {
+        serde_json::from_value(v.get("errors").cloned().unwrap_or_default()).map_err(|e| {
+            InputError::file(
+                path,
+                format!("the truth's `errors` is not an error set: {e}"),
+            )
+        })?
     } else {
-        v
+        // parse the text again as an error set so that mistakes are located (line, column)
+        read_json(path).map_err(|e| InputError {
+            message: format!("not an error set: {}", e.message),
+            ..e
+        })?
     };
-    let set: ErrorSet = serde_json::from_value(inner)
-        .map_err(|e| InputError::file(path, format!("not an error set: {e}")))?;
     set.validate()
         .map_err(|e| InputError::file(path, e.to_string()))?;
     Ok(set)

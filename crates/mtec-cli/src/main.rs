@@ -15,7 +15,13 @@ geometric and thermal errors.
 The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
-  identify lines  the 21 error elements of a 3-axis machine from laser lines (9-line method)
+  identify lines   the 21 error elements of a 3-axis machine from laser lines (9-line method)
+  identify ballbar  rotary-axis error motions (EXC EYC EZC EAC EBC) from ballbar readings in 5 modes
+  map           volumetric error maps: fit a grid (trilinear) and evaluate it at points
+  compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
+                (`compensate table`)
+  thermal       thermal drift models from temperature logs: select sensors, fit, predict
+  sensitivity   which error elements drive the volumetric error (EFAST/Sobol/Morris), tolerances
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
 Every CSV column name carries its unit suffix (x_mm, ex_um, ...). Exit codes: 0 success,
@@ -34,16 +40,42 @@ enum Command {
     Simulate(cmd::simulate::Args),
     /// Volumetric error at commanded points (HTM or POE, exact or first-order).
     Volumetric(cmd::volumetric::Args),
-    /// Identify error elements from measurements (lines, ...).
-    Identify(cmd::identify::Args),
+    /// Identify error elements or error motions from measurements.
+    #[command(subcommand)]
+    Identify(Identify),
+    /// Volumetric error maps: `map fit` (grid CSV -> map JSON), `map eval` (errors at points).
+    Map(cmd::map::Args),
+    /// Compensation outputs: corrected NC programs, controller tables.
+    #[command(subcommand)]
+    Compensate(cmd::compensate::Command),
+    /// Thermal error models: ridge-trace sensor selection, MLR/ridge/exp-ambient fit, predict.
+    Thermal(cmd::thermal::Args),
+    /// Global sensitivity (EFAST, Sobol, Morris) of the volumetric error to the error elements.
+    Sensitivity(cmd::sensitivity::Args),
+}
+
+#[derive(Subcommand)]
+enum Identify {
+    /// Error elements of a 3-axis machine from line measurements (9-line method).
+    #[command(long_about = cmd::identify_lines::LONG_ABOUT)]
+    Lines(cmd::identify_lines::Args),
+    /// Rotary-axis error motions from ballbar readings in five installation modes.
+    #[command(long_about = cmd::identify_ballbar::LONG_ABOUT)]
+    Ballbar(cmd::identify_ballbar::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
+    let result: Result<(), error::CliError> = match cli.command {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Volumetric(a) => cmd::volumetric::run(a),
-        Command::Identify(a) => cmd::identify::run(a),
+        Command::Identify(Identify::Lines(a)) => cmd::identify_lines::run(a),
+        Command::Identify(Identify::Ballbar(a)) => cmd::identify_ballbar::run(a),
+        Command::Map(a) => cmd::map::run(a),
+        Command::Compensate(cmd::compensate::Command::Gcode(a)) => cmd::compensate_gcode::run(a),
+        Command::Compensate(cmd::compensate::Command::Table(a)) => cmd::compensate_table::run(a),
+        Command::Thermal(a) => cmd::thermal::run(a),
+        Command::Sensitivity(a) => cmd::sensitivity::run(a),
     };
     error::exit(result)
 }

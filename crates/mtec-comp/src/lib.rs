@@ -1,8 +1,26 @@
 //! mtec-comp: compensation. Volumetric maps, correction values, G-code rewriting, controller
 //! tables and the real-time evaluation API.
 //!
+//! What it is for: turning a predicted volumetric error into something that makes the machine cut
+//! true. [`map`] builds a volumetric error map from a measured grid (trilinear interpolation, the
+//! controller-style baseline); [`load`] reads any model file by its `"format"`; [`correction`]
+//! solves p + e(p) = target for the command p; [`table`] writes controller compensation tables
+//! (LinuxCNC, Siemens CEC/LEC, FANUC, HEIDENHAIN, Beckhoff) with a checker of each format's rules;
+//! [`rt`] evaluates corrections each interpolation cycle without allocating (its C ABI lives in
+//! the `mtec-rt` crate).
+//!
 //! What it is not for: identifying or fitting errors; it takes an [`ErrorModel`] from elsewhere.
 
+pub mod correction;
+pub mod gcode;
+pub mod load;
+pub mod map;
 pub mod model;
+pub mod rt;
+pub mod table;
 
+pub use correction::{command_for_target, CorrectionError, CorrectionOptions};
+pub use load::load_error_model;
+pub use map::{GridLimits, GridMap, Outside};
 pub use model::ErrorModel;
+pub use rt::Compensator;

@@ -7,8 +7,13 @@
 //!
 //! What it is not for: analysis. Nothing here is used to identify or fit anything.
 
+pub mod circular_test;
+pub mod dbb_rotary;
+pub mod feed_axis_ambient;
 pub mod instruments;
+pub mod iso230_2;
 pub mod scenario;
+pub mod spindle_sensors;
 pub mod thermal_network;
 pub mod truth;
 pub mod vmc_9line;

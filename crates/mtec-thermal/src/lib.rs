@@ -1,1 +1,44 @@
-//! mtec-thermal: Thermal error models: MLR, ridge with VIF and ridge-trace sensor selection, ambient-adaptive exponential feed-axis model; metrics.
+//! mtec-thermal: thermal error models of machine tools, fitted from temperature logs.
+//!
+//! What it is for: predicting thermal drift (µm) from temperature sensors, with the methods of
+//! the source literature — multiple linear regression, ridge regression with variance inflation
+//! factors, the ridge trace and sensor elimination by its rules, the comparison table (full MLR,
+//! ridge-selected, simple-correlation top-n), and the ambient-adaptive exponential feed-axis
+//! model — plus thermal-dynamics features (first-order lags with fitted time constants,
+//! temperature rates) so a linear model follows duty cycles it was not trained on, and
+//! `lag-select`, a forward selection of a few sensors with lags scored on held-out blocks.
+//! Every model `fit`s and `predict`s through the traits in [`model`], serialises to versioned
+//! JSON (`mtec.thermal-model/1`) and is scored by one [`Metrics`] type.
+//!
+//! What it is not for: reading files beyond turning a [`mtec_io::Table`] into [`ThermalData`],
+//! neural models (`mtec-nn`), or simulating the machine (`mtec-sim`). Validation splits are by
+//! whole experiments or time blocks, never random rows (drift is autocorrelated; random rows
+//! leak the answer).
+
+// `!(a > b)` is deliberate: it is true for NaN, which must fail the check; index loops read
+// like the equations they implement.
+#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
+
+pub mod data;
+pub mod error;
+pub mod exp_ambient;
+pub mod features;
+pub mod lag_select;
+pub mod linear;
+pub mod metrics;
+pub mod model;
+pub mod plot;
+pub mod select;
+pub mod validate;
+
+pub use data::ThermalData;
+pub use error::ThermalError;
+pub use exp_ambient::ExpAmbientModel;
+pub use features::Feature;
+pub use lag_select::LagSelect;
+pub use metrics::Metrics;
+pub use model::{
+    ExpAmbient, Fit, LinearModel, Mlr, ModelFile, Predict, Ridge, RidgeSelect, ThermalModel,
+    MODEL_FORMAT,
+};
+pub use select::{select_sensors, RidgeTrace, SelectOptions, Selection};

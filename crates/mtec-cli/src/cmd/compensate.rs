@@ -1,0 +1,10 @@
+//! `mtec compensate`: the group of compensation outputs.
+
+#[derive(clap::Subcommand)]
+pub enum Command {
+    /// Rewrite an NC program (G-code) so the machine reaches the programmed points.
+    Gcode(super::compensate_gcode::Args),
+    /// Controller compensation tables (LinuxCNC, Siemens CEC/LEC, Fanuc, Heidenhain, Beckhoff).
+    #[command(long_about = super::compensate_table::HELP)]
+    Table(super::compensate_table::Args),
+}

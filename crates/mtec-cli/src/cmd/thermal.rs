@@ -1,0 +1,624 @@
+//! `mtec thermal select|fit|predict|cv`: thermal error models from temperature logs.
+
+use crate::error::CliError;
+use mtec_io::{InputError, OutputGuard, Table};
+use mtec_thermal::model::{ModelFile, Split, ThermalModel};
+use mtec_thermal::select::{select_sensors, SelectOptions, Selection};
+use mtec_thermal::validate::{block_cv, rows_of_experiments, split_at_time, time_blocks};
+use mtec_thermal::{
+    features::{design, temp_features},
+    ExpAmbient, Fit, LagSelect, Metrics, Mlr, Predict, Ridge, RidgeSelect, ThermalData,
+    ThermalError, MODEL_FORMAT,
+};
+use std::path::{Path, PathBuf};
+
+const FORMAT_HELP: &str = "\
+Thermal log format (CSV, SPEC §4):
+  experiment,time_min,<sensor>_c...,[ambient_c],[position_mm],<target>_um
+Every `_c` column except `ambient_c` is a temperature sensor. `experiment` may be absent (one
+continuous record). Rows of one experiment are in time order. Other columns are ignored.";
+
+/// Thermal error models: sensor selection, fitting and prediction.
+#[derive(clap::Args)]
+#[command(after_help = FORMAT_HELP)]
+pub struct Args {
+    #[command(subcommand)]
+    cmd: Sub,
+}
+
+#[derive(clap::Subcommand)]
+enum Sub {
+    /// VIF table, ridge trace, sensor elimination by the ridge-trace rules, chosen k, and the
+    /// comparison of full MLR, ridge-selected and simple-correlation models.
+    ///
+    /// Example: mtec thermal select --data thermal.csv --target radial_um --out sel/
+    /// writes sel/ridge_trace.csv, sel/ridge_trace.svg and sel/selection.json and prints the
+    /// report; `--json` prints the selection as JSON instead.
+    Select(SelectArgs),
+    /// Fits a model and writes it as JSON (`mtec.thermal-model/1`) with train/test metrics.
+    ///
+    /// Models: mlr (all or --sensors), ridge (k from the ridge trace or --k), ridge-select
+    /// (sensors chosen by the ridge trace), exp-ambient (δ = k·x + b with exponential
+    /// saturation in the temperature rises of --sensors UP,NUT and cubic-in-ambient
+    /// coefficients; needs ambient_c and position_mm), lag-select (forward selection of up to
+    /// --max-sensors sensors, each with a first-order lag of fitted time constant, scored by
+    /// leaving out whole blocks of --block-min minutes or experiments). --lag adds a
+    /// first-order lag of each sensor with a fitted time constant (mlr, ridge, ridge-select).
+    ///
+    /// Example: mtec thermal fit --data thermal.csv --target ez_um --model exp-ambient
+    /// --sensors up,nut --train 1,2,4 --test 3 -o z.json
+    Fit(FitArgs),
+    /// Predicts the drift with a model file; metrics when the data hold the target.
+    ///
+    /// Example: mtec thermal predict --model z.json --data thermal.csv --json
+    Predict(PredictArgs),
+    /// Leave-one-block-out cross-validation: whole experiments, or time blocks of --block-min.
+    ///
+    /// Example: mtec thermal cv --data train.csv --target ch1_um --model mlr --lag
+    /// --sensors t1,t5 --block-min 480
+    Cv(CvArgs),
+}
+
+#[derive(clap::Args)]
+struct SelectArgs {
+    /// Thermal log (CSV).
+    #[arg(long)]
+    data: PathBuf,
+    /// Target column (`radial_um` or `radial`).
+    #[arg(long)]
+    target: String,
+    /// Candidate sensors (default: every `_c` column but ambient_c).
+    #[arg(long, value_delimiter = ',')]
+    sensors: Vec<String>,
+    /// Folder for ridge_trace.csv, ridge_trace.svg, selection.json (default: beside the data).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Print the selection as JSON (`mtec.thermal-selection/1`) on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum, PartialEq)]
+enum ModelKind {
+    Mlr,
+    Ridge,
+    RidgeSelect,
+    ExpAmbient,
+    LagSelect,
+}
+
+#[derive(clap::Args)]
+struct Common {
+    /// Thermal log (CSV).
+    #[arg(long)]
+    data: PathBuf,
+    /// Target column (`ez_um` or `ez`).
+    #[arg(long)]
+    target: String,
+    /// Model family.
+    #[arg(long, value_enum)]
+    model: ModelKind,
+    /// Sensors to use (exp-ambient: exactly two, the upper bearing then the nut).
+    #[arg(long, value_delimiter = ',')]
+    sensors: Vec<String>,
+    /// Ridge parameter k (correlation form); default: where the ridge trace stabilises.
+    #[arg(long)]
+    k: Option<f64>,
+    /// Add a first-order lag feature per sensor with a fitted time constant.
+    #[arg(long)]
+    lag: bool,
+    /// Validation block length in minutes: `cv` leaves out one block at a time, `lag-select`
+    /// chooses its sensors by leaving out blocks of the training rows (default: experiments).
+    #[arg(long)]
+    block_min: Option<f64>,
+    /// lag-select: largest number of sensors.
+    #[arg(long, default_value_t = 3)]
+    max_sensors: usize,
+}
+
+#[derive(clap::Args)]
+struct FitArgs {
+    #[command(flatten)]
+    common: Common,
+    /// Train on rows with time_min ≤ MIN, test on the rest.
+    #[arg(long, conflicts_with_all = ["train", "test"])]
+    train_until: Option<f64>,
+    /// Experiments to train on (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    train: Vec<String>,
+    /// Experiments to test on (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    test: Vec<String>,
+    /// Model file to write (JSON).
+    #[arg(short = 'o', long = "output")]
+    output: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct PredictArgs {
+    /// Model file (JSON, `mtec.thermal-model/1`).
+    #[arg(long)]
+    model: PathBuf,
+    /// Thermal log (CSV) with the model's sensors.
+    #[arg(long)]
+    data: PathBuf,
+    /// Print `{rmse_um, mae_um, max_abs_residual_um, n, predictions, metrics}` as JSON.
+    #[arg(long)]
+    json: bool,
+    /// Write `experiment,time_min,predicted_um[,measured_um,residual_um]` here (default stdout).
+    #[arg(short = 'o', long = "output")]
+    output: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct CvArgs {
+    #[command(flatten)]
+    common: Common,
+    /// Print the per-block metrics as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    match args.cmd {
+        Sub::Select(a) => select(a),
+        Sub::Fit(a) => fit(a),
+        Sub::Predict(a) => predict(a),
+        Sub::Cv(a) => cv(a),
+    }
+}
+
+fn load(path: &Path, target: Option<&str>, require: bool) -> Result<ThermalData, CliError> {
+    let t = Table::read(path)?;
+    Ok(ThermalData::from_table(&t, target, require)?)
+}
+
+/// A model error about the data file: missing columns at the header, the rest about the file.
+fn located(data: &ThermalData, path: &Path, e: ThermalError) -> CliError {
+    match e {
+        ThermalError::MissingColumn(c) => CliError::Input(data.header_error(format!(
+            "missing column `{c}`; the header has: {}",
+            header_list(data)
+        ))),
+        other => CliError::Input(InputError::file(path, other.to_string())),
+    }
+}
+
+fn header_list(d: &ThermalData) -> String {
+    let mut h = d.sensor_names.clone();
+    if d.ambient_c.is_some() {
+        h.push("ambient_c".into());
+    }
+    if d.position_mm.is_some() {
+        h.push("position_mm".into());
+    }
+    h.join(", ")
+}
+
+fn select(a: SelectArgs) -> Result<(), CliError> {
+    let data = load(&a.data, Some(&a.target), true)?;
+    let err = |e| located(&data, &a.data, e);
+    let features = temp_features(&data, &a.sensors).map_err(err)?;
+    let names: Vec<String> = features.iter().map(|f| f.name()).collect();
+    let x = design(&data, &features).map_err(err)?;
+    let y = data.target_um().map_err(err)?;
+    let sel = select_sensors(&x, y, &names, SelectOptions::default()).map_err(err)?;
+    let mut doc = serde_json::to_value(&sel).map_err(|e| CliError::Internal(e.into()))?;
+    doc["format"] = "mtec.thermal-selection/1".into();
+    doc["target"] = data.target_name().unwrap_or_default().into();
+    let out_dir = match (&a.out, a.json) {
+        (Some(d), _) => Some(d.clone()),
+        (None, false) => Some(default_out(&a.data, "select")),
+        (None, true) => None,
+    };
+    if let Some(dir) = &out_dir {
+        std::fs::create_dir_all(dir)?;
+        let guard = OutputGuard::new(&[&a.data]);
+        guard.write(&dir.join("ridge_trace.csv"), sel.trace.to_csv().as_bytes())?;
+        let svg = mtec_thermal::plot::ridge_trace_svg(&sel.trace, sel.k)
+            .map_err(|e| CliError::Internal(anyhow::anyhow!("plot: {e}")))?;
+        guard.write(&dir.join("ridge_trace.svg"), svg.as_bytes())?;
+        guard.write(
+            &dir.join("selection.json"),
+            serde_json::to_string_pretty(&doc)
+                .map_err(|e| CliError::Internal(e.into()))?
+                .as_bytes(),
+        )?;
+    }
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?
+        );
+    } else {
+        print_selection(&sel, data.target_name().unwrap_or_default());
+        if let Some(dir) = out_dir {
+            println!(
+                "\nwrote {}/ridge_trace.csv, ridge_trace.svg, selection.json",
+                dir.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+fn default_out(data: &Path, what: &str) -> PathBuf {
+    let stem = data
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    data.with_file_name(format!("{stem}-{what}"))
+}
+
+fn fmt_opt(v: Option<f64>, prec: usize) -> String {
+    v.map(|x| format!("{x:.prec$}"))
+        .unwrap_or_else(|| "-".into())
+}
+
+fn print_selection(sel: &Selection, target: &str) {
+    println!("Variance inflation factors (VIF > 10: severe collinearity)");
+    for v in &sel.vif {
+        println!(
+            "  {:<16} {:>12} {}",
+            v.sensor,
+            v.vif
+                .map(|x| format!("{x:.1}"))
+                .unwrap_or_else(|| "inf".into()),
+            if v.severe { "severe" } else { "" }
+        );
+    }
+    println!("\nRidge-trace elimination (rules: stable-small, unstable-to-zero, unstable)");
+    for (i, s) in sel.steps.iter().enumerate() {
+        println!(
+            "  step {}: {:<17} removed {:<24} at k = {:.4}; remaining {}",
+            i + 1,
+            s.rule,
+            s.removed.join(","),
+            s.k,
+            s.remaining.join(",")
+        );
+    }
+    println!(
+        "\nSelected sensors: {}   chosen k = {:.4}",
+        sel.selected.join(", "),
+        sel.k
+    );
+    let std_eq: Vec<String> = sel
+        .selected
+        .iter()
+        .zip(&sel.standardised_coefficients)
+        .map(|(s, b)| format!("{b:+.4}·z({s})"))
+        .collect();
+    println!(
+        "Standardised equation:    z({target}) = {}",
+        std_eq.join(" ")
+    );
+    let eq: Vec<String> = sel
+        .selected
+        .iter()
+        .zip(&sel.coefficients)
+        .map(|(s, b)| format!("{b:+.4}·{s}"))
+        .collect();
+    println!(
+        "De-standardised equation: {target} = {:.4} {}",
+        sel.intercept_um,
+        eq.join(" ")
+    );
+    println!("\nComparison");
+    println!(
+        "  {:<34} {:>3} {:>8} {:>10} {:>12} {:>10} {:>12}",
+        "model", "n", "R²", "max|res|", "SSE", "MSE", "F"
+    );
+    for r in &sel.comparison {
+        let m = &r.metrics;
+        println!(
+            "  {:<34} {:>3} {:>8} {:>10.3} {:>12.3} {:>10} {:>12}",
+            r.model,
+            r.sensors.len(),
+            fmt_opt(m.r2, 4),
+            m.max_abs_residual_um,
+            m.sse_um2,
+            fmt_opt(m.mse_um2, 4),
+            fmt_opt(m.f_statistic, 1)
+        );
+    }
+}
+
+fn fit_model(c: &Common, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
+    Ok(match c.model {
+        ModelKind::Mlr => ThermalModel::Linear(
+            Mlr {
+                sensors: c.sensors.clone(),
+                lag: c.lag,
+            }
+            .fit_rows(data, rows)?,
+        ),
+        ModelKind::Ridge => ThermalModel::Linear(
+            Ridge {
+                sensors: c.sensors.clone(),
+                k: c.k,
+                lag: c.lag,
+            }
+            .fit_rows(data, rows)?,
+        ),
+        ModelKind::RidgeSelect => ThermalModel::Linear(
+            RidgeSelect {
+                sensors: c.sensors.clone(),
+                options: SelectOptions::default(),
+                lag: c.lag,
+            }
+            .fit_rows(data, rows)?,
+        ),
+        ModelKind::LagSelect => ThermalModel::Linear(
+            LagSelect {
+                sensors: c.sensors.clone(),
+                max_sensors: c.max_sensors,
+                block_min: c.block_min,
+            }
+            .fit_rows(data, rows)?,
+        ),
+        ModelKind::ExpAmbient => {
+            let [up, nut] = c.sensors.as_slice() else {
+                return Err(ThermalError::Invalid(
+                    "exp-ambient needs --sensors UP,NUT: the upper-bearing sensor, then the ball-screw-nut sensor".into(),
+                ));
+            };
+            ThermalModel::ExpAmbient(
+                ExpAmbient {
+                    up_sensor: up.clone(),
+                    nut_sensor: nut.clone(),
+                }
+                .fit_rows(data, rows)?,
+            )
+        }
+    })
+}
+
+fn check_common(c: &Common) -> Result<(), CliError> {
+    if let Some(b) = c.block_min {
+        if !(b > 0.0 && b.is_finite()) {
+            return Err(CliError::usage(
+                "--block-min must be a number of minutes > 0",
+            ));
+        }
+    }
+    if c.model == ModelKind::LagSelect && c.max_sensors == 0 {
+        return Err(CliError::usage("--max-sensors must be at least 1"));
+    }
+    if c.model == ModelKind::ExpAmbient && c.lag {
+        return Err(CliError::usage(
+            "--lag applies to the linear models, not exp-ambient",
+        ));
+    }
+    if let Some(k) = c.k {
+        if !(k >= 0.0 && k.is_finite()) || c.model != ModelKind::Ridge {
+            return Err(CliError::usage(
+                "--k must be a number ≥ 0 and goes with --model ridge",
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn metrics_on(
+    model: &ThermalModel,
+    data: &ThermalData,
+    rows: &[usize],
+    pred: &[f64],
+) -> Result<Metrics, ThermalError> {
+    let y = data.target_um()?;
+    let yt: Vec<f64> = rows.iter().map(|&i| y[i]).collect();
+    let pt: Vec<f64> = rows.iter().map(|&i| pred[i]).collect();
+    Ok(Metrics::new(&yt, &pt, model.predictors()))
+}
+
+fn fit(a: FitArgs) -> Result<(), CliError> {
+    check_common(&a.common)?;
+    let data = load(&a.common.data, Some(&a.common.target), true)?;
+    let err = |e| located(&data, &a.common.data, e);
+    let all: Vec<usize> = (0..data.len()).collect();
+    let (train, test, split) = if let Some(t) = a.train_until {
+        let (tr, te) = split_at_time(&data, t);
+        let s = Split {
+            train_until_min: Some(t),
+            ..Default::default()
+        };
+        (tr, te, s)
+    } else if !a.train.is_empty() {
+        let tr = rows_of_experiments(&data, &a.train).map_err(err)?;
+        let te = if a.test.is_empty() {
+            all.iter().copied().filter(|i| !tr.contains(i)).collect()
+        } else {
+            rows_of_experiments(&data, &a.test).map_err(err)?
+        };
+        let test_exps = if a.test.is_empty() {
+            data.experiments()
+                .into_iter()
+                .filter(|e| !a.train.contains(e))
+                .collect()
+        } else {
+            a.test.clone()
+        };
+        let s = Split {
+            train_experiments: a.train.clone(),
+            test_experiments: test_exps,
+            ..Default::default()
+        };
+        (tr, te, s)
+    } else if !a.test.is_empty() {
+        return Err(CliError::usage("--test needs --train"));
+    } else {
+        (all, Vec::new(), Split::default())
+    };
+    if train.is_empty() {
+        return Err(CliError::usage("the training selection holds no rows"));
+    }
+    let model = fit_model(&a.common, &data, &train).map_err(err)?;
+    let pred = model.predict(&data).map_err(err)?;
+    let train_metrics = metrics_on(&model, &data, &train, &pred).map_err(err)?;
+    let test_metrics = if test.is_empty() {
+        None
+    } else {
+        Some(metrics_on(&model, &data, &test, &pred).map_err(err)?)
+    };
+    let mut split = split;
+    if split.train_experiments.is_empty() && split.train_until_min.is_none() {
+        split.train_experiments = data.experiments();
+    }
+    split.train_rows = train.len();
+    split.test_rows = test.len();
+    let file = ModelFile {
+        format: MODEL_FORMAT.into(),
+        target: data.target_name().unwrap_or_default().to_string(),
+        model,
+        split,
+        train_metrics,
+        test_metrics,
+    };
+    let text = serde_json::to_string_pretty(&file).map_err(|e| CliError::Internal(e.into()))?;
+    OutputGuard::new(&[&a.common.data]).write(&a.output, text.as_bytes())?;
+    let show = |name: &str, m: &Metrics| {
+        println!(
+            "{name:<6} n={:<6} RMSE {:.3} um  MAE {:.3} um  max|res| {:.3} um  R² {}  compensation {}",
+            m.n,
+            m.rmse_um,
+            m.mae_um,
+            m.max_abs_residual_um,
+            fmt_opt(m.r2, 4),
+            m.compensation_rate.map(|c| format!("{:.1} %", 100.0 * c)).unwrap_or_else(|| "-".into())
+        )
+    };
+    if let ThermalModel::ExpAmbient(m) = &file.model {
+        println!(
+            "exp-ambient: δ = k·x + b, b = b_a(1 − exp(−ΔT_up/b_b)), k = k_a(1 − exp(−ΔT_nut/k_b)); polynomials of degree {} in u = (T_a − 20 °C)/10 °C (coefficient ± standard uncertainty, ascending powers)",
+            m.degree
+        );
+        for (name, c, sd) in [
+            ("b_a [um]", &m.b_a, &m.b_a_sd),
+            ("b_b [C]", &m.b_b, &m.b_b_sd),
+            ("k_a [um/mm]", &m.k_a, &m.k_a_sd),
+            ("k_b [C]", &m.k_b, &m.k_b_sd),
+        ] {
+            let terms: Vec<String> = c
+                .iter()
+                .zip(sd)
+                .map(|(c, s)| format!("{c:.5} ± {s:.5}"))
+                .collect();
+            println!("  {name:<12} {}", terms.join(", "));
+        }
+    }
+    show("train", &file.train_metrics);
+    if let Some(m) = &file.test_metrics {
+        show("test", m);
+    }
+    println!("wrote {}", a.output.display());
+    Ok(())
+}
+
+fn predict(a: PredictArgs) -> Result<(), CliError> {
+    let file: ModelFile = mtec_io::read_json(&a.model)?;
+    file.check_format()
+        .map_err(|e| CliError::Input(InputError::file(&a.model, e.to_string())))?;
+    let data = load(&a.data, Some(&file.target), false)?;
+    let pred = file
+        .model
+        .predict(&data)
+        .map_err(|e| located(&data, &a.data, e))?;
+    let metrics = match data.target_um() {
+        Ok(y) => Some(Metrics::new(y, &pred, file.model.predictors())),
+        Err(_) => None,
+    };
+    if a.json {
+        let mut doc = serde_json::json!({
+            "format": "mtec.thermal-prediction/1",
+            "target": file.target,
+            "n": pred.len(),
+            "predictions": pred,
+        });
+        if let Some(m) = &metrics {
+            doc["rmse_um"] = m.rmse_um.into();
+            doc["mae_um"] = m.mae_um.into();
+            doc["max_abs_residual_um"] = m.max_abs_residual_um.into();
+            doc["metrics"] = serde_json::to_value(m).map_err(|e| CliError::Internal(e.into()))?;
+        }
+        println!(
+            "{}",
+            serde_json::to_string(&doc).map_err(|e| CliError::Internal(e.into()))?
+        );
+    }
+    if a.output.is_some() || !a.json {
+        let y = data.target_um().ok();
+        let mut csv = String::from("experiment,time_min,predicted_um");
+        if y.is_some() {
+            csv.push_str(",measured_um,residual_um");
+        }
+        csv.push('\n');
+        for i in 0..pred.len() {
+            csv.push_str(&format!(
+                "{},{},{:.4}",
+                data.experiment[i], data.time_min[i], pred[i]
+            ));
+            if let Some(y) = y {
+                csv.push_str(&format!(",{:.4},{:.4}", y[i], y[i] - pred[i]));
+            }
+            csv.push('\n');
+        }
+        match &a.output {
+            Some(p) => OutputGuard::new(&[&a.data, &a.model]).write(p, csv.as_bytes())?,
+            None => print!("{csv}"),
+        }
+    }
+    Ok(())
+}
+
+struct CvFitter<'a>(&'a Common);
+
+impl Fit for CvFitter<'_> {
+    type Model = ThermalModel;
+    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
+        fit_model(self.0, data, rows)
+    }
+}
+
+fn cv(a: CvArgs) -> Result<(), CliError> {
+    check_common(&a.common)?;
+    let data = load(&a.common.data, Some(&a.common.target), true)?;
+    let err = |e| located(&data, &a.common.data, e);
+    let blocks: Vec<Vec<usize>> = match a.common.block_min {
+        Some(b) if b > 0.0 => time_blocks(&data, b),
+        Some(_) => return Err(CliError::usage("--block-min must be > 0")),
+        None => data
+            .experiments()
+            .iter()
+            .map(|e| rows_of_experiments(&data, std::slice::from_ref(e)))
+            .collect::<Result<_, _>>()
+            .map_err(err)?,
+    };
+    if blocks.len() < 2 {
+        return Err(CliError::usage("cross-validation needs at least two blocks (experiments, or --block-min shorter than the record)"));
+    }
+    let res = block_cv(&CvFitter(&a.common), &data, &blocks).map_err(err)?;
+    if a.json {
+        let mut doc = serde_json::to_value(&res).map_err(|e| CliError::Internal(e.into()))?;
+        doc["format"] = "mtec.thermal-cv/1".into();
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?
+        );
+    } else {
+        for (i, m) in res.per_block.iter().enumerate() {
+            println!(
+                "block {:<3} n={:<6} RMSE {:.3} um  max|res| {:.3} um",
+                i + 1,
+                m.n,
+                m.rmse_um,
+                m.max_abs_residual_um
+            );
+        }
+        println!(
+            "pooled RMSE {:.3} um, max|res| {:.3} um",
+            res.pooled_rmse_um, res.pooled_max_abs_um
+        );
+    }
+    Ok(())
+}

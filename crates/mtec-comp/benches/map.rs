@@ -1,0 +1,85 @@
+//! Trilinear map evaluation and correction speed (issue 8 target: ≤ 100 ns per point).
+//! The grid and points are the SciPy fixture's (tests/map_fixtures), so `bench/interp.sh` can
+//! compare the same work with SciPy's RegularGridInterpolator.
+
+use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
+use mtec_comp::map::{GridLimits, GridMap, Outside};
+use mtec_comp::ErrorModel;
+use std::path::PathBuf;
+
+fn grid_25() -> GridMap {
+    // a controller-size grid: 25 points per axis over 600 × 400 × 300 mm
+    let axis = |len: f64| (0..25).map(|i| len * i as f64 / 24.0).collect::<Vec<f64>>();
+    let axes = [axis(600.0), axis(400.0), axis(300.0)];
+    let mut values = Vec::new();
+    for &x in &axes[0] {
+        for &y in &axes[1] {
+            for &z in &axes[2] {
+                values.push([(x / 90.0).sin(), (y / 70.0).cos(), 1e-5 * x * y + z * 1e-3]);
+            }
+        }
+    }
+    GridMap::new(axes, values, Outside::Clamp, "bench").unwrap()
+}
+
+fn points(n: usize, box_mm: [f64; 3]) -> Vec<[f64; 3]> {
+    let mut s = 0x9E3779B97F4A7C15u64;
+    let mut u = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..n)
+        .map(|_| [box_mm[0] * u(), box_mm[1] * u(), box_mm[2] * u()])
+        .collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let map = grid_25();
+    let pts = points(100_000, [600.0, 400.0, 300.0]);
+    let mut g = c.benchmark_group("trilinear");
+    g.throughput(Throughput::Elements(pts.len() as u64));
+    g.bench_function("grid25_eval_100k_points", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for p in &pts {
+                let e = map.error_um(black_box(*p));
+                acc += e[0] + e[1] + e[2];
+            }
+            acc
+        })
+    });
+    let opts = mtec_comp::CorrectionOptions::default();
+    g.bench_function("grid25_correction_100k_points", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for p in &pts {
+                let q = mtec_comp::command_for_target(&map, black_box(*p), &opts).unwrap();
+                acc += q[0];
+            }
+            acc
+        })
+    });
+    // the SciPy comparison grid (tests/map_fixtures/grid.csv, 6×5×4 nodes)
+    let fixture = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/map_fixtures/grid.csv");
+    let small = GridMap::read_csv(&fixture, &GridLimits::default(), Outside::Extrapolate).unwrap();
+    let pts2: Vec<[f64; 3]> = points(100_000, [500.0, 500.0, 300.0])
+        .into_iter()
+        .map(|p| [p[0], p[1] - 200.0, p[2] - 300.0])
+        .collect();
+    g.bench_function("fixture_grid_eval_100k_points", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for p in &pts2 {
+                let e = small.error_um(black_box(*p));
+                acc += e[0];
+            }
+            acc
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,240 @@
+//! Arc geometry of G2/G3 (RS274/NGC, LinuxCNC semantics): centre from I/J/K or from R, sweep,
+//! helical axis, and points along the arc for linearisation.
+//!
+//! Planes (NIST RS274/NGC v3 §3.5.3): G17 works in (X, Y) about Z, G18 in (Z, X) about Y, G19 in
+//! (Y, Z) about X; G3 is counter-clockwise seen from the positive end of the normal axis, which
+//! is a positive angle in the (first, second) plane coordinates listed here. When the end radius
+//! differs a little from the start radius (rounded programs) the radius is interpolated linearly
+//! with the angle, as LinuxCNC does.
+
+use std::f64::consts::PI;
+
+/// A working plane: (first, second) in-plane axis indices and the normal axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Plane {
+    pub first: usize,
+    pub second: usize,
+    pub normal: usize,
+}
+
+/// G17: X-Y about Z.
+pub const XY: Plane = Plane {
+    first: 0,
+    second: 1,
+    normal: 2,
+};
+/// G18: Z-X about Y.
+pub const ZX: Plane = Plane {
+    first: 2,
+    second: 0,
+    normal: 1,
+};
+/// G19: Y-Z about X.
+pub const YZ: Plane = Plane {
+    first: 1,
+    second: 2,
+    normal: 0,
+};
+
+/// A circular (or helical) arc in machine coordinates (mm).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Arc {
+    pub plane: Plane,
+    pub start: [f64; 3],
+    pub end: [f64; 3],
+    /// Centre in the plane: (first, second) coordinates.
+    pub center: [f64; 2],
+    pub r_start: f64,
+    pub r_end: f64,
+    pub theta_start: f64,
+    /// Signed sweep in radians: positive counter-clockwise (G3).
+    pub sweep: f64,
+}
+
+/// Largest radius difference accepted between start and end (mm), and its relative part.
+const RADIUS_MISMATCH_MM: f64 = 0.002;
+const RADIUS_MISMATCH_REL: f64 = 0.001;
+
+fn in_plane(p: &[f64; 3], pl: Plane) -> [f64; 2] {
+    [p[pl.first], p[pl.second]]
+}
+
+impl Arc {
+    /// The arc through its centre (`center` already absolute, in the plane), turning
+    /// clockwise (G2) or not, `turns` ≥ 1 full turns counted as LinuxCNC's P word.
+    pub fn from_center(
+        start: [f64; 3],
+        end: [f64; 3],
+        center: [f64; 2],
+        plane: Plane,
+        clockwise: bool,
+        turns: u32,
+    ) -> Result<Arc, String> {
+        let s = in_plane(&start, plane);
+        let e = in_plane(&end, plane);
+        let r_start = (s[0] - center[0]).hypot(s[1] - center[1]);
+        let r_end = (e[0] - center[0]).hypot(e[1] - center[1]);
+        if r_start < 1e-9 {
+            return Err("arc radius is zero (the centre is the start point)".into());
+        }
+        if (r_end - r_start).abs() > RADIUS_MISMATCH_MM.max(RADIUS_MISMATCH_REL * r_start) {
+            return Err(format!(
+                "arc end point is not on the circle: radius {r_start:.6} mm at the start, {r_end:.6} mm at the end"
+            ));
+        }
+        let theta_start = (s[1] - center[1]).atan2(s[0] - center[0]);
+        let theta_end = (e[1] - center[1]).atan2(e[0] - center[0]);
+        let full = (e[0] - s[0]).hypot(e[1] - s[1]) < 1e-9;
+        let mut sweep = theta_end - theta_start;
+        if clockwise {
+            if full {
+                sweep = -2.0 * PI;
+            }
+            while sweep >= 0.0 {
+                sweep -= 2.0 * PI;
+            }
+        } else {
+            if full {
+                sweep = 2.0 * PI;
+            }
+            while sweep <= 0.0 {
+                sweep += 2.0 * PI;
+            }
+        }
+        let extra = 2.0 * PI * (turns.max(1) - 1) as f64;
+        sweep += if clockwise { -extra } else { extra };
+        Ok(Arc {
+            plane,
+            start,
+            end,
+            center,
+            r_start,
+            r_end,
+            theta_start,
+            sweep,
+        })
+    }
+
+    /// The arc of signed radius `r` (R word): positive takes the short way (≤ 180°),
+    /// negative the long way.
+    pub fn from_radius(
+        start: [f64; 3],
+        end: [f64; 3],
+        r: f64,
+        plane: Plane,
+        clockwise: bool,
+    ) -> Result<Arc, String> {
+        let s = in_plane(&start, plane);
+        let e = in_plane(&end, plane);
+        let chord = (e[0] - s[0]).hypot(e[1] - s[1]);
+        if chord < 1e-9 {
+            return Err("an R-format arc cannot have its end point at its start point".into());
+        }
+        let half = chord / 2.0;
+        let h2 = r * r - half * half;
+        let h = if h2 >= 0.0 {
+            h2.sqrt()
+        } else if half - r.abs() <= RADIUS_MISMATCH_MM.max(RADIUS_MISMATCH_REL * r.abs()) {
+            0.0
+        } else {
+            return Err(format!(
+                "arc radius {:.6} mm is smaller than half the distance between its end points ({half:.6} mm)",
+                r.abs()
+            ));
+        };
+        let u = [(e[0] - s[0]) / chord, (e[1] - s[1]) / chord];
+        let left = [-u[1], u[0]];
+        // the centre lies left of S→E for a short counter-clockwise arc (and right for G2)
+        let side = if clockwise { -1.0 } else { 1.0 } * r.signum();
+        let m = [(s[0] + e[0]) / 2.0, (s[1] + e[1]) / 2.0];
+        let center = [m[0] + side * h * left[0], m[1] + side * h * left[1]];
+        Arc::from_center(start, end, center, plane, clockwise, 1)
+    }
+
+    /// The point at fraction `t` ∈ [0, 1] of the sweep; `t = 1` is exactly the end point.
+    pub fn point(&self, t: f64) -> [f64; 3] {
+        if t >= 1.0 {
+            return self.end;
+        }
+        if t <= 0.0 {
+            return self.start;
+        }
+        let theta = self.theta_start + self.sweep * t;
+        let r = self.r_start + (self.r_end - self.r_start) * t;
+        let mut p = [0.0; 3];
+        p[self.plane.first] = self.center[0] + r * theta.cos();
+        p[self.plane.second] = self.center[1] + r * theta.sin();
+        let n = self.plane.normal;
+        p[n] = self.start[n] + (self.end[n] - self.start[n]) * t;
+        p
+    }
+
+    /// Number of chords so that each chord's sagitta r·(1 − cos(Δθ/2)) is at most `chord_tol_mm`.
+    pub fn chord_count(&self, chord_tol_mm: f64) -> usize {
+        let r = self.r_start.max(self.r_end);
+        let max_step = if chord_tol_mm >= r {
+            PI / 2.0
+        } else {
+            (2.0 * (1.0 - chord_tol_mm / r).acos()).min(PI / 2.0)
+        };
+        ((self.sweep.abs() / max_step).ceil() as usize).max(1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: [f64; 3], b: [f64; 3]) -> bool {
+        (0..3).all(|i| (a[i] - b[i]).abs() < 1e-9)
+    }
+
+    #[test]
+    fn quarter_circle_ccw_from_radius() {
+        // G17 G3 from (1,0) to (0,1) with R1: centre at the origin, +90°
+        let a = Arc::from_radius([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 1.0, XY, false).unwrap();
+        assert!(a.center[0].abs() < 1e-12 && a.center[1].abs() < 1e-12);
+        assert!((a.sweep - PI / 2.0).abs() < 1e-12);
+        let mid = a.point(0.5);
+        let s = 0.5f64.sqrt();
+        assert!(close(mid, [s, s, 0.0]));
+        // G2 with R1: centre at (1,1), clockwise 90°
+        let b = Arc::from_radius([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 1.0, XY, true).unwrap();
+        assert!((b.center[0] - 1.0).abs() < 1e-12 && (b.center[1] - 1.0).abs() < 1e-12);
+        assert!((b.sweep + PI / 2.0).abs() < 1e-12);
+        // negative R: the long way round (270°)
+        let c = Arc::from_radius([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], -1.0, XY, false).unwrap();
+        assert!((c.sweep - 1.5 * PI).abs() < 1e-12);
+    }
+
+    #[test]
+    fn full_circle_helix_and_zx_plane() {
+        let a =
+            Arc::from_center([1.0, 0.0, 0.0], [1.0, 0.0, -2.0], [0.0, 0.0], XY, true, 2).unwrap();
+        assert!((a.sweep + 4.0 * PI).abs() < 1e-12);
+        assert!(close(a.point(0.25), [-1.0, 0.0, -0.5]));
+        assert!(close(a.point(0.5), [1.0, 0.0, -1.0]));
+        assert_eq!(a.point(1.0), [1.0, 0.0, -2.0]);
+        // G18 G3 from X1 Z0 about the origin: plane (Z, X); a quarter turn CCW moves to Z1? the
+        // point (z, x) = (0, 1) at 90° goes to 180° = (-1, 0): Z-1, X0.
+        let b =
+            Arc::from_center([1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 0.0], ZX, false, 1).unwrap();
+        assert!((b.sweep - PI / 2.0).abs() < 1e-12);
+        let mid = b.point(0.5);
+        let s = 0.5f64.sqrt();
+        assert!(close(mid, [s, 0.0, -s]));
+    }
+
+    #[test]
+    fn chord_count_meets_sagitta() {
+        let a =
+            Arc::from_center([10.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 0.0], XY, false, 1).unwrap();
+        let n = a.chord_count(0.5e-3);
+        let dtheta = a.sweep / n as f64;
+        assert!(10.0 * (1.0 - (dtheta / 2.0).cos()) <= 0.5e-3 + 1e-15);
+        assert!(
+            Arc::from_center([1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0], XY, false, 1).is_err()
+        );
+        assert!(Arc::from_radius([0.0, 0.0, 0.0], [3.0, 0.0, 0.0], 1.0, XY, false).is_err());
+    }
+}

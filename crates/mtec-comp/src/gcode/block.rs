@@ -1,0 +1,145 @@
+//! One block (line) read into the words the rewriter cares about, with their token indices.
+//!
+//! The block keeps references into the token list, never copies of the text: an edit later
+//! replaces exactly the bytes of one word's value.
+
+use super::lexer::{Token, TokenKind, Value};
+
+/// A word of the block: its value and the index of its token.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WordRef {
+    pub value: Value,
+    pub token: usize,
+}
+
+/// A construct the rewriter does not compensate, located by its token.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Issue {
+    pub token: Option<usize>,
+    pub message: String,
+    /// True when the construct may change state the rewriter tracks in ways it cannot follow
+    /// (subroutines, control flow, offsets written by parameters, unknown G-codes).
+    pub poisons_all: bool,
+}
+
+/// The words of one block, by letter.
+#[derive(Debug, Default)]
+pub struct Block {
+    pub block_delete: bool,
+    pub percent: bool,
+    /// G-codes times ten (G59.1 → 591) with their token index.
+    pub g: Vec<(u32, usize)>,
+    pub m: Vec<(u32, usize)>,
+    /// A..Z words other than G, M, N (index: letter − b'A'); `@` and `^` in `polar`.
+    pub letters: [Option<WordRef>; 26],
+    pub polar: Option<usize>,
+    pub issues: Vec<Issue>,
+    /// Index of the first word token after the line number (where a motion word is inserted).
+    pub first_word: Option<usize>,
+}
+
+impl Block {
+    pub fn word(&self, letter: u8) -> Option<WordRef> {
+        self.letters[(letter - b'A') as usize]
+    }
+
+    pub fn has_g(&self, code10: u32) -> Option<usize> {
+        self.g.iter().find(|(c, _)| *c == code10).map(|(_, t)| *t)
+    }
+
+    pub fn has_m(&self, code: u32) -> Option<usize> {
+        self.m.iter().find(|(c, _)| *c == code).map(|(_, t)| *t)
+    }
+
+    fn issue(&mut self, token: usize, message: impl Into<String>, poisons_all: bool) {
+        self.issues.push(Issue {
+            token: Some(token),
+            message: message.into(),
+            poisons_all,
+        });
+    }
+
+    /// Reads the tokens of a line into a block; constructs that cannot be compensated are
+    /// collected in `issues` (in order of appearance), not refused here.
+    pub fn read(tokens: &[Token], line: &[u8]) -> Block {
+        let mut b = Block::default();
+        for (i, t) in tokens.iter().enumerate() {
+            match t.kind {
+                TokenKind::BlockDelete => b.block_delete = true,
+                TokenKind::Percent => b.percent = true,
+                TokenKind::Comment => {}
+                TokenKind::OWord { keyword } => {
+                    if keyword {
+                        b.issue(
+                            i,
+                            "O-word control flow or subroutine (sub/call/if/while/…): the path depends on run-time values",
+                            true,
+                        );
+                    }
+                }
+                TokenKind::Assignment { param, named } => match (param, named) {
+                    (_, true) => {}
+                    (Some(n), false) if n < 5000 => {}
+                    (Some(n), false) => b.issue(
+                        i,
+                        format!("assignment to system parameter #{n} (offsets and machine state live there)"),
+                        true,
+                    ),
+                    (None, false) => b.issue(i, "assignment to an indirect parameter", true),
+                },
+                TokenKind::Word { letter, value } => {
+                    if b.first_word.is_none() && letter != b'N' {
+                        b.first_word = Some(i);
+                    }
+                    match letter {
+                        b'G' | b'M' => {
+                            let Value::Number(v) = value else {
+                                b.issue(
+                                    i,
+                                    format!(
+                                        "{} word with a parameter or expression: the mode cannot be known before run time",
+                                        letter as char
+                                    ),
+                                    true,
+                                );
+                                continue;
+                            };
+                            let code10 = (v * 10.0).round();
+                            if v < 0.0 || (v * 10.0 - code10).abs() > 1e-6 || code10 > 1e7 {
+                                b.issue(i, format!("{} code {v} is not a known code", letter as char), true);
+                                continue;
+                            }
+                            if letter == b'G' {
+                                b.g.push((code10 as u32, i));
+                            } else if code10 as u32 % 10 != 0 {
+                                b.issue(i, format!("M code {v} is not a known code", ), true);
+                            } else {
+                                b.m.push((code10 as u32 / 10, i));
+                            }
+                        }
+                        b'N' => {}
+                        b'@' | b'^' => {
+                            if b.polar.is_none() {
+                                b.polar = Some(i);
+                            }
+                        }
+                        l => {
+                            let k = (l - b'A') as usize;
+                            if b.letters[k].is_some() {
+                                b.issue(
+                                    i,
+                                    format!("two {} words in one block", l as char),
+                                    true,
+                                );
+                            } else {
+                                b.letters[k] = Some(WordRef { value, token: i });
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let _ = line;
+        b
+    }
+}

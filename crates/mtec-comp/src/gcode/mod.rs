@@ -1,0 +1,55 @@
+//! G-code rewriting: the commanded points of an NC program corrected so the machine cuts true.
+//!
+//! The method (SPEC §1 C, "the ideal NC program is reconstructed by adding the reversed error to
+//! each commanded position"): for every commanded point `t` the rewritten program commands
+//! `p = t + c` where `p + e(p) = t` ([`solve`]). Feed moves are split where the correction
+//! changes along them, arcs are linearised where it varies along the arc, rapids are corrected
+//! at their end points only.
+//!
+//! Design decisions (the spec is silent on these):
+//! - **Our own lexer** ([`lexer`]): each line's text is kept; only the words that change are
+//!   edited, so comments, line numbers, unknown words, spacing, letter case and line endings
+//!   (LF or CRLF, a missing last newline, bytes inside comments) survive as they were.
+//! - **Zero model ⇒ byte-identical output.** A word whose correction is exactly zero keeps its
+//!   text, no axis word is added when the output position does not change, and the
+//!   `--max-segment-mm` split only applies to moves with a non-zero correction.
+//! - **Provenance header, written lazily**: the comment naming the model and the knobs is
+//!   written just before the first line that changes. A program the model leaves untouched
+//!   (a zero model) therefore stays byte-identical, and in a compensated program the comment
+//!   still precedes every corrected line. (A `%` first line stays first.)
+//! - **Split pieces**: the original line becomes the first piece (so its other words — F, S,
+//!   M3, G91, its line number and comments — act first, as the controller orders a block), the
+//!   other pieces follow as new `G1` lines without line numbers. A piece is accepted when the
+//!   correction at its end and at its middle differ from the one at its start by less than
+//!   `--tolerance-um`; the last piece ends exactly at the original target plus its correction.
+//! - **Arcs**: kept as arcs (only the end point, and in G90.1 the centre, edited) when the
+//!   correction varies by less than half the tolerance along 16 samples; otherwise replaced by
+//!   chords of sagitta ≤ `--chord-tolerance-um`, each split like a feed move. A block relying
+//!   on the modal G2/G3 after a linearised arc gets its G2/G3 word back.
+//! - **Rounding**: changed words are written with 4 decimals in mm and 5 in inch (configurable);
+//!   positions are tracked as the rounded output commands, so incremental (G91) programs do
+//!   not drift.
+//! - **Unsupported constructs** (parameters/expressions in motion words, O-word subroutines and
+//!   control flow, canned cycles, G41/G42, G93, G10/G92, rotary or polar axis words, M98/M99,
+//!   block delete on motion) are refused naming `line:column`, or with
+//!   [`OnUnsupported::PassThroughWithWarning`] copied unchanged with a warning; everything the
+//!   construct may have changed is then treated as unknown until the program sets it again.
+//! - **Positions not yet known** (the first moves of a program, after G28/G30): rapids are
+//!   copied uncorrected; feed moves to a known end point from an unknown start are corrected at
+//!   their end point only; arcs from an unknown start are unsupported.
+//! - Lines after a closing `%` tape mark are copied untouched (the controller never reads them).
+
+pub mod arc;
+pub mod block;
+pub mod format;
+pub mod lexer;
+pub mod offsets;
+pub mod rewrite;
+pub mod solve;
+
+pub use offsets::{Offsets, OffsetsFile};
+pub use rewrite::{
+    header_comment, rewrite, Diagnostic, GcodeError, OnUnsupported, ProblemKind, RewriteOptions,
+    RewriteReport, Units,
+};
+pub use solve::{correction_mm, SolveError};

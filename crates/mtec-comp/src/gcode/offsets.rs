@@ -1,0 +1,145 @@
+//! Work offsets and tool lengths: how program coordinates become machine coordinates.
+//!
+//! The error model is a function of the machine (axis) position, while a program commands the
+//! tool tip in a work coordinate system. With work offset `w` (G54–G59.3) and tool length `L`
+//! (G43, along Z), `machine = program + w + [0, 0, L]` (LinuxCNC's convention; G53 blocks use
+//! machine coordinates directly). The offsets come from a TOML file (`--offsets`):
+//!
+//! ```toml
+//! format = "mtec.gcode-offsets/1"
+//! active = "G54"                      # the system in effect at program start (default G54)
+//! [work_offsets_mm]
+//! G54 = [250.0, 120.0, -300.0]
+//! G55 = [0.0, 0.0, 0.0]
+//! [tool_lengths_mm]
+//! 1 = 85.25
+//! 4 = 102.0
+//! ```
+//!
+//! Decision: without an offsets file every work offset is zero (program coordinates are used as
+//! machine coordinates) and no tool has a known length, so `G43` is an unsupported construct —
+//! evaluating the model at a point off by a tool length would compensate the wrong place.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+
+/// The offsets file, as read from TOML.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OffsetsFile {
+    #[serde(default)]
+    pub format: Option<String>,
+    #[serde(default)]
+    pub active: Option<String>,
+    #[serde(default)]
+    pub work_offsets_mm: BTreeMap<String, [f64; 3]>,
+    #[serde(default)]
+    pub tool_lengths_mm: BTreeMap<String, f64>,
+}
+
+/// Work offsets (indexed by [`work_system_index`]) and tool lengths, validated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Offsets {
+    /// Offsets of G54, G55, G56, G57, G58, G59, G59.1, G59.2, G59.3 in mm.
+    pub work_mm: [[f64; 3]; 9],
+    /// Index of the system in effect at program start.
+    pub active: usize,
+    /// Tool number → length in mm.
+    pub tool_length_mm: BTreeMap<u32, f64>,
+}
+
+impl Default for Offsets {
+    fn default() -> Self {
+        Offsets {
+            work_mm: [[0.0; 3]; 9],
+            active: 0,
+            tool_length_mm: BTreeMap::new(),
+        }
+    }
+}
+
+/// The names of the work coordinate systems, in index order.
+pub const WORK_SYSTEMS: [&str; 9] = [
+    "G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3",
+];
+
+/// Index of a work system from its G-code times ten (540 → 0, …, 593 → 8).
+pub fn work_system_index(code10: u32) -> Option<usize> {
+    match code10 {
+        540 | 550 | 560 | 570 | 580 | 590 => Some(((code10 - 540) / 10) as usize),
+        591..=593 => Some((code10 - 591) as usize + 6),
+        _ => None,
+    }
+}
+
+impl OffsetsFile {
+    /// Validates names and values; the error names the offending key.
+    pub fn validate(&self) -> Result<Offsets, String> {
+        if let Some(f) = &self.format {
+            if f != "mtec.gcode-offsets/1" {
+                return Err(format!("format '{f}' is not 'mtec.gcode-offsets/1'"));
+            }
+        }
+        let find = |name: &str| {
+            WORK_SYSTEMS
+                .iter()
+                .position(|s| s.eq_ignore_ascii_case(name.trim()))
+                .ok_or_else(|| {
+                    format!(
+                        "'{name}' is not a work coordinate system (one of {})",
+                        WORK_SYSTEMS.join(", ")
+                    )
+                })
+        };
+        let mut out = Offsets::default();
+        for (name, v) in &self.work_offsets_mm {
+            let i = find(name)?;
+            if !v.iter().all(|x| x.is_finite()) {
+                return Err(format!("work offset {name} is not finite"));
+            }
+            out.work_mm[i] = *v;
+        }
+        if let Some(a) = &self.active {
+            out.active = find(a)?;
+        }
+        for (k, len) in &self.tool_lengths_mm {
+            let t: u32 = k
+                .trim()
+                .parse()
+                .map_err(|_| format!("tool '{k}' is not a tool number"))?;
+            if !len.is_finite() {
+                return Err(format!("tool {t} length is not finite"));
+            }
+            out.tool_length_mm.insert(t, *len);
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_and_indices() {
+        assert_eq!(work_system_index(540), Some(0));
+        assert_eq!(work_system_index(590), Some(5));
+        assert_eq!(work_system_index(593), Some(8));
+        assert_eq!(work_system_index(541), None);
+        let f = OffsetsFile {
+            active: Some("g55".into()),
+            work_offsets_mm: [("G59.2".to_string(), [1.0, 2.0, 3.0])].into(),
+            tool_lengths_mm: [("4".to_string(), 102.0)].into(),
+            ..Default::default()
+        };
+        let o = f.validate().unwrap();
+        assert_eq!(o.active, 1);
+        assert_eq!(o.work_mm[7], [1.0, 2.0, 3.0]);
+        assert_eq!(o.tool_length_mm[&4], 102.0);
+        let bad = OffsetsFile {
+            work_offsets_mm: [("G60".to_string(), [0.0; 3])].into(),
+            ..Default::default()
+        };
+        assert!(bad.validate().unwrap_err().contains("G60"));
+    }
+}

@@ -1,0 +1,1457 @@
+//! The streaming rewriter: reads a program line by line, tracks the modal state, and writes each
+//! line either byte for byte or with only the changed words edited, plus the lines of split moves.
+
+use super::arc::{self, Arc, Plane};
+use super::block::{Block, Issue};
+use super::format::{apply_edits, format_number, Edit};
+use super::lexer::{lex_line, Token, TokenKind, Value};
+use super::offsets::{work_system_index, Offsets};
+use super::solve::{correction_mm, SolveError};
+use crate::ErrorModel;
+use std::io::{BufRead, Write};
+
+/// What to do with a construct that cannot be compensated safely.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum OnUnsupported {
+    /// Stop with an error naming the line and column (the default).
+    #[default]
+    Refuse,
+    /// Copy the line unchanged, record a warning, and stop compensating whatever the construct
+    /// may have changed (positions, modes) until the program sets it again explicitly.
+    PassThroughWithWarning,
+}
+
+/// Length units of the program.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Units {
+    Mm,
+    Inch,
+}
+
+impl Units {
+    fn mm_per_unit(self) -> f64 {
+        match self {
+            Units::Mm => 1.0,
+            Units::Inch => 25.4,
+        }
+    }
+}
+
+/// The knobs of the rewriter (every one has a CLI flag of the same name).
+#[derive(Debug, Clone)]
+pub struct RewriteOptions {
+    /// Largest change of the correction along one output piece, µm (`--tolerance-um`).
+    pub tolerance_um: f64,
+    /// Longest output piece of a compensated feed move, mm (`--max-segment-mm`).
+    pub max_segment_mm: f64,
+    /// Largest sagitta of a chord when an arc is linearised, µm (`--chord-tolerance-um`).
+    pub chord_tolerance_um: f64,
+    /// Corrections larger than this are refused, µm (`--max-correction-um`).
+    pub max_correction_um: f64,
+    pub on_unsupported: OnUnsupported,
+    /// Digits after the point of rewritten words in mm and in inch programs.
+    pub decimals_mm: usize,
+    pub decimals_inch: usize,
+    /// Units in effect before the program's first G20/G21 (the controller's power-on default).
+    pub default_units: Units,
+    pub offsets: Offsets,
+    /// A single move split into more pieces than this is an error (a runaway model).
+    pub max_pieces_per_move: usize,
+    /// Machine position (mm) at program start, when known (e.g. the home position; on a lathe
+    /// the Y position that programs never state). `None`: unknown until programmed.
+    pub start_position_mm: Option<[f64; 3]>,
+}
+
+impl Default for RewriteOptions {
+    fn default() -> Self {
+        RewriteOptions {
+            tolerance_um: 0.5,
+            max_segment_mm: 10.0,
+            chord_tolerance_um: 0.5,
+            max_correction_um: 500.0,
+            on_unsupported: OnUnsupported::Refuse,
+            decimals_mm: 4,
+            decimals_inch: 5,
+            default_units: Units::Mm,
+            offsets: Offsets::default(),
+            max_pieces_per_move: 1_000_000,
+            start_position_mm: None,
+        }
+    }
+}
+
+impl RewriteOptions {
+    /// Checks that the numbers make sense; the message names the option.
+    pub fn validate(&self) -> Result<(), String> {
+        let pos = |v: f64, name: &str| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("{name} must be a positive number, not {v}"))
+            }
+        };
+        pos(self.tolerance_um, "--tolerance-um")?;
+        pos(self.chord_tolerance_um, "--chord-tolerance-um")?;
+        pos(self.max_correction_um, "--max-correction-um")?;
+        if !(self.max_segment_mm > 0.0) {
+            return Err(format!(
+                "--max-segment-mm must be positive, not {}",
+                self.max_segment_mm
+            ));
+        }
+        if self.decimals_mm > 9 || self.decimals_inch > 9 {
+            return Err("--decimals must be at most 9".into());
+        }
+        Ok(())
+    }
+}
+
+/// What kind of problem stopped the rewrite.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProblemKind {
+    /// The line cannot be read (lexer error, two X words, …).
+    Syntax,
+    /// A construct the rewriter does not compensate (`--on-unsupported`).
+    Unsupported,
+    /// The correction could not be computed (non-convergence, too large, non-finite).
+    Correction,
+}
+
+/// A located problem: line and column are 1-based.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Diagnostic {
+    pub line: usize,
+    pub column: usize,
+    pub kind: ProblemKind,
+    pub message: String,
+}
+
+impl std::fmt::Display for Diagnostic {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}:{}: {}", self.line, self.column, self.message)
+    }
+}
+
+/// Why a rewrite failed.
+#[derive(Debug, thiserror::Error)]
+pub enum GcodeError {
+    #[error("{0}")]
+    At(Diagnostic),
+    #[error("{0}")]
+    Io(#[from] std::io::Error),
+}
+
+/// What a rewrite did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RewriteReport {
+    pub lines_read: usize,
+    pub lines_written: usize,
+    /// Motion blocks whose end point (or path) was corrected.
+    pub moves_compensated: usize,
+    /// Lines added by splitting moves and linearising arcs.
+    pub lines_added: usize,
+    pub arcs_linearised: usize,
+    /// Rapid moves left uncompensated because an axis position was not yet known.
+    pub rapids_not_compensated: usize,
+    /// Feed moves compensated at their end point only (their start position was not known).
+    pub moves_end_point_only: usize,
+    pub max_correction_um: f64,
+    /// The first warnings (at most [`MAX_WARNINGS_KEPT`]) and how many there were in all.
+    pub warnings: Vec<Diagnostic>,
+    pub warnings_total: usize,
+    pub header_written: bool,
+}
+
+/// Warnings kept in the report; the rest are only counted.
+pub const MAX_WARNINGS_KEPT: usize = 100;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Motion {
+    Rapid,
+    Linear,
+    Cw,
+    Ccw,
+    /// G80: no motion mode; axis words alone are an error.
+    Cancelled,
+    /// After an unsupported motion code (canned cycle, probing, …) or poisoning.
+    Unknown,
+}
+
+impl Motion {
+    fn code(self) -> &'static str {
+        match self {
+            Motion::Rapid => "G0",
+            Motion::Linear => "G1",
+            Motion::Cw => "G2",
+            Motion::Ccw => "G3",
+            _ => "",
+        }
+    }
+}
+
+/// Modal state of the program as the controller would see it; `None` = not known.
+#[derive(Debug, Clone)]
+struct State {
+    /// Where the program's commands put the tool, machine frame, mm.
+    prog: [Option<f64>; 3],
+    /// Where the rewritten program's commands put the axes, machine frame, mm (as rounded).
+    out: [Option<f64>; 3],
+    units: Option<Units>,
+    absolute: Option<bool>,
+    arc_absolute: Option<bool>,
+    plane: Option<Plane>,
+    work: Option<usize>,
+    tool_length_mm: Option<f64>,
+    selected_tool: Option<u32>,
+    current_tool: Option<u32>,
+    motion: Motion,
+    out_motion: Motion,
+    cutter_comp: bool,
+    inverse_time: bool,
+}
+
+/// Rewrites a program from `input` to `output`, line by line (memory does not grow with the
+/// file). `name` is only used in the header comment.
+pub fn rewrite<R: BufRead, W: Write>(
+    input: R,
+    output: W,
+    model: &dyn ErrorModel,
+    options: &RewriteOptions,
+) -> Result<RewriteReport, GcodeError> {
+    let mut rw = Rewriter::new(model, options);
+    rw.run(input, output)?;
+    Ok(rw.report)
+}
+
+struct Rewriter<'a> {
+    model: &'a dyn ErrorModel,
+    opt: &'a RewriteOptions,
+    st: State,
+    report: RewriteReport,
+    line_no: usize,
+    tokens: Vec<Token>,
+    edits: Vec<Edit>,
+    extra_lines: Vec<String>,
+    out_buf: Vec<u8>,
+    tape_started: bool,
+    tape_ended: bool,
+    seen_content: bool,
+    /// The current line writes its letters in lower case (new words follow it).
+    lower: bool,
+    /// The motion of the current block was written (by `emit_pieces` or as an uncorrected rapid).
+    emitted: bool,
+}
+
+/// A target point with the correction to apply there.
+type Piece = ([f64; 3], [f64; 3]);
+
+impl<'a> Rewriter<'a> {
+    fn new(model: &'a dyn ErrorModel, opt: &'a RewriteOptions) -> Self {
+        Rewriter {
+            model,
+            opt,
+            st: State {
+                prog: opt
+                    .start_position_mm
+                    .map(|p| p.map(Some))
+                    .unwrap_or([None; 3]),
+                out: opt
+                    .start_position_mm
+                    .map(|p| p.map(Some))
+                    .unwrap_or([None; 3]),
+                units: Some(opt.default_units),
+                absolute: Some(true),
+                arc_absolute: Some(false),
+                plane: Some(arc::XY),
+                work: Some(opt.offsets.active),
+                tool_length_mm: Some(0.0),
+                selected_tool: None,
+                current_tool: None,
+                motion: Motion::Cancelled,
+                out_motion: Motion::Cancelled,
+                cutter_comp: false,
+                inverse_time: false,
+            },
+            report: RewriteReport::default(),
+            line_no: 0,
+            tokens: Vec::new(),
+            edits: Vec::new(),
+            extra_lines: Vec::new(),
+            out_buf: Vec::new(),
+            tape_started: false,
+            tape_ended: false,
+            seen_content: false,
+            lower: false,
+            emitted: false,
+        }
+    }
+
+    fn run<R: BufRead, W: Write>(&mut self, mut input: R, mut output: W) -> Result<(), GcodeError> {
+        let mut buf = Vec::with_capacity(256);
+        loop {
+            buf.clear();
+            let n = input.read_until(b'\n', &mut buf)?;
+            if n == 0 {
+                break;
+            }
+            self.line_no += 1;
+            self.report.lines_read += 1;
+            let mut body_end = buf.len();
+            if buf[body_end - 1] == b'\n' {
+                body_end -= 1;
+                if body_end > 0 && buf[body_end - 1] == b'\r' {
+                    body_end -= 1;
+                }
+            }
+            let (body, ending) = buf.split_at(body_end);
+            self.line(body, ending, &mut output)?;
+        }
+        output.flush()?;
+        Ok(())
+    }
+
+    fn diag(&self, column: usize, kind: ProblemKind, message: String) -> Diagnostic {
+        Diagnostic {
+            line: self.line_no,
+            column,
+            kind,
+            message,
+        }
+    }
+
+    fn column_of(&self, token: Option<usize>) -> usize {
+        token
+            .and_then(|t| self.tokens.get(t))
+            .map(|t| t.span.start + 1)
+            .unwrap_or(1)
+    }
+
+    /// Refuses, or records a warning and returns Ok (the caller passes the line through).
+    fn unsupported(&mut self, d: Diagnostic) -> Result<(), GcodeError> {
+        match self.opt.on_unsupported {
+            OnUnsupported::Refuse => Err(GcodeError::At(d)),
+            OnUnsupported::PassThroughWithWarning => {
+                self.report.warnings_total += 1;
+                if self.report.warnings.len() < MAX_WARNINGS_KEPT {
+                    self.report.warnings.push(d);
+                }
+                Ok(())
+            }
+        }
+    }
+
+    fn poison_all(&mut self) {
+        let st = &mut self.st;
+        st.prog = [None; 3];
+        st.out = [None; 3];
+        st.units = None;
+        st.absolute = None;
+        st.arc_absolute = None;
+        st.plane = None;
+        st.work = None;
+        st.tool_length_mm = None;
+        st.motion = Motion::Unknown;
+        st.out_motion = Motion::Unknown;
+    }
+
+    fn write_verbatim<W: Write>(
+        &mut self,
+        body: &[u8],
+        ending: &[u8],
+        output: &mut W,
+    ) -> Result<(), GcodeError> {
+        output.write_all(body)?;
+        output.write_all(ending)?;
+        self.report.lines_written += 1;
+        Ok(())
+    }
+
+    fn line<W: Write>(
+        &mut self,
+        body: &[u8],
+        ending: &[u8],
+        output: &mut W,
+    ) -> Result<(), GcodeError> {
+        if self.tape_ended {
+            return self.write_verbatim(body, ending, output);
+        }
+        let start = if self.line_no == 1 && body.starts_with(b"\xEF\xBB\xBF") {
+            3
+        } else {
+            0
+        };
+        let mut tokens = std::mem::take(&mut self.tokens);
+        let lexed = lex_line(body, start, &mut tokens);
+        self.tokens = tokens;
+        if let Err(e) = lexed {
+            let d = self.diag(e.column, ProblemKind::Syntax, e.message);
+            self.unsupported(d)?;
+            self.poison_all();
+            return self.write_verbatim(body, ending, output);
+        }
+        let block = Block::read(&self.tokens, body);
+        self.lower = self
+            .tokens
+            .iter()
+            .find(|t| matches!(t.kind, TokenKind::Word { .. }))
+            .map(|t| body[t.span.start].is_ascii_lowercase())
+            .unwrap_or(false);
+        if block.percent {
+            if !self.seen_content {
+                self.tape_started = true;
+            } else if self.tape_started {
+                self.tape_ended = true;
+            }
+            self.seen_content = true;
+            return self.write_verbatim(body, ending, output);
+        }
+        if !self.tokens.is_empty() {
+            self.seen_content = true;
+        }
+        self.edits.clear();
+        self.extra_lines.clear();
+        let handled = self.block(&block, body)?;
+        if !handled || (self.edits.is_empty() && self.extra_lines.is_empty()) {
+            return self.write_verbatim(body, ending, output);
+        }
+        if !self.report.header_written {
+            self.report.header_written = true;
+            let header = header_comment(self.model, self.opt);
+            output.write_all(header.as_bytes())?;
+            output.write_all(if ending.is_empty() { b"\n" } else { ending })?;
+            self.report.lines_written += 1;
+        }
+        self.out_buf.clear();
+        let mut edits = std::mem::take(&mut self.edits);
+        apply_edits(body, &mut edits, &mut self.out_buf);
+        self.edits = edits;
+        let sep: &[u8] = if ending.is_empty() { b"\n" } else { ending };
+        for l in &self.extra_lines {
+            self.out_buf.extend_from_slice(sep);
+            self.out_buf.extend_from_slice(l.as_bytes());
+        }
+        self.out_buf.extend_from_slice(ending);
+        output.write_all(&self.out_buf)?;
+        self.report.lines_written += 1 + self.extra_lines.len();
+        self.report.lines_added += self.extra_lines.len();
+        Ok(())
+    }
+
+    /// Interprets one block; fills `edits` / `extra_lines`. Returns false when the line is to be
+    /// passed through unchanged because of an unsupported construct (already warned).
+    fn block(&mut self, b: &Block, body: &[u8]) -> Result<bool, GcodeError> {
+        let mut issues: Vec<Issue> = b.issues.clone();
+        let axis_letters = [b'X', b'Y', b'Z'];
+        let has_xyz = axis_letters.iter().any(|&l| b.word(l).is_some());
+        let other_axis = [b'A', b'B', b'C', b'U', b'V', b'W']
+            .into_iter()
+            .find(|&l| b.word(l).is_some());
+        let has_axis = has_xyz || other_axis.is_some() || b.polar.is_some();
+
+        if b.block_delete {
+            let meaningful = !b.g.is_empty()
+                || b.m.iter().any(|(m, _)| matches!(m, 2 | 6 | 30 | 98 | 99))
+                || has_axis
+                || [b'T', b'H', b'I', b'J', b'K', b'R', b'P']
+                    .iter()
+                    .any(|&l| b.word(l).is_some());
+            if meaningful {
+                issues.push(Issue {
+                    token: Some(0),
+                    message: "block delete '/' on a block with motion or modal codes: whether it runs depends on the operator's switch".into(),
+                    poisons_all: true,
+                });
+            }
+        }
+
+        // --- classify G codes, in order; collect issues ---------------------------------
+        let mut motion_word: Option<(Motion, usize)> = None;
+        let mut g53 = false;
+        let mut axis_consumer: Option<u32> = None; // G10, G28, G30, G92 take the axis words
+        for &(code, tok) in &b.g {
+            match code {
+                0 => motion_word = Some((Motion::Rapid, tok)),
+                10 => motion_word = Some((Motion::Linear, tok)),
+                20 => motion_word = Some((Motion::Cw, tok)),
+                30 => motion_word = Some((Motion::Ccw, tok)),
+                800 => motion_word = Some((Motion::Cancelled, tok)),
+                40 | 170 | 180 | 190 | 200 | 210 | 400 | 430 | 490 | 540 | 550 | 560 | 570
+                | 580 | 590 | 591 | 592 | 593 | 610 | 611 | 640 | 80 | 900 | 910 | 901 | 911
+                | 940 | 950 | 960 | 970 | 980 | 990 | 281 | 301 => {}
+                530 => g53 = true,
+                280 | 300 => axis_consumer = Some(code),
+                410 | 411 | 420 | 421 => issues.push(Issue {
+                    token: Some(tok),
+                    message: format!(
+                        "{}: cutter radius compensation offsets the path in the controller; compensate the offset path instead",
+                        g_name(code)
+                    ),
+                    poisons_all: false,
+                }),
+                930 => issues.push(Issue {
+                    token: Some(tok),
+                    message: "G93 inverse-time feed: splitting a move would change its duration".into(),
+                    poisons_all: false,
+                }),
+                100 | 920 | 921 | 922 | 923 | 520 => {
+                    axis_consumer = Some(code);
+                    issues.push(Issue {
+                        token: Some(tok),
+                        message: format!(
+                            "{} changes coordinate offsets or tables from the program; give offsets with --offsets instead",
+                            g_name(code)
+                        ),
+                        poisons_all: true,
+                    });
+                }
+                330 | 331 | 382 | 383 | 384 | 385 | 730 | 740 | 760 | 810 | 820 | 830 | 840
+                | 850 | 860 | 870 | 880 | 890 | 50 | 51 | 52 | 53 => {
+                    motion_word = Some((Motion::Unknown, tok));
+                    issues.push(Issue {
+                        token: Some(tok),
+                        message: format!(
+                            "{} (canned cycle, threading, probing or spline) cannot be compensated point by point",
+                            g_name(code)
+                        ),
+                        poisons_all: false,
+                    });
+                }
+                _ => issues.push(Issue {
+                    token: Some(tok),
+                    message: format!("{} is not a code the rewriter knows", g_name(code)),
+                    poisons_all: true,
+                }),
+            }
+        }
+        for &(code, tok) in &b.m {
+            if code == 98 || code == 99 {
+                issues.push(Issue {
+                    token: Some(tok),
+                    message: format!("M{code}: subprogram call or return"),
+                    poisons_all: true,
+                });
+            }
+        }
+
+        // --- modal state changes, in the controller's order of execution ------------------
+        let st = &mut self.st;
+        if b.has_g(930).is_some() {
+            st.inverse_time = true;
+        }
+        if b.has_g(940).is_some() || b.has_g(950).is_some() {
+            st.inverse_time = false;
+        }
+        if let Some(t) = b.word(b'T') {
+            st.selected_tool = match t.value {
+                Value::Number(v) if v >= 0.0 && v.fract() == 0.0 && v < 1e9 => Some(v as u32),
+                _ => None,
+            };
+        }
+        if b.has_m(6).is_some() {
+            st.current_tool = st.selected_tool;
+        }
+        for &(code, tok) in &b.g {
+            match code {
+                170 => st.plane = Some(arc::XY),
+                180 => st.plane = Some(arc::ZX),
+                190 => st.plane = Some(arc::YZ),
+                200 => st.units = Some(Units::Inch),
+                210 => st.units = Some(Units::Mm),
+                400 => st.cutter_comp = false,
+                410 | 411 | 420 | 421 => st.cutter_comp = true,
+                430 => {
+                    let tool = match b.word(b'H') {
+                        Some(h) => match h.value {
+                            Value::Number(v) if v >= 0.0 && v.fract() == 0.0 && v < 1e9 => {
+                                Some(v as u32)
+                            }
+                            _ => None,
+                        },
+                        None => st.current_tool,
+                    };
+                    st.tool_length_mm =
+                        tool.and_then(|t| self.opt.offsets.tool_length_mm.get(&t).copied());
+                    if st.tool_length_mm.is_none() {
+                        let what = match tool {
+                            Some(t) => format!("tool {t} has no length in the offsets file (--offsets, [tool_lengths_mm])"),
+                            None => "the tool is not known (no H word and no T… M6 before)".into(),
+                        };
+                        issues.push(Issue {
+                            token: Some(tok),
+                            message: format!("G43: {what}"),
+                            poisons_all: false,
+                        });
+                    }
+                }
+                490 => st.tool_length_mm = Some(0.0),
+                540 | 550 | 560 | 570 | 580 | 590 | 591 | 592 | 593 => {
+                    st.work = work_system_index(code)
+                }
+                900 => st.absolute = Some(true),
+                910 => st.absolute = Some(false),
+                901 => st.arc_absolute = Some(true),
+                911 => st.arc_absolute = Some(false),
+                _ => {}
+            }
+        }
+
+        // --- what the axis words mean ------------------------------------------------------
+        let mut motion = None;
+        if has_axis && axis_consumer.is_none() {
+            let m = motion_word.map(|(m, _)| m).unwrap_or(st.motion);
+            motion = Some(m);
+            let tok = axis_letters
+                .iter()
+                .chain([b'A', b'B', b'C', b'U', b'V', b'W'].iter())
+                .find_map(|&l| b.word(l))
+                .map(|w| w.token)
+                .or(b.polar);
+            let mut why: Option<String> = None;
+            match m {
+                Motion::Cancelled => {
+                    why = Some(
+                        "axis words with no motion mode in effect (after G80 or at program start)"
+                            .into(),
+                    )
+                }
+                Motion::Unknown => {
+                    if motion_word.is_none() {
+                        why = Some("axis words in a motion mode the rewriter cannot follow (a canned cycle repeats, or the mode was set by an unsupported line)".into())
+                    }
+                }
+                _ => {}
+            }
+            if why.is_none() && st.cutter_comp && m != Motion::Unknown {
+                why = Some("cutter radius compensation (G41/G42) is active: the controller offsets this path".into());
+            }
+            if why.is_none() && st.inverse_time && m != Motion::Rapid {
+                why = Some(
+                    "inverse-time feed (G93) is active: a split move would change its duration"
+                        .into(),
+                );
+            }
+            if why.is_none() {
+                if let Some(l) = other_axis {
+                    why = Some(format!(
+                        "axis {} moves: only X, Y and Z are compensated",
+                        l as char
+                    ));
+                } else if b.polar.is_some() {
+                    why = Some("polar coordinates (@ ^) are not supported".into());
+                }
+            }
+            if why.is_none() {
+                for l in [b'X', b'Y', b'Z', b'I', b'J', b'K', b'R', b'P'] {
+                    if l == b'P' && !matches!(m, Motion::Cw | Motion::Ccw) {
+                        continue;
+                    }
+                    if let Some(w) = b.word(l) {
+                        if w.value == Value::Computed {
+                            issues.push(Issue {
+                                token: Some(w.token),
+                                message: format!(
+                                    "{} word with a parameter or expression in a motion block",
+                                    l as char
+                                ),
+                                poisons_all: false,
+                            });
+                        }
+                    }
+                }
+            }
+            if let Some(w) = why {
+                issues.push(Issue {
+                    token: tok,
+                    message: w,
+                    poisons_all: false,
+                });
+            }
+        }
+        if let Some((m, _)) = motion_word {
+            st.motion = m;
+        }
+
+        // --- unsupported: refuse, or warn and pass through ----------------------------------
+        if !issues.is_empty() {
+            let first = issues
+                .iter()
+                .min_by_key(|i| self.column_of(i.token))
+                .cloned()
+                .unwrap_or_else(|| issues[0].clone());
+            let d = self.diag(
+                self.column_of(first.token),
+                ProblemKind::Unsupported,
+                first.message.clone(),
+            );
+            self.unsupported(d)?;
+            let mut edited = false;
+            if has_axis
+                && motion_word.is_none()
+                && axis_consumer.is_none()
+                && matches!(
+                    self.st.motion,
+                    Motion::Rapid | Motion::Linear | Motion::Cw | Motion::Ccw
+                )
+                && self.st.out_motion != self.st.motion
+            {
+                // the line is copied, but it must still move in the program's mode
+                let m = self.st.motion;
+                self.restore_motion_word(b, m, true);
+                edited = true;
+            }
+            if issues.iter().any(|i| i.poisons_all) {
+                self.poison_all();
+            } else {
+                for (a, l) in axis_letters.iter().enumerate() {
+                    if b.word(*l).is_some()
+                        || (has_axis && matches!(motion, Some(Motion::Cw | Motion::Ccw)))
+                    {
+                        self.st.prog[a] = None;
+                        self.st.out[a] = None;
+                    }
+                }
+                if motion_word.is_some() {
+                    self.st.out_motion = self.st.motion;
+                }
+            }
+            self.after_block(b);
+            return Ok(edited);
+        }
+
+        // --- G28 / G30: reference-point moves leave the axes at a position we do not know ----
+        if let Some(code) = axis_consumer {
+            debug_assert!(code == 280 || code == 300);
+            for (a, l) in axis_letters.iter().enumerate() {
+                if !has_axis || b.word(*l).is_some() {
+                    self.st.prog[a] = None;
+                    self.st.out[a] = None;
+                }
+            }
+            if motion_word.is_some() {
+                self.st.out_motion = self.st.motion;
+            }
+            self.after_block(b);
+            return Ok(true);
+        }
+
+        if let Some(m) = motion {
+            self.emitted = false;
+            let motion_tok = motion_word.map(|(_, t)| t);
+            self.motion_block(b, body, m, motion_tok, g53)?;
+            if !self.emitted {
+                // copied without compensation: it must still move in the program's mode
+                self.restore_motion_word(b, m, motion_tok.is_none());
+            }
+        } else if motion_word.is_some() {
+            self.st.out_motion = self.st.motion;
+        }
+        self.after_block(b);
+        Ok(true)
+    }
+
+    /// Program stops M2/M30 reset modes as LinuxCNC does.
+    fn after_block(&mut self, b: &Block) {
+        if b.has_m(2).is_some() || b.has_m(30).is_some() {
+            let st = &mut self.st;
+            st.work = Some(0);
+            st.plane = Some(arc::XY);
+            st.absolute = Some(true);
+            st.inverse_time = false;
+            st.cutter_comp = false;
+            st.motion = Motion::Linear;
+            // the output program is reset the same way
+            st.out_motion = Motion::Linear;
+        }
+    }
+
+    fn offset_mm(&self, axis: usize, g53: bool) -> Option<f64> {
+        if g53 {
+            return Some(0.0);
+        }
+        let w = self.opt.offsets.work_mm[self.st.work?][axis];
+        Some(if axis == 2 {
+            w + self.st.tool_length_mm?
+        } else {
+            w
+        })
+    }
+
+    fn decimals(&self) -> usize {
+        match self.st.units {
+            Some(Units::Inch) => self.opt.decimals_inch,
+            _ => self.opt.decimals_mm,
+        }
+    }
+
+    fn motion_block(
+        &mut self,
+        b: &Block,
+        body: &[u8],
+        m: Motion,
+        motion_tok: Option<usize>,
+        g53: bool,
+    ) -> Result<(), GcodeError> {
+        let first_axis_tok = [b'X', b'Y', b'Z']
+            .iter()
+            .find_map(|&l| b.word(l))
+            .map(|w| w.token);
+        let col = self.column_of(first_axis_tok.or(motion_tok));
+        let (Some(units), Some(absolute)) = (self.st.units, self.st.absolute) else {
+            let d = self.diag(
+                col,
+                ProblemKind::Unsupported,
+                "units or distance mode not known here (after an unsupported line)".into(),
+            );
+            self.unsupported(d)?;
+            self.st.prog = [None; 3];
+            self.st.out = [None; 3];
+            return Ok(());
+        };
+        if g53 && !absolute {
+            let d = self.diag(
+                col,
+                ProblemKind::Syntax,
+                "G53 needs absolute distance mode (G90)".into(),
+            );
+            return self.unsupported(d);
+        }
+        let scale = units.mm_per_unit();
+        let mut offsets = [0.0; 3];
+        for (a, off) in offsets.iter_mut().enumerate() {
+            match self.offset_mm(a, g53) {
+                Some(o) => *off = o,
+                None => {
+                    let d = self.diag(
+                        col,
+                        ProblemKind::Unsupported,
+                        "work offset or tool length not known here (after an unsupported line)"
+                            .into(),
+                    );
+                    self.unsupported(d)?;
+                    self.st.prog = [None; 3];
+                    self.st.out = [None; 3];
+                    return Ok(());
+                }
+            }
+        }
+        // target of the program, machine frame
+        let start = self.st.prog;
+        let mut target = start;
+        let mut words = [None; 3];
+        for (a, l) in [b'X', b'Y', b'Z'].iter().enumerate() {
+            if let Some(w) = b.word(*l) {
+                let Value::Number(v) = w.value else {
+                    // refused in `block` before motion is interpreted; kept safe here
+                    let d = self.diag(
+                        col,
+                        ProblemKind::Unsupported,
+                        "parameter or expression in an axis word".into(),
+                    );
+                    return self.unsupported(d);
+                };
+                words[a] = Some((v, w.token));
+                target[a] = if absolute {
+                    Some(v * scale + offsets[a])
+                } else {
+                    start[a].map(|s| s + v * scale)
+                };
+            }
+        }
+        let is_arc = matches!(m, Motion::Cw | Motion::Ccw);
+        let uses_modal = motion_tok.is_none();
+        let target_known = target.iter().all(|t| t.is_some());
+        let start_known =
+            start.iter().all(|t| t.is_some()) && self.st.out.iter().all(|t| t.is_some());
+
+        if !target_known || (is_arc && !start_known) {
+            if m == Motion::Rapid {
+                // positioning before every axis is known: copied, not compensated
+                self.report.rapids_not_compensated += 1;
+                for a in 0..3 {
+                    if let Some((v, _)) = words[a] {
+                        self.st.prog[a] = target[a];
+                        self.st.out[a] = if absolute {
+                            Some(v * scale + offsets[a])
+                        } else {
+                            self.st.out[a].map(|o| o + v * scale)
+                        };
+                    }
+                }
+                self.restore_motion_word(b, m, uses_modal);
+                self.emitted = true;
+                return Ok(());
+            }
+            let missing = (0..3)
+                .find(|&a| target[a].is_none() || (is_arc && start[a].is_none()))
+                .unwrap_or(0);
+            let d = self.diag(
+                col,
+                ProblemKind::Unsupported,
+                format!(
+                    "the position of {} is not known before this feed move (program it in an absolute move first)",
+                    ["X", "Y", "Z"][missing]
+                ),
+            );
+            self.unsupported(d)?;
+            for a in 0..3 {
+                if words[a].is_some() {
+                    self.st.prog[a] = None;
+                    self.st.out[a] = None;
+                }
+            }
+            return Ok(());
+        }
+        let target = target.map(|t| t.unwrap_or(0.0));
+        let c_end = self.correct(target, col)?;
+        let c_start = if start_known {
+            Some([0, 1, 2].map(|a| self.st.out[a].unwrap_or(0.0) - self.st.prog[a].unwrap_or(0.0)))
+        } else {
+            None
+        };
+        let start_p = start.map(|s| s.unwrap_or(0.0));
+
+        match (m, c_start) {
+            (Motion::Linear, Some(c0)) if !g53 => {
+                let mut pieces = Vec::new();
+                self.split_linear(start_p, target, c0, c_end, &mut pieces, col)?;
+                self.emit_pieces(
+                    b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false,
+                )?;
+            }
+            (Motion::Cw | Motion::Ccw, Some(c0)) => {
+                let arc = match self.arc_of(
+                    b,
+                    start_p,
+                    target,
+                    m == Motion::Cw,
+                    absolute,
+                    scale,
+                    offsets,
+                ) {
+                    Ok(a) => a,
+                    Err(msg) => {
+                        let d = self.diag(col, ProblemKind::Syntax, msg);
+                        self.unsupported(d)?;
+                        for a in 0..3 {
+                            self.st.prog[a] = None;
+                            self.st.out[a] = None;
+                        }
+                        return Ok(());
+                    }
+                };
+                let tol = self.opt.tolerance_um * 1e-3;
+                let mut keep = dist(c_end, c0) < tol / 2.0;
+                const SAMPLES: usize = 16;
+                let mut i = 1;
+                while keep && i < SAMPLES {
+                    let p = arc.point(i as f64 / SAMPLES as f64);
+                    let c = self.correct(p, col)?;
+                    keep = dist(c, c0) < tol / 2.0;
+                    i += 1;
+                }
+                if keep {
+                    // endpoints move with the correction; the centre moves with the start's
+                    if self.st.arc_absolute == Some(true) {
+                        for (a, l) in [b'I', b'J', b'K'].iter().enumerate() {
+                            if let Some(w) = b.word(*l) {
+                                if c0[a] != 0.0 {
+                                    let Value::Number(v) = w.value else { continue };
+                                    let mut s = String::new();
+                                    format_number(v + c0[a] / scale, self.decimals(), &mut s);
+                                    let span = self.tokens[w.token].value_span.clone();
+                                    if super::lexer::parse_number(s.as_bytes()) != Some(v) {
+                                        self.edits.push(Edit {
+                                            span,
+                                            text: s,
+                                            order: 0,
+                                        });
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    let pieces = [(target, c_end)];
+                    self.emit_pieces(
+                        b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false,
+                    )?;
+                } else {
+                    let n = arc.chord_count(self.opt.chord_tolerance_um * 1e-3);
+                    let mut pieces = Vec::new();
+                    let mut prev = start_p;
+                    let mut c_prev = c0;
+                    for k in 1..=n {
+                        let v = arc.point(k as f64 / n as f64);
+                        let cv = if k == n { c_end } else { self.correct(v, col)? };
+                        self.split_linear(prev, v, c_prev, cv, &mut pieces, col)?;
+                        prev = v;
+                        c_prev = cv;
+                    }
+                    self.report.arcs_linearised += 1;
+                    self.emit_pieces(
+                        b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, true,
+                    )?;
+                }
+            }
+            _ => {
+                // rapids, G53 moves and feed moves from an unknown start: end point only
+                if m != Motion::Rapid && !g53 {
+                    self.report.moves_end_point_only += 1;
+                }
+                let pieces = [(target, c_end)];
+                self.emit_pieces(
+                    b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false,
+                )?;
+            }
+        }
+        self.st.prog = target.map(Some);
+        Ok(())
+    }
+
+    /// The correction at a target (mm), with the error located at the block.
+    fn correct(&mut self, target: [f64; 3], col: usize) -> Result<[f64; 3], GcodeError> {
+        match correction_mm(self.model, target, self.opt.max_correction_um) {
+            Ok(c) => {
+                let n = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() * 1e3;
+                if n > self.report.max_correction_um {
+                    self.report.max_correction_um = n;
+                }
+                Ok(c)
+            }
+            Err(e) => {
+                let msg = match e {
+                    SolveError::NotFinite { .. }
+                    | SolveError::NotConverged { .. }
+                    | SolveError::TooLarge { .. } => {
+                        format!(
+                            "{e} (target [{:.4}, {:.4}, {:.4}] mm, machine frame)",
+                            target[0], target[1], target[2]
+                        )
+                    }
+                };
+                Err(GcodeError::At(self.diag(col, ProblemKind::Correction, msg)))
+            }
+        }
+    }
+
+    /// Splits the straight move a→b so that along each piece the correction changes by less
+    /// than the tolerance (checked at both ends and the middle) and no piece of a compensated
+    /// move is longer than `max_segment_mm`. Pushes (target, correction) of each piece's end;
+    /// the last is exactly (b, c_b).
+    fn split_linear(
+        &mut self,
+        a: [f64; 3],
+        b: [f64; 3],
+        c_a: [f64; 3],
+        c_b: [f64; 3],
+        pieces: &mut Vec<Piece>,
+        col: usize,
+    ) -> Result<(), GcodeError> {
+        let tol = self.opt.tolerance_um * 1e-3;
+        let len = dist(a, b);
+        let lerp = |t: f64| -> [f64; 3] {
+            if t >= 1.0 {
+                b
+            } else {
+                [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * t)
+            }
+        };
+        let c_mid = self.correct(lerp(0.5), col)?;
+        let zero = [0.0; 3];
+        if c_a == zero && c_b == zero && c_mid == zero {
+            pieces.push((b, c_b)); // nothing to compensate: the move is left whole
+            return Ok(());
+        }
+        let n0 = ((len / self.opt.max_segment_mm).ceil() as usize).max(1);
+        if n0 > self.opt.max_pieces_per_move {
+            return Err(self.too_many(col));
+        }
+        let start_count = pieces.len();
+        let mut t_prev = 0.0;
+        let mut c_prev = c_a;
+        for k in 1..=n0 {
+            let t1 = if k == n0 { 1.0 } else { k as f64 / n0 as f64 };
+            let c1 = if k == n0 {
+                c_b
+            } else {
+                self.correct(lerp(t1), col)?
+            };
+            // depth-first bisection of [t_prev, t1], left half first
+            let mut stack = vec![(t_prev, c_prev, t1, c1)];
+            while let Some((t0, c0, t1, c1)) = stack.pop() {
+                let tm = 0.5 * (t0 + t1);
+                let cm = if n0 == 1 && t0 == 0.0 && t1 == 1.0 {
+                    c_mid
+                } else {
+                    self.correct(lerp(tm), col)?
+                };
+                let ok = dist(c1, c0) < tol && dist(cm, c0) < tol && dist(cm, c1) < tol;
+                if ok || (t1 - t0) * len < 1e-9 {
+                    pieces.push((lerp(t1), c1));
+                    if pieces.len() - start_count > self.opt.max_pieces_per_move {
+                        return Err(self.too_many(col));
+                    }
+                } else {
+                    stack.push((tm, cm, t1, c1));
+                    stack.push((t0, c0, tm, cm));
+                }
+            }
+            t_prev = t1;
+            c_prev = c1;
+        }
+        Ok(())
+    }
+
+    fn too_many(&self, col: usize) -> GcodeError {
+        GcodeError::At(self.diag(
+            col,
+            ProblemKind::Correction,
+            format!(
+                "the move would need more than {} pieces: the error model changes too fast for --tolerance-um",
+                self.opt.max_pieces_per_move
+            ),
+        ))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn arc_of(
+        &self,
+        b: &Block,
+        start: [f64; 3],
+        end: [f64; 3],
+        clockwise: bool,
+        _absolute: bool,
+        scale: f64,
+        offsets: [f64; 3],
+    ) -> Result<Arc, String> {
+        let plane = self.st.plane.ok_or("plane not known here")?;
+        let num = |l: u8| -> Option<f64> {
+            b.word(l).map(|w| match w.value {
+                Value::Number(v) => v,
+                Value::Computed => f64::NAN,
+            })
+        };
+        let turns = match num(b'P') {
+            None => 1,
+            Some(p) if p >= 1.0 && p.fract() == 0.0 && p < 1e6 => p as u32,
+            Some(p) => return Err(format!("arc P word {p} is not a whole number of turns ≥ 1")),
+        };
+        if let Some(r) = num(b'R') {
+            if [b'I', b'J', b'K'].iter().any(|&l| b.word(l).is_some()) {
+                return Err("arc with both R and I/J/K".into());
+            }
+            if turns != 1 {
+                return Err("R-format arc with a P word".into());
+            }
+            return Arc::from_radius(start, end, r * scale, plane, clockwise);
+        }
+        let ijk = [num(b'I'), num(b'J'), num(b'K')];
+        let (f, s) = (plane.first, plane.second);
+        if ijk[plane.normal].is_some() {
+            let l = [b'I', b'J', b'K'][plane.normal] as char;
+            return Err(format!("arc offset {l} is not in the selected plane"));
+        }
+        if ijk[f].is_none() && ijk[s].is_none() {
+            return Err("arc without R or centre offsets (I, J, K) in its plane".into());
+        }
+        let center = if self.st.arc_absolute == Some(true) {
+            [
+                ijk[f].map(|v| v * scale + offsets[f]).unwrap_or(start[f]),
+                ijk[s].map(|v| v * scale + offsets[s]).unwrap_or(start[s]),
+            ]
+        } else {
+            [
+                start[f] + ijk[f].unwrap_or(0.0) * scale,
+                start[s] + ijk[s].unwrap_or(0.0) * scale,
+            ]
+        };
+        Arc::from_center(start, end, center, plane, clockwise, turns)
+    }
+
+    /// Makes sure a block that relies on the modal motion mode still moves the way the program
+    /// means, when earlier rewriting changed the mode of the output (an arc turned into G1s).
+    fn restore_motion_word(&mut self, b: &Block, m: Motion, uses_modal: bool) {
+        if uses_modal && self.st.out_motion != m && !m.code().is_empty() {
+            let tok = b.first_word.unwrap_or(0);
+            let pos = self.tokens.get(tok).map(|t| t.span.start).unwrap_or(0);
+            let text = format!("{}{}", case(m.code(), self.lower(b)), self.sep_for(b));
+            self.edits.push(Edit {
+                span: pos..pos,
+                text,
+                order: 0,
+            });
+        }
+        self.st.out_motion = m;
+    }
+
+    fn lower(&self, _b: &Block) -> bool {
+        self.lower
+    }
+
+    fn sep_for(&self, _b: &Block) -> &'static str {
+        let spaced = self
+            .tokens
+            .windows(2)
+            .any(|w| w[1].span.start > w[0].span.end);
+        if spaced {
+            " "
+        } else {
+            ""
+        }
+    }
+
+    /// Writes the pieces of one move: the first on the original line (its words edited), the
+    /// others as new `G1` lines. `linearised` arcs lose their G2/G3, I, J, K, R and P words.
+    #[allow(clippy::too_many_arguments)]
+    fn emit_pieces(
+        &mut self,
+        b: &Block,
+        body: &[u8],
+        m: Motion,
+        uses_modal: bool,
+        pieces: &[Piece],
+        words: &[Option<(f64, usize)>; 3],
+        offsets: [f64; 3],
+        absolute: bool,
+        scale: f64,
+        linearised: bool,
+    ) -> Result<(), GcodeError> {
+        let _ = body;
+        self.emitted = true;
+        let lower = self.lower(b);
+        let sep = self.sep_for(b);
+        let decimals = self.decimals();
+        // --- the original line = first piece -------------------------------------------------
+        if linearised {
+            for l in [b'I', b'J', b'K', b'R', b'P'] {
+                if let Some(w) = b.word(l) {
+                    let span = self.removal_span(body, self.tokens[w.token].span.clone());
+                    self.edits.push(Edit {
+                        span,
+                        text: String::new(),
+                        order: 0,
+                    });
+                }
+            }
+            let g1 = case("G1", lower);
+            match b.g.iter().find(|(c, _)| *c == 20 || *c == 30) {
+                Some(&(_, tok)) if !uses_modal => {
+                    let span = self.tokens[tok].span.clone();
+                    self.edits.push(Edit {
+                        span,
+                        text: g1,
+                        order: 0,
+                    });
+                }
+                _ => {
+                    if self.st.out_motion != Motion::Linear {
+                        let tok = b.first_word.unwrap_or(0);
+                        let pos = self.tokens[tok].span.start;
+                        self.edits.push(Edit {
+                            span: pos..pos,
+                            text: format!("{g1}{sep}"),
+                            order: 0,
+                        });
+                    }
+                }
+            }
+            self.st.out_motion = Motion::Linear;
+        } else {
+            self.restore_motion_word(b, m, uses_modal);
+        }
+        let edits_before = self.edits.len();
+        let insert_at = [b'X', b'Y', b'Z']
+            .iter()
+            .filter_map(|&l| b.word(l))
+            .map(|w| self.tokens[w.token].span.end)
+            .max()
+            .unwrap_or(0);
+        let (t0, c0) = pieces[0];
+        let last = pieces.len() == 1;
+        for a in 0..3 {
+            let want = t0[a] + c0[a];
+            let out_prev = self.st.out[a];
+            let letter = [b'X', b'Y', b'Z'][a];
+            match words[a] {
+                Some((v, tok)) => {
+                    let span = self.tokens[tok].value_span.clone();
+                    // exact shortcut: the final piece with the same correction as before keeps its text
+                    let delta = if absolute {
+                        c0[a]
+                    } else {
+                        c0[a] - (out_prev.unwrap_or(0.0) - self.st.prog[a].unwrap_or(0.0))
+                    };
+                    if last && delta == 0.0 {
+                        self.st.out[a] = if absolute {
+                            Some(v * scale + offsets[a])
+                        } else {
+                            out_prev.map(|o| o + v * scale)
+                        };
+                        continue;
+                    }
+                    let w = if absolute {
+                        (want - offsets[a]) / scale
+                    } else {
+                        (want - out_prev.unwrap_or(0.0)) / scale
+                    };
+                    let mut s = String::new();
+                    format_number(w, decimals, &mut s);
+                    let r = super::lexer::parse_number(s.as_bytes()).unwrap_or(w);
+                    if r != v {
+                        self.edits.push(Edit {
+                            span,
+                            text: s,
+                            order: 0,
+                        });
+                    }
+                    self.st.out[a] = if absolute {
+                        Some(r * scale + offsets[a])
+                    } else {
+                        out_prev.map(|o| o + r * scale)
+                    };
+                }
+                None => {
+                    if let Some(text) =
+                        self.new_word(a, want, offsets[a], absolute, scale, decimals)
+                    {
+                        self.edits.push(Edit {
+                            span: insert_at..insert_at,
+                            text: format!("{sep}{}{text}", case_letter(letter, lower) as char),
+                            order: 1 + a as u8,
+                        });
+                    }
+                }
+            }
+        }
+        if self.edits.len() > edits_before || pieces.len() > 1 || linearised {
+            self.report.moves_compensated += 1;
+        }
+        // --- the other pieces as new lines -----------------------------------------------
+        for &(t, c) in &pieces[1..] {
+            let mut line = case("G1", lower);
+            let mut moved = false;
+            for a in 0..3 {
+                if let Some(text) =
+                    self.new_word(a, t[a] + c[a], offsets[a], absolute, scale, decimals)
+                {
+                    line.push(' ');
+                    line.push(case_letter([b'X', b'Y', b'Z'][a], lower) as char);
+                    line.push_str(&text);
+                    moved = true;
+                }
+            }
+            if moved {
+                self.extra_lines.push(line);
+            }
+            self.st.out_motion = Motion::Linear;
+        }
+        Ok(())
+    }
+
+    /// The value text of a word moving axis `a` to `want_mm` (machine frame), or None when the
+    /// rounded command would not change; updates the output position.
+    fn new_word(
+        &mut self,
+        a: usize,
+        want_mm: f64,
+        offset: f64,
+        absolute: bool,
+        scale: f64,
+        decimals: usize,
+    ) -> Option<String> {
+        let prev = self.st.out[a];
+        if prev == Some(want_mm) {
+            return None;
+        }
+        let mut s = String::new();
+        if absolute {
+            format_number((want_mm - offset) / scale, decimals, &mut s);
+            let r = super::lexer::parse_number(s.as_bytes()).unwrap_or(0.0);
+            if let Some(p) = prev {
+                let mut q = String::new();
+                format_number((p - offset) / scale, decimals, &mut q);
+                if q == s {
+                    return None;
+                }
+            }
+            self.st.out[a] = Some(r * scale + offset);
+        } else {
+            let p = prev?;
+            format_number((want_mm - p) / scale, decimals, &mut s);
+            let r = super::lexer::parse_number(s.as_bytes()).unwrap_or(0.0);
+            if r == 0.0 {
+                return None;
+            }
+            self.st.out[a] = Some(p + r * scale);
+        }
+        Some(s)
+    }
+
+    /// The span to delete for a removed word: with the blanks before it, or (when it starts
+    /// the line) with the blanks after it, so no double or leading blank is left.
+    fn removal_span(&self, body: &[u8], span: std::ops::Range<usize>) -> std::ops::Range<usize> {
+        let blank = |c: u8| c == b' ' || c == b'\t';
+        let mut s = span.start;
+        while s > 0 && blank(body[s - 1]) {
+            s -= 1;
+        }
+        if s > 0 {
+            return s..span.end;
+        }
+        let mut e = span.end;
+        while e < body.len() && blank(body[e]) {
+            e += 1;
+        }
+        span.start..e
+    }
+}
+
+fn case(code: &str, lower: bool) -> String {
+    if lower {
+        code.to_ascii_lowercase()
+    } else {
+        code.to_string()
+    }
+}
+
+fn case_letter(l: u8, lower: bool) -> u8 {
+    if lower {
+        l.to_ascii_lowercase()
+    } else {
+        l
+    }
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+fn g_name(code10: u32) -> String {
+    if code10 % 10 == 0 {
+        format!("G{}", code10 / 10)
+    } else {
+        format!("G{}.{}", code10 / 10, code10 % 10)
+    }
+}
+
+/// The provenance comment written before the first rewritten line.
+pub fn header_comment(model: &dyn ErrorModel, opt: &RewriteOptions) -> String {
+    let describe: String = model
+        .describe()
+        .chars()
+        .map(|c| match c {
+            '(' => '[',
+            ')' => ']',
+            '\n' | '\r' => ' ',
+            c if c.is_ascii() => c,
+            _ => '?',
+        })
+        .collect();
+    format!(
+        "(mtec compensate gcode {}: lines below corrected with model: {}; tolerance {} um, max segment {} mm, chord tolerance {} um)",
+        env!("CARGO_PKG_VERSION"),
+        describe,
+        opt.tolerance_um,
+        opt.max_segment_mm,
+        opt.chord_tolerance_um
+    )
+}

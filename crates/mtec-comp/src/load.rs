@@ -1,0 +1,96 @@
+//! Reading any compensable model file: dispatch on the JSON `"format"` field.
+//!
+//! Known formats: `mtec.map/1` (a [`GridMap`]). The kinematic error models (`mtec.errors/1`,
+//! with a machine) and fitted networks (`mtec.bpnn/1`) plug in here as further match arms.
+
+use crate::map::{GridMap, MapFile, MAP_FORMAT};
+use crate::ErrorModel;
+use mtec_io::InputError;
+use std::path::Path;
+
+/// The model formats this build can load, for messages.
+pub const KNOWN_FORMATS: &[&str] = &[MAP_FORMAT];
+
+/// Loads an error model file, whatever its kind, as an [`ErrorModel`].
+pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> {
+    let text = mtec_io::read_text(path)?;
+    let value: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
+    let format = model_format(path, &text, &value)?;
+    match format.as_str() {
+        MAP_FORMAT => Ok(Box::new(load_map_text(path, &text)?)),
+        other => Err(located_format_error(
+            path,
+            &text,
+            format!(
+                "unknown model format `{other}`; this mtec reads: {}",
+                KNOWN_FORMATS.join(", ")
+            ),
+        )),
+    }
+}
+
+/// Loads a grid map file (`mtec.map/1`) as the concrete type (for table writers that need the
+/// grid itself).
+pub fn load_map(path: &Path) -> Result<GridMap, InputError> {
+    let text = mtec_io::read_text(path)?;
+    load_map_text(path, &text)
+}
+
+fn load_map_text(path: &Path, text: &str) -> Result<GridMap, InputError> {
+    let file: MapFile = serde_json::from_str(text)
+        .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
+    let map = GridMap::from_file(file).map_err(|e| InputError::file(path, e.to_string()))?;
+    Ok(if map.source().is_empty() {
+        let outside = map.outside();
+        let f = map.to_file();
+        GridMap::from_file(MapFile {
+            source: path.display().to_string(),
+            ..f
+        })
+        .map_err(|e| InputError::file(path, e.to_string()))?
+        .with_outside(outside)
+    } else {
+        map
+    })
+}
+
+/// The `"format"` string of a model document, or a located error.
+pub fn model_format(
+    path: &Path,
+    text: &str,
+    value: &serde_json::Value,
+) -> Result<String, InputError> {
+    let Some(obj) = value.as_object() else {
+        return Err(InputError::line(
+            path,
+            1,
+            "a model file must be a JSON object with a \"format\" field",
+        ));
+    };
+    match obj.get("format") {
+        Some(serde_json::Value::String(s)) => Ok(s.clone()),
+        Some(_) => Err(located_format_error(
+            path,
+            text,
+            "\"format\" must be a string such as \"mtec.map/1\"".to_string(),
+        )),
+        None => Err(InputError::file(
+            path,
+            format!(
+                "no \"format\" field: mtec model files say what they are (one of: {})",
+                KNOWN_FORMATS.join(", ")
+            ),
+        )),
+    }
+}
+
+fn located_format_error(path: &Path, text: &str, msg: String) -> InputError {
+    match text.find("\"format\"") {
+        Some(off) => {
+            let (l, c) = mtec_io::line_col(text, off);
+            InputError::at(path, l, c, msg)
+        }
+        None => InputError::file(path, msg),
+    }
+}

@@ -1,0 +1,644 @@
+//! Volumetric error maps: a regular (rectilinear) grid of measured errors with trilinear
+//! interpolation, the controller-style baseline of compensation.
+//!
+//! A grid file is CSV with the columns `x_mm,y_mm,z_mm,ex_um,ey_um,ez_um` (SPEC §4), one row per
+//! grid node. [`GridMap::read_csv`] checks, with messages that name file, line and column:
+//! - every number is finite;
+//! - the rows form a full tensor grid: with the distinct x, y, z values x₀<…<x_{nx−1} (likewise
+//!   y, z), each of the nx·ny·nz combinations appears exactly once. Rows may come in any order
+//!   (the grid is sorted); a duplicated node is refused naming both lines; a value that appears
+//!   in fewer rows than a grid value must (a stray point, a typo) is reported at its first row;
+//!   a missing node is named by its coordinates;
+//! - per-controller limits when asked ([`GridLimits`]): at most N points per axis (FANUC-style 3-D
+//!   compensation allows 25 per axis in some controllers, the source literature's figure;
+//!   LinuxCNC's `COMP_FILE` holds 256 triplets per joint), and equal spacing.
+//!
+//! Decisions where the spec is silent:
+//! - Coordinates closer than 1e-6 mm (1 nm) are the same grid value (spreadsheet round-off).
+//! - Spacing may vary per axis (rectilinear, like SciPy's `RegularGridInterpolator`); equal
+//!   spacing is only demanded when a limit asks for it.
+//! - An axis with a single value is allowed (a planar map, e.g. z constant): the map is then
+//!   independent of that coordinate, which is never "outside".
+//! - Outside the grid ([`Outside`], chosen by the user, stored in the map file):
+//!   `clamp` (default) evaluates at the nearest point of the grid box (each coordinate clamped to
+//!   its axis range: the controller behaviour, the error stays bounded); `extrapolate` continues
+//!   the edge cell's trilinear polynomial linearly (identical to SciPy's `fill_value=None`);
+//!   `refuse` returns [`OutsideGrid`] (and NaN through the [`ErrorModel`] trait, which correction
+//!   turns into a located error). A point within 1e-9 mm of the box counts as inside. Note that
+//!   correction evaluates the map at the corrected command, not at the target: with `refuse`, a
+//!   target on the edge of the grid whose command moves outside is refused; use `clamp` to
+//!   compensate up to the edges.
+//!
+//! Map JSON (`"format": "mtec.map/1"`): `model` (`"trilinear"`), `outside`, `source`, the axes
+//! `x_mm`, `y_mm`, `z_mm` (strictly increasing) and the values `ex_um`, `ey_um`, `ez_um` as flat
+//! arrays in C order: node (i, j, k) at index (i·ny + j)·nz + k (x slowest, z fastest — the
+//! layout of a NumPy array `values[i, j, k]`).
+
+use crate::ErrorModel;
+use mtec_io::{InputError, Table};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The `format` tag of a map file.
+pub const MAP_FORMAT: &str = "mtec.map/1";
+
+/// Coordinates closer than this are the same grid value (mm).
+const SAME_VALUE_MM: f64 = 1e-6;
+/// A point this close outside the grid box counts as inside (mm).
+const INSIDE_SLACK_MM: f64 = 1e-9;
+
+/// What a map does at a point outside its grid box.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Outside {
+    /// Evaluate at the nearest point of the box (each coordinate clamped to its axis range).
+    #[default]
+    Clamp,
+    /// Continue the edge cell's trilinear polynomial (linear extrapolation).
+    Extrapolate,
+    /// No value: [`GridMap::try_error_um`] fails, [`ErrorModel::error_um`] gives NaN.
+    Refuse,
+}
+
+impl Outside {
+    /// Parses `clamp`, `extrapolate` or `refuse`.
+    pub fn parse(s: &str) -> Option<Outside> {
+        match s {
+            "clamp" => Some(Outside::Clamp),
+            "extrapolate" => Some(Outside::Extrapolate),
+            "refuse" => Some(Outside::Refuse),
+            _ => None,
+        }
+    }
+    /// The name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Outside::Clamp => "clamp",
+            Outside::Extrapolate => "extrapolate",
+            Outside::Refuse => "refuse",
+        }
+    }
+}
+
+/// Limits a controller puts on a compensation grid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct GridLimits {
+    /// Largest number of grid values along any one axis.
+    pub max_points_per_axis: Option<usize>,
+    /// Demand equal spacing along each axis.
+    pub require_uniform: bool,
+}
+
+impl GridLimits {
+    /// Named presets: `fanuc-3d` (≤ 25 points per axis, equal spacing: the controller-style 3-D
+    /// compensation of the source literature), `linuxcnc` (≤ 256 per axis: `COMP_FILE` holds 256
+    /// triplets per joint), `none`.
+    pub fn for_controller(name: &str) -> Option<GridLimits> {
+        match name {
+            "fanuc-3d" => Some(GridLimits {
+                max_points_per_axis: Some(25),
+                require_uniform: true,
+            }),
+            "linuxcnc" => Some(GridLimits {
+                max_points_per_axis: Some(256),
+                require_uniform: false,
+            }),
+            "none" => Some(GridLimits::default()),
+            _ => None,
+        }
+    }
+}
+
+/// A point outside the grid of a map whose policy is [`Outside::Refuse`].
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("point ({:.6}, {:.6}, {:.6}) mm is outside the map's grid: {axis} must lie in [{min_mm}, {max_mm}] mm (outside = refuse)", p_mm[0], p_mm[1], p_mm[2])]
+pub struct OutsideGrid {
+    pub p_mm: [f64; 3],
+    pub axis: &'static str,
+    pub min_mm: f64,
+    pub max_mm: f64,
+}
+
+/// A grid map whose parts do not fit together (lengths, ordering, non-finite numbers, limits).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct MapShapeError(pub String);
+
+const AXIS_NAMES: [&str; 3] = ["x_mm", "y_mm", "z_mm"];
+const VALUE_NAMES: [&str; 3] = ["ex_um", "ey_um", "ez_um"];
+
+/// A volumetric error map on a rectilinear grid, evaluated by trilinear interpolation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridMap {
+    axes_mm: [Vec<f64>; 3],
+    /// [ex, ey, ez] µm of node (i, j, k) at (i·ny + j)·nz + k.
+    values_um: Vec<[f64; 3]>,
+    outside: Outside,
+    source: String,
+}
+
+/// The JSON document of a map (`mtec.map/1`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapFile {
+    pub format: String,
+    pub model: String,
+    #[serde(default)]
+    pub outside: Outside,
+    #[serde(default)]
+    pub source: String,
+    pub x_mm: Vec<f64>,
+    pub y_mm: Vec<f64>,
+    pub z_mm: Vec<f64>,
+    pub ex_um: Vec<f64>,
+    pub ey_um: Vec<f64>,
+    pub ez_um: Vec<f64>,
+}
+
+impl GridMap {
+    /// A map from its axes (each strictly increasing, finite, ≥ 1 value) and node values in C
+    /// order (see the module docs).
+    pub fn new(
+        axes_mm: [Vec<f64>; 3],
+        values_um: Vec<[f64; 3]>,
+        outside: Outside,
+        source: impl Into<String>,
+    ) -> Result<GridMap, MapShapeError> {
+        for (a, name) in axes_mm.iter().zip(AXIS_NAMES) {
+            if a.is_empty() {
+                return Err(MapShapeError(format!("axis `{name}` has no values")));
+            }
+            if let Some(v) = a.iter().find(|v| !v.is_finite()) {
+                return Err(MapShapeError(format!(
+                    "axis `{name}` has a non-finite value {v}"
+                )));
+            }
+            if let Some(w) = a.windows(2).find(|w| w[1] <= w[0]) {
+                return Err(MapShapeError(format!(
+                    "axis `{name}` must be strictly increasing, but {} is followed by {}",
+                    w[0], w[1]
+                )));
+            }
+        }
+        let n = axes_mm[0].len() * axes_mm[1].len() * axes_mm[2].len();
+        if values_um.len() != n {
+            return Err(MapShapeError(format!(
+                "{} node values for a grid of {}×{}×{} = {n} nodes",
+                values_um.len(),
+                axes_mm[0].len(),
+                axes_mm[1].len(),
+                axes_mm[2].len()
+            )));
+        }
+        if let Some(i) = values_um
+            .iter()
+            .position(|v| !v.iter().all(|c| c.is_finite()))
+        {
+            return Err(MapShapeError(format!("node value {i} is not finite")));
+        }
+        Ok(GridMap {
+            axes_mm,
+            values_um,
+            outside,
+            source: source.into(),
+        })
+    }
+
+    /// Reads and validates a grid CSV (`x_mm,y_mm,z_mm,ex_um,ey_um,ez_um`).
+    pub fn read_csv(
+        path: &Path,
+        limits: &GridLimits,
+        outside: Outside,
+    ) -> Result<GridMap, InputError> {
+        let table = Table::read(path)?;
+        GridMap::from_table(&table, limits, outside)
+    }
+
+    /// Builds a map from a grid table already read (see [`GridMap::read_csv`]).
+    pub fn from_table(
+        table: &Table,
+        limits: &GridLimits,
+        outside: Outside,
+    ) -> Result<GridMap, InputError> {
+        let path = table.path.as_path();
+        let mut cols = [0usize; 6];
+        for (c, name) in cols
+            .iter_mut()
+            .zip(AXIS_NAMES.iter().chain(VALUE_NAMES.iter()))
+        {
+            *c = table.column(name)?;
+        }
+        let mut rows: Vec<([f64; 3], [f64; 3])> = Vec::with_capacity(table.rows.len());
+        for r in &table.rows {
+            let mut p = [0.0; 3];
+            let mut e = [0.0; 3];
+            for a in 0..3 {
+                p[a] = table.cell_f64(r, cols[a])?;
+                e[a] = table.cell_f64(r, cols[3 + a])?;
+            }
+            rows.push((p, e));
+        }
+        // distinct values per axis
+        let mut axes: [Vec<f64>; 3] = Default::default();
+        for a in 0..3 {
+            let mut v: Vec<f64> = rows.iter().map(|(p, _)| p[a]).collect();
+            v.sort_by(|x, y| x.total_cmp(y));
+            let mut nodes: Vec<f64> = Vec::new();
+            for x in v {
+                match nodes.last() {
+                    Some(&last) if x - last <= SAME_VALUE_MM => {}
+                    _ => nodes.push(x),
+                }
+            }
+            axes[a] = nodes;
+        }
+        let n = [axes[0].len(), axes[1].len(), axes[2].len()];
+        // every grid value must appear in the same number of rows (regularity)
+        let mut index_of_row: Vec<[usize; 3]> = Vec::with_capacity(rows.len());
+        for (p, _) in &rows {
+            let mut ijk = [0; 3];
+            for a in 0..3 {
+                ijk[a] = node_index(&axes[a], p[a]);
+            }
+            index_of_row.push(ijk);
+        }
+        // the stray value is the one seen in the smallest share of the rows it needs
+        let mut worst: Option<(f64, usize, usize, usize, usize)> = None; // (share, axis, node, count, need)
+        for a in 0..3 {
+            let need = n[0] * n[1] * n[2] / n[a];
+            let mut count = vec![0usize; n[a]];
+            for ijk in &index_of_row {
+                count[ijk[a]] += 1;
+            }
+            for (node, &c) in count.iter().enumerate() {
+                let share = c as f64 / need as f64;
+                if c < need && worst.map_or(true, |w| share < w.0) {
+                    worst = Some((share, a, node, c, need));
+                }
+            }
+        }
+        if let Some((_, a, bad, count, need)) = worst {
+            let r = index_of_row
+                .iter()
+                .position(|ijk| ijk[a] == bad)
+                .unwrap_or(0);
+            let row = &table.rows[r];
+            return Err(table.error_at(
+                row,
+                AXIS_NAMES[a],
+                format!(
+                    "not a regular grid: `{}` = {} appears in {count} row(s) but each grid value needs {need} (one per combination of the other two coordinates)",
+                    AXIS_NAMES[a], axes[a][bad]
+                ),
+            ));
+        }
+        // limits
+        for a in 0..3 {
+            if let Some(max) = limits.max_points_per_axis {
+                if n[a] > max {
+                    return Err(InputError::line(
+                        path,
+                        table.header_line,
+                        format!(
+                            "the grid has {} values of `{}`; the controller allows at most {max} points per axis",
+                            n[a], AXIS_NAMES[a]
+                        ),
+                    ));
+                }
+            }
+            if limits.require_uniform && n[a] > 2 {
+                let step = axes[a][1] - axes[a][0];
+                if let Some(w) = axes[a]
+                    .windows(2)
+                    .find(|w| ((w[1] - w[0]) - step).abs() > 1e-6 * step.abs().max(1.0))
+                {
+                    return Err(InputError::line(
+                        path,
+                        table.header_line,
+                        format!(
+                            "the controller needs equally spaced `{}` values, but the step from {} to {} is {} instead of {step}",
+                            AXIS_NAMES[a], w[0], w[1], w[1] - w[0]
+                        ),
+                    ));
+                }
+            }
+        }
+        // place every row; duplicates refused
+        let total = n[0] * n[1] * n[2];
+        let mut slot_row: Vec<Option<usize>> = vec![None; total];
+        let mut values = vec![[0.0; 3]; total];
+        for (r, ijk) in index_of_row.iter().enumerate() {
+            let idx = (ijk[0] * n[1] + ijk[1]) * n[2] + ijk[2];
+            if let Some(first) = slot_row[idx] {
+                let row = &table.rows[r];
+                return Err(table.error_at(
+                    row,
+                    "x_mm",
+                    format!(
+                        "duplicate grid node ({}, {}, {}) mm: already given on line {}",
+                        rows[r].0[0], rows[r].0[1], rows[r].0[2], table.rows[first].line
+                    ),
+                ));
+            }
+            slot_row[idx] = Some(r);
+            values[idx] = rows[r].1;
+        }
+        if let Some(idx) = slot_row.iter().position(|s| s.is_none()) {
+            let (i, j, k) = (idx / (n[1] * n[2]), (idx / n[2]) % n[1], idx % n[2]);
+            return Err(InputError::file(
+                path,
+                format!(
+                    "incomplete grid: no row for node ({}, {}, {}) mm ({}×{}×{} = {total} nodes expected, {} rows given)",
+                    axes[0][i], axes[1][j], axes[2][k], n[0], n[1], n[2], rows.len()
+                ),
+            ));
+        }
+        GridMap::new(axes, values, outside, path.display().to_string())
+            .map_err(|e| InputError::file(path, e.to_string()))
+    }
+
+    /// The map as its JSON document.
+    pub fn to_file(&self) -> MapFile {
+        let col = |c: usize| self.values_um.iter().map(|v| v[c]).collect::<Vec<f64>>();
+        MapFile {
+            format: MAP_FORMAT.to_string(),
+            model: "trilinear".to_string(),
+            outside: self.outside,
+            source: self.source.clone(),
+            x_mm: self.axes_mm[0].clone(),
+            y_mm: self.axes_mm[1].clone(),
+            z_mm: self.axes_mm[2].clone(),
+            ex_um: col(0),
+            ey_um: col(1),
+            ez_um: col(2),
+        }
+    }
+
+    /// A map from its JSON document, checked.
+    pub fn from_file(f: MapFile) -> Result<GridMap, MapShapeError> {
+        if f.format != MAP_FORMAT {
+            return Err(MapShapeError(format!(
+                "format is `{}`, expected `{MAP_FORMAT}`",
+                f.format
+            )));
+        }
+        if f.model != "trilinear" {
+            return Err(MapShapeError(format!(
+                "model `{}` is not a grid map model (expected `trilinear`)",
+                f.model
+            )));
+        }
+        let n = f.ex_um.len();
+        if f.ey_um.len() != n || f.ez_um.len() != n {
+            return Err(MapShapeError(format!(
+                "ex_um, ey_um, ez_um have {}, {}, {} values: they must be equally long",
+                n,
+                f.ey_um.len(),
+                f.ez_um.len()
+            )));
+        }
+        let values = (0..n)
+            .map(|i| [f.ex_um[i], f.ey_um[i], f.ez_um[i]])
+            .collect();
+        GridMap::new([f.x_mm, f.y_mm, f.z_mm], values, f.outside, f.source)
+    }
+
+    /// Checks the map against controller limits.
+    pub fn check_limits(&self, limits: &GridLimits) -> Result<(), MapShapeError> {
+        for (a, name) in AXIS_NAMES.iter().enumerate() {
+            let n = self.axes_mm[a].len();
+            if let Some(max) = limits.max_points_per_axis {
+                if n > max {
+                    return Err(MapShapeError(format!(
+                        "{n} values of `{name}`; the controller allows at most {max} points per axis"
+                    )));
+                }
+            }
+            if limits.require_uniform && !self.is_uniform(a) {
+                return Err(MapShapeError(format!(
+                    "the controller needs equally spaced `{name}` values"
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// True when the grid values along axis `a` (0 = x) are equally spaced.
+    pub fn is_uniform(&self, a: usize) -> bool {
+        let ax = &self.axes_mm[a];
+        if ax.len() < 3 {
+            return true;
+        }
+        let step = ax[1] - ax[0];
+        ax.windows(2)
+            .all(|w| ((w[1] - w[0]) - step).abs() <= 1e-6 * step.abs().max(1.0))
+    }
+
+    /// The grid values of the three axes (mm).
+    pub fn axes_mm(&self) -> &[Vec<f64>; 3] {
+        &self.axes_mm
+    }
+
+    /// Error [ex, ey, ez] µm stored at node (i, j, k).
+    pub fn node_um(&self, i: usize, j: usize, k: usize) -> [f64; 3] {
+        let n = [self.axes_mm[1].len(), self.axes_mm[2].len()];
+        self.values_um[(i * n[0] + j) * n[1] + k]
+    }
+
+    /// The behaviour outside the grid.
+    pub fn outside(&self) -> Outside {
+        self.outside
+    }
+
+    /// The same map with another outside-grid behaviour.
+    pub fn with_outside(mut self, outside: Outside) -> GridMap {
+        self.outside = outside;
+        self
+    }
+
+    /// Where the map came from (the grid file).
+    pub fn source(&self) -> &str {
+        &self.source
+    }
+
+    /// Trilinear interpolation of the error at `p_mm`, following the outside-grid policy.
+    #[inline]
+    pub fn try_error_um(&self, p_mm: [f64; 3]) -> Result<[f64; 3], OutsideGrid> {
+        let mut i0 = [0usize; 3];
+        let mut i1 = [0usize; 3];
+        let mut t = [0.0f64; 3];
+        for a in 0..3 {
+            let (lo, hi, frac) = self.locate(a, p_mm)?;
+            i0[a] = lo;
+            i1[a] = hi;
+            t[a] = frac;
+        }
+        let ny = self.axes_mm[1].len();
+        let nz = self.axes_mm[2].len();
+        let v = |i: usize, j: usize, k: usize| &self.values_um[(i * ny + j) * nz + k];
+        let mut out = [0.0; 3];
+        // trilinear interpolation: successive linear interpolation along x, then y, then z
+        // (Numerical Recipes 3rd ed. §3.6, eq. 3.6.5 extended to 3-D)
+        for (c, out_c) in out.iter_mut().enumerate() {
+            let lerp = |a: f64, b: f64, s: f64| a + (b - a) * s;
+            let c00 = lerp(v(i0[0], i0[1], i0[2])[c], v(i1[0], i0[1], i0[2])[c], t[0]);
+            let c10 = lerp(v(i0[0], i1[1], i0[2])[c], v(i1[0], i1[1], i0[2])[c], t[0]);
+            let c01 = lerp(v(i0[0], i0[1], i1[2])[c], v(i1[0], i0[1], i1[2])[c], t[0]);
+            let c11 = lerp(v(i0[0], i1[1], i1[2])[c], v(i1[0], i1[1], i1[2])[c], t[0]);
+            let c0 = lerp(c00, c10, t[1]);
+            let c1 = lerp(c01, c11, t[1]);
+            *out_c = lerp(c0, c1, t[2]);
+        }
+        Ok(out)
+    }
+
+    /// Cell (lower node, upper node) and fraction along axis `a` for the coordinate of `p`.
+    #[inline]
+    fn locate(&self, a: usize, p: [f64; 3]) -> Result<(usize, usize, f64), OutsideGrid> {
+        let ax = &self.axes_mm[a];
+        let n = ax.len();
+        if n == 1 {
+            return Ok((0, 0, 0.0));
+        }
+        let (lo_mm, hi_mm) = (ax[0], ax[n - 1]);
+        let mut x = p[a];
+        if x < lo_mm || x > hi_mm {
+            let slack = x >= lo_mm - INSIDE_SLACK_MM && x <= hi_mm + INSIDE_SLACK_MM;
+            match self.outside {
+                _ if slack => x = x.clamp(lo_mm, hi_mm),
+                Outside::Clamp => x = x.clamp(lo_mm, hi_mm),
+                Outside::Extrapolate => {}
+                Outside::Refuse => {
+                    return Err(OutsideGrid {
+                        p_mm: p,
+                        axis: AXIS_NAMES[a],
+                        min_mm: lo_mm,
+                        max_mm: hi_mm,
+                    })
+                }
+            }
+        }
+        // lower node of the cell: last grid value ≤ x, kept within 0..n−2
+        let i = ax.partition_point(|&v| v <= x).saturating_sub(1).min(n - 2);
+        let frac = (x - ax[i]) / (ax[i + 1] - ax[i]);
+        Ok((i, i + 1, frac))
+    }
+}
+
+impl ErrorModel for GridMap {
+    /// The interpolated error; NaN outside the grid when the policy is `refuse`.
+    fn error_um(&self, p_mm: [f64; 3]) -> [f64; 3] {
+        self.try_error_um(p_mm).unwrap_or([f64::NAN; 3])
+    }
+
+    fn describe(&self) -> String {
+        let r = |a: usize| {
+            let ax = &self.axes_mm[a];
+            format!("{}..{} mm ({})", ax[0], ax[ax.len() - 1], ax.len())
+        };
+        format!(
+            "trilinear grid map (mtec.map/1): x {}, y {}, z {}, outside = {}, from {}",
+            r(0),
+            r(1),
+            r(2),
+            self.outside.name(),
+            if self.source.is_empty() {
+                "unknown source"
+            } else {
+                &self.source
+            }
+        )
+    }
+}
+
+/// Index of the grid value `x` (within [`SAME_VALUE_MM`]) in the sorted `nodes`.
+fn node_index(nodes: &[f64], x: f64) -> usize {
+    // first node ≥ x − tolerance: nodes are ≥ SAME_VALUE_MM apart, so it is x's own node
+    nodes
+        .partition_point(|&v| v < x - SAME_VALUE_MM)
+        .min(nodes.len() - 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn affine_map(outside: Outside) -> GridMap {
+        // e = (1 + 2x + 3y + 4z, x·y, −z) on x ∈ {0, 10, 30}, y ∈ {0, 5}, z ∈ {−1, 1}
+        let axes = [vec![0.0, 10.0, 30.0], vec![0.0, 5.0], vec![-1.0, 1.0]];
+        let mut values = Vec::new();
+        for &x in &axes[0] {
+            for &y in &axes[1] {
+                for &z in &axes[2] {
+                    values.push([1.0 + 2.0 * x + 3.0 * y + 4.0 * z, x * y, -z]);
+                }
+            }
+        }
+        GridMap::new(axes, values, outside, "test").unwrap()
+    }
+
+    /// Trilinear interpolation reproduces any function of the form a + bx + cy + dz + exy + …
+    /// (multilinear) exactly inside each cell: worked by hand at one point.
+    #[test]
+    fn multilinear_function_is_reproduced() {
+        let m = affine_map(Outside::Clamp);
+        let e = m.try_error_um([17.0, 2.0, 0.25]).unwrap();
+        assert!((e[0] - (1.0 + 34.0 + 6.0 + 1.0)).abs() < 1e-12);
+        assert!((e[1] - 34.0).abs() < 1e-12);
+        assert!((e[2] + 0.25).abs() < 1e-12);
+    }
+
+    #[test]
+    fn outside_policies() {
+        let p = [40.0, 2.0, 0.0];
+        let clamp = affine_map(Outside::Clamp).try_error_um(p).unwrap();
+        assert!((clamp[0] - (1.0 + 60.0 + 6.0)).abs() < 1e-12);
+        let extra = affine_map(Outside::Extrapolate).try_error_um(p).unwrap();
+        assert!((extra[0] - (1.0 + 80.0 + 6.0)).abs() < 1e-12);
+        assert!((extra[1] - 80.0).abs() < 1e-12);
+        let refuse = affine_map(Outside::Refuse).try_error_um(p).unwrap_err();
+        assert_eq!(refuse.axis, "x_mm");
+        assert!(affine_map(Outside::Refuse).error_um(p)[0].is_nan());
+        // on the edge is inside
+        assert!(affine_map(Outside::Refuse)
+            .try_error_um([30.0, 5.0, 1.0])
+            .is_ok());
+    }
+
+    #[test]
+    fn single_value_axis_is_constant() {
+        let axes = [vec![0.0, 1.0], vec![0.0, 1.0], vec![50.0]];
+        let values = vec![[0.0; 3], [1.0; 3], [2.0; 3], [3.0; 3]];
+        let m = GridMap::new(axes, values, Outside::Refuse, "").unwrap();
+        let e = m.try_error_um([0.5, 0.5, -400.0]).unwrap();
+        assert!((e[0] - 1.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn json_round_trip() {
+        let m = affine_map(Outside::Extrapolate);
+        let text = serde_json::to_string(&m.to_file()).unwrap();
+        let back = GridMap::from_file(serde_json::from_str(&text).unwrap()).unwrap();
+        assert_eq!(back, m);
+    }
+
+    #[test]
+    fn bad_shapes_refused() {
+        let e = GridMap::new(
+            [vec![0.0, 0.0], vec![1.0], vec![1.0]],
+            vec![[0.0; 3]; 2],
+            Outside::Clamp,
+            "",
+        )
+        .unwrap_err();
+        assert!(e.0.contains("strictly increasing"));
+        let e = GridMap::new(
+            [vec![0.0, 1.0], vec![1.0], vec![1.0]],
+            vec![[0.0; 3]; 3],
+            Outside::Clamp,
+            "",
+        )
+        .unwrap_err();
+        assert!(e.0.contains("3 node values"));
+    }
+}

@@ -1,0 +1,263 @@
+//! FANUC stored pitch error compensation: parameters 3620–3625 and the incremental compensation
+//! data, as a parameter/pitch-error tape (`%`, `N03620A1P…`, `N1nnnnP…`, `%`).
+//!
+//! Documented rules (FANUC Series 16i/18i-MA/TA *Bidirectional pitch error compensation*,
+//! A-77810E, table (a); FANUC Series 0i-PB Parameter Manual B-63980EN/01 p. 100, parameters
+//! 3620–3625; the GSK983Ma manual's appendix 8 for the same scheme):
+//! - 3620 number of the compensation point of the reference position, 3621/3622 numbers of the
+//!   farthest points on the − / + side, 3623 magnification, 3624 interval between compensation
+//!   points, 3625 travel per rotation (rotary axes).
+//! - Each compensation point holds the *increment* of compensation over the interval that ends at
+//!   it ("the compensation value is output at the compensation position No. corresponding to each
+//!   section"): number R (3620) holds the interval ending at the reference position, R + k the
+//!   interval ending k intervals further in +. Values are in detection units × magnification.
+//! - Rotary axes: the farthest − point equals the reference number, the farthest + point is
+//!   R + travel/interval; the values R+1…R+m must sum to zero (otherwise the error accumulates per
+//!   turn), and point R is given the same value as point R+m.
+//!
+//! mtec's rounding: the absolute compensation C(x) = c(x) − c(x_ref) is rounded at each point and
+//! the increments taken from the rounded values, so rounding never accumulates along the axis.
+//! The pitch-data tape number of point n is 10000 + n. Value range per point: ±`max_increment`
+//! (the range depends on the control model — older ones allow ±7, 16i/0i ±127 — so it is an
+//! option, default 127).
+
+use super::{AxisProfile, TableError};
+
+const FORMAT: &str = "FANUC pitch error";
+
+/// Settings of the FANUC table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FanucOptions {
+    /// Axis number in the parameter tape (A1 = first axis).
+    pub axis_number: u8,
+    /// Machine position of the reference point (mm or deg); must be a table point.
+    pub reference_mm: f64,
+    /// Parameter 3620: compensation point number of the reference position.
+    pub reference_number: u32,
+    /// Parameter 3623: magnification (1–100).
+    pub magnification: u32,
+    /// Detection unit (µm, or 0.001 deg for rotary axes: give 1.0).
+    pub detection_unit_um: f64,
+    /// Largest |value| per point (in units of detection unit × magnification).
+    pub max_increment: i64,
+    /// Largest compensation point number of the control.
+    pub max_number: u32,
+}
+
+impl Default for FanucOptions {
+    fn default() -> Self {
+        FanucOptions {
+            axis_number: 1,
+            reference_mm: 0.0,
+            reference_number: 0,
+            magnification: 1,
+            detection_unit_um: 1.0,
+            max_increment: 127,
+            max_number: 1023,
+        }
+    }
+}
+
+/// Writes the parameter and pitch-error tape for `profile` (input = output axis).
+pub fn write(profile: &AxisProfile, opts: &FanucOptions) -> Result<String, TableError> {
+    if profile.input_axis != profile.output_axis {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            "pitch error compensation corrects the axis's own position (input axis = output axis)",
+        ));
+    }
+    if !(1..=100).contains(&opts.magnification) {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            "magnification (3623) must be 1..100",
+        ));
+    }
+    if !(opts.detection_unit_um > 0.0) {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            "the detection unit must be positive",
+        ));
+    }
+    let n = profile.comp_um.len();
+    let m_f = (opts.reference_mm - profile.start_mm) / profile.step_mm;
+    let m = m_f.round();
+    if (m_f - m).abs() > 1e-6 || m < 0.0 || m as usize >= n {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            format!(
+                "the reference position {} must be one of the table points {}..{} step {}",
+                opts.reference_mm,
+                profile.start_mm,
+                profile.end_mm(),
+                profile.step_mm
+            ),
+        ));
+    }
+    let m = m as usize;
+    if profile.rotary && m != 0 {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            "a rotary axis table starts at its reference position (farthest − point = reference number)",
+        ));
+    }
+    let interval_units = profile.step_mm * 1000.0 / opts.detection_unit_um;
+    if (interval_units - interval_units.round()).abs() > 1e-6 {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            format!(
+                "the interval {} mm is not a whole number of detection units",
+                profile.step_mm
+            ),
+        ));
+    }
+    let r = opts.reference_number as i64;
+    let n_min = if profile.rotary { r } else { r + 1 - m as i64 };
+    let n_max = r + (n - 1 - m) as i64;
+    if n_min < 0 || n_max > opts.max_number as i64 {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            format!(
+                "compensation points {n_min}..{n_max} fall outside 0..{}: choose another reference number (3620)",
+                opts.max_number
+            ),
+        ));
+    }
+    // absolute compensation relative to the reference, rounded per point (no accumulation)
+    let unit_um = opts.detection_unit_um * opts.magnification as f64;
+    let c_ref = profile.comp_um[m];
+    let abs_units: Vec<i64> = profile
+        .comp_um
+        .iter()
+        .map(|c| ((c - c_ref) / unit_um).round() as i64)
+        .collect();
+    let mut values: Vec<(i64, i64)> = Vec::with_capacity(n);
+    for j in 1..n {
+        values.push((r + j as i64 - m as i64, abs_units[j] - abs_units[j - 1]));
+    }
+    if profile.rotary {
+        // point R repeats point R + m
+        let last = values.last().map(|v| v.1).unwrap_or(0);
+        values.insert(0, (r, last));
+    }
+    let a = opts.axis_number;
+    let mut out = String::from("%\n");
+    out.push_str(&format!("N03620A{a}P{r}\n"));
+    out.push_str(&format!("N03621A{a}P{n_min}\n"));
+    out.push_str(&format!("N03622A{a}P{n_max}\n"));
+    out.push_str(&format!("N03623A{a}P{}\n", opts.magnification));
+    out.push_str(&format!("N03624A{a}P{}\n", interval_units.round() as i64));
+    if profile.rotary {
+        let travel = (profile.end_mm() - profile.start_mm) * 1000.0 / opts.detection_unit_um;
+        out.push_str(&format!("N03625A{a}P{}\n", travel.round() as i64));
+    }
+    for (num, v) in &values {
+        out.push_str(&format!("N{}P{v}\n", 10000 + num));
+    }
+    out.push_str("%\n");
+    check(&out, opts.max_increment)?;
+    Ok(out)
+}
+
+/// Constraint checker: tape framing, parameters present, points 3621..3622 all present in order,
+/// |value| ≤ `max_increment`, and for rotary axes (3625 given) the sum-to-zero rule.
+pub fn check(text: &str, max_increment: i64) -> Result<(), TableError> {
+    let lines: Vec<&str> = text.lines().collect();
+    if lines.first() != Some(&"%") || lines.last() != Some(&"%") || lines.len() < 2 {
+        return Err(TableError::rule(
+            FORMAT,
+            Some(1),
+            "a tape starts and ends with a `%` line",
+        ));
+    }
+    let mut params = std::collections::BTreeMap::new();
+    let mut points: Vec<(i64, i64, usize)> = Vec::new();
+    for (i, line) in lines.iter().enumerate().skip(1).take(lines.len() - 2) {
+        let bad = || TableError::rule(FORMAT, Some(i + 1), format!("`{line}` is not N…P… data"));
+        let rest = line.strip_prefix('N').ok_or_else(bad)?;
+        let (num, val) = rest.split_once('P').ok_or_else(bad)?;
+        let value: i64 = val.parse().map_err(|_| bad())?;
+        if let Some((param, _axis)) = num.split_once('A') {
+            let p: u32 = param.parse().map_err(|_| bad())?;
+            params.insert(p, value);
+        } else {
+            let n: i64 = num.parse().map_err(|_| bad())?;
+            if n < 10000 {
+                return Err(bad());
+            }
+            if value.abs() > max_increment {
+                return Err(TableError::rule(
+                    FORMAT,
+                    Some(i + 1),
+                    format!(
+                        "value {value} exceeds ±{max_increment}: raise the magnification (3623)"
+                    ),
+                ));
+            }
+            points.push((n - 10000, value, i + 1));
+        }
+    }
+    let param = |p: u32| {
+        params
+            .get(&p)
+            .copied()
+            .ok_or_else(|| TableError::rule(FORMAT, None, format!("parameter {p} missing")))
+    };
+    let (r, n_min, n_max) = (param(3620)?, param(3621)?, param(3622)?);
+    param(3623)?;
+    if param(3624)? <= 0 {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            "interval (3624) must be positive",
+        ));
+    }
+    if !(n_min <= r && r <= n_max) {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            format!("reference number {r} must lie within {n_min}..{n_max}"),
+        ));
+    }
+    let expect: Vec<i64> = (n_min..=n_max).collect();
+    let got: Vec<i64> = points.iter().map(|p| p.0).collect();
+    if got != expect {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            format!("pitch data must cover points {n_min}..{n_max} once each, in order"),
+        ));
+    }
+    if params.contains_key(&3625) {
+        if n_min != r {
+            return Err(TableError::rule(
+                FORMAT,
+                None,
+                "rotary axis: the farthest − point (3621) must equal the reference number (3620)",
+            ));
+        }
+        let sum: i64 = points.iter().filter(|p| p.0 > r).map(|p| p.1).sum();
+        if sum != 0 {
+            return Err(TableError::rule(
+                FORMAT,
+                None,
+                format!("rotary axis: the values of points {}..{n_max} sum to {sum}, not 0 (the error would accumulate every turn)", r + 1),
+            ));
+        }
+        let at = |n: i64| points.iter().find(|p| p.0 == n).map(|p| p.1);
+        if at(r) != at(n_max) {
+            return Err(TableError::rule(
+                FORMAT,
+                None,
+                format!("rotary axis: point {r} must repeat the value of point {n_max}"),
+            ));
+        }
+    }
+    Ok(())
+}

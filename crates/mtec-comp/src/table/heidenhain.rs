@@ -1,0 +1,163 @@
+//! HEIDENHAIN nonlinear axis error compensation: compensation value tables (`*.COM`) and their
+//! assignment table (`*.CMA`).
+//!
+//! Documented rules (HEIDENHAIN Technical Manual MANUALplus 620, §6.10.3 "Nonlinear axis error
+//! compensation", pp. 713–718; TNC 407/415/425 Technical Manual, "Non-linear axis error
+//! compensation", pp. 4-28…4-31 and module 9095):
+//! - A `.COM` table has the column `AXISPOS` (compensation points, relative to the machine
+//!   datum) and a column named after the axis that is compensated, holding the compensation
+//!   values; an optional `BACKLASH` column (not written: mtec's models have no reversal error).
+//! - The `.CMA` table has one column per axis; the `.COM` name is entered in the column of the
+//!   axis on which the compensation depends: "[axis in column of *.com] = F(axis in column of
+//!   *.cma in which *.com is entered)". The column `ACTIVE` marks the active line with `*`.
+//! - At most 256 entries per `.COM` (module 9095 error 3).
+//! - Tables are TNC table files: a `BEGIN <name> <unit>` line, a header line, rows, `[END]`.
+//!
+//! Values: the compensation value c = −e in mm with 4 decimals (0.1 µm), signed (`+0.0030`).
+//! The sign convention is mtec's reading of "compensation value"; the manuals' examples plot the
+//! error curve without stating the sign explicitly (see the report).
+
+use super::{AxisProfile, TableError};
+
+const FORMAT: &str = "HEIDENHAIN .COM/.CMA";
+/// Most entries of a `.COM` table.
+pub const MAX_ENTRIES: usize = 256;
+
+/// The two files of a HEIDENHAIN compensation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeidenhainTables {
+    pub com_name: String,
+    pub com: String,
+    pub cma_name: String,
+    pub cma: String,
+}
+
+/// Writes the `.COM` table named `com_name` (e.g. `ZY.COM`) and a one-line `.CMA` assigning it.
+pub fn write(
+    profile: &AxisProfile,
+    com_name: &str,
+    cma_name: &str,
+) -> Result<HeidenhainTables, TableError> {
+    let out_axis = profile.output_axis.letter();
+    let mut com = format!("BEGIN {com_name} MM\n");
+    com.push_str(&format!("{:<5} {:>13} {:>10}\n", "NR", "AXISPOS", out_axis));
+    for (n, &c_um) in profile.comp_um.iter().enumerate() {
+        let c_mm = c_um * 1e-3;
+        let c_txt = format!("{:+.4}", if c_mm.abs() < 5e-5 { 0.0 } else { c_mm });
+        com.push_str(&format!(
+            "{:<5} {:>13} {:>10}\n",
+            n,
+            format!("{:+.4}", profile.position(n)),
+            c_txt
+        ));
+    }
+    com.push_str("[END]\n");
+    check_com(&com)?;
+    let mut cma = format!("BEGIN {cma_name}\n");
+    let col = |a: char| {
+        if a == profile.input_axis.letter() {
+            com_name.to_string()
+        } else {
+            String::new()
+        }
+    };
+    cma.push_str(&format!(
+        "{:<5} {:<12} {:<12} {:<12} {}\n",
+        "NR", "X", "Y", "Z", "ACTIVE"
+    ));
+    cma.push_str(&format!(
+        "{:<5} {:<12} {:<12} {:<12} {}\n",
+        0,
+        col('X'),
+        col('Y'),
+        col('Z'),
+        "*"
+    ));
+    cma.push_str("[END]\n");
+    Ok(HeidenhainTables {
+        com_name: com_name.to_string(),
+        com,
+        cma_name: cma_name.to_string(),
+        cma,
+    })
+}
+
+/// Constraint checker of a `.COM` table: framing, NR 0..N−1, AXISPOS strictly increasing,
+/// numeric values, at most 256 entries.
+pub fn check_com(text: &str) -> Result<(), TableError> {
+    let lines: Vec<&str> = text.lines().collect();
+    if !lines.first().is_some_and(|l| l.starts_with("BEGIN ")) {
+        return Err(TableError::rule(
+            FORMAT,
+            Some(1),
+            "a table starts with `BEGIN <name> <unit>`",
+        ));
+    }
+    if lines.last() != Some(&"[END]") {
+        return Err(TableError::rule(
+            FORMAT,
+            Some(lines.len()),
+            "a table ends with `[END]`",
+        ));
+    }
+    let header: Vec<&str> = lines
+        .get(1)
+        .map(|l| l.split_whitespace().collect())
+        .unwrap_or_default();
+    if header.len() < 3 || header[0] != "NR" || header[1] != "AXISPOS" {
+        return Err(TableError::rule(
+            FORMAT,
+            Some(2),
+            "header must be `NR AXISPOS <axis>…`",
+        ));
+    }
+    let rows = &lines[2..lines.len() - 1];
+    if rows.len() > MAX_ENTRIES {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            format!(
+                "{} entries; a .COM table holds at most {MAX_ENTRIES}",
+                rows.len()
+            ),
+        ));
+    }
+    let mut last: Option<f64> = None;
+    for (k, row) in rows.iter().enumerate() {
+        let line = k + 3;
+        let f: Vec<&str> = row.split_whitespace().collect();
+        if f.len() != header.len() {
+            return Err(TableError::rule(
+                FORMAT,
+                Some(line),
+                "row width differs from the header",
+            ));
+        }
+        if f[0].parse::<usize>().ok() != Some(k) {
+            return Err(TableError::rule(
+                FORMAT,
+                Some(line),
+                format!("NR must be {k}"),
+            ));
+        }
+        let nums: Option<Vec<f64>> = f[1..].iter().map(|s| s.parse::<f64>().ok()).collect();
+        let Some(nums) = nums else {
+            return Err(TableError::rule(
+                FORMAT,
+                Some(line),
+                "AXISPOS and values must be numbers",
+            ));
+        };
+        if let Some(prev) = last {
+            if nums[0] <= prev {
+                return Err(TableError::rule(
+                    FORMAT,
+                    Some(line),
+                    "AXISPOS must increase",
+                ));
+            }
+        }
+        last = Some(nums[0]);
+    }
+    Ok(())
+}

@@ -1,0 +1,205 @@
+//! Controller compensation tables: from an [`ErrorModel`] to the files a CNC loads.
+//!
+//! Every writer works from sampled compensation values and runs a constraint checker on what it
+//! wrote (the rules each controller documents: point counts, ordering, equal spacing, value
+//! ranges, sum-to-zero of rotary axes), so a table mtec writes is one the controller accepts.
+//!
+//! Sign conventions (each format's module says which documented rule it follows):
+//! - mtec's models give the error e (µm): the tool reaches p + e when commanded to p. The
+//!   compensation value is c = −e ("compensation values = the negative of the predicted error",
+//!   SPEC §1, method C), sampled at the nominal table positions. (Solving p + e(p) = t instead
+//!   would change c by e·∂e/∂p ≈ 10⁻⁵·e, far below any table's resolution.)
+//! - LinuxCNC type 1, Siemens CEC, Fanuc, Heidenhain: the value is the correction added to the
+//!   command, i.e. c. LinuxCNC type 0 stores the actual position nominal + e. Siemens LEC
+//!   (`$AA_ENC_COMP`): a positive value moves the axis negative, so the value written is −c = e.
+//!   Beckhoff/ISG volumetric compensation takes the error parameters themselves (e, in mm) and
+//!   compensates them.
+//!
+//! Units: positions mm, values mm (µm in Fanuc detection units), as each format demands.
+
+pub mod beckhoff;
+pub mod fanuc;
+pub mod heidenhain;
+pub mod linuxcnc;
+pub mod sinumerik;
+
+use crate::ErrorModel;
+
+/// A machine axis of the Cartesian error models.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Axis {
+    X,
+    Y,
+    Z,
+}
+
+impl Axis {
+    /// 0, 1, 2 for X, Y, Z.
+    pub fn index(self) -> usize {
+        match self {
+            Axis::X => 0,
+            Axis::Y => 1,
+            Axis::Z => 2,
+        }
+    }
+    /// `X`, `Y` or `Z`.
+    pub fn letter(self) -> char {
+        ['X', 'Y', 'Z'][self.index()]
+    }
+    /// Parses `X`/`x`, `Y`/`y`, `Z`/`z`.
+    pub fn parse(s: &str) -> Option<Axis> {
+        match s {
+            "X" | "x" => Some(Axis::X),
+            "Y" | "y" => Some(Axis::Y),
+            "Z" | "z" => Some(Axis::Z),
+            _ => None,
+        }
+    }
+}
+
+/// Compensation values of one output axis at equally spaced positions of one input axis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AxisProfile {
+    /// The axis whose position selects the value (base axis, "master").
+    pub input_axis: Axis,
+    /// The axis that is moved by the value (compensation axis, "slave").
+    pub output_axis: Axis,
+    /// Position of the first point (mm, or deg for a rotary axis).
+    pub start_mm: f64,
+    /// Distance between points (> 0).
+    pub step_mm: f64,
+    /// Compensation value c = −e (µm) at each point.
+    pub comp_um: Vec<f64>,
+    /// The input axis is rotary (positions in degrees, one turn = the table's range).
+    pub rotary: bool,
+}
+
+impl AxisProfile {
+    /// Position of point `n`.
+    pub fn position(&self, n: usize) -> f64 {
+        self.start_mm + self.step_mm * n as f64
+    }
+    /// Position of the last point.
+    pub fn end_mm(&self) -> f64 {
+        self.position(self.comp_um.len().saturating_sub(1))
+    }
+}
+
+/// Why a table cannot be written (or a written table breaks its format's rules).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TableError {
+    /// The sampling request is inconsistent.
+    #[error("{0}")]
+    Sampling(String),
+    /// The model has no value where the table needs one.
+    #[error("the model has no value at ({:.6}, {:.6}, {:.6}) mm (outside a map that refuses points beyond its grid)", p_mm[0], p_mm[1], p_mm[2])]
+    Undefined { p_mm: [f64; 3] },
+    /// A rule of the target format is broken; `line` is 1-based in the written text when known.
+    #[error("{format} table rule broken{}: {message}", line.map(|l| format!(" at line {l}")).unwrap_or_default())]
+    Constraint {
+        format: &'static str,
+        line: Option<usize>,
+        message: String,
+    },
+}
+
+impl TableError {
+    pub(crate) fn rule(format: &'static str, line: Option<usize>, msg: impl Into<String>) -> Self {
+        TableError::Constraint {
+            format,
+            line,
+            message: msg.into(),
+        }
+    }
+}
+
+/// Samples c = −e_output along the input axis from `start_mm` to `end_mm` (inclusive, which
+/// must be a whole number of `step_mm` from the start), the other coordinates at `at_mm`.
+pub fn axis_profile(
+    model: &dyn ErrorModel,
+    input_axis: Axis,
+    output_axis: Axis,
+    start_mm: f64,
+    end_mm: f64,
+    step_mm: f64,
+    at_mm: [f64; 3],
+) -> Result<AxisProfile, TableError> {
+    if !(step_mm > 0.0) || !start_mm.is_finite() || !end_mm.is_finite() {
+        return Err(TableError::Sampling(format!(
+            "table range {start_mm}..{end_mm} step {step_mm}: the step must be positive and the ends finite"
+        )));
+    }
+    if end_mm <= start_mm {
+        return Err(TableError::Sampling(format!(
+            "table range {start_mm}..{end_mm}: the end must be above the start"
+        )));
+    }
+    let intervals = (end_mm - start_mm) / step_mm;
+    let n_int = intervals.round();
+    if (intervals - n_int).abs() > 1e-6 {
+        return Err(TableError::Sampling(format!(
+            "the range {start_mm}..{end_mm} mm is not a whole number of steps of {step_mm} mm ({intervals:.4} steps)"
+        )));
+    }
+    let n = n_int as usize + 1;
+    let mut comp_um = Vec::with_capacity(n);
+    for i in 0..n {
+        let mut p = at_mm;
+        p[input_axis.index()] = start_mm + step_mm * i as f64;
+        let e = model.error_um(p);
+        let v = e[output_axis.index()];
+        if !v.is_finite() {
+            return Err(TableError::Undefined { p_mm: p });
+        }
+        comp_um.push(-v);
+    }
+    Ok(AxisProfile {
+        input_axis,
+        output_axis,
+        start_mm,
+        step_mm,
+        comp_um,
+        rotary: false,
+    })
+}
+
+/// A number with at most `decimals` decimals, trailing zeros (and a lone point) removed, and no
+/// negative zero: `0.010000` → `0.01`, `-0.0000001` → `0`, `400` → `400`.
+pub fn trim_number(v: f64, decimals: usize) -> String {
+    let s = format!("{:.*}", decimals, v);
+    let s = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    };
+    if s == "-0" {
+        "0".to_string()
+    } else {
+        s
+    }
+}
+
+/// Like [`trim_number`] but keeps one decimal for whole numbers (`400` → `400.0`), the style of
+/// the Siemens examples for positions.
+pub fn decimal_number(v: f64, decimals: usize) -> String {
+    let s = trim_number(v, decimals);
+    if s.contains('.') {
+        s
+    } else {
+        format!("{s}.0")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn number_formatting() {
+        assert_eq!(trim_number(0.01, 6), "0.01");
+        assert_eq!(trim_number(-0.0000001, 6), "0");
+        assert_eq!(trim_number(400.0, 6), "400");
+        assert_eq!(decimal_number(-200.0, 6), "-200.0");
+        assert_eq!(decimal_number(6.73, 6), "6.73");
+    }
+}

@@ -1,0 +1,313 @@
+//! The rewriter on small programs whose correct output is worked out by hand.
+
+mod gcode_support;
+use gcode_support::*;
+use mtec_comp::gcode::{
+    correction_mm, rewrite, GcodeError, Offsets, OnUnsupported, ProblemKind, RewriteOptions,
+    RewriteReport,
+};
+use mtec_comp::ErrorModel;
+use std::collections::BTreeMap;
+
+fn run(input: &str, model: &dyn ErrorModel, opts: &RewriteOptions) -> (String, RewriteReport) {
+    let mut out = Vec::new();
+    let rep = rewrite(input.as_bytes(), &mut out, model, opts).unwrap();
+    (String::from_utf8(out).unwrap(), rep)
+}
+
+fn refuse(
+    input: &str,
+    model: &dyn ErrorModel,
+    opts: &RewriteOptions,
+) -> mtec_comp::gcode::Diagnostic {
+    let mut out = Vec::new();
+    match rewrite(input.as_bytes(), &mut out, model, opts) {
+        Err(GcodeError::At(d)) => d,
+        other => panic!("expected a located error, got {other:?}"),
+    }
+}
+
+#[test]
+fn zero_model_is_byte_identical_with_crlf_bom_and_no_final_newline() {
+    let input = b"\xEF\xBB\xBF%\r\nO1234 (PART)\r\nN10 G21 G90 G17 ; setup\r\n\r\nN20 G0 X0 Y0 Z5\r\n/N25 M8\r\nN30 G1 Z-1 F100 (plunge)\r\nN40 X100.00000 Y+50 (long)\r\nN50 G2 X120 Y70 R20\r\nN60 G3 X100 Y90 I-20 J0\r\n(comment \xff\xfe bytes)\r\nN70 G0 Z5\r\nM30\r\n%\r\ntrailing junk after the tape end ((\r\nno newline";
+    let mut out = Vec::new();
+    let rep = rewrite(&input[..], &mut out, &ZeroModel, &RewriteOptions::default()).unwrap();
+    assert_eq!(out, input.to_vec());
+    assert_eq!(rep.lines_read, 16);
+    assert_eq!(rep.lines_written, 16);
+    assert!(!rep.header_written);
+}
+
+#[test]
+fn constant_error_shifts_every_point_and_keeps_arcs() {
+    // e = [+10, -20, +5] um everywhere ⇒ the command is the target minus e: c = [-0.01, +0.02, -0.005] mm
+    let model = ConstModel([10.0, -20.0, 5.0]);
+    let input =
+        "G21 G90\nG0 X0 Y0 Z5\nG1 Z-1 F100\nX100 (cut)\nG2 X120 Y20 R20\nG3 X100 Y40 I-20 J0\n";
+    // no max-segment split here (it applies to every compensated feed move)
+    let opts = RewriteOptions {
+        max_segment_mm: 1e6,
+        ..RewriteOptions::default()
+    };
+    let (out, rep) = run(input, &model, &opts);
+    let lines: Vec<&str> = out.lines().collect();
+    assert!(lines[1].starts_with("(mtec compensate gcode"), "{out}");
+    assert_eq!(lines[2], "G0 X-0.01 Y0.02 Z4.995");
+    // the 6 mm plunge has a constant correction: one piece
+    assert_eq!(lines[3], "G1 Z-1.005 F100");
+    assert_eq!(lines[4], "X99.99 (cut)");
+    // arcs kept: only the end points move (I/J are relative to the shifted start)
+    assert_eq!(lines[5], "G2 X119.99 Y20.02 R20");
+    assert_eq!(lines[6], "G3 X99.99 Y40.02 I-20 J0");
+    assert_eq!(lines.len(), 7);
+    assert_eq!(rep.arcs_linearised, 0);
+    assert_eq!(rep.lines_added, 0);
+    assert!((rep.max_correction_um - (100.0f64 + 400.0 + 25.0).sqrt()).abs() < 1e-6);
+}
+
+/// e_x = 0.02·x um (20 um/m scale error), worked by hand.
+struct ScaleX;
+impl ErrorModel for ScaleX {
+    fn error_um(&self, p: [f64; 3]) -> [f64; 3] {
+        [0.02 * p[0], 0.0, 0.0]
+    }
+    fn describe(&self) -> String {
+        "scale".into()
+    }
+}
+
+#[test]
+fn long_move_is_split_and_ends_exactly_at_target_plus_correction() {
+    // p + 2e-5 p = t ⇒ c(t) = -2e-5 t / (1 + 2e-5): the correction changes by 0.02 um per mm,
+    // so with 0.5 um tolerance a piece may be up to ~25 mm; the max segment (10 mm) decides.
+    let input = "G21 G90\nG0 X0 Y0 Z0\nG1 X100 F500\n";
+    let (out, rep) = run(input, &ScaleX, &RewriteOptions::default());
+    let lines: Vec<&str> = out.lines().collect();
+    // the original line is the first piece, then 9 new G1 lines; the last ends at 100 + c(100)
+    assert_eq!(lines[3], "G1 X9.9998 F500");
+    assert_eq!(lines.len(), 4 + 9);
+    let c100: f64 = -2e-5 * 100.0 / (1.0 + 2e-5);
+    assert_eq!(
+        *lines.last().unwrap(),
+        format!("G1 X{}", 100.0 + (c100 * 1e4).round() / 1e4)
+    );
+    assert_eq!(rep.lines_added, 9);
+    // a tighter tolerance splits by the correction's change instead: 0.02 um/mm · L < 0.05 um
+    let opts = RewriteOptions {
+        tolerance_um: 0.05,
+        max_segment_mm: 1e9,
+        ..RewriteOptions::default()
+    };
+    let (out, _) = run(input, &ScaleX, &opts);
+    let xs: Vec<f64> = out
+        .lines()
+        .skip(3)
+        .map(|l| {
+            l.split_whitespace().find(|w| w.starts_with('X')).unwrap()[1..]
+                .parse()
+                .unwrap()
+        })
+        .collect();
+    let mut prev = 0.0;
+    for &x in &xs {
+        let step = x - prev;
+        assert!(
+            0.02 * step < 0.05 + 1e-9,
+            "piece of {step} mm changes the correction by more than 0.05 um"
+        );
+        prev = x;
+    }
+    // bisection: 100 mm / 2^6 = 1.5625 mm is the first power-of-two piece under 2.5 mm
+    assert_eq!(xs.len(), 64);
+}
+
+#[test]
+fn work_offset_and_tool_length_place_the_model_in_machine_coordinates() {
+    // G54 X offset 200 mm: program X10 is machine X210; c = -2e-5·210/(1+2e-5) = -0.0041999 mm
+    let opts = RewriteOptions {
+        offsets: Offsets {
+            work_mm: {
+                let mut w = [[0.0; 3]; 9];
+                w[0] = [200.0, 0.0, 0.0];
+                w
+            },
+            tool_length_mm: [(3, 55.0)].into(),
+            ..Offsets::default()
+        },
+        ..RewriteOptions::default()
+    };
+    let (out, _) = run("G21 G54 G43 H3\nG0 X10 Y0 Z0\n", &ScaleX, &opts);
+    assert_eq!(out.lines().nth(2), Some("G0 X9.9958 Y0 Z0"));
+    // a model in z shows the tool length: machine z = program z + 55
+    struct ScaleZ;
+    impl ErrorModel for ScaleZ {
+        fn error_um(&self, p: [f64; 3]) -> [f64; 3] {
+            [0.0, 0.0, 0.1 * p[2]]
+        }
+        fn describe(&self) -> String {
+            "z".into()
+        }
+    }
+    let (out, _) = run("G21 G54 G43 H3\nG0 X10 Y0 Z0\n", &ScaleZ, &opts);
+    // c_z = -1e-4·55/(1+1e-4) = -0.0054995 mm
+    assert_eq!(out.lines().nth(2), Some("G0 X10 Y0 Z-0.0055"));
+    // G43 with a tool that has no length is refused at the G43 word
+    let d = refuse("G21\nG43 H7\n", &ScaleX, &opts);
+    assert_eq!((d.line, d.column, d.kind), (2, 1, ProblemKind::Unsupported));
+    assert!(d.message.contains("tool 7"));
+}
+
+#[test]
+fn incremental_and_inch_programs_do_not_drift() {
+    let input = "G20 G91\nG0 X0 Y0 Z0\nG1 X1 Y1 F10\nX1\nX1\nY-2\nX-3\n";
+    let opts = RewriteOptions {
+        start_position_mm: Some([0.0; 3]),
+        ..RewriteOptions::default()
+    };
+    let (out, _) = run(input, &PolyModel, &opts);
+    let work = [[0.0; 3]; 6];
+    let start = Some([0.0; 3]);
+    let want = interpret(input, &work, &BTreeMap::new(), start);
+    let got = interpret(&out, &work, &BTreeMap::new(), start);
+    // the last output point, through the machine, is back at the origin within inch rounding
+    let end = machine(&PolyModel, got.last().unwrap().end);
+    assert!(
+        dist(end, want.last().unwrap().end) < 0.127e-3 * 3f64.sqrt(),
+        "{out}"
+    );
+    check_lands_on_target(
+        input,
+        &out,
+        &PolyModel,
+        &work,
+        &BTreeMap::new(),
+        start,
+        0.23e-3,
+        0.8e-3,
+    );
+}
+
+#[test]
+fn arcs_are_linearised_when_the_correction_varies_and_modal_g2_is_restored() {
+    let input = "G21 G90 G17\nG0 X0 Y0 Z0\nG1 X50 F300\nG2 X100 Y0 R25\nX150 Y0 R25\nG1 Y10\n";
+    let (out, rep) = run(input, &PolyModel, &RewriteOptions::default());
+    assert_eq!(rep.arcs_linearised, 2);
+    let lines: Vec<&str> = out.lines().collect();
+    // the first arc's own line became its first chord
+    let arc1 = lines
+        .iter()
+        .position(|l| l.starts_with("G1 X") && l.ends_with(""))
+        .unwrap();
+    assert!(arc1 > 0);
+    assert!(
+        !out.contains("R25"),
+        "R words are gone with the arcs:\n{out}"
+    );
+    // the modal arc line got a G1 (output was G1 already: nothing inserted) -- and the path holds
+    check_lands_on_target(
+        input,
+        &out,
+        &PolyModel,
+        &[[0.0; 3]; 6],
+        &BTreeMap::new(),
+        None,
+        0.09e-3,
+        1.1e-3,
+    );
+    // an arc kept as an arc after a linearised one gets its G2 back
+    let input = "G21 G90 G17\nG0 X0 Y0 Z0\nG2 X50 Y0 R25 F100\nX50.001 Y0.001 R0.001\n";
+    let (out, _) = run(
+        input,
+        &ConstModel([1.0, 1.0, 1.0]),
+        &RewriteOptions::default(),
+    );
+    assert_eq!(out.lines().nth(4), Some("X50.0 Y0.0 R0.001"), "{out}");
+}
+
+#[test]
+fn restores_modal_arc_after_linearisation() {
+    // first arc linearised (the model varies), the second tiny one is kept: it needs its G2 back
+    let input = "G21 G90\nG0 X0 Y0 Z0\nG2 X50 Y0 R25 F100\nX50.01 Y0.01 R0.01\n";
+    let (out, _) = run(
+        input,
+        &PolyModel,
+        &RewriteOptions {
+            tolerance_um: 5.0,
+            ..RewriteOptions::default()
+        },
+    );
+    let last = out.lines().last().unwrap();
+    assert!(last.starts_with("G2 X"), "{out}");
+}
+
+#[test]
+fn unsupported_constructs_are_refused_with_line_and_column_or_passed_through() {
+    let cases: &[(&str, usize, usize, &str)] = &[
+        (
+            "G21\nG0 X0 Y0 Z0\nG1 X[1+2]\n",
+            3,
+            4,
+            "parameter or expression",
+        ),
+        ("G21\n#5221 = 3\n", 2, 1, "#5221"),
+        ("G21\no100 sub\n", 2, 1, "O-word"),
+        ("G21 G0 X0 Y0 Z0\nG81 X1 Y1 Z-1 R1\n", 2, 1, "G81"),
+        ("G21\nG41 D1\n", 2, 1, "G41"),
+        ("G21 G0 X0 Y0 Z0\nG1 X1 A30\n", 2, 4, "axis A"),
+        ("G21\nM98 P100\n", 2, 1, "M98"),
+        ("G21\nG1 X1 (open\n", 2, 7, "comment"),
+        ("G21 G0 X0 Y0 Z0\nG1 X1 X2\n", 2, 7, "two X words"),
+        ("G21\nG1 X10 Y0 Z0 F10\n", 2, 4, "position of"),
+        ("G21 G0 X0 Y0 Z0\n/G1 X3\n", 2, 1, "block delete"),
+        ("G21 G0 X0 Y0 Z0\nG10 L2 P1 X3\n", 2, 1, "G10"),
+    ];
+    for (input, line, col, words) in cases {
+        // G1 X10 from an unknown start is accepted with end-point-only correction when the
+        // target is known; here Y/Z are given so it is accepted: skip that case for refusal
+        if words == &"position of" {
+            let (_, rep) = run(input, &PolyModel, &RewriteOptions::default());
+            assert_eq!(rep.moves_end_point_only, 1);
+            continue;
+        }
+        let d = refuse(input, &PolyModel, &RewriteOptions::default());
+        assert_eq!((d.line, d.column), (*line, *col), "{input:?}: {d}");
+        assert!(d.message.contains(words), "{input:?}: {d}");
+        let opts = RewriteOptions {
+            on_unsupported: OnUnsupported::PassThroughWithWarning,
+            ..RewriteOptions::default()
+        };
+        let (out, rep) = run(input, &PolyModel, &opts);
+        assert!(rep.warnings_total >= 1);
+        let bad_line = input.lines().nth(line - 1).unwrap();
+        assert!(
+            out.lines().any(|l| l == bad_line),
+            "{input:?}: the line was not copied:\n{out}"
+        );
+    }
+}
+
+#[test]
+fn correction_failures_are_errors_at_the_line() {
+    let d = refuse(
+        "G21\nG0 X0 Y0 Z0\nG0 X30000\n",
+        &ScaleX,
+        &RewriteOptions::default(),
+    );
+    assert_eq!((d.line, d.kind), (3, ProblemKind::Correction));
+    assert!(d.message.contains("exceeds --max-correction-um"), "{d}");
+    struct Nan;
+    impl ErrorModel for Nan {
+        fn error_um(&self, _p: [f64; 3]) -> [f64; 3] {
+            [f64::NAN, 0.0, 0.0]
+        }
+        fn describe(&self) -> String {
+            "nan".into()
+        }
+    }
+    let d = refuse("G21\nG0 X0 Y0 Z0\n", &Nan, &RewriteOptions::default());
+    assert_eq!(d.line, 2);
+    assert!(d.message.contains("non-finite"));
+    // the solve agrees with the closed form of the scale model
+    let c = correction_mm(&ScaleX, [210.0, 0.0, 0.0], 500.0).unwrap();
+    assert!((c[0] + 2e-5 * 210.0 / (1.0 + 2e-5)).abs() < 1e-9);
+}

@@ -1,0 +1,331 @@
+//! Shared by the gcode_* integration tests: error models with known values, and a small
+//! reference interpreter of the G-code subset the rewriter writes, independent of its
+//! modal-state code, used to push programs through the "machine" p + e(p).
+#![allow(dead_code)]
+
+use mtec_comp::gcode::lexer::{lex_line, TokenKind, Value};
+use mtec_comp::ErrorModel;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+/// e = 0 everywhere.
+pub struct ZeroModel;
+impl ErrorModel for ZeroModel {
+    fn error_um(&self, _p: [f64; 3]) -> [f64; 3] {
+        [0.0; 3]
+    }
+    fn describe(&self) -> String {
+        "zero model (test)".into()
+    }
+}
+
+/// A smooth analytic model, linear + quadratic in x, y, z (µm, positions in mm): the kind of
+/// error a real machine has (scale errors, squareness, straightness bows), large enough that
+/// moves of a few mm need splitting at 0.5 µm.
+pub struct PolyModel;
+impl ErrorModel for PolyModel {
+    fn error_um(&self, p: [f64; 3]) -> [f64; 3] {
+        let [x, y, z] = p;
+        [
+            8.0 + 0.30 * x - 0.10 * y + 2e-3 * x * y + 1e-3 * z * z,
+            -4.0 + 0.20 * y + 1e-3 * x * x - 0.05 * z,
+            3.0 + 0.10 * z + 5e-4 * (x * x + y * y),
+        ]
+    }
+    fn describe(&self) -> String {
+        "analytic linear+quadratic test model (test) (µm)".into()
+    }
+}
+
+/// A constant error: every point needs the same correction.
+pub struct ConstModel(pub [f64; 3]);
+impl ErrorModel for ConstModel {
+    fn error_um(&self, _p: [f64; 3]) -> [f64; 3] {
+        self.0
+    }
+    fn describe(&self) -> String {
+        "constant".into()
+    }
+}
+
+/// The machine: commanded p goes to p + e(p)·1e-3.
+pub fn machine(model: &dyn ErrorModel, p: [f64; 3]) -> [f64; 3] {
+    let e = model.error_um(p);
+    [p[0] + e[0] * 1e-3, p[1] + e[1] * 1e-3, p[2] + e[2] * 1e-3]
+}
+
+pub fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// A move of the reference interpreter, machine frame, mm.
+#[derive(Debug, Clone)]
+pub struct Move {
+    pub line: usize,
+    pub rapid: bool,
+    pub start: [f64; 3],
+    pub end: [f64; 3],
+    /// Points along the move (for arcs: dense samples; for lines: start and end).
+    pub path: Vec<[f64; 3]>,
+}
+
+/// Interprets the subset: G0 G1 G2 G3 (I J K or R, P turns), G17/18/19, G20/21, G90/91,
+/// G90.1/91.1, G54–G59 with `work`, G43 H/G49 with `tools`, comments, N/F/S/T/M words.
+/// Moves before X, Y and Z are all known are not returned (nor compensated by the rewriter).
+pub fn interpret(
+    text: &str,
+    work: &[[f64; 3]; 6],
+    tools: &BTreeMap<u32, f64>,
+    start: Option<[f64; 3]>,
+) -> Vec<Move> {
+    let mut pos: [Option<f64>; 3] = start.map(|p| p.map(Some)).unwrap_or([None; 3]);
+    let mut scale = 1.0;
+    let mut absolute = true;
+    let mut arc_abs = false;
+    let mut plane = (0usize, 1usize, 2usize);
+    let mut mode = -1i32;
+    let mut wcs = 0usize;
+    let mut tool = 0.0;
+    let mut moves = Vec::new();
+    let mut toks = Vec::new();
+    for (ln, line) in text.lines().enumerate() {
+        let line = line.trim_start_matches('\u{feff}');
+        lex_line(line.as_bytes(), 0, &mut toks).expect("reference interpreter: lexable line");
+        let mut w: BTreeMap<u8, f64> = BTreeMap::new();
+        let mut gs = Vec::new();
+        for t in &toks {
+            if let TokenKind::Word {
+                letter,
+                value: Value::Number(v),
+            } = t.kind
+            {
+                if letter == b'G' {
+                    gs.push((v * 10.0).round() as i32);
+                } else {
+                    w.insert(letter, v);
+                }
+            }
+        }
+        for &g in &gs {
+            match g {
+                170 => plane = (0, 1, 2),
+                180 => plane = (2, 0, 1),
+                190 => plane = (1, 2, 0),
+                200 => scale = 25.4,
+                210 => scale = 1.0,
+                900 => absolute = true,
+                910 => absolute = false,
+                901 => arc_abs = true,
+                911 => arc_abs = false,
+                540 | 550 | 560 | 570 | 580 | 590 => wcs = ((g - 540) / 10) as usize,
+                430 => tool = tools[&(w[&b'H'] as u32)],
+                490 => tool = 0.0,
+                0 | 10 | 20 | 30 => mode = g / 10,
+                _ => {}
+            }
+        }
+        let letters = [b'X', b'Y', b'Z'];
+        if !letters.iter().any(|l| w.contains_key(l)) {
+            continue;
+        }
+        let off = [work[wcs][0], work[wcs][1], work[wcs][2] + tool];
+        let mut end = pos;
+        for a in 0..3 {
+            if let Some(v) = w.get(&letters[a]) {
+                end[a] = if absolute {
+                    Some(v * scale + off[a])
+                } else {
+                    pos[a].map(|p| p + v * scale)
+                };
+            }
+        }
+        let known = pos.iter().all(|p| p.is_some()) && end.iter().all(|p| p.is_some());
+        let s = pos.map(|p| p.unwrap_or(0.0));
+        let e = end.map(|p| p.unwrap_or(0.0));
+        pos = end;
+        if !known {
+            continue;
+        }
+        let path = if mode == 2 || mode == 3 {
+            let (f, g2, n) = plane;
+            let c = if let Some(r) = w.get(&b'R') {
+                let r = r * scale;
+                let (dx, dy) = (e[f] - s[f], e[g2] - s[g2]);
+                let d = (dx * dx + dy * dy).sqrt();
+                let h = (r * r - d * d / 4.0).max(0.0).sqrt();
+                let side = if mode == 2 { -1.0 } else { 1.0 } * r.signum();
+                [
+                    (s[f] + e[f]) / 2.0 - side * h * dy / d,
+                    (s[g2] + e[g2]) / 2.0 + side * h * dx / d,
+                ]
+            } else {
+                let ijk = [b'I', b'J', b'K'];
+                let get = |a: usize, base: f64| match w.get(&ijk[a]) {
+                    Some(v) if arc_abs => v * scale + off[a],
+                    Some(v) => base + v * scale,
+                    None => base,
+                };
+                [get(f, s[f]), get(g2, s[g2])]
+            };
+            let a0 = (s[g2] - c[1]).atan2(s[f] - c[0]);
+            let a1 = (e[g2] - c[1]).atan2(e[f] - c[0]);
+            let mut sweep = a1 - a0;
+            let full = (e[f] - s[f]).hypot(e[g2] - s[g2]) < 1e-9;
+            if mode == 3 {
+                if full {
+                    sweep = 2.0 * std::f64::consts::PI;
+                }
+                while sweep <= 0.0 {
+                    sweep += 2.0 * std::f64::consts::PI;
+                }
+            } else {
+                if full {
+                    sweep = -2.0 * std::f64::consts::PI;
+                }
+                while sweep >= 0.0 {
+                    sweep -= 2.0 * std::f64::consts::PI;
+                }
+            }
+            let turns = w.get(&b'P').copied().unwrap_or(1.0);
+            sweep += sweep.signum() * 2.0 * std::f64::consts::PI * (turns - 1.0);
+            let r0 = (s[f] - c[0]).hypot(s[g2] - c[1]);
+            let r1 = (e[f] - c[0]).hypot(e[g2] - c[1]);
+            let k = 400;
+            (0..=k)
+                .map(|i| {
+                    let t = i as f64 / k as f64;
+                    let th = a0 + sweep * t;
+                    let r = r0 + (r1 - r0) * t;
+                    let mut p = [0.0; 3];
+                    p[f] = c[0] + r * th.cos();
+                    p[g2] = c[1] + r * th.sin();
+                    p[n] = s[n] + (e[n] - s[n]) * t;
+                    p
+                })
+                .collect()
+        } else {
+            vec![s, e]
+        };
+        moves.push(Move {
+            line: ln + 1,
+            rapid: mode == 0,
+            start: s,
+            end: e,
+            path,
+        });
+    }
+    moves
+}
+
+/// Distance from `p` to the polyline `path`.
+pub fn dist_to_path(p: [f64; 3], path: &[[f64; 3]]) -> f64 {
+    let mut best = f64::INFINITY;
+    for w in path.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let l2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+        let t = if l2 == 0.0 {
+            0.0
+        } else {
+            (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1] + (p[2] - a[2]) * ab[2]) / l2)
+                .clamp(0.0, 1.0)
+        };
+        best = best.min(dist(
+            p,
+            [a[0] + ab[0] * t, a[1] + ab[1] * t, a[2] + ab[2] * t],
+        ));
+    }
+    if path.len() == 1 {
+        best = dist(p, path[0]);
+    }
+    best
+}
+
+/// The shared data folder: `../shared` beside the repository root, or `$MTEC_SHARED_DIR`.
+pub fn shared_dir() -> Option<PathBuf> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let candidates = [
+        std::env::var_os("MTEC_SHARED_DIR").map(PathBuf::from),
+        Some(root.join("../shared")),
+    ];
+    candidates
+        .into_iter()
+        .flatten()
+        .find(|p| p.join("data/gcode").is_dir())
+}
+
+/// Pushes the rewritten program through the machine and checks it against the original:
+/// the machine's end point of every original move lies within `end_tol_mm` of its target, and
+/// every output vertex and piece midpoint lies within `path_tol_mm` of the original path (the
+/// moves are matched in order). Returns the largest end and path deviations (mm).
+pub fn check_lands_on_target(
+    input: &str,
+    output: &str,
+    model: &dyn ErrorModel,
+    work: &[[f64; 3]; 6],
+    tools: &BTreeMap<u32, f64>,
+    start: Option<[f64; 3]>,
+    end_tol_mm: f64,
+    path_tol_mm: f64,
+) -> (f64, f64) {
+    let want = interpret(input, work, tools, start);
+    let got = interpret(output, work, tools, start);
+    assert!(!want.is_empty(), "no moves in the input");
+    let mut j = 0usize; // current original move
+    let mut worst_end: f64 = 0.0;
+    let mut worst_path: f64 = 0.0;
+    let mut ends_hit = vec![false; want.len()];
+    for g in &got {
+        let reached = machine(model, g.end);
+        let mid = machine(model, [0, 1, 2].map(|i| 0.5 * (g.start[i] + g.end[i])));
+        // advance to the original move this output move belongs to
+        let mut k = j;
+        loop {
+            let d = dist_to_path(reached, &want[k].path);
+            if d <= path_tol_mm {
+                break;
+            }
+            k += 1;
+            assert!(
+                k < want.len(),
+                "output move of line {} reaches {:?}, not on any remaining original move (from line {})",
+                g.line,
+                reached,
+                want[j].line
+            );
+        }
+        j = k;
+        let d_end = dist(reached, want[j].end);
+        if d_end <= end_tol_mm {
+            ends_hit[j] = true;
+            worst_end = worst_end.max(d_end);
+        }
+        worst_path = worst_path.max(dist_to_path(reached, &want[j].path));
+        if !g.rapid && g.path.len() == 2 {
+            let dm = dist_to_path(mid, &want[j].path);
+            assert!(
+                dm <= path_tol_mm,
+                "midpoint of the output move of line {} is {:.3} um off the original path of line {}",
+                g.line,
+                dm * 1e3,
+                want[j].line
+            );
+            worst_path = worst_path.max(dm);
+        }
+    }
+    for (k, hit) in ends_hit.iter().enumerate() {
+        // a zero-length original move shares its end with the move before it
+        let hit = *hit
+            || got
+                .iter()
+                .any(|g| dist(machine(model, g.end), want[k].end) <= end_tol_mm);
+        assert!(
+            hit,
+            "the end point of original line {} ({:?}) is not reached within {} um",
+            want[k].line,
+            want[k].end,
+            end_tol_mm * 1e3
+        );
+    }
+    (worst_end, worst_path)
+}

@@ -1,0 +1,70 @@
+//! The C ABI called from Rust: load, corrections (checked against the closed-form answer of a
+//! map whose error is affine), error codes, free.
+
+use mtec_comp::map::{GridMap, Outside};
+use mtec_rt::*;
+use std::ffi::{CStr, CString};
+
+/// e = (5 + 0.01·x, −2, 0) µm: the correction for target t solves p + e(p)·1e-3 = t, i.e.
+/// p_x = (t_x − 0.005)/(1 + 1e-5), c_x = (p_x − t_x)·1e3; c_y = +2 µm, c_z = 0.
+fn write_map(dir: &std::path::Path, outside: Outside) -> CString {
+    let axes = [vec![0.0, 100.0], vec![0.0, 100.0], vec![0.0, 100.0]];
+    let mut values = Vec::new();
+    for &x in &axes[0] {
+        for _ in 0..2 {
+            for _ in 0..2 {
+                values.push([5.0 + 0.01 * x, -2.0, 0.0]);
+            }
+        }
+    }
+    let map = GridMap::new(axes, values, outside, "abi test").unwrap();
+    let path = dir.join("map.json");
+    std::fs::write(&path, serde_json::to_string(&map.to_file()).unwrap()).unwrap();
+    CString::new(path.to_str().unwrap()).unwrap()
+}
+
+#[test]
+fn load_correct_free() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_map(dir.path(), Outside::Refuse);
+    unsafe {
+        let h = mtec_rt_load(path.as_ptr());
+        assert!(!h.is_null());
+        let mut out = [9.0; 3];
+        assert_eq!(
+            mtec_rt_correction(h, 40.0, 50.0, 60.0, out.as_mut_ptr()),
+            MTEC_RT_OK
+        );
+        let px = (40.0 - 0.005) / (1.0 + 1e-5);
+        let cx = (px - 40.0) * 1e3;
+        assert!((out[0] - cx).abs() < 1e-4, "{} vs {cx}", out[0]);
+        assert!((out[1] - 2.0).abs() < 1e-4);
+        assert!(out[2].abs() < 1e-9);
+        // outside a refusing map: code 1 and zeros
+        assert_eq!(
+            mtec_rt_correction(h, 400.0, 50.0, 60.0, out.as_mut_ptr()),
+            MTEC_RT_ERR_UNDEFINED
+        );
+        assert_eq!(out, [0.0; 3]);
+        assert_eq!(
+            mtec_rt_correction(h, 1.0, 1.0, 1.0, std::ptr::null_mut()),
+            MTEC_RT_ERR_NULL
+        );
+        mtec_rt_free(h);
+        mtec_rt_free(std::ptr::null_mut());
+    }
+}
+
+#[test]
+fn load_failure_reports_why() {
+    let missing = CString::new("/nonexistent/map.json").unwrap();
+    unsafe {
+        assert!(mtec_rt_load(missing.as_ptr()).is_null());
+        let msg = CStr::from_ptr(mtec_rt_last_error()).to_str().unwrap();
+        assert!(
+            msg.contains("/nonexistent/map.json") && msg.contains("cannot read"),
+            "{msg}"
+        );
+        assert!(mtec_rt_load(std::ptr::null()).is_null());
+    }
+}

@@ -1,0 +1,235 @@
+//! EFAST, the extended Fourier amplitude sensitivity test (Saltelli, Tarantola & Chan 1999,
+//! Technometrics 41(1):39–56): first-order and total indices from the Fourier spectrum of the
+//! model output along search curves through the input space.
+//!
+//! Sampling: for each input i (and each of `resamples` repetitions) one search curve of N points
+//! s_k = 2πk/N, k = 0..N−1, on which input i oscillates with the high frequency ω_i and every
+//! other input with a low frequency from the complementary set {ω_~i} (eq. 19 of the paper):
+//! x_j(s) = ½ + (1/π)·arcsin(sin(ω_j·s + φ_j)), mapped through x_j's quantile function.
+//! Frequencies (as in SALib, so designs are comparable): ω_i = ⌊(N−1)/(2M)⌋, and the
+//! complementary frequencies spread over 1..⌊ω_i/(2M)⌋, so that their first M harmonics stay
+//! below ω_i/2 and do not interfere with ω_i's harmonics (M = interference factor, default 4;
+//! N > 4M² is needed). Each curve gets independent random phase shifts φ_j ∈ [0, 2π) (the
+//! paper's resampling scheme); repeating the curves `resamples` times with new phases and
+//! averaging the indices reduces the estimator's variance, and the spread over repetitions gives
+//! a confidence interval.
+//!
+//! Analysis of one curve (eqs. 21–24): Λ_p = |F_p/N|² for p = 1..⌈N/2⌉−1 (F = DFT of the
+//! output), V = 2 Σ_p Λ_p, V_i = 2 Σ_{q=1..M} Λ_{qω_i}, S1_i = V_i / V; the complementary set's
+//! variance V_~i = 2 Σ_{p=1..⌊ω_i/2⌋} Λ_p and ST_i = 1 − V_~i / V. With one repetition this is
+//! exactly SALib's `fast.analyze` (checked against a SALib fixture to 1e-9). SALib's bootstrap
+//! of EFAST (half-size resamples of the curve's points, which destroys the periodic structure the
+//! spectrum relies on) is deliberately not copied: intervals come from the repetitions instead.
+
+use crate::problem::{check_outputs, Indices, Problem, SampleMatrix};
+use crate::SensitivityError;
+use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
+use rustfft::{num_complex::Complex, FftPlanner};
+
+/// Design settings of an EFAST analysis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EfastSettings {
+    /// Points per search curve (per input and repetition), N > 4M².
+    pub n: usize,
+    /// Interference factor M: harmonics of ω_i counted in S1 (default 4).
+    pub m: usize,
+    /// Independent repetitions of every curve with new random phases (default 1, SALib's design).
+    pub resamples: usize,
+}
+
+impl Default for EfastSettings {
+    fn default() -> Self {
+        EfastSettings {
+            n: 1000,
+            m: 4,
+            resamples: 1,
+        }
+    }
+}
+
+impl EfastSettings {
+    fn check(&self) -> Result<(), SensitivityError> {
+        if self.m == 0 {
+            return Err(SensitivityError::Settings(
+                "interference factor M must be at least 1".into(),
+            ));
+        }
+        if self.n <= 4 * self.m * self.m {
+            return Err(SensitivityError::Settings(format!(
+                "EFAST needs N > 4M² = {} points per curve (got N = {}, M = {})",
+                4 * self.m * self.m,
+                self.n,
+                self.m
+            )));
+        }
+        if self.resamples == 0 {
+            return Err(SensitivityError::Settings(
+                "resamples must be at least 1".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Total model evaluations: N · D · resamples.
+    pub fn evaluations(&self, dim: usize) -> usize {
+        self.n * dim * self.resamples
+    }
+}
+
+/// The frequencies of one curve: ω_max for the input of interest, then the complementary set
+/// for the other D−1 inputs (SALib's choice, see the module docs).
+pub fn frequencies(n: usize, m: usize, dim: usize) -> (usize, Vec<usize>) {
+    let omega_max = (n - 1) / (2 * m);
+    let m_c = omega_max / (2 * m);
+    let others = if dim <= 1 {
+        Vec::new()
+    } else if m_c >= dim - 1 {
+        // floor(linspace(1, m_c, D−1))
+        (0..dim - 1)
+            .map(|k| {
+                if dim == 2 {
+                    1
+                } else if k == dim - 2 {
+                    m_c
+                } else {
+                    // numpy's linspace: start + k·step, the last point set to stop exactly.
+                    let step = (m_c as f64 - 1.0) / (dim - 2) as f64;
+                    (k as f64 * step + 1.0).floor() as usize
+                }
+            })
+            .collect()
+    } else {
+        (0..dim - 1).map(|k| k % m_c + 1).collect()
+    };
+    (omega_max, others)
+}
+
+/// Draws the EFAST design: `resamples × D` curves of N rows each, in that order (repetition,
+/// then input of interest, then the point along the curve).
+pub fn sample(
+    problem: &Problem,
+    settings: &EfastSettings,
+    seed: u64,
+) -> Result<SampleMatrix, SensitivityError> {
+    settings.check()?;
+    let d = problem.dim();
+    let n = settings.n;
+    let (omega_max, others) = frequencies(n, settings.m, d);
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    let mut data = vec![0.0; settings.evaluations(d) * d];
+    let curve_len = n * d;
+    for (c, curve) in data.chunks_exact_mut(curve_len).enumerate() {
+        let i = c % d;
+        // ω_j on this curve: ω_max for input i, the complementary set in order for the others.
+        let mut omega = vec![0usize; d];
+        let mut rest = others.iter();
+        for (j, w) in omega.iter_mut().enumerate() {
+            *w = if j == i {
+                omega_max
+            } else {
+                *rest.next().unwrap_or(&1)
+            };
+        }
+        let phi: Vec<f64> = (0..d)
+            .map(|_| rng.random::<f64>() * std::f64::consts::TAU)
+            .collect();
+        for (k, row) in curve.chunks_exact_mut(d).enumerate() {
+            let s = std::f64::consts::TAU * k as f64 / n as f64;
+            for j in 0..d {
+                // Search curve, Saltelli et al. 1999 eq. 19.
+                row[j] = 0.5 + (omega[j] as f64 * s + phi[j]).sin().asin() / std::f64::consts::PI;
+            }
+            problem.scale_row(row);
+        }
+    }
+    SampleMatrix::from_rows(d, data)
+}
+
+/// S1 and ST of the input of interest from the outputs along one curve (eqs. 21–24; SALib's
+/// `compute_orders`).
+pub fn curve_indices(y: &[f64], m: usize, omega_max: usize) -> (f64, f64, f64) {
+    let n = y.len();
+    let mut buf: Vec<Complex<f64>> = y.iter().map(|&v| Complex::new(v, 0.0)).collect();
+    FftPlanner::new().plan_fft_forward(n).process(&mut buf);
+    // Λ_p = |F_p / N|², p = 1 .. ceil(N/2) − 1
+    let spectrum = |p: usize| (buf[p] / n as f64).norm_sqr();
+    let top = n.div_ceil(2);
+    let v: f64 = 2.0 * (1..top).map(spectrum).sum::<f64>();
+    let v_i: f64 = 2.0 * (1..=m).map(|q| spectrum(q * omega_max)).sum::<f64>();
+    let v_not_i: f64 = 2.0 * (1..=omega_max / 2).map(spectrum).sum::<f64>();
+    (v_i / v, 1.0 - v_not_i / v, v)
+}
+
+/// EFAST indices from the outputs `y` of a design drawn by [`sample`] (or by SALib's
+/// `fast_sampler` when `resamples` is 1): S1 and ST per input, averaged over repetitions; with
+/// two or more repetitions the 95 % confidence half widths 1.96·sd/√R are reported.
+pub fn analyze(
+    names: &[String],
+    y: &[f64],
+    m: usize,
+    resamples: usize,
+) -> Result<Indices, SensitivityError> {
+    let d = names.len();
+    if d == 0 || resamples == 0 {
+        return Err(SensitivityError::Settings(
+            "need at least one input and one repetition".into(),
+        ));
+    }
+    if y.len() % (d * resamples) != 0 {
+        return Err(SensitivityError::Outputs(format!(
+            "{} outputs are not a multiple of D·resamples = {}",
+            y.len(),
+            d * resamples
+        )));
+    }
+    let n = y.len() / (d * resamples);
+    let settings = EfastSettings { n, m, resamples };
+    settings.check()?;
+    check_outputs(y, settings.evaluations(d))?;
+    let (omega_max, _) = frequencies(n, m, d);
+    let per_curve: Vec<(f64, f64, f64)> = y
+        .par_chunks_exact(n)
+        .map(|c| curve_indices(c, m, omega_max))
+        .collect();
+    if let Some(c) = per_curve.iter().position(|r| !(r.2 > 0.0)) {
+        return Err(SensitivityError::Outputs(format!(
+            "the output does not vary along curve {c} (input `{}`): indices are undefined",
+            names[c % d]
+        )));
+    }
+    let r = resamples as f64;
+    let mut s1 = vec![0.0; d];
+    let mut st = vec![0.0; d];
+    let mut variance = 0.0;
+    for (c, &(a, b, v)) in per_curve.iter().enumerate() {
+        s1[c % d] += a / r;
+        st[c % d] += b / r;
+        variance += v / (r * d as f64);
+    }
+    let (s1_conf, st_conf) = if resamples >= 2 {
+        let half_width = |k: usize, mean: &[f64], pick: fn(&(f64, f64, f64)) -> f64| {
+            let ss: f64 = per_curve
+                .iter()
+                .enumerate()
+                .filter(|(c, _)| c % d == k)
+                .map(|(_, t)| (pick(t) - mean[k]).powi(2))
+                .sum();
+            1.96 * (ss / (r - 1.0)).sqrt() / r.sqrt()
+        };
+        (
+            Some((0..d).map(|k| half_width(k, &s1, |t| t.0)).collect()),
+            Some((0..d).map(|k| half_width(k, &st, |t| t.1)).collect()),
+        )
+    } else {
+        (None, None)
+    };
+    Ok(Indices {
+        inputs: names.to_vec(),
+        s1,
+        st,
+        s1_conf,
+        st_conf,
+        variance,
+    })
+}

@@ -1,0 +1,666 @@
+//! Global sensitivity of a machine's volumetric error to its geometric error elements: the
+//! source method (EFAST on the first-order 3-axis error model, inputs = error elements with
+//! measured normal distributions, outputs Ex, Ey, Ez), plus Sobol and Morris as cross-checks,
+//! the ranking of key and coupled errors, and a tolerance allocation.
+//!
+//! Decisions where the spec is silent:
+//! - **Model.** The first-order volumetric model of `mtec-model`: at a commanded pose q,
+//!   E(q) = J(q)·e with J the first-order Jacobian (µm per µm or per µrad) and e the element
+//!   values. Ex, Ey, Ez are linear in e, so for them S1 = ST = J_i²σ_i²/Σ_j J_j²σ_j² exactly
+//!   (the tests use this as ground truth); the fourth output, the total volumetric error
+//!   |E| = √(Ex² + Ey² + Ez²), is non-linear and is where the elements couple (ST > S1).
+//! - **Inputs.** Every element of the statistics file with std > 0 is an input, normal with its
+//!   mean and std; elements with std = 0 stay fixed at their mean (they shift E, and so |E|,
+//!   but have no index). Elements the machine's chain does not have are refused.
+//! - **Several points** (`--points`): all points share one sample of the element values (the
+//!   machine has one set of errors). Indices are aggregated per output with variance weights,
+//!   S_i = Σ_p V_p S_{i,p} / Σ_p V_p, the generalised index of Gamboa, Janon, Klein & Lagnoux
+//!   (2014, Electron. J. Stat. 8:575–603) for a vector output: the share of the total variance
+//!   over the workspace that input i explains. Points where an output does not vary get weight 0.
+//! - **Key errors** are ranked by S1 of |E| (and per axis); **coupled errors** by ST − S1 of |E|,
+//!   listed when ST − S1 ≥ 0.03 (above EFAST's leakage floor, see [`COUPLING_THRESHOLD`]).
+//! - **Tolerance allocation** (equal-effects rule of tolerance design): the target accuracy T
+//!   (default 25 µm) bounds each of Ex, Ey, Ez at a coverage factor k (default 2, ≈ 95 %), so each
+//!   axis may have a standard deviation σ_T = T/k. From the indices, element i's effective
+//!   coefficient on output a is c_{i,a} = √(ST_{i,a}·V_a)/σ_i (exactly |J_{a,i}| at one point;
+//!   its RMS over several points). Giving each of the n_a elements that reach output a an equal
+//!   share of σ_T² gives the allowed std σ_i,a = σ_T / (√n_a · c_{i,a}); the table reports the
+//!   smallest over the three axes and which axis binds. The means (systematic errors) are left
+//!   to compensation and are not part of the budget.
+
+use crate::efast::{self, EfastSettings};
+use crate::morris::{self, MorrisSettings};
+use crate::problem::{evaluate, Model, Problem};
+use crate::sobol::{self, Bootstrap};
+use crate::{Distribution, SensitivityError};
+use mtec_io::{InputError, Table};
+use mtec_model::{ErrorElement, ErrorSet, Machine, VolumetricModel};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Output channel names, in order.
+pub const OUTPUTS: [&str; 4] = ["Ex", "Ey", "Ez", "E"];
+
+/// Measured statistics of one error element.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ElementStat {
+    pub element: String,
+    pub mean: f64,
+    pub std: f64,
+    /// `um` or `urad`, as the element requires.
+    pub unit: String,
+}
+
+/// The error-statistics file (SPEC §4: `element,mean,std,unit`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ErrorStatistics {
+    pub elements: Vec<ElementStat>,
+}
+
+impl ErrorStatistics {
+    /// Reads and checks a statistics CSV: known ISO 230-1 names, each once, finite mean,
+    /// std ≥ 0, unit matching the element (`um` for translations, `urad` for rotations).
+    pub fn read(path: &Path) -> Result<ErrorStatistics, InputError> {
+        let t = Table::read(path)?;
+        t.require(&["element", "mean", "std", "unit"])?;
+        let (ce, cm, cs, cu) = (
+            t.column("element")?,
+            t.column("mean")?,
+            t.column("std")?,
+            t.column("unit")?,
+        );
+        let mut elements: Vec<ElementStat> = Vec::new();
+        for row in &t.rows {
+            let name = row.fields[ce].trim().to_string();
+            let el = ErrorElement::parse(&name)
+                .map_err(|e| InputError::at(path, row.line, ce + 1, e.to_string()))?;
+            let canonical = el.name();
+            if elements.iter().any(|s| s.element == canonical) {
+                return Err(InputError::at(
+                    path,
+                    row.line,
+                    ce + 1,
+                    format!("element `{canonical}` is listed twice"),
+                ));
+            }
+            let mean = t.cell_f64(row, cm)?;
+            let std = t.cell_f64(row, cs)?;
+            if std < 0.0 {
+                return Err(InputError::at(
+                    path,
+                    row.line,
+                    cs + 1,
+                    format!("std is {std}: a standard deviation cannot be negative"),
+                ));
+            }
+            let unit = row.fields[cu].trim().to_string();
+            let want = el.unit();
+            let unit_ok = unit == want
+                || (want == "um" && unit == "µm")
+                || (want == "urad" && unit == "µrad");
+            if !unit_ok {
+                return Err(InputError::at(
+                    path,
+                    row.line,
+                    cu + 1,
+                    format!(
+                        "unit `{unit}` does not fit {canonical}: expected `{want}` ({} error)",
+                        if el.is_angular() { "angular" } else { "linear" }
+                    ),
+                ));
+            }
+            elements.push(ElementStat {
+                element: canonical,
+                mean,
+                std,
+                unit: want.to_string(),
+            });
+        }
+        Ok(ErrorStatistics { elements })
+    }
+
+    /// Statistics of an error set over the machine's travels: each element's function sampled
+    /// at `samples` evenly spaced positions of its axis; mean and (population) std of the values.
+    /// This is how the simulated machine's statistics are made, and what a user gets from an
+    /// identified error set.
+    pub fn from_error_set(set: &ErrorSet, machine: &Machine, samples: usize) -> ErrorStatistics {
+        let samples = samples.max(2);
+        let mut elements = Vec::new();
+        for &axis in &machine.axes {
+            let [lo, hi] = machine.travel(axis);
+            let mut els: Vec<ErrorElement> = mtec_model::motion_elements(axis).to_vec();
+            els.extend(mtec_model::location_elements(axis));
+            for el in els {
+                let Some(_) = set.get(&el) else { continue };
+                let vals: Vec<f64> = (0..samples)
+                    .map(|k| set.value(&el, lo + (hi - lo) * k as f64 / (samples - 1) as f64))
+                    .collect();
+                let mean = vals.iter().sum::<f64>() / samples as f64;
+                let constant = vals.iter().all(|v| *v == vals[0]);
+                let var = if constant {
+                    0.0 // a location error (squareness) is one number, not a distribution
+                } else {
+                    vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / samples as f64
+                };
+                elements.push(ElementStat {
+                    element: el.name(),
+                    mean,
+                    std: var.sqrt(),
+                    unit: el.unit().to_string(),
+                });
+            }
+        }
+        ErrorStatistics { elements }
+    }
+
+    /// The CSV text of the statistics.
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from("element,mean,std,unit\n");
+        for e in &self.elements {
+            s.push_str(&format!("{},{},{},{}\n", e.element, e.mean, e.std, e.unit));
+        }
+        s
+    }
+}
+
+/// The first-order volumetric error at a set of poses as a [`Model`] of the uncertain elements:
+/// outputs [Ex, Ey, Ez, |E|] for each pose in turn (µm).
+#[derive(Debug, Clone)]
+pub struct VolumetricErrorModel {
+    /// Per pose, per input: the Jacobian column [∂Ex, ∂Ey, ∂Ez]/∂e_i.
+    coefficients: Vec<Vec<[f64; 3]>>,
+    /// Per pose: the error caused by the fixed (std 0) elements at their means.
+    offsets: Vec<[f64; 3]>,
+}
+
+impl VolumetricErrorModel {
+    /// The per-pose Jacobian columns of the inputs.
+    pub fn coefficients(&self) -> &[Vec<[f64; 3]>] {
+        &self.coefficients
+    }
+}
+
+impl Model for VolumetricErrorModel {
+    fn n_outputs(&self) -> usize {
+        4 * self.coefficients.len()
+    }
+    fn evaluate(&self, x: &[f64], out: &mut [f64]) {
+        for ((cols, off), o) in self
+            .coefficients
+            .iter()
+            .zip(&self.offsets)
+            .zip(out.chunks_exact_mut(4))
+        {
+            // First-order volumetric error E = J·e (linear in the element values).
+            let mut e = *off;
+            for (c, xi) in cols.iter().zip(x) {
+                e[0] += c[0] * xi;
+                e[1] += c[1] * xi;
+                e[2] += c[2] * xi;
+            }
+            o[0] = e[0];
+            o[1] = e[1];
+            o[2] = e[2];
+            o[3] = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+        }
+    }
+}
+
+/// The sensitivity problem of a machine: inputs, fixed elements, and the model at the poses.
+#[derive(Debug, Clone)]
+pub struct ErrorModelProblem {
+    pub problem: Problem,
+    /// Elements held at their mean (std = 0).
+    pub fixed: Vec<String>,
+    pub model: VolumetricErrorModel,
+    /// Standard deviations of the inputs (element units).
+    pub stds: Vec<f64>,
+}
+
+impl ErrorModelProblem {
+    /// Builds the problem; poses are in the machine's pose order (mm, deg).
+    pub fn new(
+        machine: &Machine,
+        stats: &ErrorStatistics,
+        poses: &[Vec<f64>],
+    ) -> Result<ErrorModelProblem, SensitivityError> {
+        if poses.is_empty() {
+            return Err(SensitivityError::Problem("no poses".into()));
+        }
+        let vm = VolumetricModel::new(machine, &ErrorSet::new("sensitivity"));
+        let mut names = Vec::new();
+        let mut dists = Vec::new();
+        let mut stds = Vec::new();
+        let mut fixed = Vec::new();
+        let jac: Vec<BTreeMap<String, [f64; 3]>> = poses
+            .iter()
+            .map(|q| {
+                vm.first_order_jacobian(q)
+                    .into_iter()
+                    .map(|(e, c)| (e.name(), c))
+                    .collect()
+            })
+            .collect();
+        for s in &stats.elements {
+            if !jac[0].contains_key(&s.element) {
+                return Err(SensitivityError::Problem(format!(
+                    "element {} is not an error of the machine's chain {}",
+                    s.element, machine.chain.text
+                )));
+            }
+            if s.std > 0.0 {
+                names.push(s.element.clone());
+                dists.push(Distribution::Normal {
+                    mean: s.mean,
+                    std: s.std,
+                });
+                stds.push(s.std);
+            } else {
+                fixed.push(s.element.clone());
+            }
+        }
+        let problem = Problem::new(names, dists)?;
+        let coefficients = jac
+            .iter()
+            .map(|j| problem.names.iter().map(|n| j[n]).collect())
+            .collect();
+        let offsets = jac
+            .iter()
+            .map(|j| {
+                let mut o = [0.0; 3];
+                for s in stats.elements.iter().filter(|s| s.std == 0.0) {
+                    let c = j[&s.element];
+                    for k in 0..3 {
+                        o[k] += c[k] * s.mean;
+                    }
+                }
+                o
+            })
+            .collect();
+        Ok(ErrorModelProblem {
+            problem,
+            fixed,
+            model: VolumetricErrorModel {
+                coefficients,
+                offsets,
+            },
+            stds,
+        })
+    }
+}
+
+/// Which method, with its design size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Method {
+    Efast(EfastSettings),
+    /// Sobol with N base points.
+    Sobol {
+        n: usize,
+        bootstrap: Bootstrap,
+    },
+    Morris(MorrisSettings),
+}
+
+impl Method {
+    /// Name for reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Efast(_) => "efast",
+            Method::Sobol { .. } => "sobol",
+            Method::Morris(_) => "morris",
+        }
+    }
+}
+
+/// Indices of one output channel, aggregated over the poses.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ChannelIndices {
+    pub output: String,
+    #[serde(rename = "S1", skip_serializing_if = "Option::is_none")]
+    pub s1: Option<Vec<f64>>,
+    #[serde(rename = "ST", skip_serializing_if = "Option::is_none")]
+    pub st: Option<Vec<f64>>,
+    #[serde(rename = "S1_conf", skip_serializing_if = "Option::is_none")]
+    pub s1_conf: Option<Vec<f64>>,
+    #[serde(rename = "ST_conf", skip_serializing_if = "Option::is_none")]
+    pub st_conf: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mu_star: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<Vec<f64>>,
+    /// Mean over the poses of the output's variance, µm².
+    pub variance_um2: f64,
+}
+
+/// One ranked element.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Ranked {
+    pub element: String,
+    pub value: f64,
+}
+
+/// One row of the tolerance-allocation table.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Allocation {
+    pub element: String,
+    pub unit: String,
+    pub current_std: f64,
+    /// Allowed std, or `None` when the element does not reach Ex, Ey, Ez (no limit).
+    pub allowed_std: Option<f64>,
+    /// The axis whose budget binds.
+    pub binding_output: Option<String>,
+    /// current / allowed: > 1 means the element must be held tighter.
+    pub ratio: Option<f64>,
+}
+
+/// The tolerance-allocation result.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ToleranceTable {
+    pub target_um: f64,
+    pub coverage_factor: f64,
+    /// Current k·σ of Ex, Ey, Ez (µm), to compare with the target.
+    pub current_expanded_um: [f64; 3],
+    pub rows: Vec<Allocation>,
+}
+
+/// Everything an error-model sensitivity run reports.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ErrorModelReport {
+    pub method: String,
+    pub evaluations: usize,
+    pub points: usize,
+    pub inputs: Vec<String>,
+    pub fixed: Vec<String>,
+    pub outputs: Vec<ChannelIndices>,
+    /// Key errors: by S1 of |E| (μ* for Morris), largest first.
+    pub key_errors: Vec<Ranked>,
+    /// Coupled errors: ST − S1 of |E| ≥ [`COUPLING_THRESHOLD`] (σ for Morris), largest first.
+    pub coupled_errors: Vec<Ranked>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tolerance: Option<ToleranceTable>,
+}
+
+/// Threshold of ST − S1 above which an element is listed as coupled. EFAST with normal inputs
+/// and M = 4 shows ST ≈ 0.01–0.02 for elements that have no effect at all (harmonic leakage, see
+/// `efast`), so the threshold sits above that floor.
+pub const COUPLING_THRESHOLD: f64 = 0.03;
+
+/// Runs the method on the problem and aggregates, ranks and allocates tolerances.
+pub fn analyze(
+    emp: &ErrorModelProblem,
+    method: &Method,
+    seed: u64,
+    target_um: f64,
+    coverage_factor: f64,
+) -> Result<ErrorModelReport, SensitivityError> {
+    let names = &emp.problem.names;
+    let d = names.len();
+    let n_points = emp.model.coefficients.len();
+    // Draw the design and evaluate every output column.
+    let (columns, evaluations, morris_design) = match method {
+        Method::Efast(s) => {
+            let x = efast::sample(&emp.problem, s, seed)?;
+            (evaluate(&emp.model, &x), x.n_rows, None)
+        }
+        Method::Sobol { n, .. } => {
+            let x = sobol::sample(&emp.problem, *n, seed)?;
+            (evaluate(&emp.model, &x), x.n_rows, None)
+        }
+        Method::Morris(s) => {
+            let design = morris::sample(&emp.problem, s, seed)?;
+            let cols = evaluate(&emp.model, &design.samples);
+            let rows = design.samples.n_rows;
+            (cols, rows, Some(design))
+        }
+    };
+    let mut outputs = Vec::new();
+    for (k, out_name) in OUTPUTS.iter().enumerate() {
+        let mut acc = Aggregate::new(d);
+        for p in 0..n_points {
+            let y = &columns[4 * p + k];
+            let mean = y.iter().sum::<f64>() / y.len() as f64;
+            let var = y.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / y.len() as f64;
+            if !(var > 1e-20 * (1.0 + mean * mean)) {
+                acc.add_constant();
+                continue;
+            }
+            match method {
+                Method::Efast(s) => {
+                    let ix = efast::analyze(names, y, s.m, s.resamples)?;
+                    acc.add(
+                        var,
+                        &ix.s1,
+                        &ix.st,
+                        ix.s1_conf.as_deref(),
+                        ix.st_conf.as_deref(),
+                    );
+                }
+                Method::Sobol { bootstrap, .. } => {
+                    // Bootstrap intervals at a single pose only (over many poses they would
+                    // cost resamples × outputs analyses and the aggregate has no simple interval).
+                    let b = if n_points == 1 {
+                        *bootstrap
+                    } else {
+                        Bootstrap {
+                            resamples: 0,
+                            ..*bootstrap
+                        }
+                    };
+                    let r = sobol::analyze(names, y, &b)?;
+                    let ix = r.indices;
+                    acc.add(
+                        var,
+                        &ix.s1,
+                        &ix.st,
+                        ix.s1_conf.as_deref(),
+                        ix.st_conf.as_deref(),
+                    );
+                }
+                Method::Morris(_) => {
+                    let design = morris_design.as_ref().expect("morris design drawn above");
+                    let r = morris::analyze(names, design, y)?;
+                    acc.add(var, &r.mu_star, &r.sigma, None, None);
+                }
+            }
+        }
+        let is_morris = matches!(method, Method::Morris(_));
+        let (a, b, ca, cb, v) = acc.finish(n_points, is_morris);
+        outputs.push(if is_morris {
+            ChannelIndices {
+                output: out_name.to_string(),
+                s1: None,
+                st: None,
+                s1_conf: None,
+                st_conf: None,
+                mu_star: Some(a),
+                sigma: Some(b),
+                variance_um2: v,
+            }
+        } else {
+            ChannelIndices {
+                output: out_name.to_string(),
+                s1: Some(a),
+                st: Some(b),
+                s1_conf: ca,
+                st_conf: cb,
+                mu_star: None,
+                sigma: None,
+                variance_um2: v,
+            }
+        });
+    }
+    let total = &outputs[3];
+    let (key, coupled) = match (&total.s1, &total.st, &total.mu_star, &total.sigma) {
+        (Some(s1), Some(st), _, _) => (
+            rank(names, s1, f64::NEG_INFINITY),
+            rank(
+                names,
+                &st.iter().zip(s1).map(|(t, s)| t - s).collect::<Vec<_>>(),
+                COUPLING_THRESHOLD,
+            ),
+        ),
+        (_, _, Some(mu), Some(sig)) => (
+            rank(names, mu, f64::NEG_INFINITY),
+            rank(names, sig, f64::NEG_INFINITY),
+        ),
+        _ => (Vec::new(), Vec::new()),
+    };
+    let tolerance = if matches!(method, Method::Morris(_)) {
+        None
+    } else {
+        Some(allocate(emp, &outputs, target_um, coverage_factor)?)
+    };
+    Ok(ErrorModelReport {
+        method: method.name().to_string(),
+        evaluations,
+        points: n_points,
+        inputs: names.clone(),
+        fixed: emp.fixed.clone(),
+        outputs,
+        key_errors: key,
+        coupled_errors: coupled,
+        tolerance,
+    })
+}
+
+/// Variance-weighted aggregation of per-pose indices (Gamboa et al. 2014).
+struct Aggregate {
+    a: Vec<f64>,
+    b: Vec<f64>,
+    ca: Option<Vec<f64>>,
+    cb: Option<Vec<f64>>,
+    weight: f64,
+    sum_var: f64,
+    single: bool,
+}
+
+impl Aggregate {
+    fn new(d: usize) -> Self {
+        Aggregate {
+            a: vec![0.0; d],
+            b: vec![0.0; d],
+            ca: None,
+            cb: None,
+            weight: 0.0,
+            sum_var: 0.0,
+            single: true,
+        }
+    }
+    fn add_constant(&mut self) {
+        self.single = false;
+    }
+    fn add(&mut self, var: f64, a: &[f64], b: &[f64], ca: Option<&[f64]>, cb: Option<&[f64]>) {
+        if self.weight > 0.0 {
+            self.single = false;
+        }
+        for i in 0..a.len() {
+            self.a[i] += var * a[i];
+            self.b[i] += var * b[i];
+        }
+        self.ca = ca.map(|c| c.to_vec());
+        self.cb = cb.map(|c| c.to_vec());
+        self.weight += var;
+        self.sum_var += var;
+    }
+    /// Variance-weighted indices (or Morris measures), the single-pose intervals, and the mean
+    /// variance over the poses.
+    #[allow(clippy::type_complexity)]
+    fn finish(
+        self,
+        n_points: usize,
+        _morris: bool,
+    ) -> (Vec<f64>, Vec<f64>, Option<Vec<f64>>, Option<Vec<f64>>, f64) {
+        let w = if self.weight > 0.0 { self.weight } else { 1.0 };
+        let a = self.a.iter().map(|v| v / w).collect();
+        let b = self.b.iter().map(|v| v / w).collect();
+        let (ca, cb) = if self.single && n_points == 1 {
+            (self.ca, self.cb)
+        } else {
+            (None, None)
+        };
+        (a, b, ca, cb, self.sum_var / n_points as f64)
+    }
+}
+
+fn rank(names: &[String], v: &[f64], threshold: f64) -> Vec<Ranked> {
+    let mut r: Vec<Ranked> = names
+        .iter()
+        .zip(v)
+        .filter(|(_, &x)| x >= threshold)
+        .map(|(n, &x)| Ranked {
+            element: n.clone(),
+            value: x,
+        })
+        .collect();
+    r.sort_by(|a, b| b.value.total_cmp(&a.value));
+    r
+}
+
+/// Equal-effects tolerance allocation from the indices of Ex, Ey, Ez (see the module docs).
+pub fn allocate(
+    emp: &ErrorModelProblem,
+    outputs: &[ChannelIndices],
+    target_um: f64,
+    coverage_factor: f64,
+) -> Result<ToleranceTable, SensitivityError> {
+    if !(target_um > 0.0 && target_um.is_finite()) {
+        return Err(SensitivityError::Settings(format!(
+            "target accuracy {target_um} µm must be a positive number"
+        )));
+    }
+    if !(coverage_factor > 0.0 && coverage_factor.is_finite()) {
+        return Err(SensitivityError::Settings(format!(
+            "coverage factor {coverage_factor} must be a positive number"
+        )));
+    }
+    let sigma_target = target_um / coverage_factor;
+    let d = emp.problem.dim();
+    let mut allowed: Vec<Option<(f64, usize)>> = vec![None; d];
+    let mut expanded = [0.0; 3];
+    for (a, out) in outputs.iter().take(3).enumerate() {
+        let st = out.st.as_ref().ok_or_else(|| {
+            SensitivityError::Settings("tolerance allocation needs total indices".into())
+        })?;
+        let v = out.variance_um2;
+        expanded[a] = coverage_factor * v.sqrt();
+        // c_{i,a} = √(ST_{i,a}·V_a)/σ_i
+        let c: Vec<f64> = (0..d)
+            .map(|i| (st[i].max(0.0) * v).sqrt() / emp.stds[i])
+            .collect();
+        let c_max = c.iter().cloned().fold(0.0, f64::max);
+        // Elements whose share is below 1e-6 of the largest do not reach this output.
+        let active: Vec<usize> = (0..d)
+            .filter(|&i| c[i] > 1e-3 * c_max && c[i] > 0.0)
+            .collect();
+        let n = active.len() as f64;
+        for &i in &active {
+            // σ_i,a = σ_T / (√n_a · c_{i,a})
+            let s = sigma_target / (n.sqrt() * c[i]);
+            if allowed[i].is_none_or(|(cur, _)| s < cur) {
+                allowed[i] = Some((s, a));
+            }
+        }
+    }
+    let unit = |name: &str| {
+        ErrorElement::parse(name)
+            .map(|e| e.unit().to_string())
+            .unwrap_or_default()
+    };
+    let rows = (0..d)
+        .map(|i| Allocation {
+            element: emp.problem.names[i].clone(),
+            unit: unit(&emp.problem.names[i]),
+            current_std: emp.stds[i],
+            allowed_std: allowed[i].map(|a| a.0),
+            binding_output: allowed[i].map(|a| OUTPUTS[a.1].to_string()),
+            ratio: allowed[i].map(|a| emp.stds[i] / a.0),
+        })
+        .collect();
+    Ok(ToleranceTable {
+        target_um,
+        coverage_factor,
+        current_expanded_um: expanded,
+        rows,
+    })
+}

@@ -1,0 +1,198 @@
+//! Standard test functions with analytic sensitivity indices, shipped next to the methods (as
+//! SALib does) and used by the tests, the benchmarks and `mtec sensitivity --function`.
+
+use crate::problem::{Model, Problem};
+use crate::Distribution;
+use std::f64::consts::PI;
+
+/// A test function: its problem, its model, and its exact indices.
+pub trait TestFunction: Model {
+    /// The inputs and their distributions.
+    fn problem(&self) -> Problem;
+    /// Exact first-order indices.
+    fn analytic_s1(&self) -> Vec<f64>;
+    /// Exact total indices.
+    fn analytic_st(&self) -> Vec<f64>;
+}
+
+fn names(prefix: &str, d: usize) -> Vec<String> {
+    (1..=d).map(|i| format!("{prefix}{i}")).collect()
+}
+
+/// Ishigami & Homma (1990): f = sin x1 + a sin² x2 + b x3⁴ sin x1, xᵢ ~ U(−π, π).
+#[derive(Debug, Clone, Copy)]
+pub struct Ishigami {
+    pub a: f64,
+    pub b: f64,
+}
+
+impl Default for Ishigami {
+    /// The usual a = 7, b = 0.1.
+    fn default() -> Self {
+        Ishigami { a: 7.0, b: 0.1 }
+    }
+}
+
+impl Ishigami {
+    /// Partial variances (Sobol & Levitan 1999): V, V1, V2, V13.
+    fn variances(&self) -> (f64, f64, f64, f64) {
+        let (a, b) = (self.a, self.b);
+        let pi4 = PI.powi(4);
+        let pi8 = PI.powi(8);
+        let v1 = 0.5 * (1.0 + b * pi4 / 5.0).powi(2);
+        let v2 = a * a / 8.0;
+        let v13 = b * b * pi8 * (1.0 / 18.0 - 1.0 / 50.0);
+        (v1 + v2 + v13, v1, v2, v13)
+    }
+}
+
+impl Model for Ishigami {
+    fn evaluate(&self, x: &[f64], out: &mut [f64]) {
+        out[0] = x[0].sin() + self.a * x[1].sin().powi(2) + self.b * x[2].powi(4) * x[0].sin();
+    }
+}
+
+impl TestFunction for Ishigami {
+    fn problem(&self) -> Problem {
+        let u = Distribution::Uniform { low: -PI, high: PI };
+        Problem::new(names("x", 3), vec![u; 3]).expect("valid by construction")
+    }
+    fn analytic_s1(&self) -> Vec<f64> {
+        let (v, v1, v2, _) = self.variances();
+        vec![v1 / v, v2 / v, 0.0]
+    }
+    fn analytic_st(&self) -> Vec<f64> {
+        let (v, v1, v2, v13) = self.variances();
+        vec![(v1 + v13) / v, v2 / v, v13 / v]
+    }
+}
+
+/// Sobol's G-function: f = Πᵢ (|4xᵢ − 2| + aᵢ)/(1 + aᵢ), xᵢ ~ U(0, 1); small aᵢ = important.
+#[derive(Debug, Clone)]
+pub struct SobolG {
+    pub a: Vec<f64>,
+}
+
+impl Default for SobolG {
+    /// The 8-input set of Saltelli & Sobol (1995): a = (0, 1, 4.5, 9, 99, 99, 99, 99).
+    fn default() -> Self {
+        SobolG {
+            a: vec![0.0, 1.0, 4.5, 9.0, 99.0, 99.0, 99.0, 99.0],
+        }
+    }
+}
+
+impl SobolG {
+    /// V_i = 1 / (3 (1 + a_i)²).
+    fn partial(&self) -> Vec<f64> {
+        self.a
+            .iter()
+            .map(|a| 1.0 / (3.0 * (1.0 + a).powi(2)))
+            .collect()
+    }
+}
+
+impl Model for SobolG {
+    fn evaluate(&self, x: &[f64], out: &mut [f64]) {
+        out[0] = x
+            .iter()
+            .zip(&self.a)
+            .map(|(x, a)| ((4.0 * x - 2.0).abs() + a) / (1.0 + a))
+            .product();
+    }
+}
+
+impl TestFunction for SobolG {
+    fn problem(&self) -> Problem {
+        let u = Distribution::Uniform {
+            low: 0.0,
+            high: 1.0,
+        };
+        Problem::new(names("x", self.a.len()), vec![u; self.a.len()])
+            .expect("valid by construction")
+    }
+    fn analytic_s1(&self) -> Vec<f64> {
+        let vi = self.partial();
+        let v = vi.iter().map(|v| 1.0 + v).product::<f64>() - 1.0;
+        vi.iter().map(|x| x / v).collect()
+    }
+    fn analytic_st(&self) -> Vec<f64> {
+        let vi = self.partial();
+        let all = vi.iter().map(|v| 1.0 + v).product::<f64>();
+        let v = all - 1.0;
+        // V_Ti = V_i Π_{j≠i} (1 + V_j)
+        vi.iter().map(|x| x * all / (1.0 + x) / v).collect()
+    }
+}
+
+/// A linear model y = Σ cᵢ xᵢ with independent inputs: S1ᵢ = STᵢ = cᵢ² Var xᵢ / Σⱼ cⱼ² Var xⱼ.
+#[derive(Debug, Clone)]
+pub struct Linear {
+    pub coefficients: Vec<f64>,
+    pub distributions: Vec<Distribution>,
+}
+
+impl Default for Linear {
+    /// y = x1 + 2 x2 + 3 x3 with x1 ~ U(0, 1), x2 ~ N(0, 0.5), x3 ~ N(1, 0.1).
+    fn default() -> Self {
+        Linear {
+            coefficients: vec![1.0, 2.0, 3.0],
+            distributions: vec![
+                Distribution::Uniform {
+                    low: 0.0,
+                    high: 1.0,
+                },
+                Distribution::Normal {
+                    mean: 0.0,
+                    std: 0.5,
+                },
+                Distribution::Normal {
+                    mean: 1.0,
+                    std: 0.1,
+                },
+            ],
+        }
+    }
+}
+
+impl Model for Linear {
+    fn evaluate(&self, x: &[f64], out: &mut [f64]) {
+        out[0] = x.iter().zip(&self.coefficients).map(|(x, c)| x * c).sum();
+    }
+}
+
+impl TestFunction for Linear {
+    fn problem(&self) -> Problem {
+        Problem::new(
+            names("x", self.coefficients.len()),
+            self.distributions.clone(),
+        )
+        .expect("valid by construction")
+    }
+    fn analytic_s1(&self) -> Vec<f64> {
+        let parts: Vec<f64> = self
+            .coefficients
+            .iter()
+            .zip(&self.distributions)
+            .map(|(c, d)| c * c * d.variance())
+            .collect();
+        let v: f64 = parts.iter().sum();
+        parts.iter().map(|p| p / v).collect()
+    }
+    fn analytic_st(&self) -> Vec<f64> {
+        self.analytic_s1()
+    }
+}
+
+/// A test function by name: `ishigami`, `sobol-g`, `linear`.
+pub fn by_name(name: &str) -> Option<Box<dyn TestFunction>> {
+    match name {
+        "ishigami" => Some(Box::new(Ishigami::default())),
+        "sobol-g" | "g-function" => Some(Box::new(SobolG::default())),
+        "linear" => Some(Box::new(Linear::default())),
+        _ => None,
+    }
+}
+
+/// Names accepted by [`by_name`].
+pub const NAMES: [&str; 3] = ["ishigami", "sobol-g", "linear"];

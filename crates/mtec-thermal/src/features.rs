@@ -1,0 +1,196 @@
+//! Regressors built from the temperature log: the temperatures themselves, and thermal-dynamics
+//! features (beyond the source methods) that let a linear model follow a duty cycle it has not
+//! seen.
+//!
+//! Thermal drift lags the temperatures a sensor sees: the structure between a sensor and the
+//! point whose displacement is measured is a thermal low-pass. Two features capture it:
+//! - `lag`: a first-order lag of a sensor, L[i] = L[i−1] + (1 − e^(−Δt/τ))(T[i] − L[i−1]),
+//!   the exact discretisation of τ·dL/dt = T − L for a temperature held over each interval;
+//!   L starts at the experiment's first reading (the machine starts in equilibrium);
+//! - `rate`: the temperature rate dT/dt (°C/min) as the backward difference over a window w,
+//!   (T(t) − T(t − w))/w, clamped at the start of the experiment.
+//!
+//! Both are causal: they use only past temperatures, so a controller can compute them on line.
+//! The time constants are fitted (see [`fit_time_constants`]): coordinate descent over a log
+//! grid of τ minimising the training SSE of the linear model that uses the features.
+
+use crate::data::ThermalData;
+use crate::error::ThermalError;
+use crate::linear::ols;
+use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
+
+/// One regressor of a linear thermal model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum Feature {
+    /// The sensor's temperature (°C).
+    Temp { sensor: String },
+    /// First-order lag of the sensor with time constant `tau_min`.
+    Lag { sensor: String, tau_min: f64 },
+    /// Temperature rate over a backward window (°C/min).
+    Rate { sensor: String, window_min: f64 },
+}
+
+impl Feature {
+    /// Short name for tables: `t3_c`, `lag(t3_c, 42.0 min)`, `rate(t3_c, 5 min)`.
+    pub fn name(&self) -> String {
+        match self {
+            Feature::Temp { sensor } => sensor.clone(),
+            Feature::Lag { sensor, tau_min } => format!("lag({sensor},{tau_min:.1}min)"),
+            Feature::Rate { sensor, window_min } => format!("rate({sensor},{window_min}min)"),
+        }
+    }
+
+    fn sensor(&self) -> &str {
+        match self {
+            Feature::Temp { sensor }
+            | Feature::Lag { sensor, .. }
+            | Feature::Rate { sensor, .. } => sensor,
+        }
+    }
+
+    /// Values of the feature on every row of `data`.
+    pub fn values(&self, data: &ThermalData) -> Result<Vec<f64>, ThermalError> {
+        let t = data.sensor(data.sensor_index(self.sensor())?);
+        Ok(match self {
+            Feature::Temp { .. } => t,
+            Feature::Lag { tau_min, .. } => lag_filter(data, &t, *tau_min),
+            Feature::Rate { window_min, .. } => rate(data, &t, *window_min),
+        })
+    }
+}
+
+/// First-order lag along each experiment (module docs).
+pub fn lag_filter(data: &ThermalData, t: &[f64], tau_min: f64) -> Vec<f64> {
+    let mut out = vec![0.0; t.len()];
+    for (a, b) in data.segments() {
+        out[a] = t[a];
+        for i in a + 1..b {
+            let dt = data.time_min[i] - data.time_min[i - 1];
+            // exact step response of τ·dL/dt = T − L over dt
+            let alpha = 1.0 - (-dt / tau_min).exp();
+            out[i] = out[i - 1] + alpha * (t[i] - out[i - 1]);
+        }
+    }
+    out
+}
+
+/// Backward-difference rate over a window, within each experiment (module docs).
+pub fn rate(data: &ThermalData, t: &[f64], window_min: f64) -> Vec<f64> {
+    let mut out = vec![0.0; t.len()];
+    for (a, b) in data.segments() {
+        let mut j = a;
+        for i in a..b {
+            while j < i && data.time_min[i] - data.time_min[j + 1] >= window_min {
+                j += 1;
+            }
+            let dt = data.time_min[i] - data.time_min[j];
+            out[i] = if dt > 0.0 { (t[i] - t[j]) / dt } else { 0.0 };
+        }
+    }
+    out
+}
+
+/// The design matrix of a feature list on `data` (rows × features).
+pub fn design(data: &ThermalData, features: &[Feature]) -> Result<DMatrix<f64>, ThermalError> {
+    let mut x = DMatrix::zeros(data.len(), features.len());
+    for (j, f) in features.iter().enumerate() {
+        for (i, v) in f.values(data)?.into_iter().enumerate() {
+            x[(i, j)] = v;
+        }
+    }
+    Ok(x)
+}
+
+/// Plain temperature features of the named sensors (all sensors when `sensors` is empty).
+pub fn temp_features(data: &ThermalData, sensors: &[String]) -> Result<Vec<Feature>, ThermalError> {
+    if sensors.is_empty() {
+        return Ok(data
+            .sensor_names
+            .iter()
+            .map(|s| Feature::Temp { sensor: s.clone() })
+            .collect());
+    }
+    sensors
+        .iter()
+        .map(|s| {
+            let j = data.sensor_index(s)?;
+            Ok(Feature::Temp {
+                sensor: data.sensor_names[j].clone(),
+            })
+        })
+        .collect()
+}
+
+/// The τ grid searched (min): 24 values log-spaced from 2 to 1000 min.
+pub fn tau_grid() -> Vec<f64> {
+    (0..24)
+        .map(|i| 2.0 * 500f64.powf(i as f64 / 23.0))
+        .collect()
+}
+
+/// Fits the time constants of the `Lag` features in `features` (in place) by coordinate descent
+/// over [`tau_grid`] on the training rows `rows`: each sweep sets each τ in turn to the grid value that minimises the
+/// training SSE of the OLS model on all features; two sweeps. Returns the final SSE.
+pub fn fit_time_constants(
+    data: &ThermalData,
+    rows: &[usize],
+    features: &mut [Feature],
+) -> Result<f64, ThermalError> {
+    let grid = tau_grid();
+    let names: Vec<String> = features.iter().map(|f| f.name()).collect();
+    let yall = data.target_um()?;
+    let y: Vec<f64> = rows.iter().map(|&i| yall[i]).collect();
+    let y = y.as_slice();
+    let mut x = design(data, features)?.select_rows(rows.iter());
+    let sse_of = |x: &DMatrix<f64>| -> f64 {
+        match ols(x, y, &names) {
+            Ok(fit) => (0..x.nrows())
+                .map(|i| {
+                    let f = fit.intercept
+                        + (0..x.ncols())
+                            .map(|j| fit.coefficients[j] * x[(i, j)])
+                            .sum::<f64>();
+                    (y[i] - f).powi(2)
+                })
+                .sum(),
+            Err(_) => f64::INFINITY,
+        }
+    };
+    let mut best = sse_of(&x);
+    for _sweep in 0..2 {
+        for j in 0..features.len() {
+            let Feature::Lag { sensor, tau_min } = features[j].clone() else {
+                continue;
+            };
+            let t = data.sensor(data.sensor_index(&sensor)?);
+            let mut best_tau = tau_min;
+            for &tau in &grid {
+                let col = lag_filter(data, &t, tau);
+                for (r, &i) in rows.iter().enumerate() {
+                    x[(r, j)] = col[i];
+                }
+                let sse = sse_of(&x);
+                if sse < best {
+                    best = sse;
+                    best_tau = tau;
+                }
+            }
+            let col = lag_filter(data, &t, best_tau);
+            for (r, &i) in rows.iter().enumerate() {
+                x[(r, j)] = col[i];
+            }
+            features[j] = Feature::Lag {
+                sensor,
+                tau_min: best_tau,
+            };
+        }
+    }
+    if !best.is_finite() {
+        return Err(ThermalError::Undetermined(
+            "no time constant gives a solvable regression (are the lag features collinear with the temperatures?)".into(),
+        ));
+    }
+    Ok(best)
+}

@@ -1,0 +1,297 @@
+//! Linear least squares on a design of regressors: ordinary least squares (MLR) by QR, ridge
+//! regression in standardised (correlation) form by SVD, and variance inflation factors.
+//!
+//! Ridge convention (Hoerl & Kennard 1970, the form ridge traces are drawn in): the regressors
+//! are standardised with their mean and population standard deviation, z = (x − x̄)/s_x, the
+//! target with ȳ and s_y; the standardised coefficients are
+//! β*(k) = (R + kI)⁻¹ r with R = ZᵀZ/n the correlation matrix and r = Zᵀ(y−ȳ)/(n s_y),
+//! and the de-standardised equation is b_j = β*_j s_y / s_j, b₀ = ȳ − Σ b_j x̄_j.
+//! This equals scikit-learn's `Ridge(alpha = n·k)` fitted on `StandardScaler` output (the
+//! fixtures check it). k = 0 is ordinary least squares.
+
+use crate::error::ThermalError;
+use nalgebra::{DMatrix, DVector};
+
+/// Relative size of a QR diagonal below which a column counts as dependent on the others.
+const RANK_TOL: f64 = 1e-10;
+
+/// An ordinary least-squares fit y = b₀ + Σ b_j x_j.
+#[derive(Debug, Clone)]
+pub struct OlsFit {
+    pub intercept: f64,
+    pub coefficients: Vec<f64>,
+    /// Standard errors of [intercept, coefficients…] from σ²(XᵀX)⁻¹, σ² = SSE/(n−p−1).
+    pub std_errors: Vec<f64>,
+}
+
+/// Ordinary least squares with an intercept, by Householder QR of [1 X].
+pub fn ols(x: &DMatrix<f64>, y: &[f64], names: &[String]) -> Result<OlsFit, ThermalError> {
+    let (n, p) = x.shape();
+    if n <= p + 1 {
+        return Err(ThermalError::TooFewRows {
+            rows: n,
+            params: p + 1,
+        });
+    }
+    let mut a = DMatrix::from_element(n, p + 1, 1.0);
+    a.view_mut((0, 1), (n, p)).copy_from(x);
+    // column scaling keeps the rank test meaningful for regressors in any unit
+    let scale: Vec<f64> = (0..=p)
+        .map(|j| a.column(j).norm().max(f64::MIN_POSITIVE))
+        .collect();
+    for j in 0..=p {
+        a.column_mut(j).scale_mut(1.0 / scale[j]);
+    }
+    let qr = a.clone().qr();
+    let r = qr.r();
+    let rmax = (0..=p).map(|i| r[(i, i)].abs()).fold(0.0, f64::max);
+    let weak: Vec<usize> = (0..=p)
+        .filter(|&i| r[(i, i)].abs() <= RANK_TOL * rmax)
+        .collect();
+    if !weak.is_empty() {
+        return Err(ThermalError::RankDeficient {
+            rank: p + 1 - weak.len(),
+            cols: p + 1,
+            names: weak
+                .iter()
+                .map(|&i| {
+                    if i == 0 {
+                        "intercept".to_string()
+                    } else {
+                        names.get(i - 1).cloned().unwrap_or_else(|| format!("x{i}"))
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(", "),
+        });
+    }
+    // R b = Qᵀ y  (normal equations solved through the QR factors)
+    let mut qty = DVector::from_column_slice(y);
+    qr.q_tr_mul(&mut qty);
+    let rt = r.view((0, 0), (p + 1, p + 1)).into_owned();
+    let b = rt
+        .solve_upper_triangular(&qty.rows(0, p + 1).into_owned())
+        .ok_or(ThermalError::RankDeficient {
+            rank: 0,
+            cols: p + 1,
+            names: names.join(", "),
+        })?;
+    let yv = DVector::from_column_slice(y);
+    let resid = &yv - &a * &b;
+    let sigma2 = resid.norm_squared() / (n - p - 1) as f64;
+    // (XᵀX)⁻¹ = R⁻¹R⁻ᵀ
+    let rinv = rt
+        .solve_upper_triangular(&DMatrix::identity(p + 1, p + 1))
+        .expect("R checked non-singular");
+    let cov_diag: Vec<f64> = (0..=p).map(|i| rinv.row(i).norm_squared()).collect();
+    let coef: Vec<f64> = (0..=p).map(|j| b[j] / scale[j]).collect();
+    let se: Vec<f64> = (0..=p)
+        .map(|j| (sigma2 * cov_diag[j]).sqrt() / scale[j])
+        .collect();
+    Ok(OlsFit {
+        intercept: coef[0],
+        coefficients: coef[1..].to_vec(),
+        std_errors: se,
+    })
+}
+
+/// The standardisation of a design: column means and population standard deviations, and the
+/// target's mean and standard deviation.
+#[derive(Debug, Clone)]
+pub struct Standardisation {
+    pub x_mean: Vec<f64>,
+    pub x_std: Vec<f64>,
+    pub y_mean: f64,
+    pub y_std: f64,
+}
+
+/// A ridge problem in correlation form, factorised once (SVD of Z/√n) so that the coefficients for
+/// any k cost O(p²): the ridge trace evaluates 100 values of k from one factorisation.
+#[derive(Debug, Clone)]
+pub struct RidgeProblem {
+    pub std: Standardisation,
+    /// Singular values of Z/√n (their squares are the eigenvalues of the correlation matrix R).
+    pub singular: Vec<f64>,
+    v: DMatrix<f64>,
+    /// Uᵀ(y−ȳ)/(√n s_y)
+    uty: DVector<f64>,
+}
+
+impl RidgeProblem {
+    /// Standardises `x` and `y` and factorises; `names` are used in messages only.
+    pub fn new(x: &DMatrix<f64>, y: &[f64], names: &[String]) -> Result<Self, ThermalError> {
+        let (n, p) = x.shape();
+        if n < 3 || p == 0 {
+            return Err(ThermalError::TooFewRows {
+                rows: n,
+                params: p + 1,
+            });
+        }
+        let nf = n as f64;
+        let mut z = x.clone();
+        let mut x_mean = Vec::with_capacity(p);
+        let mut x_std = Vec::with_capacity(p);
+        for j in 0..p {
+            let m = x.column(j).sum() / nf;
+            let s = (x.column(j).iter().map(|v| (v - m).powi(2)).sum::<f64>() / nf).sqrt();
+            if !(s > 1e-12 * m.abs().max(1.0)) {
+                return Err(ThermalError::ConstantColumn(
+                    names.get(j).cloned().unwrap_or_else(|| format!("x{j}")),
+                ));
+            }
+            for v in z.column_mut(j).iter_mut() {
+                *v = (*v - m) / (s * nf.sqrt());
+            }
+            x_mean.push(m);
+            x_std.push(s);
+        }
+        let y_mean = y.iter().sum::<f64>() / nf;
+        let y_std = (y.iter().map(|v| (v - y_mean).powi(2)).sum::<f64>() / nf).sqrt();
+        if !(y_std > 0.0) {
+            return Err(ThermalError::ConstantColumn("target".into()));
+        }
+        let yc = DVector::from_iterator(n, y.iter().map(|v| (v - y_mean) / (y_std * nf.sqrt())));
+        let svd = z.svd(true, true);
+        let u = svd.u.expect("u requested");
+        let v = svd.v_t.expect("v requested").transpose();
+        let uty = u.transpose() * yc;
+        Ok(RidgeProblem {
+            std: Standardisation {
+                x_mean,
+                x_std,
+                y_mean,
+                y_std,
+            },
+            singular: svd.singular_values.iter().copied().collect(),
+            v,
+            uty,
+        })
+    }
+
+    /// Standardised coefficients β*(k) = V diag(σ/(σ²+k)) Uᵀ y*  (Hoerl & Kennard 1970, eq. 2.2 by SVD).
+    pub fn standardised(&self, k: f64) -> Result<Vec<f64>, ThermalError> {
+        let smax = self.singular.iter().cloned().fold(0.0, f64::max);
+        let mut w = DVector::zeros(self.singular.len());
+        for (i, s) in self.singular.iter().enumerate() {
+            let den = s * s + k;
+            if k == 0.0 && *s <= 1e-12 * smax {
+                return Err(ThermalError::RankDeficient {
+                    rank: self.singular.iter().filter(|s| **s > 1e-12 * smax).count(),
+                    cols: self.singular.len(),
+                    names: "(exactly collinear sensors; use k > 0)".into(),
+                });
+            }
+            w[i] = s / den * self.uty[i];
+        }
+        Ok((&self.v * w).iter().copied().collect())
+    }
+
+    /// De-standardised equation: (b₀, b) with y ≈ b₀ + Σ b_j x_j.
+    pub fn destandardise(&self, beta_std: &[f64]) -> (f64, Vec<f64>) {
+        let s = &self.std;
+        let b: Vec<f64> = beta_std
+            .iter()
+            .zip(&s.x_std)
+            .map(|(bs, sx)| bs * s.y_std / sx)
+            .collect();
+        let b0 = s.y_mean - b.iter().zip(&s.x_mean).map(|(b, m)| b * m).sum::<f64>();
+        (b0, b)
+    }
+}
+
+/// Variance inflation factor of each regressor: VIF_j = 1/(1 − R²_j), R²_j from the OLS of x_j on
+/// all other regressors with an intercept (the definition statsmodels'
+/// `variance_inflation_factor` applies to a design with a constant). An exactly dependent
+/// regressor has VIF = ∞.
+///
+/// Computed from one QR of the centred design X_c = QR: VIF_j = [(X_cᵀX_c)⁻¹]_jj·(X_cᵀX_c)_jj,
+/// with (X_cᵀX_c)⁻¹ = R⁻¹R⁻ᵀ (the same number as the auxiliary regressions, p times cheaper).
+/// A rank-deficient design falls back to the auxiliary regressions to tell which regressors
+/// are the dependent ones.
+pub fn vif(x: &DMatrix<f64>, names: &[String]) -> Result<Vec<f64>, ThermalError> {
+    let (n, p) = x.shape();
+    if n <= p + 1 {
+        return Err(ThermalError::TooFewRows {
+            rows: n,
+            params: p + 1,
+        });
+    }
+    let mut xc = x.clone();
+    for j in 0..p {
+        let m = xc.column(j).sum() / n as f64;
+        xc.column_mut(j).add_scalar_mut(-m);
+        if xc.column(j).norm() <= 1e-12 * m.abs().max(1.0) * (n as f64).sqrt() {
+            return Err(ThermalError::ConstantColumn(names[j].clone()));
+        }
+    }
+    let ss: Vec<f64> = (0..p).map(|j| xc.column(j).norm_squared()).collect();
+    let r = xc.qr().r();
+    let rmax = (0..p).map(|i| r[(i, i)].abs()).fold(0.0, f64::max);
+    if (0..p).all(|i| r[(i, i)].abs() > RANK_TOL * rmax * 1e3) {
+        if let Some(rinv) = r.solve_upper_triangular(&DMatrix::identity(p, p)) {
+            return Ok((0..p).map(|j| rinv.row(j).norm_squared() * ss[j]).collect());
+        }
+    }
+    vif_by_regressions(x, names)
+}
+
+/// VIF by the definition: one auxiliary OLS regression per regressor.
+pub fn vif_by_regressions(x: &DMatrix<f64>, names: &[String]) -> Result<Vec<f64>, ThermalError> {
+    let (n, p) = x.shape();
+    let mut out = Vec::with_capacity(p);
+    for j in 0..p {
+        if p == 1 {
+            out.push(1.0);
+            continue;
+        }
+        let others = x.clone().remove_column(j);
+        let others_names: Vec<String> = names
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| *i != j)
+            .map(|(_, s)| s.clone())
+            .collect();
+        let xj: Vec<f64> = x.column(j).iter().copied().collect();
+        let mean = xj.iter().sum::<f64>() / n as f64;
+        let sst: f64 = xj.iter().map(|v| (v - mean).powi(2)).sum();
+        if sst <= 0.0 {
+            return Err(ThermalError::ConstantColumn(names[j].clone()));
+        }
+        let r2 = match ols(&others, &xj, &others_names) {
+            Ok(fit) => {
+                let mut sse = 0.0;
+                for i in 0..n {
+                    let f = fit.intercept
+                        + (0..p - 1)
+                            .map(|c| fit.coefficients[c] * others[(i, c)])
+                            .sum::<f64>();
+                    sse += (xj[i] - f).powi(2);
+                }
+                1.0 - sse / sst
+            }
+            Err(ThermalError::RankDeficient { .. }) => {
+                // the other regressors are themselves dependent: minimum-norm least squares
+                // (SVD) of the centred x_j on the centred others gives the same fitted values
+                let mut oc = others.clone();
+                for c in 0..p - 1 {
+                    let m = oc.column(c).sum() / n as f64;
+                    oc.column_mut(c).add_scalar_mut(-m);
+                }
+                let yc = DVector::from_iterator(n, xj.iter().map(|v| v - mean));
+                let svd = oc.clone().svd(true, true);
+                let eps = 1e-10 * svd.singular_values.max();
+                let b = svd
+                    .solve(&yc, eps)
+                    .map_err(|e| ThermalError::Invalid(e.to_string()))?;
+                1.0 - (&yc - &oc * b).norm_squared() / sst
+            }
+            Err(e) => return Err(e),
+        };
+        out.push(if r2 >= 1.0 {
+            f64::INFINITY
+        } else {
+            1.0 / (1.0 - r2)
+        });
+    }
+    Ok(out)
+}

@@ -1,0 +1,79 @@
+//! The ridge-trace plot (SVG, drawn with plotters): standardised coefficient of each sensor
+//! against k on a log axis, with the chosen k marked.
+
+use crate::select::RidgeTrace;
+use plotters::prelude::*;
+
+/// Renders the trace (k > 0 only; k = 0 cannot sit on a log axis) as SVG text.
+pub fn ridge_trace_svg(trace: &RidgeTrace, chosen_k: f64) -> Result<String, String> {
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 560)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let pts: Vec<(usize, f64)> = trace
+            .k
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| **k > 0.0)
+            .map(|(i, k)| (i, *k))
+            .collect();
+        let (kmin, kmax) = (
+            pts.first().map(|p| p.1).unwrap_or(1e-4),
+            pts.last().map(|p| p.1).unwrap_or(1.0),
+        );
+        let (lo, hi) = pts
+            .iter()
+            .flat_map(|(i, _)| trace.coefficients[*i].iter())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                (l.min(*v), h.max(*v))
+            });
+        let pad = 0.05 * (hi - lo).max(1e-9);
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                "Ridge trace (standardised coefficients)",
+                ("sans-serif", 20),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .right_y_label_area_size(10)
+            .build_cartesian_2d((kmin..kmax).log_scale(), (lo - pad)..(hi + pad))
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc("k")
+            .y_desc("standardised coefficient")
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for (j, name) in trace.sensors.iter().enumerate() {
+            let color = Palette99::pick(j).to_rgba();
+            chart
+                .draw_series(LineSeries::new(
+                    pts.iter().map(|(i, k)| (*k, trace.coefficients[*i][j])),
+                    color.stroke_width(2),
+                ))
+                .map_err(|e| e.to_string())?
+                .label(name.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                });
+        }
+        chart
+            .draw_series(LineSeries::new(
+                vec![(chosen_k, lo - pad), (chosen_k, hi + pad)],
+                BLACK.stroke_width(1),
+            ))
+            .map_err(|e| e.to_string())?
+            .label(format!("chosen k = {chosen_k:.4}"))
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK));
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}
