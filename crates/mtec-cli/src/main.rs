@@ -15,6 +15,7 @@ geometric and thermal errors.
 The workflow, and the commands for each step:
   simulate      a virtual machine with a known truth writes measurement files to practise on
   volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
+  identify lines   the 21 error elements of a 3-axis machine from laser lines (9-line method)
   identify ballbar  rotary-axis error motions (EXC EYC EZC EAC EBC) from ballbar readings in 5 modes
   iso230-2      positioning statistics of a linear axis from laser runs (ISO 230-2, VDI 3441)
   circular      circular test of two axes: ISO 230-4 G and H, ballbar diagnostics ranked
@@ -66,6 +67,9 @@ enum Command {
 
 #[derive(Subcommand)]
 enum Identify {
+    /// Error elements of a 3-axis machine from line measurements (9-line method).
+    #[command(long_about = cmd::identify_lines::LONG_ABOUT)]
+    Lines(cmd::identify_lines::Args),
     /// Rotary-axis error motions from ballbar readings in five installation modes.
     #[command(long_about = cmd::identify_ballbar::LONG_ABOUT)]
     Ballbar(cmd::identify_ballbar::Args),
@@ -83,6 +87,7 @@ fn main() -> ExitCode {
     let result: Result<(), error::CliError> = match cli.command {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Volumetric(a) => cmd::volumetric::run(a),
+        Command::Identify(Identify::Lines(a)) => cmd::identify_lines::run(a),
         Command::Identify(Identify::Ballbar(a)) => cmd::identify_ballbar::run(a),
         Command::Iso230_2(a) => cmd::iso230_2::run(a),
         Command::Circular(a) => cmd::circular::run(a),

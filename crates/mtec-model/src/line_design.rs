@@ -14,7 +14,20 @@
 //!   pitch as Abbe differences, the Y-straightness at two heights gives its roll), Y along two
 //!   lines (the Z offset gives its pitch and roll), Z along one line, each with displacement and
 //!   both straightness channels; plus three face diagonals with two axes moving together
-//!   (XY, XZ, YZ: displacement) that fix the three squareness errors.
+//!   (XY, XZ, YZ), each read along the diagonal (displacement: the three squareness errors)
+//!   and across its face (straightness along the axis that does not move).
+//!
+//!   Why the diagonals carry a straightness channel (a change made with line identification,
+//!   issue 3): the alignment slope of straightness optics hides the *linear part* of every
+//!   function a straightness channel sees, so the straightness differences of parallel axial
+//!   lines give the rolls of X and Y (`EAX`, `EBY`) only up to a linear term — a constant-rate
+//!   twist of the guideway. That twist reaches the tool through lever arms that grow with a
+//!   second axis (Ez ∋ −EAX(x)·y, Ey ∋ EAX(x)·(z+L), Ex ∋ −EBY(y)·(z+L)): a bilinear term that
+//!   a face diagonal's displacement sees only as one more linear trend (confounded with the
+//!   squareness), but its across-the-face straightness sees as curvature (x·y along XY, x·z
+//!   along XZ, y·z along YZ), which no alignment slope can absorb. Without these channels the
+//!   twist rates and the squareness errors are confounded and the identified model misses
+//!   several µm of volumetric error away from the measured planes.
 //! - `fifteen-line`: the nine plus the three opposite face diagonals and three more axial lines
 //!   (X and Y at the far corner, Z at a second XY position): redundancy for a better-conditioned
 //!   estimate.
@@ -100,7 +113,21 @@ pub fn line_preset(
             steps,
             channels: vec![],
         };
-        l.channels = vec![l.direction()];
+        let d = l.direction();
+        l.channels = vec![d];
+        // straightness across the face, along the axis that does not move (see module docs)
+        if let Some(k) = (0..3).find(|&k| d[k] == 0.0) {
+            let mut n = [0.0; 3];
+            n[k] = 1.0;
+            // in-plane straightness: n × d
+            let ip = [
+                n[1] * d[2] - n[2] * d[1],
+                n[2] * d[0] - n[0] * d[2],
+                n[0] * d[1] - n[1] * d[0],
+            ];
+            l.channels.push(ip);
+            l.channels.push(n);
+        }
         l
     };
     let mut lines = vec![

@@ -62,8 +62,8 @@ fn noiseless_laser_reads_the_exact_projection_computed_independently_by_poe() {
         assert!((expected - v[6]).abs() < 2e-4, "{row}: expected {expected}");
         rows += 1;
     }
-    // 6 axial lines × 3 channels + 3 diagonals × 1 channel, 11 points each
-    assert_eq!(rows, (6 * 3 + 3) * 11);
+    // 6 axial lines and 3 diagonals, each read along and across (3 channels), 11 points each
+    assert_eq!(rows, (6 * 3 + 3 * 3) * 11);
 }
 
 #[test]

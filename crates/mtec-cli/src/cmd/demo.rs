@@ -63,7 +63,6 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
     };
     say("simulating the virtual machine ...");
-    let mut simulated = Vec::new();
     for sc in [
         "vmc-9line",
         "volumetric-grid",
@@ -85,22 +84,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
             "truth.json",
             &serde_json::to_string_pretty(&o.truth).unwrap_or_default(),
         )?;
-        simulated.push(sc);
     }
     write(&data, "part.ngc", DEMO_GCODE)?;
-    let has = |c: &str| commands().contains(&c);
     project.push_str("machine = \"vmc-9line/machine.toml\"\n");
-    if has("iso230-2") {
-        project.push_str("[[iso230_2]]\ndata = \"iso230-2/iso230-2.csv\"\n");
-    }
-    if has("identify lines") {
-        project.push_str(
-            "[lines]\ndata = \"vmc-9line/lines.csv\"\n[sensitivity]\nmethod = \"efast\"\n",
-        );
-    }
-    if has("circular") {
-        project.push_str("[[circular]]\ndata = \"circular-test/circular.csv\"\n");
-    }
+    project.push_str("[[iso230_2]]\ndata = \"iso230-2/iso230-2.csv\"\n");
+    project
+        .push_str("[lines]\ndata = \"vmc-9line/lines.csv\"\n[sensitivity]\nmethod = \"efast\"\n");
+    project.push_str("[[circular]]\ndata = \"circular-test/circular.csv\"\n");
     project.push_str("[ballbar]\nsetup = \"dbb-rotary/setup.toml\"\ndata = \"dbb-rotary/dbb.csv\"\ntemps = \"dbb-rotary/temps.csv\"\n");
     project.push_str("[[thermal]]\ndata = \"spindle-sensors/thermal.csv\"\ntarget = \"radial_um\"\nmodel = \"ridge-select\"\n");
     project.push_str(
@@ -121,21 +111,6 @@ pub fn run(args: Args) -> Result<(), CliError> {
     )?;
     println!("report: {}", report.display());
     Ok(())
-}
-
-/// The subcommands this build has (the demo project uses only what exists).
-fn commands() -> Vec<&'static str> {
-    let mut v = vec!["identify ballbar", "thermal", "map", "compensate"];
-    if super::HAS_ISO230_2 {
-        v.push("iso230-2");
-    }
-    if super::HAS_CIRCULAR {
-        v.push("circular");
-    }
-    if super::HAS_IDENTIFY_LINES {
-        v.push("identify lines");
-    }
-    v
 }
 
 /// Compensation rate on the virtual machine: 1 − RMS(error after)/RMS(error before) per axis at

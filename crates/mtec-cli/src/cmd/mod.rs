@@ -4,6 +4,7 @@ pub mod circular;
 pub mod compensate_gcode;
 pub mod compensate_table;
 pub mod identify_ballbar;
+pub mod identify_lines;
 pub mod iso230_2;
 pub mod map;
 pub mod model_loader;
@@ -17,8 +18,4 @@ pub mod demo;
 pub mod pipeline;
 pub mod run;
 
-/// Whether this build has these subcommands (the demo project uses only what exists).
-pub const HAS_ISO230_2: bool = true;
-pub const HAS_CIRCULAR: bool = true;
-pub const HAS_IDENTIFY_LINES: bool = false;
 pub mod map_bpnn;

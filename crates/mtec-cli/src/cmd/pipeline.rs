@@ -303,12 +303,42 @@ pub fn sensitivity(
         }
         (None, None) => return Err(CliError::usage("[sensitivity] needs `stats` or a [lines] stage whose identified errors give the statistics")),
     };
+    // indices aggregated over a 3 × 3 × 3 grid of the workspace
+    let mach = crate::inputs::read_machine(machine)?;
+    let mut pts = mach
+        .axes
+        .iter()
+        .map(|a| crate::inputs::pose_column(*a))
+        .collect::<Vec<_>>()
+        .join(",")
+        + "\n";
+    let mut poses: Vec<Vec<f64>> = vec![vec![]];
+    for a in &mach.axes {
+        let [lo, hi] = mach.travel(*a);
+        poses = poses
+            .into_iter()
+            .flat_map(|p| [0.0, 0.5, 1.0].map(|f| [p.clone(), vec![lo + f * (hi - lo)]].concat()))
+            .collect();
+    }
+    for q in &poses {
+        pts.push_str(
+            &(q.iter()
+                .map(|v| format!("{v}"))
+                .collect::<Vec<_>>()
+                .join(",")
+                + "\n"),
+        );
+    }
+    let points = p.out.join("sensitivity-points.csv");
+    mtec_io::write_atomic(&points, pts.as_bytes())?;
     let mut args = vec![
         "sensitivity".into(),
         "--machine".into(),
         s(machine),
         "--stats".into(),
         s(&stats),
+        "--points".into(),
+        s(&points),
         "--method".into(),
         st.method.clone(),
         "--json".into(),

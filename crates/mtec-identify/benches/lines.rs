@@ -1,0 +1,51 @@
+//! Identification of the 21 elements of the XYFZ machine from the vmc-9line data
+//! (9 lines × 21 points, 27 channels): parse excluded, design + identifiability + solve included.
+//! Issue 3 goal: < 5 ms.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use mtec_identify::lines::{identify, LineData, DEFAULT_DEGREE};
+use mtec_io::Table;
+use mtec_model::Machine;
+use std::path::Path;
+
+fn bench(c: &mut Criterion) {
+    let out = mtec_sim::run_scenario("vmc-9line", 1).expect("scenario");
+    let csv = &out
+        .files
+        .iter()
+        .find(|f| f.name == "lines.csv")
+        .expect("lines")
+        .contents;
+    let data = LineData::from_table(&Table::parse(Path::new("lines.csv"), csv).expect("csv"))
+        .expect("data");
+    let m = Machine::vmc_xyfz(100.0);
+    c.bench_function("identify_lines_nine_line_21_points", |b| {
+        b.iter(|| identify(&m, &data, DEFAULT_DEGREE).expect("identifies"))
+    });
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches, stage_benches);
+
+fn stages(c: &mut Criterion) {
+    let out = mtec_sim::run_scenario("vmc-9line", 1).expect("scenario");
+    let csv = &out
+        .files
+        .iter()
+        .find(|f| f.name == "lines.csv")
+        .expect("lines")
+        .contents;
+    let data = LineData::from_table(&Table::parse(Path::new("lines.csv"), csv).expect("csv"))
+        .expect("data");
+    let m = Machine::vmc_xyfz(100.0);
+    let layout = mtec_identify::lines::Layout::new(&m, 3, &data).unwrap();
+    c.bench_function("stage_design", |b| {
+        b.iter(|| mtec_identify::lines::model::design_matrix(&m, &layout, &data))
+    });
+    let (a, y) = mtec_identify::lines::model::design_matrix(&m, &layout, &data);
+    c.bench_function("stage_analyse", |b| {
+        b.iter(|| mtec_identify::lines::identifiability::analyse(&a, &y, &layout))
+    });
+    c.bench_function("stage_qr", |b| b.iter(|| a.clone().qr()));
+}
+criterion_group!(stage_benches, stages);

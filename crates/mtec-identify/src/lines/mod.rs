@@ -1,0 +1,245 @@
+//! Line-set identification (the 9-line method and its relatives): the error elements of a
+//! three-axis machine from laser-interferometer readings along straight lines.
+//!
+//! Pipeline: [`data`] reads the SPEC §4 line file and infers each line's geometry from its
+//! points (the design is data); [`model`] parameterises the 21 error functions as polynomials
+//! and builds the linear observation model from the first-order kinematics of `mtec-model`;
+//! [`identifiability`] finds, by SVD of the column-scaled design, what the design cannot
+//! determine and names it; [`solve`] fits the rest by least squares with covariance-based
+//! uncertainties; [`report`] renders the result.
+//!
+//! # Decisions (where the spec is silent)
+//! - The identification uses the linearised model (first-order Jacobian); the simulator uses the
+//!   exact kinematics. Second-order terms of realistic errors (≤ 50 µrad) are below 0.01 µm.
+//! - Conventions of the error functions: see [`model`]; they are the conventions of the
+//!   virtual machine's truth, so that identified and true elements are comparable.
+//! - Straightness channels carry a free alignment slope each: it is estimated and reported
+//!   (`alignment`), never turned into squareness. Consequence: a straightness channel only
+//!   informs the curvature (degree ≥ 2) of what it sees.
+//! - Elements that the design cannot separate are dropped by the rule in [`identifiability`];
+//!   their partners absorb them *at the measured tool offset*: the identified set predicts the
+//!   volumetric error for that tool offset (e.g. `EXZ` then holds EXZ + L·EBZ).
+//! - The element functions are written as polynomials in the axis position q (expanded from the
+//!   normalised basis), zero at the travel's lower end.
+
+pub mod data;
+pub mod identifiability;
+pub mod model;
+pub mod report;
+pub mod solve;
+
+pub use data::{Channel, ChannelKind, LineData};
+pub use identifiability::{Analysis, Dropped};
+pub use model::{Layout, ModelError};
+pub use report::{ElementReport, LinesReport, SlopeReport, UnidentifiableReport};
+pub use solve::Fit;
+
+use mtec_io::InputError;
+use mtec_model::{ErrorFunction, ErrorSet, Machine};
+use nalgebra::{DMatrix, DVector};
+
+/// Default polynomial degree of the error functions.
+pub const DEFAULT_DEGREE: usize = 3;
+
+/// Why an identification cannot run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LinesError {
+    /// A located problem with the data file.
+    #[error("{0}")]
+    Input(#[from] InputError),
+    /// The machine or the options do not fit the method.
+    #[error("{0}")]
+    Model(#[from] ModelError),
+    /// Not enough readings for the parameters.
+    #[error("{readings} readings cannot determine {parameters} parameters: lower the polynomial degree or measure more points")]
+    TooFewReadings { readings: usize, parameters: usize },
+}
+
+/// Everything an identification produces.
+#[derive(Debug, Clone)]
+pub struct LineIdentification {
+    /// The identified error set (`mtec.errors/1`), dropped elements listed as unidentifiable.
+    pub errors: ErrorSet,
+    /// The report (identifiability, fit statistics, uncertainties).
+    pub report: LinesReport,
+    pub layout: Layout,
+    pub analysis: Analysis,
+    pub fit: Fit,
+}
+
+impl LineIdentification {
+    /// Value and 1σ (µm or µrad) of an identified element at axis position q; None if dropped.
+    pub fn value_sigma(&self, e: &mtec_model::ErrorElement, q: f64) -> Option<(f64, f64)> {
+        if self.analysis.dropped.iter().any(|d| d.element == *e) {
+            return None;
+        }
+        let b = self.layout.block(e)?;
+        Some(self.fit.value_sigma(&self.analysis, b, q))
+    }
+}
+
+/// Identifies the error elements of `machine` from line readings with polynomials of `degree`.
+pub fn identify(
+    machine: &Machine,
+    data: &LineData,
+    degree: usize,
+) -> Result<LineIdentification, LinesError> {
+    let layout = Layout::new(machine, degree, data)?;
+    model::check_travels(machine, data).map_err(|(ci, k, e)| match &data.path {
+        Some(p) => LinesError::Input(InputError::at(
+            p,
+            data.channels[ci].file_lines[k],
+            data.point_column,
+            e.to_string(),
+        )),
+        None => LinesError::Model(e),
+    })?;
+    let (a, y) = model::design_matrix(machine, &layout, data);
+    let too_few = |(readings, parameters)| LinesError::TooFewReadings {
+        readings,
+        parameters,
+    };
+    // ordinary least squares first, then weighted by the noise each kind of optics shows
+    let analysis = identifiability::analyse(&a, &y, &layout).map_err(too_few)?;
+    let fit = solve::solve(&a, &y, &analysis);
+    let weights = kind_weights(data, &fit);
+    let (analysis, fit) = match &weights {
+        None => (analysis, fit),
+        Some(w) => {
+            let aw = DMatrix::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)] * w[i]);
+            let yw = y.component_mul(w);
+            let analysis_w =
+                identifiability::analyse_with(&aw, &yw, &layout, Some(&analysis.dropped))
+                    .map_err(too_few)?;
+            // rank and singular values of the design itself (weights do not change the rank)
+            let mut analysis_w = analysis_w;
+            analysis_w.singular_values = analysis.singular_values.clone();
+            analysis_w.kept_singular_values = analysis.kept_singular_values.clone();
+            analysis_w.rank = analysis.rank;
+            let analysis = analysis_w;
+            let mut fit = solve::solve(&aw, &yw, &analysis);
+            // report residuals in µm (unweighted); σ̂ is the weighted fit's scale (≈ 1)
+            fit.residual_um = &y - &a * &fit.theta;
+            fit.sigma_um = (fit.residual_um.norm_squared() / fit.dof.max(1) as f64).sqrt();
+            (analysis, fit)
+        }
+    };
+    let errors = error_set(machine, data, degree, &layout, &analysis, &fit);
+    let report = report::build(machine, data, degree, &layout, &analysis, &fit);
+    Ok(LineIdentification {
+        errors,
+        report,
+        layout,
+        analysis,
+        fit,
+    })
+}
+
+/// Row weights 1/σ_kind from the residuals of a first fit: displacement optics and straightness
+/// optics have different noise (a laser's straightness reading is typically 1.5–2× noisier), so
+/// the weighted least-squares estimate (Aitken / Gauss–Markov) needs the ratio. Each kind's
+/// variance is its residual sum of squares over its share of the degrees of freedom.
+/// None when only one kind is present.
+fn kind_weights(data: &LineData, fit: &Fit) -> Option<DVector<f64>> {
+    let m = fit.residual_um.len();
+    let mut ss = [0.0f64; 2];
+    let mut n = [0usize; 2];
+    let mut kinds = Vec::with_capacity(m);
+    let mut row = 0;
+    for c in &data.channels {
+        let k = (c.kind == ChannelKind::Straightness) as usize;
+        for _ in 0..c.readings_um.len() {
+            ss[k] += fit.residual_um[row].powi(2);
+            n[k] += 1;
+            kinds.push(k);
+            row += 1;
+        }
+    }
+    if n[0] == 0 || n[1] == 0 || fit.dof == 0 {
+        return None;
+    }
+    let share = fit.dof as f64 / m as f64;
+    let var = [0, 1].map(|k| ss[k] / (n[k] as f64 * share));
+    if !(var[0] > 0.0 && var[1] > 0.0) {
+        return None;
+    }
+    Some(DVector::from_iterator(
+        m,
+        kinds.into_iter().map(|k| 1.0 / var[k].sqrt()),
+    ))
+}
+
+/// The identified functions as an error set.
+fn error_set(
+    machine: &Machine,
+    data: &LineData,
+    degree: usize,
+    layout: &Layout,
+    an: &Analysis,
+    fit: &Fit,
+) -> ErrorSet {
+    let mut set = ErrorSet::new(format!(
+        "mtec identify lines: {} ({} lines, degree {degree}); valid at tool offset {:?} mm",
+        data.source,
+        data.line_names().len(),
+        machine.tool_offset_mm
+    ));
+    for b in &layout.blocks {
+        if an.dropped.iter().any(|d| d.element == b.element) {
+            continue;
+        }
+        let f = if b.kind == model::ElementKind::Squareness {
+            ErrorFunction::constant(fit.theta[b.first_col])
+        } else {
+            let coeffs: Vec<(i32, f64)> = b
+                .powers
+                .iter()
+                .zip(b.cols())
+                .map(|(&p, c)| (p, fit.theta[c]))
+                .collect();
+            ErrorFunction::polynomial(solve::polynomial_in_q(&coeffs, b.travel))
+        };
+        set.insert(b.element, f);
+    }
+    set.unidentifiable = an.dropped.iter().map(|d| d.element.name()).collect();
+    set
+}
+
+/// What a design can identify, without readings (rank, singular values, unidentifiable elements).
+pub fn analyse_design(
+    machine: &Machine,
+    data: &LineData,
+    degree: usize,
+) -> Result<LinesReport, LinesError> {
+    identify(machine, data, degree).map(|id| id.report)
+}
+
+/// Checks that the data contain every line and channel of a design (e.g. a preset), by geometry:
+/// same name, same direction, same reading directions. Returns the first mismatch.
+pub fn check_design(data: &LineData, design: &[mtec_model::LineSpec]) -> Result<(), String> {
+    for l in design {
+        let chans: Vec<&Channel> = data.channels.iter().filter(|c| c.line == l.name).collect();
+        if chans.is_empty() {
+            return Err(format!(
+                "the design has line `{}` but the data do not",
+                l.name
+            ));
+        }
+        let d = l.direction();
+        if data::dot(d, chans[0].direction).abs() < 0.999 {
+            return Err(format!(
+                "line `{}` runs along {:?} in the data but along {:?} in the design",
+                l.name, chans[0].direction, d
+            ));
+        }
+        for u in &l.channels {
+            if !chans.iter().any(|c| data::dot(c.u, *u) > 0.999) {
+                return Err(format!(
+                    "line `{}` has no channel reading along {:?}, which the design measures",
+                    l.name, u
+                ));
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,302 @@
+//! The linear observation model of a line design: parameters (polynomial coefficients of every
+//! error function, squareness constants, straightness alignment slopes) and the design matrix
+//! built from the first-order kinematics.
+//!
+//! Parameterisation (the conventions of `mtec-sim`'s truth, written down in the crate docs):
+//! with s = (q − q_min)/L the axis position normalised by its travel length L,
+//! - positioning and angular error motions: f(q) = Σ_{p=1..N} c_p s^p (zero at the origin);
+//! - straightness: f(q) = Σ_{p=2..N} c_p s^p (no linear term: a straightness slope is a
+//!   squareness, or for X, which defines the frame, nothing);
+//! - squareness `EC0Y`, `EB0Z`, `EA0Z`: a constant;
+//! - one alignment slope a (µrad) per straightness channel: reading += a·d·1e-3, d the distance
+//!   (mm) from the channel's reference point.
+//!
+//! A reading of channel u at point k (reference point 0) is modelled as
+//!   r_k = u · (J(q_k)·f(q_k) − J(q_0)·f(q_0)) + a·d_k·1e-3 + noise,
+//! with J the first-order Jacobian of [`VolumetricModel::first_order_jacobian`] (µm per µm or
+//! µrad of each element): one row of the design matrix per reading.
+
+use super::data::{dot, ChannelKind, LineData};
+use mtec_model::{three_axis_elements, Axis, ErrorElement, Machine, VolumetricModel};
+use nalgebra::{DMatrix, DVector};
+
+/// The role of an element in the parameterisation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ElementKind {
+    Positioning,
+    Straightness,
+    Angular,
+    Squareness,
+}
+
+/// One element's columns of the design matrix.
+#[derive(Debug, Clone)]
+pub struct Block {
+    pub element: ErrorElement,
+    pub kind: ElementKind,
+    /// Index of the element's axis in the pose vector.
+    pub pose_index: usize,
+    /// Travel [min, max] of the axis.
+    pub travel: [f64; 2],
+    /// Powers of s of the columns (0 for a squareness constant).
+    pub powers: Vec<i32>,
+    /// Columns `first_col .. first_col + powers.len()`.
+    pub first_col: usize,
+    /// True if the element's axis carries the tool (angular errors then act through the tool offset only).
+    pub tool_side: bool,
+}
+
+impl Block {
+    /// Normalised position s of an axis value q.
+    pub fn s(&self, q: f64) -> f64 {
+        (q - self.travel[0]) / (self.travel[1] - self.travel[0])
+    }
+    /// Basis values at pose q (µm or µrad of the element per unit coefficient).
+    pub fn basis(&self, q_axis: f64) -> impl Iterator<Item = f64> + '_ {
+        let s = self.s(q_axis);
+        self.powers.iter().map(move |&p| s.powi(p))
+    }
+    /// The column range.
+    pub fn cols(&self) -> std::ops::Range<usize> {
+        self.first_col..self.first_col + self.powers.len()
+    }
+}
+
+/// Parameter layout: element blocks, then one alignment slope per straightness channel.
+#[derive(Debug, Clone)]
+pub struct Layout {
+    pub blocks: Vec<Block>,
+    /// (channel index, column) of each alignment slope.
+    pub slopes: Vec<(usize, usize)>,
+    pub n_cols: usize,
+}
+
+/// Why a design cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    #[error("line identification needs a machine with exactly the linear axes X, Y, Z (this one has {0})")]
+    NotThreeAxis(String),
+    #[error("polynomial degree must be between 2 and 12 (got {0})")]
+    Degree(usize),
+    #[error("line `{line}` point {point} ({x}, {y}, {z}) is outside the travel of axis {axis} [{lo}, {hi}]")]
+    OutsideTravel {
+        line: String,
+        point: usize,
+        x: f64,
+        y: f64,
+        z: f64,
+        axis: char,
+        lo: f64,
+        hi: f64,
+    },
+}
+
+/// The classification of a three-axis element.
+pub fn element_kind(e: &ErrorElement) -> ElementKind {
+    if e.location {
+        ElementKind::Squareness
+    } else if e.is_angular() {
+        ElementKind::Angular
+    } else if e.direction == e.axis {
+        ElementKind::Positioning
+    } else {
+        ElementKind::Straightness
+    }
+}
+
+impl Layout {
+    /// The layout for a machine, a polynomial degree and the channels of a data set.
+    pub fn new(machine: &Machine, degree: usize, data: &LineData) -> Result<Layout, ModelError> {
+        check_machine(machine)?;
+        if !(2..=12).contains(&degree) {
+            return Err(ModelError::Degree(degree));
+        }
+        let mut blocks = Vec::new();
+        let mut col = 0;
+        for element in three_axis_elements() {
+            let kind = element_kind(&element);
+            let powers: Vec<i32> = match kind {
+                ElementKind::Squareness => vec![0],
+                ElementKind::Straightness => (2..=degree as i32).collect(),
+                _ => (1..=degree as i32).collect(),
+            };
+            let n = powers.len();
+            blocks.push(Block {
+                element,
+                kind,
+                pose_index: machine.axis_index(element.axis).unwrap_or(0),
+                travel: machine.travel(element.axis),
+                powers,
+                first_col: col,
+                tool_side: machine.chain.tool_side.contains(&element.axis),
+            });
+            col += n;
+        }
+        let mut slopes = Vec::new();
+        for (i, c) in data.channels.iter().enumerate() {
+            if c.kind == ChannelKind::Straightness {
+                slopes.push((i, col));
+                col += 1;
+            }
+        }
+        Ok(Layout {
+            blocks,
+            slopes,
+            n_cols: col,
+        })
+    }
+
+    /// The block of an element.
+    pub fn block(&self, e: &ErrorElement) -> Option<&Block> {
+        self.blocks.iter().find(|b| b.element == *e)
+    }
+}
+
+/// Refuses machines that are not X, Y, Z linear.
+pub fn check_machine(machine: &Machine) -> Result<(), ModelError> {
+    if machine.axes != [Axis::X, Axis::Y, Axis::Z] {
+        return Err(ModelError::NotThreeAxis(
+            machine.axes.iter().map(|a| a.letter()).collect(),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks every commanded point lies within the travels (the error functions are defined there only).
+pub fn check_travels(machine: &Machine, data: &LineData) -> Result<(), (usize, usize, ModelError)> {
+    for (ci, c) in data.channels.iter().enumerate() {
+        for (k, p) in c.points_mm.iter().enumerate() {
+            for a in [Axis::X, Axis::Y, Axis::Z] {
+                let [lo, hi] = machine.travel(a);
+                let v = p[a.index()];
+                let tol = 1e-9 * (hi - lo);
+                if v < lo - tol || v > hi + tol {
+                    return Err((
+                        ci,
+                        k,
+                        ModelError::OutsideTravel {
+                            line: c.name.clone(),
+                            point: k,
+                            x: p[0],
+                            y: p[1],
+                            z: p[2],
+                            axis: a.letter(),
+                            lo,
+                            hi,
+                        },
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The Jacobian at a pose as one [Ex, Ey, Ez] row per block (same order as `layout.blocks`).
+fn jacobian_by_block(vm: &VolumetricModel, layout: &Layout, q: &[f64]) -> Vec<[f64; 3]> {
+    let jac = vm.first_order_jacobian(q);
+    layout
+        .blocks
+        .iter()
+        .map(|b| {
+            jac.iter()
+                .find(|(e, _)| *e == b.element)
+                .map_or([0.0; 3], |(_, j)| *j)
+        })
+        .collect()
+}
+
+/// The first-order Jacobian of an X, Y, Z machine as an affine function of the pose.
+///
+/// With no rotary axis the ideal chain is translations only, so every lever arm, and with it
+/// every column of the Jacobian (δ, ε × r, q·(ε₀ × u)), is affine in q: J(q) = J(0) + Σ_i q_i·D_i.
+/// Four evaluations of [`VolumetricModel::first_order_jacobian`] give it exactly (to rounding);
+/// `tests/lines_reference.rs` checks it against the direct evaluation.
+pub struct AffineJacobian {
+    j0: Vec<[f64; 3]>,
+    d: [Vec<[f64; 3]>; 3],
+}
+
+impl AffineJacobian {
+    /// Samples the Jacobian at the origin and 100 mm along each axis.
+    pub fn new(machine: &Machine, layout: &Layout) -> AffineJacobian {
+        let vm = VolumetricModel::new(machine, &mtec_model::ErrorSet::new("design"));
+        let j0 = jacobian_by_block(&vm, layout, &[0.0; 3]);
+        let d = [0, 1, 2].map(|i| {
+            let mut q = [0.0; 3];
+            q[i] = 100.0;
+            jacobian_by_block(&vm, layout, &q)
+                .iter()
+                .zip(&j0)
+                .map(|(a, b)| [0, 1, 2].map(|k| (a[k] - b[k]) / 100.0))
+                .collect()
+        });
+        AffineJacobian { j0, d }
+    }
+
+    /// One [Ex, Ey, Ez] row per block at pose q.
+    pub fn at(&self, q: &[f64; 3]) -> Vec<[f64; 3]> {
+        (0..self.j0.len())
+            .map(|b| {
+                [0, 1, 2].map(|k| {
+                    self.j0[b][k]
+                        + q[0] * self.d[0][b][k]
+                        + q[1] * self.d[1][b][k]
+                        + q[2] * self.d[2][b][k]
+                })
+            })
+            .collect()
+    }
+}
+
+/// The Jacobian evaluated directly (for checking [`AffineJacobian`]).
+pub fn direct_jacobian(machine: &Machine, layout: &Layout, q: &[f64; 3]) -> Vec<[f64; 3]> {
+    let vm = VolumetricModel::new(machine, &mtec_model::ErrorSet::new("design"));
+    jacobian_by_block(&vm, layout, q)
+}
+
+/// The design matrix (readings × parameters) and the reading vector.
+pub fn design_matrix(
+    machine: &Machine,
+    layout: &Layout,
+    data: &LineData,
+) -> (DMatrix<f64>, DVector<f64>) {
+    let jac = AffineJacobian::new(machine, layout);
+    let m = data.n_readings();
+    let mut a = DMatrix::<f64>::zeros(m, layout.n_cols);
+    let mut y = DVector::<f64>::zeros(m);
+    let mut row = 0;
+    // Jacobians of the points of the previous channel: channels of one line share points.
+    let mut cache: (Vec<[f64; 3]>, Vec<Vec<[f64; 3]>>) = (Vec::new(), Vec::new());
+    for (ci, c) in data.channels.iter().enumerate() {
+        if cache.0 != c.points_mm {
+            cache.1 = c.points_mm.iter().map(|p| jac.at(p)).collect();
+            cache.0 = c.points_mm.clone();
+        }
+        let jacs = &cache.1;
+        let q0 = c.points_mm[0];
+        let slope_col = layout.slopes.iter().find(|(i, _)| *i == ci).map(|s| s.1);
+        for (k, qk) in c.points_mm.iter().enumerate() {
+            for (bi, b) in layout.blocks.iter().enumerate() {
+                // u·J_e(q) is the reading per unit element value at pose q
+                let gk = dot(c.u, jacs[k][bi]);
+                let g0 = dot(c.u, jacs[0][bi]);
+                if gk == 0.0 && g0 == 0.0 {
+                    continue;
+                }
+                let xk = qk[b.pose_index];
+                let x0 = q0[b.pose_index];
+                for (j, (bk, b0)) in b.basis(xk).zip(b.basis(x0)).enumerate() {
+                    a[(row, b.first_col + j)] = gk * bk - g0 * b0;
+                }
+            }
+            if let Some(sc) = slope_col {
+                // alignment slope in µrad: µm per mm of travel × 1e3
+                a[(row, sc)] = c.distance_mm(k) * 1e-3;
+            }
+            y[row] = c.readings_um[k];
+            row += 1;
+        }
+    }
+    (a, y)
+}
