@@ -28,12 +28,17 @@ fn main() {
         ..Default::default()
     };
     println!("nested leave-one-block-out RMSE (um), 8 blocks of {BLOCK_MIN} min");
-    println!("{:<4} {:>8} {:>10}  chosen on all blocks", "ch", "MLR-16", "heat-input");
+    println!(
+        "{:<4} {:>8} {:>10}  chosen on all blocks",
+        "ch", "MLR-16", "heat-input"
+    );
     for ch in 1..=5 {
         let d0 = ThermalData::from_table(&table, Some(&format!("ch{ch}_um")), true).unwrap();
         let d = with_input(&d0, "spindle_rpm", &rpm).unwrap();
         let blocks = time_blocks(&d0, BLOCK_MIN);
-        let mlr = block_cv(&Mlr::default(), &d0, &blocks).unwrap().pooled_rmse_um;
+        let mlr = block_cv(&Mlr::default(), &d0, &blocks)
+            .unwrap()
+            .pooled_rmse_um;
         let hi = block_cv(&fitter, &d, &blocks).unwrap().pooled_rmse_um;
         let m = fitter.fit(&d).unwrap();
         println!(

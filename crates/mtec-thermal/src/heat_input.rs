@@ -38,7 +38,11 @@ pub const INPUT_REF: f64 = 1000.0;
 
 /// Attaches a non-temperature input column (e.g. `spindle_rpm`) to the data, under `name`.
 /// Replaces a column of that name if present.
-pub fn with_input(data: &ThermalData, name: &str, values: &[f64]) -> Result<ThermalData, ThermalError> {
+pub fn with_input(
+    data: &ThermalData,
+    name: &str,
+    values: &[f64],
+) -> Result<ThermalData, ThermalError> {
     if values.len() != data.len() {
         return Err(ThermalError::Invalid(format!(
             "input `{name}` has {} values for {} rows",
@@ -78,9 +82,17 @@ fn input_values(data: &ThermalData, name: &str) -> Result<Vec<f64>, ThermalError
 }
 
 /// The filter bank on every row: column m is L_{τ_m}[(n/n_ref)^α] (module docs).
-pub fn heat_features(data: &ThermalData, input: &[f64], alpha: f64, taus_min: &[f64]) -> Vec<Vec<f64>> {
+pub fn heat_features(
+    data: &ThermalData,
+    input: &[f64],
+    alpha: f64,
+    taus_min: &[f64],
+) -> Vec<Vec<f64>> {
     let p: Vec<f64> = input.iter().map(|n| (n / INPUT_REF).powf(alpha)).collect();
-    taus_min.iter().map(|&tau| lag_filter(data, &p, tau)).collect()
+    taus_min
+        .iter()
+        .map(|&tau| lag_filter(data, &p, tau))
+        .collect()
 }
 
 /// One point of the model grid.
@@ -263,7 +275,10 @@ fn fit_config(
         .collect();
     names.extend(amb.iter().map(|&j| data.sensor_names[j].clone()));
     if let Some(tau) = cfg.ambient_lag_min {
-        names.extend(amb.iter().map(|&j| format!("lag({},{tau}min)", data.sensor_names[j])));
+        names.extend(
+            amb.iter()
+                .map(|&j| format!("lag({},{tau}min)", data.sensor_names[j])),
+        );
     }
     let (h, a) = (heat.len(), amb.len());
     let prob = RidgeProblem::new(&x, y, &names)?;
@@ -299,10 +314,9 @@ impl HeatInput {
         for &i in rows {
             let b = match self.block_min {
                 Some(bm) => ((data.time_min[i] - t0) / bm).floor() as i64,
-                None if single => {
-                    ((data.time_min[i] - data.time_min[rows[0]]) / (span / 4.0 + 1e-9)).floor()
-                        as i64
-                }
+                None if single => ((data.time_min[i] - data.time_min[rows[0]])
+                    / (span / 4.0 + 1e-9))
+                    .floor() as i64,
                 None => 0,
             };
             let key = (data.experiment[i].clone(), b);
@@ -344,16 +358,32 @@ impl HeatInput {
 
     fn check(&self) -> Result<(), ThermalError> {
         let bad = |m: &str| Err(ThermalError::Invalid(m.into()));
-        if self.alphas.is_empty() || self.banks.is_empty() || self.ks.is_empty() || self.ambient_counts.is_empty() {
+        if self.alphas.is_empty()
+            || self.banks.is_empty()
+            || self.ks.is_empty()
+            || self.ambient_counts.is_empty()
+        {
             return bad("heat-input: every grid (α, τ banks, k, ambient counts) needs a value");
         }
         if self.alphas.iter().any(|a| !(*a > 0.0 && a.is_finite())) {
             return bad("heat-input: α must be > 0");
         }
-        if self.banks.iter().flatten().any(|t| !(*t > 0.0 && t.is_finite())) || self.banks.iter().any(|b| b.is_empty()) {
+        if self
+            .banks
+            .iter()
+            .flatten()
+            .any(|t| !(*t > 0.0 && t.is_finite()))
+            || self.banks.iter().any(|b| b.is_empty())
+        {
             return bad("heat-input: time constants must be > 0 min, at least one per bank");
         }
-        if self.ambient_lags.is_empty() || self.ambient_lags.iter().flatten().any(|t| !(*t > 0.0 && t.is_finite())) {
+        if self.ambient_lags.is_empty()
+            || self
+                .ambient_lags
+                .iter()
+                .flatten()
+                .any(|t| !(*t > 0.0 && t.is_finite()))
+        {
             return bad("heat-input: ambient lags must be > 0 min (or none)");
         }
         if self.ks.iter().any(|k| !(*k >= 0.0 && k.is_finite())) {
@@ -414,7 +444,15 @@ impl Fit for HeatInput {
                         .iter()
                         .position(|(key, _)| key.0 == c.alpha && key.1 == c.taus_min)
                         .expect("cached");
-                    match fit_config(data, &self.input, &train, &ytr, c, &heat_cache[hi].1, &rankings[hi]) {
+                    match fit_config(
+                        data,
+                        &self.input,
+                        &train,
+                        &ytr,
+                        c,
+                        &heat_cache[hi].1,
+                        &rankings[hi],
+                    ) {
                         Ok(m) => {
                             let pred = m.predict_rows(data, &heat_cache[hi].1, test);
                             sse[ci] += test
