@@ -95,6 +95,9 @@ pub fn heat_features(
         .collect()
 }
 
+/// ((α, τ bank), filter-bank columns on every row).
+type HeatCacheEntry = ((f64, Vec<f64>), Vec<Vec<f64>>);
+
 /// One point of the model grid.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct HeatInputConfig {
@@ -402,7 +405,7 @@ impl Fit for HeatInput {
         let u = input_values(data, &self.input)?;
         let configs = self.configs();
         // heat features depend on (α, bank) only: compute once per pair on the whole record
-        let mut heat_cache: Vec<((f64, Vec<f64>), Vec<Vec<f64>>)> = Vec::new();
+        let mut heat_cache: Vec<HeatCacheEntry> = Vec::new();
         for &a in &self.alphas {
             for b in &self.banks {
                 heat_cache.push(((a, b.clone()), heat_features(data, &u, a, b)));
