@@ -23,6 +23,7 @@ pub mod data;
 pub mod error;
 pub mod exp_ambient;
 pub mod features;
+pub mod heat_input;
 pub mod lag_select;
 pub mod linear;
 pub mod metrics;
@@ -35,6 +36,7 @@ pub use data::ThermalData;
 pub use error::ThermalError;
 pub use exp_ambient::ExpAmbientModel;
 pub use features::Feature;
+pub use heat_input::{HeatInput, HeatInputModel};
 pub use lag_select::LagSelect;
 pub use metrics::Metrics;
 pub use model::{

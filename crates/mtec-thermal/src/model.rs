@@ -293,6 +293,7 @@ impl Predict for ExpAmbientModel {
 pub enum ThermalModel {
     Linear(LinearModel),
     ExpAmbient(ExpAmbientModel),
+    HeatInput(crate::heat_input::HeatInputModel),
 }
 
 impl Predict for ThermalModel {
@@ -300,12 +301,14 @@ impl Predict for ThermalModel {
         match self {
             ThermalModel::Linear(m) => m.predict(data),
             ThermalModel::ExpAmbient(m) => m.predict(data),
+            ThermalModel::HeatInput(m) => m.predict(data),
         }
     }
     fn predictors(&self) -> usize {
         match self {
             ThermalModel::Linear(m) => m.predictors(),
             ThermalModel::ExpAmbient(m) => m.predictors(),
+            ThermalModel::HeatInput(m) => m.predictors(),
         }
     }
 }

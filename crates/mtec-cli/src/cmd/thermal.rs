@@ -7,7 +7,8 @@ use mtec_thermal::select::{select_sensors, SelectOptions, Selection};
 use mtec_thermal::validate::{block_cv, rows_of_experiments, split_at_time, time_blocks};
 use mtec_thermal::{
     features::{design, temp_features},
-    ExpAmbient, Fit, LagSelect, Metrics, Mlr, Predict, Ridge, RidgeSelect, ThermalData,
+    heat_input::with_input,
+    ExpAmbient, Fit, HeatInput, LagSelect, Metrics, Mlr, Predict, Ridge, RidgeSelect, ThermalData,
     ThermalError, MODEL_FORMAT,
 };
 use std::path::{Path, PathBuf};
@@ -42,8 +43,11 @@ enum Sub {
     /// saturation in the temperature rises of --sensors UP,NUT and cubic-in-ambient
     /// coefficients; needs ambient_c and position_mm), lag-select (forward selection of up to
     /// --max-sensors sensors, each with a first-order lag of fitted time constant, scored by
-    /// leaving out whole blocks of --block-min minutes or experiments). --lag adds a
-    /// first-order lag of each sensor with a fitted time constant (mlr, ridge, ridge-select).
+    /// leaving out whole blocks of --block-min minutes or experiments), heat-input (drift =
+    /// response to the spindle power: δ = b₀ + Σ c_m·L_τm[(n/1000)^α] + ambient sensors, n from
+    /// the --input column, α, τ bank, ridge k and ambient sensors chosen by leaving out blocks of
+    /// the training rows). --lag adds a first-order lag of each sensor with a fitted time
+    /// constant (mlr, ridge, ridge-select).
     ///
     /// Example: mtec thermal fit --data thermal.csv --target ez_um --model exp-ambient
     /// --sensors up,nut --train 1,2,4 --test 3 -o z.json
@@ -85,6 +89,7 @@ enum ModelKind {
     RidgeSelect,
     ExpAmbient,
     LagSelect,
+    HeatInput,
 }
 
 #[derive(clap::Args)]
@@ -114,6 +119,9 @@ struct Common {
     /// lag-select: largest number of sensors.
     #[arg(long, default_value_t = 3)]
     max_sensors: usize,
+    /// heat-input: the heat-source column (spindle speed, rpm).
+    #[arg(long, default_value = "spindle_rpm")]
+    input: String,
 }
 
 #[derive(clap::Args)]
@@ -169,8 +177,30 @@ pub fn run(args: Args) -> Result<(), CliError> {
 }
 
 fn load(path: &Path, target: Option<&str>, require: bool) -> Result<ThermalData, CliError> {
+    load_with_input(path, target, require, None)
+}
+
+/// Reads the log and, for heat-input models, attaches the heat-source column (e.g. `spindle_rpm`).
+fn load_with_input(
+    path: &Path,
+    target: Option<&str>,
+    require: bool,
+    input: Option<&str>,
+) -> Result<ThermalData, CliError> {
     let t = Table::read(path)?;
-    Ok(ThermalData::from_table(&t, target, require)?)
+    let d = ThermalData::from_table(&t, target, require)?;
+    match input {
+        Some(name) => {
+            let v = t.f64_column(name)?;
+            with_input(&d, name, &v)
+                .map_err(|e| CliError::Input(InputError::file(path, e.to_string())))
+        }
+        None => Ok(d),
+    }
+}
+
+fn input_of(c: &Common) -> Option<&str> {
+    (c.model == ModelKind::HeatInput).then_some(c.input.as_str())
 }
 
 /// A model error about the data file: missing columns at the header, the rest about the file.
@@ -357,6 +387,14 @@ fn fit_model(c: &Common, data: &ThermalData, rows: &[usize]) -> Result<ThermalMo
             }
             .fit_rows(data, rows)?,
         ),
+        ModelKind::HeatInput => ThermalModel::HeatInput(
+            HeatInput {
+                input: c.input.clone(),
+                block_min: c.block_min,
+                ..Default::default()
+            }
+            .fit_rows(data, rows)?,
+        ),
         ModelKind::ExpAmbient => {
             let [up, nut] = c.sensors.as_slice() else {
                 return Err(ThermalError::Invalid(
@@ -414,7 +452,12 @@ fn metrics_on(
 
 fn fit(a: FitArgs) -> Result<(), CliError> {
     check_common(&a.common)?;
-    let data = load(&a.common.data, Some(&a.common.target), true)?;
+    let data = load_with_input(
+        &a.common.data,
+        Some(&a.common.target),
+        true,
+        input_of(&a.common),
+    )?;
     let err = |e| located(&data, &a.common.data, e);
     let all: Vec<usize> = (0..data.len()).collect();
     let (train, test, split) = if let Some(t) = a.train_until {
@@ -519,7 +562,11 @@ fn predict(a: PredictArgs) -> Result<(), CliError> {
     let file: ModelFile = mtec_io::read_json(&a.model)?;
     file.check_format()
         .map_err(|e| CliError::Input(InputError::file(&a.model, e.to_string())))?;
-    let data = load(&a.data, Some(&file.target), false)?;
+    let input = match &file.model {
+        ThermalModel::HeatInput(m) => Some(m.input.as_str()),
+        _ => None,
+    };
+    let data = load_with_input(&a.data, Some(&file.target), false, input)?;
     let pred = file
         .model
         .predict(&data)
@@ -582,7 +629,12 @@ impl Fit for CvFitter<'_> {
 
 fn cv(a: CvArgs) -> Result<(), CliError> {
     check_common(&a.common)?;
-    let data = load(&a.common.data, Some(&a.common.target), true)?;
+    let data = load_with_input(
+        &a.common.data,
+        Some(&a.common.target),
+        true,
+        input_of(&a.common),
+    )?;
     let err = |e| located(&data, &a.common.data, e);
     let blocks: Vec<Vec<usize>> = match a.common.block_min {
         Some(b) if b > 0.0 => time_blocks(&data, b),

@@ -1,0 +1,529 @@
+//! `heat-input`: thermal drift as the response of a linear thermal system to its heat source,
+//! plus the ambient temperature.
+//!
+//! Model (a linear-in-parameters transfer function, sum of first-order modes):
+//!
+//!   δ(t) = b₀ + Σ_m c_m · L_{τ_m}[p](t) + Σ_a d_a · T_a(t),   p(t) = (n(t)/n_ref)^α
+//!
+//! where n is the heat-source input (spindle speed, rpm; n_ref = 1000), p ∝ the spindle's heat
+//! power (friction and windage losses grow like n^α, α ≈ 1…2), L_τ is the first-order lag
+//! τ·dL/dt = p − L (discretised exactly for an input held over each sample interval, see
+//! [`crate::features::lag_filter`]), τ_m a fixed bank of time constants (a sum of exponentials
+//! approximates the impulse response of the machine's thermal network: each body/link mode is one
+//! exponential), and T_a one or two temperature sensors that carry the ambient (the room drifts
+//! independently of the spindle). Fitted by ridge least squares in correlation form
+//! ([`crate::linear::RidgeProblem`]; k = 0 is OLS).
+//!
+//! Decisions (the spec is silent):
+//! - α, the τ bank, k and the number of ambient sensors are chosen by leave-one-block-out inside
+//!   the training rows (inner CV), so `block_cv` over this fitter is a nested CV;
+//! - the ambient sensors are the ones the heat input explains least: the lowest R² of the
+//!   regression of each sensor on the filter bank, on the training rows (physically: a sensor
+//!   that follows the room, not the spindle);
+//! - the filters start at the first sample of each experiment in equilibrium with the input
+//!   (L = p), like the temperature lags; a record that starts while the machine is still warm
+//!   from earlier running violates that, and the model will be off until the slowest τ has passed;
+//! - the input column is not a temperature: it is attached to [`ThermalData`] with
+//!   [`with_input`] under its own name (e.g. `spindle_rpm`) and never taken as an ambient sensor.
+
+use crate::data::ThermalData;
+use crate::error::ThermalError;
+use crate::features::lag_filter;
+use crate::linear::{ols, RidgeProblem};
+use crate::model::{target_rows, Fit, Predict};
+use serde::{Deserialize, Serialize};
+
+/// Reference speed of the power input p = (n/n_ref)^α (rpm).
+pub const INPUT_REF: f64 = 1000.0;
+
+/// Attaches a non-temperature input column (e.g. `spindle_rpm`) to the data, under `name`.
+/// Replaces a column of that name if present.
+pub fn with_input(
+    data: &ThermalData,
+    name: &str,
+    values: &[f64],
+) -> Result<ThermalData, ThermalError> {
+    if values.len() != data.len() {
+        return Err(ThermalError::Invalid(format!(
+            "input `{name}` has {} values for {} rows",
+            values.len(),
+            data.len()
+        )));
+    }
+    if let Some(v) = values.iter().find(|v| !v.is_finite() || **v < 0.0) {
+        return Err(ThermalError::Invalid(format!(
+            "input `{name}` must be finite and ≥ 0 (found {v})"
+        )));
+    }
+    let mut d = data.clone();
+    if let Some(j) = d.sensor_names.iter().position(|s| s == name) {
+        for (i, v) in values.iter().enumerate() {
+            d.temps_c[(i, j)] = *v;
+        }
+        return Ok(d);
+    }
+    let n = d.len();
+    let p = d.temps_c.ncols();
+    d.temps_c = d.temps_c.clone().resize_horizontally(p + 1, 0.0);
+    for i in 0..n {
+        d.temps_c[(i, p)] = values[i];
+    }
+    d.sensor_names.push(name.to_string());
+    Ok(d)
+}
+
+fn input_values(data: &ThermalData, name: &str) -> Result<Vec<f64>, ThermalError> {
+    let j = data
+        .sensor_names
+        .iter()
+        .position(|s| s == name)
+        .ok_or_else(|| ThermalError::MissingColumn(name.to_string()))?;
+    Ok(data.sensor(j))
+}
+
+/// The filter bank on every row: column m is L_{τ_m}[(n/n_ref)^α] (module docs).
+pub fn heat_features(
+    data: &ThermalData,
+    input: &[f64],
+    alpha: f64,
+    taus_min: &[f64],
+) -> Vec<Vec<f64>> {
+    let p: Vec<f64> = input.iter().map(|n| (n / INPUT_REF).powf(alpha)).collect();
+    taus_min
+        .iter()
+        .map(|&tau| lag_filter(data, &p, tau))
+        .collect()
+}
+
+/// ((α, τ bank), filter-bank columns on every row).
+type HeatCacheEntry = ((f64, Vec<f64>), Vec<Vec<f64>>);
+
+/// One point of the model grid.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HeatInputConfig {
+    pub alpha: f64,
+    pub taus_min: Vec<f64>,
+    pub k: f64,
+    pub ambient_sensors: usize,
+    /// Time constant of an extra lag of each ambient sensor (the room reaches the structure
+    /// through its own thermal mass); `None`: the temperatures alone.
+    pub ambient_lag_min: Option<f64>,
+}
+
+/// The fitter: grids of α, τ banks, ridge k and ambient-sensor counts; inner leave-one-block-out
+/// on the training rows picks one point when the grid has more than one.
+#[derive(Debug, Clone)]
+pub struct HeatInput {
+    /// Input column attached with [`with_input`].
+    pub input: String,
+    pub alphas: Vec<f64>,
+    pub banks: Vec<Vec<f64>>,
+    pub ks: Vec<f64>,
+    pub ambient_counts: Vec<usize>,
+    pub ambient_lags: Vec<Option<f64>>,
+    /// Inner validation block length (min); `None`: experiments, or four equal time blocks when
+    /// there is only one experiment.
+    pub block_min: Option<f64>,
+}
+
+impl Default for HeatInput {
+    fn default() -> Self {
+        HeatInput {
+            input: "spindle_rpm".into(),
+            alphas: vec![1.0, 1.5, 2.0],
+            banks: vec![
+                vec![30.0, 90.0, 270.0],
+                vec![10.0, 30.0, 90.0, 270.0],
+                vec![10.0, 30.0, 90.0, 270.0, 810.0],
+            ],
+            ks: vec![0.0, 1e-4, 1e-3, 1e-2],
+            ambient_counts: vec![0, 1, 2],
+            ambient_lags: vec![None, Some(60.0), Some(240.0)],
+            block_min: None,
+        }
+    }
+}
+
+/// A fitted heat-input model (module docs give the equation).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HeatInputModel {
+    pub input: String,
+    pub input_ref: f64,
+    pub alpha: f64,
+    pub taus_min: Vec<f64>,
+    pub ambient_sensors: Vec<String>,
+    pub k: f64,
+    pub intercept_um: f64,
+    /// c_m, µm per unit of the lagged power input (one per τ).
+    pub heat_coefficients_um: Vec<f64>,
+    /// d_a, µm/°C.
+    pub ambient_coefficients_um_per_c: Vec<f64>,
+    /// Lag of each ambient sensor (τ_a, min) and its coefficients e_a (µm/°C): + Σ_a e_a·L_{τ_a}[T_a].
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub ambient_lag_min: Option<f64>,
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub ambient_lag_coefficients_um_per_c: Vec<f64>,
+    /// Pooled RMSE of the inner leave-one-block-out that chose the configuration (µm).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub inner_cv_rmse_um: Option<f64>,
+}
+
+impl Predict for HeatInputModel {
+    fn predict(&self, data: &ThermalData) -> Result<Vec<f64>, ThermalError> {
+        let u = input_values(data, &self.input)?;
+        let heat = heat_features(data, &u, self.alpha, &self.taus_min);
+        let mut amb: Vec<Vec<f64>> = self
+            .ambient_sensors
+            .iter()
+            .map(|s| Ok(data.sensor(data.sensor_index(s)?)))
+            .collect::<Result<_, ThermalError>>()?;
+        if let Some(tau) = self.ambient_lag_min {
+            let lags: Vec<Vec<f64>> = amb.iter().map(|t| lag_filter(data, t, tau)).collect();
+            amb.extend(lags);
+        }
+        let amb_coef: Vec<f64> = self
+            .ambient_coefficients_um_per_c
+            .iter()
+            .chain(&self.ambient_lag_coefficients_um_per_c)
+            .copied()
+            .collect();
+        Ok((0..data.len())
+            .map(|i| {
+                self.intercept_um
+                    + heat
+                        .iter()
+                        .zip(&self.heat_coefficients_um)
+                        .map(|(f, c)| c * f[i])
+                        .sum::<f64>()
+                    + amb
+                        .iter()
+                        .zip(&amb_coef)
+                        .map(|(t, d)| d * t[i])
+                        .sum::<f64>()
+            })
+            .collect())
+    }
+    fn predictors(&self) -> usize {
+        self.taus_min.len()
+            + self.ambient_sensors.len() * (1 + self.ambient_lag_min.is_some() as usize)
+    }
+}
+
+/// Temperature sensors ordered by how little the heat features explain them (R² ascending).
+fn ambient_ranking(
+    data: &ThermalData,
+    input: &str,
+    rows: &[usize],
+    heat: &[Vec<f64>],
+) -> Vec<usize> {
+    let x = nalgebra::DMatrix::from_fn(rows.len(), heat.len(), |r, m| heat[m][rows[r]]);
+    let names: Vec<String> = (0..heat.len()).map(|m| format!("heat{m}")).collect();
+    let mut r2: Vec<(usize, f64)> = Vec::new();
+    for (j, s) in data.sensor_names.iter().enumerate() {
+        if s == input || !s.ends_with("_c") {
+            continue;
+        }
+        let t: Vec<f64> = rows.iter().map(|&i| data.temps_c[(i, j)]).collect();
+        let mean = t.iter().sum::<f64>() / t.len() as f64;
+        let sst: f64 = t.iter().map(|v| (v - mean).powi(2)).sum();
+        if !(sst > 0.0) {
+            continue;
+        }
+        let Ok(fit) = ols(&x, &t, &names) else {
+            continue;
+        };
+        let sse: f64 = (0..rows.len())
+            .map(|r| {
+                let f = fit.intercept
+                    + (0..heat.len())
+                        .map(|m| fit.coefficients[m] * x[(r, m)])
+                        .sum::<f64>();
+                (t[r] - f).powi(2)
+            })
+            .sum();
+        r2.push((j, 1.0 - sse / sst));
+    }
+    r2.sort_by(|a, b| a.1.total_cmp(&b.1));
+    r2.into_iter().map(|(j, _)| j).collect()
+}
+
+/// Least-squares fit of one configuration with given heat features and ambient ranking.
+fn fit_config(
+    data: &ThermalData,
+    input: &str,
+    rows: &[usize],
+    y: &[f64],
+    cfg: &HeatInputConfig,
+    heat: &[Vec<f64>],
+    ranking: &[usize],
+) -> Result<HeatInputModel, ThermalError> {
+    if ranking.len() < cfg.ambient_sensors {
+        return Err(ThermalError::Invalid(format!(
+            "{} ambient sensors asked, {} temperature sensors vary",
+            cfg.ambient_sensors,
+            ranking.len()
+        )));
+    }
+    let amb = &ranking[..cfg.ambient_sensors];
+    let mut cols: Vec<Vec<f64>> = heat.to_vec();
+    cols.extend(amb.iter().map(|&j| data.sensor(j)));
+    if let Some(tau) = cfg.ambient_lag_min {
+        cols.extend(amb.iter().map(|&j| lag_filter(data, &data.sensor(j), tau)));
+    }
+    let x = nalgebra::DMatrix::from_fn(rows.len(), cols.len(), |r, j| cols[j][rows[r]]);
+    let mut names: Vec<String> = cfg
+        .taus_min
+        .iter()
+        .map(|t| format!("lag(p,{t}min)"))
+        .collect();
+    names.extend(amb.iter().map(|&j| data.sensor_names[j].clone()));
+    if let Some(tau) = cfg.ambient_lag_min {
+        names.extend(
+            amb.iter()
+                .map(|&j| format!("lag({},{tau}min)", data.sensor_names[j])),
+        );
+    }
+    let (h, a) = (heat.len(), amb.len());
+    let prob = RidgeProblem::new(&x, y, &names)?;
+    let beta = prob.standardised(cfg.k)?;
+    let (b0, b) = prob.destandardise(&beta);
+    Ok(HeatInputModel {
+        input: input.to_string(),
+        input_ref: INPUT_REF,
+        alpha: cfg.alpha,
+        taus_min: cfg.taus_min.clone(),
+        ambient_sensors: amb.iter().map(|&j| data.sensor_names[j].clone()).collect(),
+        k: cfg.k,
+        intercept_um: b0,
+        heat_coefficients_um: b[..h].to_vec(),
+        ambient_coefficients_um_per_c: b[h..h + a].to_vec(),
+        ambient_lag_min: cfg.ambient_lag_min,
+        ambient_lag_coefficients_um_per_c: b[h + a..].to_vec(),
+        inner_cv_rmse_um: None,
+    })
+}
+
+impl HeatInput {
+    /// Inner validation blocks of the training rows (aligned with [`crate::validate::time_blocks`]).
+    fn inner_blocks(&self, data: &ThermalData, rows: &[usize]) -> Vec<Vec<usize>> {
+        let t0 = data.time_min.first().copied().unwrap_or(0.0);
+        let mut keys: Vec<(String, i64)> = Vec::new();
+        let mut blocks: Vec<Vec<usize>> = Vec::new();
+        let single = data.experiments().len() == 1;
+        let span = rows
+            .last()
+            .map(|&l| data.time_min[l] - data.time_min[rows[0]])
+            .unwrap_or(0.0);
+        for &i in rows {
+            let b = match self.block_min {
+                Some(bm) => ((data.time_min[i] - t0) / bm).floor() as i64,
+                None if single => ((data.time_min[i] - data.time_min[rows[0]])
+                    / (span / 4.0 + 1e-9))
+                    .floor() as i64,
+                None => 0,
+            };
+            let key = (data.experiment[i].clone(), b);
+            match keys.iter().position(|k| *k == key) {
+                Some(p) => blocks[p].push(i),
+                None => {
+                    keys.push(key);
+                    blocks.push(vec![i]);
+                }
+            }
+        }
+        blocks
+    }
+
+    fn configs(&self) -> Vec<HeatInputConfig> {
+        let mut out = Vec::new();
+        for &alpha in &self.alphas {
+            for bank in &self.banks {
+                for &k in &self.ks {
+                    for &a in &self.ambient_counts {
+                        for &lag in &self.ambient_lags {
+                            if a == 0 && lag.is_some() {
+                                continue;
+                            }
+                            out.push(HeatInputConfig {
+                                alpha,
+                                taus_min: bank.clone(),
+                                k,
+                                ambient_sensors: a,
+                                ambient_lag_min: lag,
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    fn check(&self) -> Result<(), ThermalError> {
+        let bad = |m: &str| Err(ThermalError::Invalid(m.into()));
+        if self.alphas.is_empty()
+            || self.banks.is_empty()
+            || self.ks.is_empty()
+            || self.ambient_counts.is_empty()
+        {
+            return bad("heat-input: every grid (α, τ banks, k, ambient counts) needs a value");
+        }
+        if self.alphas.iter().any(|a| !(*a > 0.0 && a.is_finite())) {
+            return bad("heat-input: α must be > 0");
+        }
+        if self
+            .banks
+            .iter()
+            .flatten()
+            .any(|t| !(*t > 0.0 && t.is_finite()))
+            || self.banks.iter().any(|b| b.is_empty())
+        {
+            return bad("heat-input: time constants must be > 0 min, at least one per bank");
+        }
+        if self.ambient_lags.is_empty()
+            || self
+                .ambient_lags
+                .iter()
+                .flatten()
+                .any(|t| !(*t > 0.0 && t.is_finite()))
+        {
+            return bad("heat-input: ambient lags must be > 0 min (or none)");
+        }
+        if self.ks.iter().any(|k| !(*k >= 0.0 && k.is_finite())) {
+            return bad("heat-input: k must be ≥ 0");
+        }
+        Ok(())
+    }
+}
+
+impl Fit for HeatInput {
+    type Model = HeatInputModel;
+    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<HeatInputModel, ThermalError> {
+        self.check()?;
+        let y = target_rows(data, rows)?;
+        let yall = data.target_um()?;
+        let u = input_values(data, &self.input)?;
+        let configs = self.configs();
+        // heat features depend on (α, bank) only: compute once per pair on the whole record
+        let mut heat_cache: Vec<HeatCacheEntry> = Vec::new();
+        for &a in &self.alphas {
+            for b in &self.banks {
+                heat_cache.push(((a, b.clone()), heat_features(data, &u, a, b)));
+            }
+        }
+        let heat_of = |c: &HeatInputConfig| -> &Vec<Vec<f64>> {
+            &heat_cache
+                .iter()
+                .find(|(key, _)| key.0 == c.alpha && key.1 == c.taus_min)
+                .expect("every config's pair is cached")
+                .1
+        };
+        let mut best: Option<(f64, HeatInputConfig)> = None;
+        if configs.len() > 1 {
+            let blocks = self.inner_blocks(data, rows);
+            if blocks.len() < 2 {
+                return Err(ThermalError::Undetermined(
+                    "heat-input: choosing α, τ and k needs at least two validation blocks in the training rows (set --block-min)".into(),
+                ));
+            }
+            let mut sse = vec![0.0; configs.len()];
+            let mut n = 0usize;
+            for (b, test) in blocks.iter().enumerate() {
+                let train: Vec<usize> = blocks
+                    .iter()
+                    .enumerate()
+                    .filter(|(c, _)| *c != b)
+                    .flat_map(|(_, r)| r.iter().copied())
+                    .collect();
+                let ytr: Vec<f64> = train.iter().map(|&i| yall[i]).collect();
+                n += test.len();
+                // ambient ranking per (α, bank) inside the inner fold
+                let rankings: Vec<Vec<usize>> = heat_cache
+                    .iter()
+                    .map(|(_, h)| ambient_ranking(data, &self.input, &train, h))
+                    .collect();
+                for (ci, c) in configs.iter().enumerate() {
+                    let hi = heat_cache
+                        .iter()
+                        .position(|(key, _)| key.0 == c.alpha && key.1 == c.taus_min)
+                        .expect("cached");
+                    match fit_config(
+                        data,
+                        &self.input,
+                        &train,
+                        &ytr,
+                        c,
+                        &heat_cache[hi].1,
+                        &rankings[hi],
+                    ) {
+                        Ok(m) => {
+                            let pred = m.predict_rows(data, &heat_cache[hi].1, test);
+                            sse[ci] += test
+                                .iter()
+                                .zip(pred)
+                                .map(|(&i, p)| (yall[i] - p).powi(2))
+                                .sum::<f64>();
+                        }
+                        Err(_) => sse[ci] = f64::INFINITY,
+                    }
+                }
+            }
+            for (ci, c) in configs.iter().enumerate() {
+                let rmse = (sse[ci] / n as f64).sqrt();
+                if rmse.is_finite() && best.as_ref().is_none_or(|(r, _)| rmse < *r) {
+                    best = Some((rmse, c.clone()));
+                }
+            }
+            if best.is_none() {
+                return Err(ThermalError::Undetermined(
+                    "heat-input: no configuration could be fitted on the inner folds".into(),
+                ));
+            }
+        }
+        let (rmse, cfg) = match best {
+            Some((r, c)) => (Some(r), c),
+            None => (None, configs[0].clone()),
+        };
+        let heat = heat_of(&cfg);
+        let ranking = ambient_ranking(data, &self.input, rows, heat);
+        let mut m = fit_config(data, &self.input, rows, &y, &cfg, heat, &ranking)?;
+        m.inner_cv_rmse_um = rmse;
+        Ok(m)
+    }
+}
+
+impl HeatInputModel {
+    /// Prediction on `rows` from precomputed heat features (inner CV).
+    fn predict_rows(&self, data: &ThermalData, heat: &[Vec<f64>], rows: &[usize]) -> Vec<f64> {
+        let amb: Vec<Vec<f64>> = self
+            .ambient_sensors
+            .iter()
+            .filter_map(|s| data.sensor_names.iter().position(|n| n == s))
+            .map(|j| data.sensor(j))
+            .collect();
+        let lags: Vec<Vec<f64>> = match self.ambient_lag_min {
+            Some(tau) => amb.iter().map(|t| lag_filter(data, t, tau)).collect(),
+            None => Vec::new(),
+        };
+        rows.iter()
+            .map(|&i| {
+                self.intercept_um
+                    + heat
+                        .iter()
+                        .zip(&self.heat_coefficients_um)
+                        .map(|(f, c)| c * f[i])
+                        .sum::<f64>()
+                    + amb
+                        .iter()
+                        .zip(&self.ambient_coefficients_um_per_c)
+                        .map(|(t, d)| d * t[i])
+                        .sum::<f64>()
+                    + lags
+                        .iter()
+                        .zip(&self.ambient_lag_coefficients_um_per_c)
+                        .map(|(t, e)| e * t[i])
+                        .sum::<f64>()
+            })
+            .collect()
+    }
+}
