@@ -351,12 +351,14 @@ pub fn sensitivity(
         .report
         .section("Global sensitivity of the volumetric error");
     sec.text("First-order index S1 (key errors) and total index ST (ST − S1: coupling) of each error element for the volumetric error, inputs drawn from the statistics of the error functions.");
+    // `outputs`: one record per output (Ex, Ey, Ez, |E|) with S1 and ST per input
     if let (Some(inputs), Some(outputs)) = (
         v.get("inputs").and_then(Value::as_array),
-        v.get("outputs").and_then(Value::as_object),
+        v.get("outputs").and_then(Value::as_array),
     ) {
         let names: Vec<String> = inputs.iter().map(fmt).collect();
-        for (out, idx) in outputs {
+        for idx in outputs {
+            let out = idx.get("output").map(fmt).unwrap_or_default();
             let get = |k: &str| {
                 idx.get(k).and_then(Value::as_array).map(|a| {
                     a.iter()
@@ -372,7 +374,7 @@ pub fn sensitivity(
                         &names,
                         &[("S1".into(), s1), ("ST".into(), st)],
                     ),
-                    format!("EFAST indices for {out}."),
+                    format!("First-order (S1) and total (ST) indices for {out}."),
                 );
             }
         }
