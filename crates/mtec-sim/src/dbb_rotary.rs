@@ -78,29 +78,19 @@ pub fn modes() -> Vec<(i64, [f64; 3], [f64; 3])> {
 
 /// Bodies: 0 motor, 1 bearing, 2 axis housing, 3 table, 4 bed.
 pub fn network() -> ThermalNetwork {
-    let body = |name: &str, c: f64, g: f64| Body {
-        name: name.into(),
-        capacity_j_per_k: c,
-        to_ambient_w_per_k: g,
-    };
-    let link = |a, b, g| Link {
-        a,
-        b,
-        conductance_w_per_k: g,
-    };
     ThermalNetwork {
         bodies: vec![
-            body("motor", 6.0e3, 1.0),
-            body("bearing", 1.0e4, 0.6),
-            body("axis_housing", 3.0e4, 2.0),
-            body("table", 1.0e4, 0.9),
-            body("bed", 8.0e5, 25.0),
+            Body::new("motor", 6.0e3, 1.0),
+            Body::new("bearing", 1.0e4, 0.6),
+            Body::new("axis_housing", 3.0e4, 2.0),
+            Body::new("table", 1.0e4, 0.9),
+            Body::new("bed", 8.0e5, 25.0),
         ],
         links: vec![
-            link(0, 2, 0.8),
-            link(1, 2, 1.5),
-            link(1, 3, 10.0),
-            link(2, 4, 2.0),
+            Link::new(0, 2, 0.8),
+            Link::new(1, 2, 1.5),
+            Link::new(1, 3, 10.0),
+            Link::new(2, 4, 2.0),
         ],
         sources: vec![
             HeatSource {

@@ -37,16 +37,6 @@ pub fn friction_factor(ambient_c: f64) -> f64 {
 /// Bodies: 0 upper bearing, 1 motor, 2 nut, 3 screw, 4 column head.
 fn network(ambient_c: f64) -> ThermalNetwork {
     let f = friction_factor(ambient_c);
-    let body = |name: &str, c: f64, g: f64| Body {
-        name: name.into(),
-        capacity_j_per_k: c,
-        to_ambient_w_per_k: g,
-    };
-    let link = |a, b, g| Link {
-        a,
-        b,
-        conductance_w_per_k: g,
-    };
     let src = |body, w: f64, e| HeatSource {
         body,
         idle_w: 0.0,
@@ -56,18 +46,18 @@ fn network(ambient_c: f64) -> ThermalNetwork {
     };
     ThermalNetwork {
         bodies: vec![
-            body("upper_bearing", 4.0e3, 1.0),
-            body("motor", 1.5e4, 3.0),
-            body("nut", 2.5e3, 1.5),
-            body("screw", 1.5e4, 3.0),
-            body("column_head", 3.0e5, 12.0),
+            Body::new("upper_bearing", 4.0e3, 1.0),
+            Body::new("motor", 1.5e4, 3.0),
+            Body::new("nut", 2.5e3, 1.5),
+            Body::new("screw", 1.5e4, 3.0),
+            Body::new("column_head", 3.0e5, 12.0),
         ],
         links: vec![
-            link(0, 4, 4.0),
-            link(0, 3, 2.0),
-            link(1, 0, 3.0),
-            link(2, 3, 5.0),
-            link(3, 4, 0.5),
+            Link::new(0, 4, 4.0),
+            Link::new(0, 3, 2.0),
+            Link::new(1, 0, 3.0),
+            Link::new(2, 3, 5.0),
+            Link::new(3, 4, 0.5),
         ],
         sources: vec![
             src(0, 30.0 * f, 1.5),

@@ -30,30 +30,20 @@ const BED_MM: f64 = 500.0;
 
 /// Bodies: 0 front bearing, 1 rear bearing, 2 motor, 3 housing, 4 bed.
 fn network() -> ThermalNetwork {
-    let body = |name: &str, c: f64, g: f64| Body {
-        name: name.into(),
-        capacity_j_per_k: c,
-        to_ambient_w_per_k: g,
-    };
-    let link = |a, b, g| Link {
-        a,
-        b,
-        conductance_w_per_k: g,
-    };
     ThermalNetwork {
         bodies: vec![
-            body("front_bearing", 9.0e3, 1.0),
-            body("rear_bearing", 7.0e3, 0.8),
-            body("motor", 2.0e4, 3.0),
-            body("housing", 2.4e5, 6.0),
-            body("bed", 1.5e6, 12.0),
+            Body::new("front_bearing", 9.0e3, 1.0),
+            Body::new("rear_bearing", 7.0e3, 0.8),
+            Body::new("motor", 2.0e4, 3.0),
+            Body::new("housing", 2.4e5, 6.0),
+            Body::new("bed", 1.5e6, 12.0),
         ],
         links: vec![
-            link(0, 3, 9.0),
-            link(1, 3, 6.0),
-            link(2, 3, 4.0),
-            link(2, 1, 2.0),
-            link(3, 4, 10.0),
+            Link::new(0, 3, 9.0),
+            Link::new(1, 3, 6.0),
+            Link::new(2, 3, 4.0),
+            Link::new(2, 1, 2.0),
+            Link::new(3, 4, 10.0),
         ],
         sources: vec![
             HeatSource {

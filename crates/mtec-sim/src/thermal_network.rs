@@ -21,12 +21,34 @@ pub struct Body {
     pub to_ambient_w_per_k: f64,
 }
 
+impl Body {
+    /// A body with heat capacity C (J/K) and conductance to the ambient air (W/K).
+    pub fn new(name: &str, capacity_j_per_k: f64, to_ambient_w_per_k: f64) -> Self {
+        Body {
+            name: name.into(),
+            capacity_j_per_k,
+            to_ambient_w_per_k,
+        }
+    }
+}
+
 /// A conductance between two bodies (indices into `ThermalNetwork::bodies`).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Link {
     pub a: usize,
     pub b: usize,
     pub conductance_w_per_k: f64,
+}
+
+impl Link {
+    /// A conductance (W/K) between bodies `a` and `b`.
+    pub fn new(a: usize, b: usize, conductance_w_per_k: f64) -> Self {
+        Link {
+            a,
+            b,
+            conductance_w_per_k,
+        }
+    }
 }
 
 /// A heat source in a body whose power follows the duty: P = idle_w + per_speed_w · (speed / rated)^exponent.
