@@ -120,6 +120,8 @@ pub struct VolumetricModel {
     machine: Machine,
     /// No rotary axis: the ideal chain is translations only (fast first-order path).
     linear_only: bool,
+    /// The chain's factors at q = 1 with the pose index that scales each (usize::MAX: fixed).
+    template: Vec<(Factor, usize)>,
     /// Slots in product order: workpiece side from W toward F, then tool side from F toward T.
     slots: Vec<Slot>,
 }
@@ -155,11 +157,32 @@ impl VolumetricModel {
             });
         }
         let linear_only = slots.iter().all(|s| !s.axis.is_rotary());
-        VolumetricModel {
+        let mut vm = VolumetricModel {
             machine: machine.clone(),
             linear_only,
             slots,
-        }
+            template: vec![],
+        };
+        // every pose-dependent amount is linear in its axis position with no offset, so the
+        // factors at q = 1 are a template that one multiplication per factor turns into any pose
+        let ones = vec![1.0; machine.axes.len()];
+        let mut buf = [Factor::Shift(Vector3::zeros()); MAX_FACTORS];
+        let n = vm.build_factors_into(&ones, &mut buf);
+        let pose_of_slot: Vec<usize> = vm.slots.iter().map(|s| s.pose_index).collect();
+        let mut ideal_seen = 0;
+        vm.template = buf[..n]
+            .iter()
+            .map(|f| match *f {
+                // the ideal factors appear in slot order, one per slot
+                Factor::Prismatic(..) | Factor::Revolute(..) => {
+                    ideal_seen += 1;
+                    (*f, pose_of_slot[ideal_seen - 1])
+                }
+                Factor::Squareness { slot, .. } => (*f, pose_of_slot[slot]),
+                _ => (*f, usize::MAX),
+            })
+            .collect();
+        vm
     }
 
     /// The machine.
@@ -183,14 +206,24 @@ impl VolumetricModel {
         let mut values = [SlotValues::default(); MAX_SLOTS];
         self.values_into(q, temps, &mut values);
         let values = &values[..self.slots.len()];
+        if self.linear_only && formalism == Formalism::Htm && order == Order::FirstOrder {
+            // the hot path: straight from the template, no factor buffer
+            return translation_chain_first_order(
+                self.template.iter().rev().map(|(f, idx)| {
+                    if *idx == usize::MAX {
+                        *f
+                    } else {
+                        scale_amount(f, q[*idx])
+                    }
+                }),
+                values,
+            );
+        }
         let mut buf = [Factor::Shift(Vector3::zeros()); MAX_FACTORS];
         let n = self.factors_into(q, &mut buf);
         let factors = &buf[..n];
         match (formalism, order) {
             (Formalism::Htm, Order::Exact) => htm_exact(factors, values),
-            (Formalism::Htm, Order::FirstOrder) if self.linear_only => {
-                translation_chain_first_order(factors, values)
-            }
             (Formalism::Htm, Order::FirstOrder) => htm_first_order(factors, values),
             (Formalism::Poe, Order::Exact) => poe_exact(factors, values),
             (Formalism::Poe, Order::FirstOrder) => poe_first_order(factors, values),
@@ -285,6 +318,18 @@ impl VolumetricModel {
         }
     }
 
+    /// Writes the factors at pose `q` into `out` from the template (no allocation).
+    fn factors_into(&self, q: &[f64], out: &mut [Factor; MAX_FACTORS]) -> usize {
+        for (k, (f, idx)) in self.template.iter().enumerate() {
+            out[k] = if *idx == usize::MAX {
+                *f
+            } else {
+                scale_amount(f, q[*idx])
+            };
+        }
+        self.template.len()
+    }
+
     /// The chain as a product of factors at pose `q` (see the module docs for the formula).
     fn factors(&self, q: &[f64]) -> Vec<Factor> {
         let mut buf = [Factor::Shift(Vector3::zeros()); MAX_FACTORS];
@@ -293,7 +338,7 @@ impl VolumetricModel {
     }
 
     /// Writes the factors into `out` and returns how many there are (no allocation).
-    fn factors_into(&self, q: &[f64], out: &mut [Factor; MAX_FACTORS]) -> usize {
+    fn build_factors_into(&self, q: &[f64], out: &mut [Factor; MAX_FACTORS]) -> usize {
         let wo = self.machine.workpiece_origin_mm;
         let to = self.machine.tool_offset_mm;
         let reference = self.machine.error_frame == ErrorFrame::Reference;
@@ -364,6 +409,26 @@ impl VolumetricModel {
         }
         push(Factor::Shift(Vector3::new(to[0], to[1], to[2])));
         n
+    }
+}
+
+/// A template factor at axis position `x` (its amount is linear in x).
+fn scale_amount(f: &Factor, x: f64) -> Factor {
+    match *f {
+        Factor::Prismatic(u, a) => Factor::Prismatic(u, a * x),
+        Factor::Revolute(u, a) => Factor::Revolute(u, a * x),
+        Factor::Squareness {
+            slot,
+            u,
+            amount,
+            inverse,
+        } => Factor::Squareness {
+            slot,
+            u,
+            amount: amount * x,
+            inverse,
+        },
+        other => other,
     }
 }
 
@@ -499,16 +564,20 @@ fn htm_first_order(factors: &[Factor], v: &[SlotValues]) -> Volumetric {
 
 /// First-order HTM for a chain whose ideal factors are translations only (no rotary axis):
 /// R_<k = I, so ΔP = Σ_k (δ_k + ε_k × r_>k) with r_>k the sum of the translations after k.
-fn translation_chain_first_order(factors: &[Factor], v: &[SlotValues]) -> Volumetric {
+/// `factors_reversed` runs from the tool back to the workpiece.
+fn translation_chain_first_order(
+    factors_reversed: impl Iterator<Item = Factor>,
+    v: &[SlotValues],
+) -> Volumetric {
     let mut r_after = Vector3::zeros();
     let mut dp = Vector3::zeros();
     let mut dr = Vector3::zeros();
-    for f in factors.iter().rev() {
-        match *f {
+    for f in factors_reversed {
+        match f {
             Factor::Shift(p) => r_after += p,
             Factor::Prismatic(u, a) => r_after += u * a,
             _ => {
-                if let Some((d, e)) = small_twist(f, v) {
+                if let Some((d, e)) = small_twist(&f, v) {
                     dp += d + e.cross(&r_after);
                     dr += e;
                 }
