@@ -17,7 +17,13 @@
 //!
 //! mtec's rounding: the absolute compensation C(x) = c(x) − c(x_ref) is rounded at each point and
 //! the increments taken from the rounded values, so rounding never accumulates along the axis.
-//! The pitch-data tape number of point n is 10000 + n. Value range per point: ±`max_increment`
+//! Tape layout (FANUC Series 15i/150i-MA Parameter Manual B-63330EN/03 §3, "Inputting and
+//! outputting parameters using external input/output devices"): a record begins and ends with
+//! `%`; an axis-type parameter block is `N<5-digit number>A<axis>P<value>` ended by the
+//! end-of-block character (LF in ISO code, written `;` in the manual); "when parameters and pitch
+//! error compensation data are collected into a single file, the file begins and ends with %".
+//! The pitch-data block of point n is `N<10000 + n>P<value>` (mtec's reading of the pitch-error
+//! data numbering; check against the control's own punched output before the first load). Value range per point: ±`max_increment`
 //! (the range depends on the control model — older ones allow ±7, 16i/0i ±127 — so it is an
 //! option, default 127).
 
