@@ -282,7 +282,7 @@ impl GridMap {
             }
             for (node, &c) in count.iter().enumerate() {
                 let share = c as f64 / need as f64;
-                if c < need && worst.map_or(true, |w| share < w.0) {
+                if c < need && !matches!(worst, Some(w) if share >= w.0) {
                     worst = Some((share, a, node, c, need));
                 }
             }

@@ -80,7 +80,7 @@ pub fn write(profile: &AxisProfile, opts: &FanucOptions) -> Result<String, Table
             "magnification (3623) must be 1..100",
         ));
     }
-    if !(opts.detection_unit_um > 0.0) {
+    if opts.detection_unit_um.is_nan() || opts.detection_unit_um <= 0.0 {
         return Err(TableError::rule(
             FORMAT,
             None,

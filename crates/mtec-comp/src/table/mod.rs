@@ -124,7 +124,7 @@ pub fn axis_profile(
     step_mm: f64,
     at_mm: [f64; 3],
 ) -> Result<AxisProfile, TableError> {
-    if !(step_mm > 0.0) || !start_mm.is_finite() || !end_mm.is_finite() {
+    if step_mm.is_nan() || step_mm <= 0.0 || !start_mm.is_finite() || !end_mm.is_finite() {
         return Err(TableError::Sampling(format!(
             "table range {start_mm}..{end_mm} step {step_mm}: the step must be positive and the ends finite"
         )));
