@@ -3,6 +3,7 @@
 
 mod cmd;
 mod error;
+mod inputs;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -30,6 +31,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Simulate measurements on the virtual machine (known truth).
+    Simulate(cmd::simulate::Args),
+    /// Volumetric error at commanded points (HTM or POE, exact or first-order).
+    Volumetric(cmd::volumetric::Args),
     /// Volumetric error maps: `map fit` (grid CSV -> map JSON), `map eval` (errors at points).
     Map(cmd::map::Args),
     /// Compensation from an error model: `compensate table` (controller tables).
@@ -52,6 +57,8 @@ enum CompensateCommand {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result: Result<(), error::CliError> = match cli.command {
+        Command::Simulate(a) => cmd::simulate::run(a),
+        Command::Volumetric(a) => cmd::volumetric::run(a),
         Command::Map(a) => cmd::map::run(a),
         Command::Compensate(c) => match c.command {
             CompensateCommand::Table(a) => cmd::compensate_table::run(a),

@@ -77,8 +77,14 @@ pub fn parse_toml<T: serde::de::DeserializeOwned>(
 /// Parses a JSON document into `T`; errors carry serde_json's line and column.
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, InputError> {
     let text = read_text(path)?;
-    serde_json::from_str(&text)
-        .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))
+    serde_json::from_str(&text).map_err(|e| {
+        // serde_json appends " at line L column C"; the location is carried separately
+        let msg = e.to_string();
+        let msg = msg
+            .rsplit_once(" at line ")
+            .map_or(msg.clone(), |(m, _)| m.to_string());
+        InputError::at(path, e.line(), e.column(), msg)
+    })
 }
 
 /// 1-based line and column of a byte offset in `text`.

@@ -1,1 +1,13 @@
-//! mtec-report: Plots (SVG) and the self-contained HTML report.
+//! mtec-report: plots (SVG, drawn with plotters) and the self-contained HTML report.
+//!
+//! What it is for: turning results into figures and one HTML file that opens anywhere with no
+//! network (inline SVG, inline CSS, no scripts from elsewhere).
+//! What it is not for: computing results; every number it shows is handed to it.
+
+pub mod html;
+pub mod plot;
+
+pub use html::{Report, Section};
+pub use plot::{bar_chart, line_chart, scatter_chart, Band, Series};
+
+pub mod polar;

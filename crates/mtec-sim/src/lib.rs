@@ -7,6 +7,16 @@
 //!
 //! What it is not for: analysis. Nothing here is used to identify or fit anything.
 
+pub mod circular_test;
+pub mod instruments;
+pub mod iso230_2;
 pub mod scenario;
+pub mod thermal_network;
+pub mod truth;
+pub mod vmc_9line;
+pub mod volumetric_grid;
 
 pub use scenario::{run_scenario, OutputFile, ScenarioOutput, SimError, SCENARIOS};
+pub use thermal_network::{
+    AmbientProfile, Body, DutyCycle, HeatSource, Link, ThermalHistory, ThermalNetwork,
+};

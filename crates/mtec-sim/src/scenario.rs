@@ -24,10 +24,38 @@ pub enum SimError {
 }
 
 /// The scenarios this build knows, with a one-line description each (shown by `mtec simulate --help`).
-pub const SCENARIOS: &[(&str, &str)] = &[];
+pub const SCENARIOS: &[(&str, &str)] = &[
+    ("vmc-9line", "laser-interferometer lines (9-line design) on an XYFZ machining centre, for `mtec identify lines`"),
+    ("volumetric-grid", "laser-tracker volumetric error grid (11x11x11) and body diagonals, for `mtec map fit`"),
+    ("iso230-2", "laser-interferometer positioning runs of one axis (ISO 230-2: 11 targets, 5 bidirectional runs)"),
+    ("circular-test", "ISO 230-4 ballbar circular test of X and Y with injected faults, and a fault-free run"),
+];
 
 /// Runs the named scenario with a seed.
 pub fn run_scenario(name: &str, seed: u64) -> Result<ScenarioOutput, SimError> {
-    let _ = seed;
-    Err(SimError::UnknownScenario(name.to_string()))
+    let pairs = |files: Vec<(String, String)>| {
+        files
+            .into_iter()
+            .map(|(name, contents)| OutputFile { name, contents })
+            .collect()
+    };
+    match name {
+        "vmc-9line" => Ok(crate::vmc_9line::run(seed)),
+        "volumetric-grid" => Ok(crate::volumetric_grid::run(seed)),
+        "iso230-2" => {
+            let (csv, truth) = crate::iso230_2::simulate(&Default::default(), seed);
+            Ok(ScenarioOutput {
+                files: pairs(vec![("iso230-2.csv".into(), csv)]),
+                truth,
+            })
+        }
+        "circular-test" => {
+            let (files, truth) = crate::circular_test::scenario(seed);
+            Ok(ScenarioOutput {
+                files: pairs(files),
+                truth,
+            })
+        }
+        _ => Err(SimError::UnknownScenario(name.to_string())),
+    }
 }

@@ -1,0 +1,300 @@
+//! Charts as SVG strings: line charts (with optional ±bands), grouped bar charts, scatter plots.
+//! Drawn with plotters' SVG backend; no hand-written SVG.
+
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+/// A named series of (x, y) points.
+#[derive(Debug, Clone)]
+pub struct Series {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+impl Series {
+    pub fn new(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
+        Series {
+            name: name.into(),
+            points,
+        }
+    }
+}
+
+/// A shaded band (e.g. mean ± 2s, or an uncertainty band): lower and upper curves on the same x.
+#[derive(Debug, Clone)]
+pub struct Band {
+    pub name: String,
+    pub x: Vec<f64>,
+    pub lower: Vec<f64>,
+    pub upper: Vec<f64>,
+}
+
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+];
+
+/// The colour of series `i`.
+pub fn colour(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
+}
+
+fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    if hi - lo < 1e-12 {
+        return (lo - 1.0, hi + 1.0);
+    }
+    let pad = 0.05 * (hi - lo);
+    (lo - pad, hi + pad)
+}
+
+/// A line chart of several series with optional bands. Returns SVG text.
+pub fn line_chart(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+    bands: &[Band],
+) -> String {
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (720, 400)).into_drawing_area();
+        let _ = root.fill(&WHITE);
+        let xs = series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.0))
+            .chain(bands.iter().flat_map(|b| b.x.iter().copied()));
+        let ys = series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.1))
+            .chain(
+                bands
+                    .iter()
+                    .flat_map(|b| b.lower.iter().chain(b.upper.iter()).copied()),
+            );
+        let (x0, x1) = range(xs);
+        let (y0, y1) = range(ys);
+        let mut chart = match ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x0..x1, y0..y1)
+        {
+            Ok(c) => c,
+            Err(_) => return svg_error(title),
+        };
+        let _ = chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc(y_label)
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw();
+        for (i, b) in bands.iter().enumerate() {
+            let c = colour(i + series.len()).mix(0.18);
+            let mut poly: Vec<(f64, f64)> =
+                b.x.iter().zip(&b.upper).map(|(x, y)| (*x, *y)).collect();
+            poly.extend(b.x.iter().zip(&b.lower).rev().map(|(x, y)| (*x, *y)));
+            if let Ok(a) = chart.draw_series(std::iter::once(Polygon::new(poly, c.filled()))) {
+                let cc = colour(i + series.len());
+                a.label(b.name.clone()).legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 5), (x + 15, y + 5)], cc.mix(0.3).filled())
+                });
+            }
+        }
+        for (i, s) in series.iter().enumerate() {
+            let c = colour(i);
+            if let Ok(a) =
+                chart.draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
+            {
+                a.label(s.name.clone()).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 15, y)], c.stroke_width(2))
+                });
+            }
+        }
+        if series.len() + bands.len() > 1 {
+            let _ = chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw();
+        }
+        let _ = root.present();
+    }
+    svg
+}
+
+/// A scatter chart (e.g. measured vs predicted). Returns SVG text.
+pub fn scatter_chart(title: &str, x_label: &str, y_label: &str, series: &[Series]) -> String {
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (720, 400)).into_drawing_area();
+        let _ = root.fill(&WHITE);
+        let (x0, x1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
+        let (y0, y1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
+        let mut chart = match ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x0..x1, y0..y1)
+        {
+            Ok(c) => c,
+            Err(_) => return svg_error(title),
+        };
+        let _ = chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc(y_label)
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw();
+        for (i, s) in series.iter().enumerate() {
+            let c = colour(i);
+            if let Ok(a) =
+                chart.draw_series(s.points.iter().map(|p| Circle::new(*p, 2, c.filled())))
+            {
+                a.label(s.name.clone())
+                    .legend(move |(x, y)| Circle::new((x + 7, y), 3, c.filled()));
+            }
+        }
+        if series.len() > 1 {
+            let _ = chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw();
+        }
+        let _ = root.present();
+    }
+    svg
+}
+
+/// A grouped bar chart: one group per category, one bar per series (e.g. S1 and ST per element).
+pub fn bar_chart(
+    title: &str,
+    y_label: &str,
+    categories: &[String],
+    series: &[(String, Vec<f64>)],
+) -> String {
+    let mut svg = String::new();
+    {
+        let width =
+            (120 + 40 * categories.len().max(1) * series.len().max(1)).clamp(480, 1100) as u32;
+        let root = SVGBackend::with_string(&mut svg, (width, 400)).into_drawing_area();
+        let _ = root.fill(&WHITE);
+        let (mut y0, y1) = range(
+            series
+                .iter()
+                .flat_map(|s| s.1.iter().copied())
+                .chain(std::iter::once(0.0)),
+        );
+        if y0 > 0.0 {
+            y0 = 0.0;
+        }
+        let n = categories.len().max(1) as f64;
+        let mut chart = match ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(50)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..n, y0..y1)
+        {
+            Ok(c) => c,
+            Err(_) => return svg_error(title),
+        };
+        let _ = chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .disable_x_axis()
+            .y_desc(y_label)
+            .draw();
+        // category names under each group (categorical axis)
+        let style =
+            TextStyle::from(("sans-serif", 12).into_font()).pos(Pos::new(HPos::Center, VPos::Top));
+        let _ = chart.draw_series(
+            categories
+                .iter()
+                .enumerate()
+                .map(|(i, c)| Text::new(c.clone(), (i as f64 + 0.5, y0), style.clone())),
+        );
+        let k = series.len().max(1) as f64;
+        for (j, (name, vals)) in series.iter().enumerate() {
+            let c = colour(j);
+            let bars = vals.iter().enumerate().map(move |(i, v)| {
+                let x0 = i as f64 + 0.1 + 0.8 * j as f64 / k;
+                let x1 = x0 + 0.8 / k;
+                Rectangle::new([(x0, 0.0), (x1, *v)], c.filled())
+            });
+            if let Ok(a) = chart.draw_series(bars) {
+                a.label(name.clone()).legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 5), (x + 15, y + 5)], c.filled())
+                });
+            }
+        }
+        if series.len() > 1 {
+            let _ = chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw();
+        }
+        let _ = root.present();
+    }
+    svg
+}
+
+fn svg_error(title: &str) -> String {
+    format!("<svg xmlns='http://www.w3.org/2000/svg' width='400' height='40'><text x='5' y='25'>{}: no data to plot</text></svg>", crate::html::escape(title))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn charts_draw_their_data() {
+        let s = Series::new(
+            "sin",
+            (0..50)
+                .map(|i| (i as f64, (i as f64 / 5.0).sin()))
+                .collect(),
+        );
+        let svg = line_chart(
+            "t",
+            "x",
+            "y",
+            &[s],
+            &[Band {
+                name: "band".into(),
+                x: vec![0.0, 49.0],
+                lower: vec![-1.0, -1.0],
+                upper: vec![1.0, 1.0],
+            }],
+        );
+        assert!(
+            svg.starts_with("<svg") && svg.contains("polyline") || svg.contains("path"),
+            "{}",
+            &svg[..200.min(svg.len())]
+        );
+        let b = bar_chart(
+            "b",
+            "S",
+            &["EXX".into(), "EYY".into()],
+            &[("S1".into(), vec![0.5, 0.2]), ("ST".into(), vec![0.6, 0.3])],
+        );
+        assert!(b.contains("EXX") && b.matches("<rect").count() >= 4);
+    }
+}
