@@ -11,6 +11,9 @@
 //!   it ("the compensation value is output at the compensation position No. corresponding to each
 //!   section"): number R (3620) holds the interval ending at the reference position, R + k the
 //!   interval ending k intervals further in +. Values are in detection units × magnification.
+//! - 3621 ≤ 3620 ≤ 3622: with the reference at the − end of the table (and on rotary axes) the
+//!   farthest − point is the reference point itself; on a linear axis its value is 0 (its
+//!   interval lies outside the compensated travel).
 //! - Rotary axes: the farthest − point equals the reference number, the farthest + point is
 //!   R + travel/interval; the values R+1…R+m must sum to zero (otherwise the error accumulates per
 //!   turn), and point R is given the same value as point R+m.
@@ -123,7 +126,13 @@ pub fn write(profile: &AxisProfile, opts: &FanucOptions) -> Result<String, Table
         ));
     }
     let r = opts.reference_number as i64;
-    let n_min = if profile.rotary { r } else { r + 1 - m as i64 };
+    // the farthest − point: for rotary axes and for a reference at the − end of the table it is
+    // the reference point itself (its interval lies before the table: value 0 on linear axes)
+    let n_min = if profile.rotary || m == 0 {
+        r
+    } else {
+        r + 1 - m as i64
+    };
     let n_max = r + (n - 1 - m) as i64;
     if n_min < 0 || n_max > opts.max_number as i64 {
         return Err(TableError::rule(
@@ -151,6 +160,9 @@ pub fn write(profile: &AxisProfile, opts: &FanucOptions) -> Result<String, Table
         // point R repeats point R + m
         let last = values.last().map(|v| v.1).unwrap_or(0);
         values.insert(0, (r, last));
+    } else if m == 0 {
+        // reference at the − end: point R covers travel before the table, no compensation
+        values.insert(0, (r, 0));
     }
     let a = opts.axis_number;
     let mut out = String::from("%\n");
