@@ -214,8 +214,8 @@ N10064P2
     assert!(err.to_string().contains("sum to 1"), "{err}");
 }
 
-/// HEIDENHAIN: Z = F(Y), the .COM has AXISPOS (Y positions) and a Z column of compensation
-/// values; the .CMA enters ZY.COM in the column of Y (the axis it depends on) and marks the line
+/// HEIDENHAIN: Z = F(Y), the .COM has AXISPOS (Y positions) and a Z column with the axis error
+/// (ez = 0.004·y: −1.6, 0, +1.6 µm); the .CMA enters ZY.COM in the column of Y (the axis it depends on) and marks the line
 /// active with `*`.
 #[test]
 fn heidenhain_golden() {
@@ -231,9 +231,9 @@ fn heidenhain_golden() {
         vec![
             vec!["BEGIN", "ZY.COM", "MM"],
             vec!["NR", "AXISPOS", "Z"],
-            vec!["0", "-400.0000", "+0.0016"],
+            vec!["0", "-400.0000", "-0.0016"],
             vec!["1", "+0.0000", "+0.0000"],
-            vec!["2", "+400.0000", "-0.0016"],
+            vec!["2", "+400.0000", "+0.0016"],
             vec!["[END]"],
         ]
     );

@@ -22,8 +22,8 @@ Formats:
                   value moves the axis negative, so the written value is the error itself
   fanuc           FANUC pitch error tape: parameters 3620-3624 and incremental values N1nnnnP...
                   per interval, relative to the reference point (--reference-mm)
-  heidenhain      HEIDENHAIN nonlinear axis error compensation: a .COM table (-o) and its .CMA
-                  assignment table beside it (--cma-name)
+  heidenhain      HEIDENHAIN nonlinear axis error compensation: a .COM table (-o) with the axis
+                  error, and its .CMA assignment table beside it (--cma-name)
   beckhoff        Beckhoff TwinCAT CNC volumetric compensation, ISG CSV: X Y Z EXX EYY EZZ (mm)
                   on the map's grid (or --x-range/--y-range/--z-range)
 

@@ -9,9 +9,10 @@
 //!   compensation value is c = −e ("compensation values = the negative of the predicted error",
 //!   SPEC §1, method C), sampled at the nominal table positions. (Solving p + e(p) = t instead
 //!   would change c by e·∂e/∂p ≈ 10⁻⁵·e, far below any table's resolution.)
-//! - LinuxCNC type 1, Siemens CEC, Fanuc, Heidenhain: the value is the correction added to the
-//!   command, i.e. c. LinuxCNC type 0 stores the actual position nominal + e. Siemens LEC
-//!   (`$AA_ENC_COMP`): a positive value moves the axis negative, so the value written is −c = e.
+//! - LinuxCNC type 1, Siemens CEC, FANUC: the value is the correction added to the command, i.e.
+//!   c. LinuxCNC type 0 stores the actual position nominal + e. Siemens LEC (`$AA_ENC_COMP`): a
+//!   positive value moves the axis negative, so the value written is −c = e. HEIDENHAIN: the axis
+//!   error e (mtec's reading of the manuals, see its module).
 //!   Beckhoff/ISG volumetric compensation takes the error parameters themselves (e, in mm) and
 //!   compensates them.
 //!
