@@ -2,6 +2,7 @@
 //! The grid and points are the SciPy fixture's (tests/map_fixtures), so `bench/interp.sh` can
 //! compare the same work with SciPy's RegularGridInterpolator.
 
+use criterion::measurement::{Measurement, ValueFormatter, WallTime};
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use mtec_comp::map::{GridLimits, GridMap, Outside};
 use mtec_comp::ErrorModel;
@@ -81,5 +82,76 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
+/// CPU time of the benchmarking thread (Linux `/proc/thread-self/schedstat`, ns on CPU), so that
+/// results stay meaningful on a machine shared with other jobs, where wall time counts the time
+/// the thread waited for a core.
+struct ThreadCpu;
+
+fn thread_cpu_ns() -> u64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0)
+}
+
+static WALL: WallTime = WallTime;
+
+impl Measurement for ThreadCpu {
+    type Intermediate = u64;
+    type Value = u64;
+    fn start(&self) -> u64 {
+        thread_cpu_ns()
+    }
+    fn end(&self, i: u64) -> u64 {
+        thread_cpu_ns().saturating_sub(i)
+    }
+    fn add(&self, a: &u64, b: &u64) -> u64 {
+        a + b
+    }
+    fn zero(&self) -> u64 {
+        0
+    }
+    fn to_f64(&self, v: &u64) -> f64 {
+        *v as f64
+    }
+    fn formatter(&self) -> &dyn ValueFormatter {
+        WALL.formatter()
+    }
+}
+
+fn bench_cpu(c: &mut Criterion<ThreadCpu>) {
+    let map = grid_25();
+    let pts = points(100_000, [600.0, 400.0, 300.0]);
+    let mut g = c.benchmark_group("trilinear_cpu");
+    g.throughput(Throughput::Elements(pts.len() as u64));
+    g.bench_function("grid25_eval_100k_points", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for p in &pts {
+                let e = map.error_um(black_box(*p));
+                acc += e[0] + e[1] + e[2];
+            }
+            acc
+        })
+    });
+    let opts = mtec_comp::CorrectionOptions::default();
+    g.bench_function("grid25_correction_100k_points", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for p in &pts {
+                let q = mtec_comp::command_for_target(&map, black_box(*p), &opts).unwrap();
+                acc += q[0];
+            }
+            acc
+        })
+    });
+    g.finish();
+}
+
 criterion_group!(benches, bench);
-criterion_main!(benches);
+criterion_group! {
+    name = cpu;
+    config = Criterion::default().with_measurement(ThreadCpu);
+    targets = bench_cpu
+}
+criterion_main!(benches, cpu);

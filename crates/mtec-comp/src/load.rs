@@ -48,15 +48,9 @@ fn load_map_text(path: &Path, text: &str) -> Result<GridMap, InputError> {
     let file: MapFile = serde_json::from_str(text)
         .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
     let map = GridMap::from_file(file).map_err(|e| InputError::file(path, e.to_string()))?;
+    // a map without provenance is described by the file it was loaded from
     Ok(if map.source().is_empty() {
-        let outside = map.outside();
-        let f = map.to_file();
-        GridMap::from_file(MapFile {
-            source: path.display().to_string(),
-            ..f
-        })
-        .map_err(|e| InputError::file(path, e.to_string()))?
-        .with_outside(outside)
+        map.with_source(path.display().to_string())
     } else {
         map
     })
@@ -99,5 +93,51 @@ fn located_format_error(path: &Path, text: &str, msg: String) -> InputError {
             InputError::at(path, l, c, msg)
         }
         None => InputError::file(path, msg),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(text: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("model.json");
+        std::fs::write(&p, text).unwrap();
+        (dir, p)
+    }
+
+    #[test]
+    fn map_dispatch_and_provenance() {
+        let (_d, p) = write(
+            r#"{"format":"mtec.map/1","model":"trilinear","x_mm":[0,1],"y_mm":[0],"z_mm":[0],
+                "ex_um":[1,3],"ey_um":[0,0],"ez_um":[0,0]}"#,
+        );
+        let m = load_error_model(&p).unwrap();
+        assert_eq!(m.error_um([0.5, 7.0, 7.0]), [2.0, 0.0, 0.0]);
+        assert!(m.describe().contains("model.json"), "{}", m.describe());
+    }
+
+    #[test]
+    fn unknown_format_is_located() {
+        let (_d, p) = write("{\n  \"format\": \"mtec.bogus/1\"\n}\n");
+        let e = load_error_model(&p).err().unwrap();
+        assert_eq!((e.line, e.column), (Some(2), Some(3)), "{e}");
+        assert!(e.message.contains("mtec.map/1"), "{e}");
+    }
+
+    #[test]
+    fn missing_format_and_bad_fields() {
+        let (_d, p) = write("{\"x_mm\": []}");
+        assert!(load_error_model(&p)
+            .err()
+            .unwrap()
+            .message
+            .contains("no \"format\""));
+        let (_d2, p2) = write(
+            "{\"format\":\"mtec.map/1\",\"model\":\"trilinear\",\"x_mm\":[1,0],\"y_mm\":[0],\"z_mm\":[0],\"ex_um\":[0,0],\"ey_um\":[0,0],\"ez_um\":[0,0]}",
+        );
+        let e = load_error_model(&p2).err().unwrap();
+        assert!(e.message.contains("strictly increasing"), "{e}");
     }
 }

@@ -135,6 +135,8 @@ pub struct GridMap {
     values_um: Vec<[f64; 3]>,
     outside: Outside,
     source: String,
+    /// 1 / step of each equally spaced axis (0 when unequal): cell lookup without a search.
+    inv_step: [f64; 3],
 }
 
 /// The JSON document of a map (`mtec.map/1`).
@@ -196,12 +198,20 @@ impl GridMap {
         {
             return Err(MapShapeError(format!("node value {i} is not finite")));
         }
-        Ok(GridMap {
+        let mut map = GridMap {
             axes_mm,
             values_um,
             outside,
             source: source.into(),
-        })
+            inv_step: [0.0; 3],
+        };
+        for a in 0..3 {
+            let ax = &map.axes_mm[a];
+            if ax.len() >= 2 && map.is_uniform(a) {
+                map.inv_step[a] = (ax.len() - 1) as f64 / (ax[ax.len() - 1] - ax[0]);
+            }
+        }
+        Ok(map)
     }
 
     /// Reads and validates a grid CSV (`x_mm,y_mm,z_mm,ex_um,ey_um,ez_um`).
@@ -272,7 +282,7 @@ impl GridMap {
             }
             for (node, &c) in count.iter().enumerate() {
                 let share = c as f64 / need as f64;
-                if c < need && worst.map_or(true, |w| share < w.0) {
+                if c < need && !matches!(worst, Some(w) if share >= w.0) {
                     worst = Some((share, a, node, c, need));
                 }
             }
@@ -456,6 +466,12 @@ impl GridMap {
         self
     }
 
+    /// The same map with another provenance text.
+    pub fn with_source(mut self, source: impl Into<String>) -> GridMap {
+        self.source = source.into();
+        self
+    }
+
     /// Where the map came from (the grid file).
     pub fn source(&self) -> &str {
         &self.source
@@ -464,35 +480,48 @@ impl GridMap {
     /// Trilinear interpolation of the error at `p_mm`, following the outside-grid policy.
     #[inline]
     pub fn try_error_um(&self, p_mm: [f64; 3]) -> Result<[f64; 3], OutsideGrid> {
-        let mut i0 = [0usize; 3];
-        let mut i1 = [0usize; 3];
-        let mut t = [0.0f64; 3];
-        for a in 0..3 {
-            let (lo, hi, frac) = self.locate(a, p_mm)?;
-            i0[a] = lo;
-            i1[a] = hi;
-            t[a] = frac;
-        }
+        let (i0, di, tx) = self.locate(0, p_mm)?;
+        let (j0, dj, ty) = self.locate(1, p_mm)?;
+        let (k0, dk, tz) = self.locate(2, p_mm)?;
         let ny = self.axes_mm[1].len();
         let nz = self.axes_mm[2].len();
-        let v = |i: usize, j: usize, k: usize| &self.values_um[(i * ny + j) * nz + k];
-        let mut out = [0.0; 3];
-        // trilinear interpolation: successive linear interpolation along x, then y, then z
+        // the 8 corners of the cell: base index and the strides of a step in x, y, z
+        let base = (i0 * ny + j0) * nz + k0;
+        let (sx, sy, sz) = (di * ny * nz, dj * nz, dk);
+        let v = &self.values_um;
+        let c = [
+            v[base],
+            v[base + sz],
+            v[base + sy],
+            v[base + sy + sz],
+            v[base + sx],
+            v[base + sx + sz],
+            v[base + sx + sy],
+            v[base + sx + sy + sz],
+        ];
+        // trilinear interpolation: e = Σ w_ijk · e_ijk with w = Π (1 − t) or t per axis
         // (Numerical Recipes 3rd ed. §3.6, eq. 3.6.5 extended to 3-D)
-        for (c, out_c) in out.iter_mut().enumerate() {
-            let lerp = |a: f64, b: f64, s: f64| a + (b - a) * s;
-            let c00 = lerp(v(i0[0], i0[1], i0[2])[c], v(i1[0], i0[1], i0[2])[c], t[0]);
-            let c10 = lerp(v(i0[0], i1[1], i0[2])[c], v(i1[0], i1[1], i0[2])[c], t[0]);
-            let c01 = lerp(v(i0[0], i0[1], i1[2])[c], v(i1[0], i0[1], i1[2])[c], t[0]);
-            let c11 = lerp(v(i0[0], i1[1], i1[2])[c], v(i1[0], i1[1], i1[2])[c], t[0]);
-            let c0 = lerp(c00, c10, t[1]);
-            let c1 = lerp(c01, c11, t[1]);
-            *out_c = lerp(c0, c1, t[2]);
+        let (ux, uy, uz) = (1.0 - tx, 1.0 - ty, 1.0 - tz);
+        let w = [
+            ux * uy * uz,
+            ux * uy * tz,
+            ux * ty * uz,
+            ux * ty * tz,
+            tx * uy * uz,
+            tx * uy * tz,
+            tx * ty * uz,
+            tx * ty * tz,
+        ];
+        let mut out = [0.0; 3];
+        for (ck, wk) in c.iter().zip(w) {
+            out[0] += wk * ck[0];
+            out[1] += wk * ck[1];
+            out[2] += wk * ck[2];
         }
         Ok(out)
     }
 
-    /// Cell (lower node, upper node) and fraction along axis `a` for the coordinate of `p`.
+    /// Cell (lower node, 1 or 0 nodes to the upper one) and fraction along axis `a`.
     #[inline]
     fn locate(&self, a: usize, p: [f64; 3]) -> Result<(usize, usize, f64), OutsideGrid> {
         let ax = &self.axes_mm[a];
@@ -518,10 +547,15 @@ impl GridMap {
                 }
             }
         }
-        // lower node of the cell: last grid value ≤ x, kept within 0..n−2
-        let i = ax.partition_point(|&v| v <= x).saturating_sub(1).min(n - 2);
+        // lower node of the cell: last grid value ≤ x, kept within 0..n−2 (direct for equal
+        // spacing, binary search otherwise)
+        let i = if self.inv_step[a] > 0.0 {
+            (((x - lo_mm) * self.inv_step[a]).floor().max(0.0) as usize).min(n - 2)
+        } else {
+            ax.partition_point(|&v| v <= x).saturating_sub(1).min(n - 2)
+        };
         let frac = (x - ax[i]) / (ax[i + 1] - ax[i]);
-        Ok((i, i + 1, frac))
+        Ok((i, 1, frac))
     }
 }
 

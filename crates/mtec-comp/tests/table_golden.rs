@@ -152,6 +152,16 @@ N10042P-2
         text2.contains("N03623A1P2\n") && text2.contains("N10041P-1\n"),
         "{text2}"
     );
+    // reference at the − end (x = −100, point 0): 3621 = 3620 = 0 and point 0 holds 0;
+    // relative to c(−100) = −1: 0, −2, −4, −6 → increments −2 at points 1, 2, 3
+    let at_start = table::fanuc::FanucOptions {
+        reference_mm: -100.0,
+        ..Default::default()
+    };
+    assert_eq!(
+        table::fanuc::write(&p, &at_start).unwrap(),
+        "%\nN03620A1P0\nN03621A1P0\nN03622A1P3\nN03623A1P1\nN03624A1P100000\nN10000P0\nN10001P-2\nN10002P-2\nN10003P-2\n%\n"
+    );
     // values beyond the range are refused
     let tight = table::fanuc::FanucOptions {
         reference_number: 40,
@@ -204,8 +214,8 @@ N10064P2
     assert!(err.to_string().contains("sum to 1"), "{err}");
 }
 
-/// HEIDENHAIN: Z = F(Y), the .COM has AXISPOS (Y positions) and a Z column of compensation
-/// values; the .CMA enters ZY.COM in the column of Y (the axis it depends on) and marks the line
+/// HEIDENHAIN: Z = F(Y), the .COM has AXISPOS (Y positions) and a Z column with the axis error
+/// (ez = 0.004·y: −1.6, 0, +1.6 µm); the .CMA enters ZY.COM in the column of Y (the axis it depends on) and marks the line
 /// active with `*`.
 #[test]
 fn heidenhain_golden() {
@@ -221,9 +231,9 @@ fn heidenhain_golden() {
         vec![
             vec!["BEGIN", "ZY.COM", "MM"],
             vec!["NR", "AXISPOS", "Z"],
-            vec!["0", "-400.0000", "+0.0016"],
+            vec!["0", "-400.0000", "-0.0016"],
             vec!["1", "+0.0000", "+0.0000"],
-            vec!["2", "+400.0000", "-0.0016"],
+            vec!["2", "+400.0000", "+0.0016"],
             vec!["[END]"],
         ]
     );

@@ -1,5 +1,6 @@
 //! `mtec compensate table`: controller compensation tables from an error model.
 
+use super::map::write_output;
 use crate::error::CliError;
 use mtec_comp::map::{GridMap, MAP_FORMAT};
 use mtec_comp::table::{self, axis_profile, Axis, TableError};
@@ -21,8 +22,8 @@ Formats:
                   value moves the axis negative, so the written value is the error itself
   fanuc           FANUC pitch error tape: parameters 3620-3624 and incremental values N1nnnnP...
                   per interval, relative to the reference point (--reference-mm)
-  heidenhain      HEIDENHAIN nonlinear axis error compensation: a .COM table (-o) and its .CMA
-                  assignment table beside it (--cma-name)
+  heidenhain      HEIDENHAIN nonlinear axis error compensation: a .COM table (-o) with the axis
+                  error, and its .CMA assignment table beside it (--cma-name)
   beckhoff        Beckhoff TwinCAT CNC volumetric compensation, ISG CSV: X Y Z EXX EYY EZZ (mm)
                   on the map's grid (or --x-range/--y-range/--z-range)
 
@@ -219,8 +220,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
             let t = table::heidenhain::write(&profile, &com_name, &a.cma_name)
                 .map_err(|e| table_error(&a.model, e))?;
             let cma_path = out.with_file_name(&a.cma_name);
-            guard.write(out, t.com.as_bytes())?;
-            guard.write(&cma_path, t.cma.as_bytes())?;
+            write_output(&guard, out, t.com.as_bytes())?;
+            write_output(&guard, &cma_path, t.cma.as_bytes())?;
             eprintln!(
                 "heidenhain: {} and {} from {provenance}",
                 out.display(),
@@ -233,14 +234,20 @@ pub fn run(a: Args) -> Result<(), CliError> {
     .map_err(|e| table_error(&a.model, e))?;
     emit(&guard, a.out.as_deref(), &text)?;
     if a.out.is_some() {
-        eprintln!("{:?} table from {provenance}", a.format);
+        use clap::ValueEnum;
+        let name = a
+            .format
+            .to_possible_value()
+            .map(|v| v.get_name().to_string())
+            .unwrap_or_default();
+        eprintln!("{name} table from {provenance}");
     }
     Ok(())
 }
 
 fn emit(guard: &OutputGuard, out: Option<&Path>, text: &str) -> Result<(), CliError> {
     match out {
-        Some(p) => guard.write(p, text.as_bytes())?,
+        Some(p) => write_output(guard, p, text.as_bytes())?,
         None => {
             use std::io::Write;
             std::io::stdout().lock().write_all(text.as_bytes())?;

@@ -123,7 +123,7 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
     let mut json =
         serde_json::to_string_pretty(&map.to_file()).map_err(|e| CliError::Internal(e.into()))?;
     json.push('\n');
-    OutputGuard::new(&[&a.grid]).write(&a.out, json.as_bytes())?;
+    write_output(&OutputGuard::new(&[&a.grid]), &a.out, json.as_bytes())?;
     let n = map.axes_mm();
     eprintln!(
         "map: {}×{}×{} nodes, outside = {} -> {}",
@@ -171,11 +171,32 @@ fn eval(a: EvalArgs) -> Result<(), CliError> {
         );
     }
     match &a.out {
-        Some(path) => OutputGuard::new(&[&a.map, &a.points]).write(path, out.as_bytes())?,
+        Some(path) => write_output(
+            &OutputGuard::new(&[&a.map, &a.points]),
+            path,
+            out.as_bytes(),
+        )?,
         None => {
             use std::io::Write;
             std::io::stdout().lock().write_all(out.as_bytes())?;
         }
     }
     Ok(())
+}
+
+/// Writes an output atomically; an attempt to overwrite an input is the user's mistake (exit 2).
+pub(crate) fn write_output(
+    guard: &OutputGuard,
+    path: &std::path::Path,
+    bytes: &[u8],
+) -> Result<(), CliError> {
+    guard.write(path, bytes).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::AlreadyExists {
+            CliError::usage(e.to_string())
+        } else {
+            CliError::Internal(
+                anyhow::Error::new(e).context(format!("cannot write {}", path.display())),
+            )
+        }
+    })
 }

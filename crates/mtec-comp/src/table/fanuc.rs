@@ -11,13 +11,22 @@
 //!   it ("the compensation value is output at the compensation position No. corresponding to each
 //!   section"): number R (3620) holds the interval ending at the reference position, R + k the
 //!   interval ending k intervals further in +. Values are in detection units × magnification.
+//! - 3621 ≤ 3620 ≤ 3622: with the reference at the − end of the table (and on rotary axes) the
+//!   farthest − point is the reference point itself; on a linear axis its value is 0 (its
+//!   interval lies outside the compensated travel).
 //! - Rotary axes: the farthest − point equals the reference number, the farthest + point is
 //!   R + travel/interval; the values R+1…R+m must sum to zero (otherwise the error accumulates per
 //!   turn), and point R is given the same value as point R+m.
 //!
 //! mtec's rounding: the absolute compensation C(x) = c(x) − c(x_ref) is rounded at each point and
 //! the increments taken from the rounded values, so rounding never accumulates along the axis.
-//! The pitch-data tape number of point n is 10000 + n. Value range per point: ±`max_increment`
+//! Tape layout (FANUC Series 15i/150i-MA Parameter Manual B-63330EN/03 §3, "Inputting and
+//! outputting parameters using external input/output devices"): a record begins and ends with
+//! `%`; an axis-type parameter block is `N<5-digit number>A<axis>P<value>` ended by the
+//! end-of-block character (LF in ISO code, written `;` in the manual); "when parameters and pitch
+//! error compensation data are collected into a single file, the file begins and ends with %".
+//! The pitch-data block of point n is `N<10000 + n>P<value>` (mtec's reading of the pitch-error
+//! data numbering; check against the control's own punched output before the first load). Value range per point: ±`max_increment`
 //! (the range depends on the control model — older ones allow ±7, 16i/0i ±127 — so it is an
 //! option, default 127).
 
@@ -74,7 +83,7 @@ pub fn write(profile: &AxisProfile, opts: &FanucOptions) -> Result<String, Table
             "magnification (3623) must be 1..100",
         ));
     }
-    if !(opts.detection_unit_um > 0.0) {
+    if opts.detection_unit_um.is_nan() || opts.detection_unit_um <= 0.0 {
         return Err(TableError::rule(
             FORMAT,
             None,
@@ -117,7 +126,13 @@ pub fn write(profile: &AxisProfile, opts: &FanucOptions) -> Result<String, Table
         ));
     }
     let r = opts.reference_number as i64;
-    let n_min = if profile.rotary { r } else { r + 1 - m as i64 };
+    // the farthest − point: for rotary axes and for a reference at the − end of the table it is
+    // the reference point itself (its interval lies before the table: value 0 on linear axes)
+    let n_min = if profile.rotary || m == 0 {
+        r
+    } else {
+        r + 1 - m as i64
+    };
     let n_max = r + (n - 1 - m) as i64;
     if n_min < 0 || n_max > opts.max_number as i64 {
         return Err(TableError::rule(
@@ -145,6 +160,9 @@ pub fn write(profile: &AxisProfile, opts: &FanucOptions) -> Result<String, Table
         // point R repeats point R + m
         let last = values.last().map(|v| v.1).unwrap_or(0);
         values.insert(0, (r, last));
+    } else if m == 0 {
+        // reference at the − end: point R covers travel before the table, no compensation
+        values.insert(0, (r, 0));
     }
     let a = opts.axis_number;
     let mut out = String::from("%\n");

@@ -13,9 +13,11 @@
 //! - At most 256 entries per `.COM` (module 9095 error 3).
 //! - Tables are TNC table files: a `BEGIN <name> <unit>` line, a header line, rows, `[END]`.
 //!
-//! Values: the compensation value c = −e in mm with 4 decimals (0.1 µm), signed (`+0.0030`).
-//! The sign convention is mtec's reading of "compensation value"; the manuals' examples plot the
-//! error curve without stating the sign explicitly (see the report).
+//! Values: the axis error e = −c in mm with 4 decimals (0.1 µm), signed (`+0.0030`). The
+//! manuals do not state the sign in words; their worked example (TNC 407 Technical Manual p. 4-28,
+//! Z = F(Y) sag) plots the curve the table is read from as "Error in Z [mm]", and the function
+//! is named *axis error* compensation, so mtec enters the error and the control removes it. This is
+//! mtec's reading, not a quoted rule: check one point on the machine before relying on it.
 
 use super::{AxisProfile, TableError};
 
@@ -42,8 +44,8 @@ pub fn write(
     let mut com = format!("BEGIN {com_name} MM\n");
     com.push_str(&format!("{:<5} {:>13} {:>10}\n", "NR", "AXISPOS", out_axis));
     for (n, &c_um) in profile.comp_um.iter().enumerate() {
-        let c_mm = c_um * 1e-3;
-        let c_txt = format!("{:+.4}", if c_mm.abs() < 5e-5 { 0.0 } else { c_mm });
+        let e_mm = -c_um * 1e-3; // the axis error
+        let c_txt = format!("{:+.4}", if e_mm.abs() < 5e-5 { 0.0 } else { e_mm });
         com.push_str(&format!(
             "{:<5} {:>13} {:>10}\n",
             n,

@@ -9,9 +9,10 @@
 //!   compensation value is c = −e ("compensation values = the negative of the predicted error",
 //!   SPEC §1, method C), sampled at the nominal table positions. (Solving p + e(p) = t instead
 //!   would change c by e·∂e/∂p ≈ 10⁻⁵·e, far below any table's resolution.)
-//! - LinuxCNC type 1, Siemens CEC, Fanuc, Heidenhain: the value is the correction added to the
-//!   command, i.e. c. LinuxCNC type 0 stores the actual position nominal + e. Siemens LEC
-//!   (`$AA_ENC_COMP`): a positive value moves the axis negative, so the value written is −c = e.
+//! - LinuxCNC type 1, Siemens CEC, FANUC: the value is the correction added to the command, i.e.
+//!   c. LinuxCNC type 0 stores the actual position nominal + e. Siemens LEC (`$AA_ENC_COMP`): a
+//!   positive value moves the axis negative, so the value written is −c = e. HEIDENHAIN: the axis
+//!   error e (mtec's reading of the manuals, see its module).
 //!   Beckhoff/ISG volumetric compensation takes the error parameters themselves (e, in mm) and
 //!   compensates them.
 //!
@@ -124,7 +125,7 @@ pub fn axis_profile(
     step_mm: f64,
     at_mm: [f64; 3],
 ) -> Result<AxisProfile, TableError> {
-    if !(step_mm > 0.0) || !start_mm.is_finite() || !end_mm.is_finite() {
+    if step_mm.is_nan() || step_mm <= 0.0 || !start_mm.is_finite() || !end_mm.is_finite() {
         return Err(TableError::Sampling(format!(
             "table range {start_mm}..{end_mm} step {step_mm}: the step must be positive and the ends finite"
         )));

@@ -207,7 +207,7 @@ fn check_equidistant(
             "a table needs at least 2 points",
         ));
     }
-    if !(step > 0.0) {
+    if step.is_nan() || step <= 0.0 {
         return Err(TableError::rule(format, None, "_STEP must be positive"));
     }
     let expect_max = min + step * (n - 1) as f64;
