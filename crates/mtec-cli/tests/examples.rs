@@ -69,9 +69,17 @@ fn vmc_example_runs() {
 }
 
 #[test]
-fn fl_thermal_example_runs() {
+fn fl_thermal_split_example_runs() {
     run_example(
-        "examples/fl-thermal/project-ci.toml",
+        "examples/fl-thermal/project-split.toml",
         &["Thermal model: ch1_um"],
+    );
+}
+
+#[test]
+fn fl_thermal_full_example_runs() {
+    run_example(
+        "examples/fl-thermal/project.toml",
+        &["Thermal model: ch1_um", "Thermal model: ch2_um"],
     );
 }
