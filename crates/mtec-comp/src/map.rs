@@ -262,6 +262,23 @@ impl GridMap {
             }
             index_of_row.push(ijk);
         }
+        // a node measured twice is named as such (before the count check, which it also upsets)
+        let mut first_row_of_node: std::collections::HashMap<[usize; 3], usize> =
+            std::collections::HashMap::new();
+        for (r, ijk) in index_of_row.iter().enumerate() {
+            if let Some(&first) = first_row_of_node.get(ijk) {
+                let first_line = table.rows[first].line;
+                let [x, y, z] = rows[r].0;
+                return Err(table.error_at(
+                    &table.rows[r],
+                    AXIS_NAMES[0],
+                    format!(
+                        "grid node ({x}, {y}, {z}) mm appears twice (first on line {first_line}): each node needs exactly one row"
+                    ),
+                ));
+            }
+            first_row_of_node.insert(*ijk, r);
+        }
         // the stray value is the one seen in the smallest share of the rows it needs
         let mut worst: Option<(f64, usize, usize, usize, usize)> = None; // (share, axis, node, count, need)
         for a in 0..3 {
