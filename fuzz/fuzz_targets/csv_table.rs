@@ -33,7 +33,10 @@ fuzz_target!(|data: &[u8]| {
         }
         Err(e) => {
             let msg = e.to_string();
-            assert!(msg.starts_with("fuzz.csv"), "error does not name the file: {msg}");
+            assert!(
+                msg.starts_with("fuzz.csv"),
+                "error does not name the file: {msg}"
+            );
         }
     }
 });

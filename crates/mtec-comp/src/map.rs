@@ -640,6 +640,21 @@ mod tests {
     }
 
     #[test]
+    fn duplicated_grid_node_is_named_at_its_second_row() {
+        let text = "x_mm,y_mm,z_mm,ex_um,ey_um,ez_um\n\
+            0,0,0,0,0,0\n0,0,5,0,0,0\n0,5,0,0,0,0\n0,5,5,0,0,0\n\
+            5,0,0,0,0,0\n5,0,5,0,0,0\n5,5,0,0,0,0\n0,5,0,1,1,1\n";
+        let table = Table::parse(Path::new("grid.csv"), text).unwrap();
+        let e = GridMap::from_table(&table, &GridLimits::default(), Outside::Clamp).unwrap_err();
+        assert_eq!((e.line, e.column), (Some(9), Some(1)), "{e}");
+        assert!(
+            e.message
+                .contains("(0, 5, 0) mm appears twice (first on line 4)"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn bad_shapes_refused() {
         let e = GridMap::new(
             [vec![0.0, 0.0], vec![1.0], vec![1.0]],

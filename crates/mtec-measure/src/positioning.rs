@@ -232,5 +232,12 @@ mod tests {
         let nan = OK.replace("0,2,+,5", "0,2,+,NaN");
         let e = parse(&nan).unwrap_err();
         assert_eq!((e.line, e.column), (Some(6), Some(4)));
+
+        // 1e300 um passed every check and came out as `inf` statistics
+        let absurd = OK.replace("10,2,+,6", "10,2,+,1e300");
+        let e = parse(&absurd).unwrap_err();
+        assert_eq!((e.line, e.column), (Some(7), Some(4)), "{e}");
+        assert!(e.message.contains("1e300 um is implausible"), "{e}");
+        assert!(parse(&OK.replace("10,2,+,6", "10,2,+,-999999")).is_ok());
     }
 }
