@@ -162,3 +162,19 @@ fn table_parse_edge_cases_give_located_errors() {
         check_table(text);
     }
 }
+
+/// serde_json reports column 0 at the end of a line or file; mtec's columns are 1-based.
+#[test]
+fn json_errors_at_end_of_file_have_column_one() {
+    let dir = tempfile::tempdir().unwrap();
+    for (text, line) in [("", 1), ("{\"a\": [1,\n", 2)] {
+        let p = dir.path().join("m.json");
+        std::fs::write(&p, text).unwrap();
+        let e = mtec_io::read_json::<serde_json::Value>(&p).unwrap_err();
+        assert_eq!((e.line, e.column), (Some(line), Some(1)), "{e}");
+        assert!(
+            e.to_string().contains(&format!("m.json:{line}:1: EOF")),
+            "{e}"
+        );
+    }
+}
