@@ -272,6 +272,23 @@ impl GridMap {
             }
             index_of_row.push(ijk);
         }
+        // a node measured twice is named as such (before the count check, which it also upsets)
+        let mut first_row_of_node: std::collections::HashMap<[usize; 3], usize> =
+            std::collections::HashMap::new();
+        for (r, ijk) in index_of_row.iter().enumerate() {
+            if let Some(&first) = first_row_of_node.get(ijk) {
+                let first_line = table.rows[first].line;
+                let [x, y, z] = rows[r].0;
+                return Err(table.error_at(
+                    &table.rows[r],
+                    AXIS_NAMES[0],
+                    format!(
+                        "grid node ({x}, {y}, {z}) mm appears twice (first on line {first_line}): each node needs exactly one row"
+                    ),
+                ));
+            }
+            first_row_of_node.insert(*ijk, r);
+        }
         // the stray value is the one seen in the smallest share of the rows it needs
         let mut worst: Option<(f64, usize, usize, usize, usize)> = None; // (share, axis, node, count, need)
         for a in 0..3 {
@@ -654,6 +671,21 @@ mod tests {
         let text = serde_json::to_string(&m.to_file()).unwrap();
         let back = GridMap::from_file(serde_json::from_str(&text).unwrap()).unwrap();
         assert_eq!(back, m);
+    }
+
+    #[test]
+    fn duplicated_grid_node_is_named_at_its_second_row() {
+        let text = "x_mm,y_mm,z_mm,ex_um,ey_um,ez_um\n\
+            0,0,0,0,0,0\n0,0,5,0,0,0\n0,5,0,0,0,0\n0,5,5,0,0,0\n\
+            5,0,0,0,0,0\n5,0,5,0,0,0\n5,5,0,0,0,0\n0,5,0,1,1,1\n";
+        let table = Table::parse(Path::new("grid.csv"), text).unwrap();
+        let e = GridMap::from_table(&table, &GridLimits::default(), Outside::Clamp).unwrap_err();
+        assert_eq!((e.line, e.column), (Some(9), Some(1)), "{e}");
+        assert!(
+            e.message
+                .contains("(0, 5, 0) mm appears twice (first on line 4)"),
+            "{e}"
+        );
     }
 
     #[test]

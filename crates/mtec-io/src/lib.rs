@@ -83,7 +83,9 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, Input
         let msg = msg
             .rsplit_once(" at line ")
             .map_or(msg.clone(), |(m, _)| m.to_string());
-        InputError::at(path, e.line(), e.column(), msg)
+        // serde_json says column 0 for "before the first character" (an error at the end of a
+        // line or file); mtec's columns are 1-based
+        InputError::at(path, e.line().max(1), e.column().max(1), msg)
     })
 }
 

@@ -45,6 +45,8 @@ fn target_key(t: f64) -> i64 {
     (t / TARGET_RESOLUTION_MM).round() as i64
 }
 
+/// Largest accepted |deviation| (1 m): anything larger is a unit or export mistake.
+pub const MAX_DEVIATION_UM: f64 = 1e6;
 impl PositioningData {
     /// Reads and validates a run file.
     pub fn read(path: &Path) -> Result<PositioningData, InputError> {
@@ -77,6 +79,18 @@ impl PositioningData {
                     ))
                 }
             };
+            // A deviation of a metre or more is not a positioning error but a unit or export
+            // mistake (e.g. nm or raw counts); the statistics would overflow to inf.
+            if devs[k].abs() >= MAX_DEVIATION_UM {
+                return Err(table.error_at(
+                    row,
+                    "deviation_um",
+                    format!(
+                        "deviation {:e} um is implausible (|deviation| must be below 1e6 um = 1 m): check the unit",
+                        devs[k]
+                    ),
+                ));
+            }
             let key = target_key(targets[k]);
             target_values.entry(key).or_insert(targets[k]);
             first_line.entry((dir, runs[k])).or_insert(row.line);
@@ -218,5 +232,12 @@ mod tests {
         let nan = OK.replace("0,2,+,5", "0,2,+,NaN");
         let e = parse(&nan).unwrap_err();
         assert_eq!((e.line, e.column), (Some(6), Some(4)));
+
+        // 1e300 um passed every check and came out as `inf` statistics
+        let absurd = OK.replace("10,2,+,6", "10,2,+,1e300");
+        let e = parse(&absurd).unwrap_err();
+        assert_eq!((e.line, e.column), (Some(7), Some(4)), "{e}");
+        assert!(e.message.contains("1e300 um is implausible"), "{e}");
+        assert!(parse(&OK.replace("10,2,+,6", "10,2,+,-999999")).is_ok());
     }
 }
