@@ -61,6 +61,37 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// The frame every x–y chart shares: caption, margins, axis labels, a light mesh.
+fn xy_frame<'a, 'b>(
+    root: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> Option<
+    ChartContext<
+        'a,
+        SVGBackend<'b>,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+> {
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .ok()?;
+    let _ = chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw();
+    Some(chart)
+}
+
 /// A line chart of several series with optional bands. Returns SVG text.
 pub fn line_chart(
     title: &str,
@@ -87,22 +118,9 @@ pub fn line_chart(
             );
         let (x0, x1) = range(xs);
         let (y0, y1) = range(ys);
-        let mut chart = match ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 18))
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(x0..x1, y0..y1)
-        {
-            Ok(c) => c,
-            Err(_) => return svg_error(title),
+        let Some(mut chart) = xy_frame(&root, title, x_label, y_label, (x0, x1), (y0, y1)) else {
+            return svg_error(title);
         };
-        let _ = chart
-            .configure_mesh()
-            .x_desc(x_label)
-            .y_desc(y_label)
-            .light_line_style(RGBColor(235, 235, 235))
-            .draw();
         for (i, b) in bands.iter().enumerate() {
             let c = colour(i + series.len()).mix(0.18);
             let mut poly: Vec<(f64, f64)> =
@@ -145,22 +163,9 @@ pub fn scatter_chart(title: &str, x_label: &str, y_label: &str, series: &[Series
         let _ = root.fill(&WHITE);
         let (x0, x1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
         let (y0, y1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
-        let mut chart = match ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 18))
-            .margin(10)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(x0..x1, y0..y1)
-        {
-            Ok(c) => c,
-            Err(_) => return svg_error(title),
+        let Some(mut chart) = xy_frame(&root, title, x_label, y_label, (x0, x1), (y0, y1)) else {
+            return svg_error(title);
         };
-        let _ = chart
-            .configure_mesh()
-            .x_desc(x_label)
-            .y_desc(y_label)
-            .light_line_style(RGBColor(235, 235, 235))
-            .draw();
         for (i, s) in series.iter().enumerate() {
             let c = colour(i);
             if let Ok(a) =
