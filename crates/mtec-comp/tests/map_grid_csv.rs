@@ -44,7 +44,7 @@ fn duplicate_node_names_both_lines() {
     let e = read(&text(&rows), GridLimits::default()).unwrap_err();
     assert_eq!((e.line, e.column), (Some(14), Some(1)), "{e}");
     assert!(
-        e.message.contains("duplicate grid node") && e.message.contains("line 5"),
+        e.message.contains("appears twice") && e.message.contains("line 5"),
         "{e}"
     );
 }
