@@ -124,6 +124,32 @@ pub fn iso230_2(p: &mut Pipeline, data: &Path) -> Result<(), CliError> {
         .report
         .section(format!("Positioning (ISO 230-2): {}", stem(&f)));
     sec.text("Bidirectional positioning accuracy A, repeatability R, reversal B, systematic deviation E and mean reversal per ISO 230-2:2014, from the laser runs.");
+    // mean unidirectional deviations with their ±2s bands, from the statistics themselves
+    if let Some(targets) = v.get("targets").and_then(Value::as_array) {
+        let col = |k: &str| {
+            targets
+                .iter()
+                .map(|t| t.get(k).and_then(Value::as_f64).unwrap_or(f64::NAN))
+                .collect::<Vec<f64>>()
+        };
+        let x = col("target_mm");
+        let mut series = Vec::new();
+        let mut bands = Vec::new();
+        for (dir, tag) in [("up", "↑"), ("down", "↓")] {
+            let mean = col(&format!("mean_{dir}_um"));
+            series.push(Series::new(
+                format!("mean deviation {tag}"),
+                x.iter().zip(&mean).map(|(a, b)| (*a, *b)).collect(),
+            ));
+            bands.push(mtec_report::Band {
+                name: format!("±2s {tag}"),
+                x: x.clone(),
+                lower: col(&format!("lower_{dir}_um")),
+                upper: col(&format!("upper_{dir}_um")),
+            });
+        }
+        sec.figure(line_chart("Mean positioning deviation with ±2s bands", "target (mm)", "deviation (µm)", &series, &bands), "ISO 230-2: mean unidirectional positioning deviation per target and direction, with the mean ± 2s band.");
+    }
     if let Some(t) = mtec_io::Table::read(&f).ok() {
         // mean deviation per target and direction with its ±2s band, drawn from the runs
         let (tg, dir, dev) = (
