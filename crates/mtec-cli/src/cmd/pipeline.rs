@@ -150,51 +150,10 @@ pub fn iso230_2(p: &mut Pipeline, data: &Path) -> Result<(), CliError> {
         }
         sec.figure(line_chart("Mean positioning deviation with ±2s bands", "target (mm)", "deviation (µm)", &series, &bands), "ISO 230-2: mean unidirectional positioning deviation per target and direction, with the mean ± 2s band.");
     }
-    if let Some(t) = mtec_io::Table::read(&f).ok() {
-        // mean deviation per target and direction with its ±2s band, drawn from the runs
-        let (tg, dir, dev) = (
-            t.f64_column("target_mm"),
-            t.str_column("direction"),
-            t.f64_column("deviation_um"),
-        );
-        if let (Ok(tg), Ok(dir), Ok(dev)) = (tg, dir, dev) {
-            let mut series = Vec::new();
-            for d in ["+", "-"] {
-                let mut targets: Vec<f64> = tg
-                    .iter()
-                    .zip(&dir)
-                    .filter(|(_, x)| x.as_str() == d)
-                    .map(|(t, _)| *t)
-                    .collect();
-                targets.sort_by(f64::total_cmp);
-                targets.dedup();
-                let pts: Vec<(f64, f64)> = targets
-                    .iter()
-                    .map(|&x| {
-                        let v: Vec<f64> = tg
-                            .iter()
-                            .zip(&dir)
-                            .zip(&dev)
-                            .filter(|((t, di), _)| **t == x && di.as_str() == d)
-                            .map(|(_, v)| *v)
-                            .collect();
-                        (x, v.iter().sum::<f64>() / v.len() as f64)
-                    })
-                    .collect();
-                series.push(Series::new(format!("mean deviation, direction {d}"), pts));
-            }
+    // every reading of every run, from the file itself
+    if let Ok(t) = mtec_io::Table::read(&f) {
+        if let (Ok(tg), Ok(dev)) = (t.f64_column("target_mm"), t.f64_column("deviation_um")) {
             let raw: Vec<(f64, f64)> = tg.iter().zip(&dev).map(|(a, b)| (*a, *b)).collect();
-            series.push(Series::new("single readings", raw.clone()));
-            sec.figure(
-                line_chart(
-                    "Positioning deviation",
-                    "target (mm)",
-                    "deviation (µm)",
-                    &series[..2],
-                    &[],
-                ),
-                "Mean unidirectional positioning deviation per target (ISO 230-2).",
-            );
             sec.figure(
                 scatter_chart(
                     "All readings",
