@@ -65,16 +65,33 @@ fn full_nine_line_design_loses_only_what_kinematics_hides() {
     assert_eq!(partners(&l, "ECZ"), Vec::<&str>::new());
     assert_eq!(partners(&l, "EBZ"), ["EXZ", "EB0Z"]);
     assert_eq!(partners(&l, "EAZ"), ["EYZ", "EA0Z"]);
-    assert_eq!(partners(&l, "ECY"), ["EXY"]);
+    // y·ECY(y) reaches Ex like EXY does; its least-squares slope is a squareness (ISO 230-1
+    // reference lines), so EC0Y shares it too
+    assert_eq!(partners(&l, "ECY"), ["EXY", "EC0Y"]);
     let r = &id.report;
     // 21 elements at degree 3: 3 axes × (3 + 2 + 2 + 3·3) + 3 squareness = 51, plus one
-    // alignment slope per straightness channel (6 axial lines × 2 + 3 diagonals × 2 = 18)
-    assert_eq!(r.parameters, 51 + 18);
+    // alignment slope per straightness channel and run (6 axial lines × 2 + 3 diagonals × 2 = 18
+    // channels, 3 runs)
+    assert_eq!(r.parameters, 51 + 18 * mtec_sim::vmc_9line::RUNS);
     // deficiency: ECZ 3 + EBZ 3 + EAZ 3 + ECY 2 (its q⁴ part is outside EXY's span at degree 3)
     assert_eq!(r.rank_deficiency, 11);
     assert!(r.condition_number.is_finite() && r.condition_number < 1e4);
     assert!(r.singular_values.windows(2).all(|w| w[0] >= w[1]));
     assert!(r.text_has_every_lost_element());
+    // repeat runs add readings, not information about other elements: one run loses the same
+    let one_run = LineData {
+        channels: data
+            .channels
+            .iter()
+            .filter(|c| c.run == 1)
+            .cloned()
+            .collect(),
+        ..data.clone()
+    };
+    let id1 = identify(&m, &one_run, 3).unwrap();
+    assert_eq!(id1.report.parameters, 51 + 18);
+    assert_eq!(id1.report.rank_deficiency, 11);
+    assert_eq!(names(&lost(&m, &one_run)), names(&l));
 }
 
 trait TextCheck {

@@ -137,7 +137,7 @@ fn three_x_line_design() -> (nalgebra::DMatrix<f64>, nalgebra::DVector<f64>) {
         .contents;
     let mut d = data(csv);
     d.channels
-        .retain(|c| ["X1", "X2", "X3"].contains(&c.line.as_str()));
+        .retain(|c| ["X1", "X2", "X3"].contains(&c.line.as_str()) && c.run == 1);
     let m = Machine::vmc_xyfz(100.0);
     let layout = mtec_identify::lines::Layout::new(&m, 3, &d).unwrap();
     let (a, y) = mtec_identify::lines::model::design_matrix(&m, &layout, &d);

@@ -25,7 +25,7 @@ impl OutputGuard {
     /// Writes `bytes` to `path` atomically, unless `path` is one of the inputs.
     pub fn write(&self, path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         let target = canonical(path);
-        if self.inputs.iter().any(|i| *i == target) {
+        if self.inputs.contains(&target) {
             return Err(std::io::Error::new(
                 std::io::ErrorKind::AlreadyExists,
                 format!("refusing to overwrite the input file {}", path.display()),

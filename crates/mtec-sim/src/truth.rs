@@ -3,8 +3,9 @@
 //! squareness 10–50 µrad (issue #2; typical of a mid-size vertical machining centre).
 //!
 //! Conventions the truth follows (the same the identification uses): every error motion is zero
-//! at the axis origin (the travel's lower end); a straightness function has no linear term at
-//! the origin (its slope belongs to squareness or to the axis that defines the frame).
+//! at the axis origin (the travel's lower end); a straightness function is measured from its
+//! least-squares reference line over the travel (ISO 230-1), so its least-squares slope is zero
+//! (that slope belongs to squareness or to the axis that defines the frame).
 //! Each function is a smooth polynomial part plus a small short-period ripple (ball-screw
 //! lead error, guideway waviness) that no low-degree polynomial represents, stored as a
 //! 1 mm piecewise-linear table.
@@ -62,7 +63,10 @@ pub fn geometric_truth(machine: &Machine, seed: u64) -> ErrorSet {
             };
             let period_mm = rng.random_range(8.0..25.0);
             let phase = rng.random_range(0.0..std::f64::consts::TAU);
-            let shape = |s: f64| a1 * s + a2 * s * s + a3 * s * s * s;
+            // a straightness bow has no least-squares slope over the travel (ISO 230-1 reference
+            // line): s^p − b_p·s with b_p = 6p/((p+1)(p+2)) the least-squares slope of s^p
+            let (b2, b3) = if straightness { (1.0, 0.9) } else { (0.0, 0.0) };
+            let shape = |s: f64| a1 * s + a2 * (s * s - b2 * s) + a3 * (s * s * s - b3 * s);
             let norm = (0..=100)
                 .map(|k| shape(k as f64 / 100.0).abs())
                 .fold(1e-9, f64::max);
@@ -81,6 +85,11 @@ pub fn geometric_truth(machine: &Machine, seed: u64) -> ErrorSet {
                     smooth + ripple
                 })
                 .collect();
+            let values = if straightness {
+                remove_ls_slope(&positions, values)
+            } else {
+                values
+            };
             set.insert(el, ErrorFunction::table(positions, values));
         }
         for el in location_elements(axis) {
@@ -89,6 +98,21 @@ pub fn geometric_truth(machine: &Machine, seed: u64) -> ErrorSet {
         }
     }
     set
+}
+
+/// Straightness is measured from its least-squares reference line (ISO 230-1): the slope of
+/// the least-squares line through (q, f(q)) is removed (here: the ripple's, the smooth bow has
+/// none), the value at the origin kept at zero.
+fn remove_ls_slope(q: &[f64], f: Vec<f64>) -> Vec<f64> {
+    let n = q.len() as f64;
+    let (qm, fm) = (q.iter().sum::<f64>() / n, f.iter().sum::<f64>() / n);
+    let sqq: f64 = q.iter().map(|v| (v - qm).powi(2)).sum();
+    let sqf: f64 = q.iter().zip(&f).map(|(a, b)| (a - qm) * (b - fm)).sum();
+    let slope = sqf / sqq;
+    q.iter()
+        .zip(f)
+        .map(|(a, b)| b - slope * (a - q[0]))
+        .collect()
 }
 
 /// Adds ball-screw expansion to the positioning error of every linear axis: 11.5 µm/(m·K) of

@@ -3,8 +3,10 @@
 //! kinematics of the ground-truth errors and instrument noise.
 //!
 //! Files: `machine.toml`, `lines.csv` (SPEC §4 line measurement: one row per point and channel;
-//! a line's channels are named `<line>`, `<line>.<dir>` for straightness), `truth.json`
-//! (the error set, the laser settings, the straightness alignment slopes).
+//! a line's channels are named `<line>`, `<line>.<dir>` for straightness; plus a `run` column:
+//! every line is measured [`RUNS`] times, each run a fresh set-up with its own zero, alignment
+//! and noise), `truth.json` (the error set, the laser settings, the straightness alignment
+//! slopes of every run).
 
 use crate::instruments::{exact_error_um, gauss, LaserInterferometer};
 use crate::scenario::{OutputFile, ScenarioOutput};
@@ -16,6 +18,46 @@ use std::fmt::Write;
 
 /// Tool length of the scenario's measurements, mm.
 pub const TOOL_LENGTH_MM: f64 = 100.0;
+/// Repeat runs of every line (a laser calibration typically repeats each line 2–5 times).
+pub const RUNS: usize = 3;
+
+/// Simulates `runs` repeat runs of a line design: the CSV text with a `run` column, and the
+/// alignment slopes (µrad) of each straightness channel and run (`X1.y run 2`).
+pub fn measure_runs(
+    machine: &Machine,
+    truth: &mtec_model::ErrorSet,
+    lines: &[LineSpec],
+    laser: &LaserInterferometer,
+    seed: u64,
+    runs: usize,
+) -> (String, Vec<(String, f64)>) {
+    let mut csv = String::from("line,run,step,x_mm,y_mm,z_mm,ux,uy,uz,reading_um\n");
+    let mut alignments = Vec::new();
+    for run in 1..=runs {
+        let (one, slopes) = measure_lines(
+            machine,
+            truth,
+            lines,
+            laser,
+            seed.wrapping_add(7919 * (run as u64 - 1)),
+        );
+        for row in one.lines().skip(1) {
+            let (name, rest) = row.split_once(',').unwrap_or((row, ""));
+            let _ = writeln!(csv, "{name},{run},{rest}");
+        }
+        alignments.extend(slopes.into_iter().map(|(n, a)| {
+            (
+                if run == 1 {
+                    n
+                } else {
+                    format!("{n} run {run}")
+                },
+                a,
+            )
+        }));
+    }
+    (csv, alignments)
+}
 
 /// Simulates a line design on a machine with its truth: the CSV text and the alignment slopes
 /// (µrad) given to each straightness channel.
@@ -83,7 +125,7 @@ pub fn run(seed: u64) -> ScenarioOutput {
     let truth = geometric_truth(&machine, seed);
     let laser = LaserInterferometer::default();
     let lines = line_preset("nine-line", &machine, 20, 10.0).expect("XYZ machine has the preset");
-    let (csv, alignments) = measure_lines(&machine, &truth, &lines, &laser, seed);
+    let (csv, alignments) = measure_runs(&machine, &truth, &lines, &laser, seed, RUNS);
     let machine_toml = toml::to_string(&machine.to_spec()).expect("machine spec serialises");
     let truth_json = serde_json::json!({
         "format": "mtec.truth/1",
@@ -93,6 +135,7 @@ pub fn run(seed: u64) -> ScenarioOutput {
         "laser": { "noise_um": laser.noise_um, "straightness_noise_um": laser.straightness_noise_um, "alignment_urad": laser.alignment_urad },
         "straightness_alignment_urad": alignments.into_iter().collect::<std::collections::BTreeMap<_, _>>(),
         "design": "nine-line",
+        "runs": RUNS,
         "lines": lines,
     });
     ScenarioOutput {
@@ -106,7 +149,7 @@ pub fn run(seed: u64) -> ScenarioOutput {
             OutputFile {
                 name: "lines.csv".into(),
                 contents: format!(
-                    "# vmc-9line: laser interferometer, 9-line design, seed {seed}\n{csv}"
+                    "# vmc-9line: laser interferometer, 9-line design, {RUNS} runs, seed {seed}\n{csv}"
                 ),
             },
         ],

@@ -12,6 +12,10 @@
 //!   nuisance parameter of the identification).
 //! - The reference point of a channel is its point with the lowest `step`; readings are
 //!   relative to it (its own reading is kept: it carries the reference's noise).
+//! - Repeat runs: an optional `run` column (a whole number ≥ 1). Each (line value, run) is its own
+//!   channel, with its own reference point and alignment slope, as a re-zeroed, re-aligned
+//!   laser set-up is; the identification then averages the runs through least squares. Without
+//!   the column every row is run 1.
 //! - Tolerances: |u| = 1 within 1e-3; `u` the same on every row of a channel within 1e-5; each
 //!   point within 1e-3 mm of the straight line through the channel's end points.
 
@@ -40,6 +44,9 @@ const STRAIGHT_TOL_MM: f64 = 1e-3;
 /// A channel with |u·d| at least this is a displacement channel.
 const ALONG_COS: f64 = 0.999;
 
+/// Optional column: the repeat run of a reading.
+pub const RUN_COLUMN: &str = "run";
+
 /// One parsed row: step, point (mm), direction, reading (µm), file line.
 type Reading = (i64, [f64; 3], [f64; 3], f64, usize);
 
@@ -60,6 +67,8 @@ pub struct Channel {
     pub name: String,
     /// The line it belongs to (name before the first `.`), e.g. `X1`.
     pub line: String,
+    /// The repeat run (1 when the file has no `run` column).
+    pub run: i64,
     /// Unit reading direction.
     pub u: [f64; 3],
     pub kind: ChannelKind,
@@ -76,6 +85,14 @@ pub struct Channel {
 }
 
 impl Channel {
+    /// The name to show: `X1.y`, or `X1.y run 2` for a later repeat run.
+    pub fn label(&self) -> String {
+        if self.run == 1 {
+            self.name.clone()
+        } else {
+            format!("{} run {}", self.name, self.run)
+        }
+    }
     /// Distance (mm) of point k from the reference point.
     pub fn distance_mm(&self, k: usize) -> f64 {
         norm(sub(self.points_mm[k], self.points_mm[0]))
@@ -113,8 +130,9 @@ impl LineData {
         let c_xyz = [col("x_mm")?, col("y_mm")?, col("z_mm")?];
         let c_u = [col("ux")?, col("uy")?, col("uz")?];
         let c_read = col("reading_um")?;
-        // rows grouped by channel name, in order of first appearance
-        let mut names: Vec<String> = Vec::new();
+        let c_run = t.column(RUN_COLUMN).ok();
+        // rows grouped by channel (name, run), in order of first appearance
+        let mut names: Vec<(String, i64)> = Vec::new();
         let mut rows: Vec<Vec<Reading>> = Vec::new();
         for row in &t.rows {
             let name = row.fields[c_line].trim().to_string();
@@ -158,6 +176,24 @@ impl LineData {
                 ));
             }
             let reading = t.cell_f64(row, c_read)?;
+            let run = match c_run {
+                None => 1,
+                Some(c) => {
+                    let v = row.fields[c].trim();
+                    match v.parse::<i64>() {
+                        Ok(r) if r >= 1 => r,
+                        _ => {
+                            return Err(InputError::at(
+                                &t.path,
+                                row.line,
+                                c + 1,
+                                format!("`run` is `{v}`: a repeat run is a whole number from 1"),
+                            ))
+                        }
+                    }
+                }
+            };
+            let name = (name, run);
             let i = match names.iter().position(|x| *x == name) {
                 Some(i) => i,
                 None => {
@@ -169,7 +205,12 @@ impl LineData {
             rows[i].push((step, p, u, reading, row.line));
         }
         let mut channels = Vec::with_capacity(names.len());
-        for (name, mut r) in names.into_iter().zip(rows) {
+        for ((name, run), mut r) in names.into_iter().zip(rows) {
+            let shown = if run == 1 {
+                name.clone()
+            } else {
+                format!("{name} run {run}")
+            };
             r.sort_by_key(|x| x.0);
             if let Some(w) = r.windows(2).find(|w| w[0].0 == w[1].0) {
                 return Err(InputError::at(
@@ -177,7 +218,7 @@ impl LineData {
                     w[1].4,
                     c_step + 1,
                     format!(
-                        "line `{name}` has step {} twice (first at line {})",
+                        "line `{shown}` has step {} twice (first at line {})",
                         w[1].0, w[0].4
                     ),
                 ));
@@ -187,7 +228,7 @@ impl LineData {
                     &t.path,
                     r[0].4,
                     format!(
-                        "line `{name}` has {} point(s): a line needs at least 3 to say anything beyond its reference",
+                        "line `{shown}` has {} point(s): a line needs at least 3 to say anything beyond its reference",
                         r.len()
                     ),
                 ));
@@ -202,7 +243,7 @@ impl LineData {
                     bad.4,
                     c_u[0] + 1,
                     format!(
-                        "line `{name}` changes its reading direction here ({:?} after {:?} at line {}): one channel reads along one direction; give another direction another line name",
+                        "line `{shown}` changes its reading direction here ({:?} after {:?} at line {}): one channel reads along one direction; give another direction another line name",
                         bad.2, u0, r[0].4
                     ),
                 ));
@@ -214,17 +255,19 @@ impl LineData {
                     &t.path,
                     file_lines[k],
                     c_xyz[0] + 1,
-                    format!("line `{name}`: {msg}"),
+                    format!("line `{shown}`: {msg}"),
                 )
             })?;
-            channels.push(Channel::new(
+            let mut channel = Channel::new(
                 name,
                 normalise(u0),
                 points,
                 r.iter().map(|x| x.3).collect(),
                 file_lines,
                 geometry,
-            ));
+            );
+            channel.run = run;
+            channels.push(channel);
         }
         Ok(LineData {
             source: t.path.display().to_string(),
@@ -321,6 +364,7 @@ impl Channel {
             .collect();
         Channel {
             line: name.split('.').next().unwrap_or(&name).to_string(),
+            run: 1,
             name,
             u,
             kind: if along {

@@ -191,12 +191,8 @@ fn error_set(
         let f = if b.kind == model::ElementKind::Squareness {
             ErrorFunction::constant(fit.theta[b.first_col])
         } else {
-            let coeffs: Vec<(i32, f64)> = b
-                .powers
-                .iter()
-                .zip(b.cols())
-                .map(|(&p, c)| (p, fit.theta[c]))
-                .collect();
+            let theta: Vec<f64> = b.cols().map(|c| fit.theta[c]).collect();
+            let coeffs = b.power_terms(&theta);
             ErrorFunction::polynomial(solve::polynomial_in_q(&coeffs, b.travel))
         };
         set.insert(b.element, f);

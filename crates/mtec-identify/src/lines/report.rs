@@ -14,6 +14,8 @@ pub const REPORT_FORMAT: &str = "mtec.identify-lines/1";
 #[derive(Debug, Clone, Serialize)]
 pub struct ChannelSummary {
     pub name: String,
+    /// Repeat run (1 when the file has no `run` column).
+    pub run: i64,
     pub kind: ChannelKind,
     pub u: [f64; 3],
 }
@@ -100,6 +102,7 @@ pub fn build(
     for c in &data.channels {
         let summary = ChannelSummary {
             name: c.name.clone(),
+            run: c.run,
             kind: c.kind,
             u: c.u,
         };
@@ -227,10 +230,21 @@ impl LinesReport {
             self.parameters
         );
         for l in &self.lines {
-            let ch: Vec<&str> = l.channels.iter().map(|c| c.name.as_str()).collect();
+            let mut ch: Vec<&str> = Vec::new();
+            for c in &l.channels {
+                if !ch.contains(&c.name.as_str()) {
+                    ch.push(c.name.as_str());
+                }
+            }
+            let runs = l.channels.iter().map(|c| c.run).max().unwrap_or(1);
+            let runs = if runs > 1 {
+                format!(" ({runs} runs)")
+            } else {
+                String::new()
+            };
             let _ = writeln!(
                 s,
-                "  {:<6} {:<3} {:>3} points  ({:.1}, {:.1}, {:.1}) -> ({:.1}, {:.1}, {:.1})  channels {}",
+                "  {:<6} {:<3} {:>3} points  ({:.1}, {:.1}, {:.1}) -> ({:.1}, {:.1}, {:.1})  channels {}{}",
                 l.name,
                 l.moving_axes,
                 l.points,
@@ -240,7 +254,8 @@ impl LinesReport {
                 l.end_mm[0],
                 l.end_mm[1],
                 l.end_mm[2],
-                ch.join(" ")
+                ch.join(" "),
+                runs
             );
         }
         let _ = writeln!(

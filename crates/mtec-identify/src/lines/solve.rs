@@ -108,7 +108,7 @@ impl Fit {
                 let n = c.readings_um.len();
                 let ss: f64 = (row..row + n).map(|i| self.residual_um[i].powi(2)).sum();
                 row += n;
-                (c.name.clone(), (ss / n as f64).sqrt())
+                (c.label(), (ss / n as f64).sqrt())
             })
             .collect()
     }
@@ -129,7 +129,7 @@ impl Fit {
                     .iter()
                     .position(|&x| x == col)
                     .map_or(f64::NAN, |j| self.cov[(j, j)].max(0.0).sqrt());
-                (data.channels[ci].name.clone(), self.theta[col], sd)
+                (data.channels[ci].label(), self.theta[col], sd)
             })
             .collect()
     }
