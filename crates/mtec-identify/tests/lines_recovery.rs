@@ -125,25 +125,31 @@ fn noise_free_smooth_truth_is_recovered_exactly() {
 }
 
 /// Issue 3: the identified model predicts the volumetric error at 1000 random workspace points
-/// to within 1 µm RMS of the truth, on every one of 12 seeds (3 runs of each line).
-/// Measured: median 0.28 µm, worst 0.49 µm. Before the straightness basis followed ISO 230-1's
-/// least-squares reference line the median was 0.84 µm and the worst 1.53 µm (one run): see
-/// `mtec_identify::lines::model`.
+/// to within 1 µm RMS of the truth, on every one of 12 seeds (3 runs of each line), at the
+/// default degree 3 and at degree 4 (the degree of the 3σ element check below, so that one
+/// identification meets both of the issue's conditions).
+/// Measured: degree 3 median 0.28 µm, worst 0.49 µm; degree 4 median 0.30, worst 0.44 µm.
+/// Before the straightness basis followed ISO 230-1's least-squares reference line the median
+/// was 0.84 µm and the worst 1.53 µm (degree 3, one run): see `mtec_identify::lines::model`.
 #[test]
 fn vmc_9line_predicts_the_volumetric_error() {
-    let mut r: Vec<f64> = (1..=12)
-        .map(|seed| {
-            let (m, data, truth) = scenario(seed);
-            let id = identify(&m, &data, DEFAULT_DEGREE).unwrap();
-            let r = volumetric_rms(&m, &truth, &id.errors);
-            println!("seed {seed}: volumetric RMS {r:.3} µm");
-            r
-        })
-        .collect();
-    r.sort_by(f64::total_cmp);
-    let median = 0.5 * (r[5] + r[6]);
-    println!("median {median:.3} µm, worst {:.3} µm", r[11]);
-    assert!(r[11] < 1.0, "worst seed {} µm", r[11]);
+    let runs: Vec<_> = (1..=12).map(scenario).collect();
+    for degree in [DEFAULT_DEGREE, 4] {
+        let mut r: Vec<f64> = runs
+            .iter()
+            .map(|(m, data, truth)| {
+                volumetric_rms(m, truth, &identify(m, data, degree).unwrap().errors)
+            })
+            .collect();
+        println!("degree {degree}: volumetric RMS per seed {r:.3?} µm");
+        r.sort_by(f64::total_cmp);
+        let median = 0.5 * (r[5] + r[6]);
+        println!(
+            "degree {degree}: median {median:.3} µm, worst {:.3} µm",
+            r[11]
+        );
+        assert!(r[11] < 1.0, "degree {degree}: worst seed {} µm", r[11]);
+    }
 }
 
 /// The truth combination each identified element estimates, as coefficients on its basis.
