@@ -9,24 +9,15 @@
 
 use mtec_comp::kinematic::KinematicModel;
 use mtec_comp::{command_for_target, CorrectionOptions};
-use mtec_identify::lines::{identify, LineData, DEFAULT_DEGREE};
-use mtec_io::Table;
-use mtec_model::{ErrorSet, Formalism, Machine, Order, VolumetricModel};
+mod support;
+
+use mtec_identify::lines::{identify, DEFAULT_DEGREE};
+use mtec_model::{Formalism, Order, VolumetricModel};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
-use std::path::Path;
 
 fn rates(seed: u64) -> ([f64; 3], f64, [f64; 3]) {
-    let out = mtec_sim::run_scenario("vmc-9line", seed).unwrap();
-    let csv = &out
-        .files
-        .iter()
-        .find(|f| f.name == "lines.csv")
-        .unwrap()
-        .contents;
-    let data = LineData::from_table(&Table::parse(Path::new("lines.csv"), csv).unwrap()).unwrap();
-    let truth: ErrorSet = serde_json::from_value(out.truth["errors"].clone()).unwrap();
-    let machine = Machine::vmc_xyfz(mtec_sim::vmc_9line::TOOL_LENGTH_MM);
+    let (machine, data, truth) = support::vmc_9line(seed);
     let id = identify(&machine, &data, DEFAULT_DEGREE).unwrap();
     let model = KinematicModel::new(&machine, &id.errors, "9-line identification").unwrap();
     let vm = VolumetricModel::new(&machine, &truth);

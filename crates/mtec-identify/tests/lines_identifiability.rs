@@ -7,21 +7,14 @@
 //! - `ECY` (yaw of Y, which carries X and the workpiece) reaches the tool as Ex ∋ y·ECY(y),
 //!   as a function of y alone in x, like the straightness `EXY`.
 
+mod support;
+
 use mtec_identify::lines::{identify, ChannelKind, LineData};
-use mtec_io::Table;
 use mtec_model::Machine;
-use std::path::Path;
 
 fn nine_line_data() -> (Machine, LineData) {
-    let out = mtec_sim::run_scenario("vmc-9line", 1).unwrap();
-    let csv = &out
-        .files
-        .iter()
-        .find(|f| f.name == "lines.csv")
-        .unwrap()
-        .contents;
-    let data = LineData::from_table(&Table::parse(Path::new("lines.csv"), csv).unwrap()).unwrap();
-    (Machine::vmc_xyfz(mtec_sim::vmc_9line::TOOL_LENGTH_MM), data)
+    let (m, data, _) = support::vmc_9line(1);
+    (m, data)
 }
 
 fn lost(m: &Machine, data: &LineData) -> Vec<(String, Vec<String>)> {

@@ -1,6 +1,8 @@
 //! Recovery of the virtual machine's truth from its `vmc-9line` measurements
 //! (issue 3, Done-when: volumetric prediction and per-element 3σ checks).
 
+mod support;
+
 use mtec_identify::lines::model::Block;
 use mtec_identify::lines::{identify, solve::polynomial_in_q, Layout, LineData, DEFAULT_DEGREE};
 use mtec_io::Table;
@@ -15,16 +17,7 @@ use std::path::Path;
 const L_MM: f64 = mtec_sim::vmc_9line::TOOL_LENGTH_MM;
 
 fn scenario(seed: u64) -> (Machine, LineData, ErrorSet) {
-    let out = mtec_sim::run_scenario("vmc-9line", seed).unwrap();
-    let csv = &out
-        .files
-        .iter()
-        .find(|f| f.name == "lines.csv")
-        .unwrap()
-        .contents;
-    let data = LineData::from_table(&Table::parse(Path::new("lines.csv"), csv).unwrap()).unwrap();
-    let truth: ErrorSet = serde_json::from_value(out.truth["errors"].clone()).unwrap();
-    (Machine::vmc_xyfz(L_MM), data, truth)
+    support::vmc_9line(seed)
 }
 
 /// RMS over 1000 random workspace points of |E_identified − E_truth| (µm), exact kinematics,
