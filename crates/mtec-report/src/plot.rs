@@ -1,6 +1,7 @@
 //! Charts as SVG strings: line charts (with optional ±bands), grouped bar charts, scatter plots.
 //! Drawn with plotters' SVG backend; no hand-written SVG.
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -143,13 +144,7 @@ pub fn line_chart(
                 });
             }
         }
-        if series.len() + bands.len() > 1 {
-            let _ = chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .draw();
-        }
+        legend(&mut chart, series.len() + bands.len());
         let _ = root.present();
     }
     svg
@@ -175,13 +170,7 @@ pub fn scatter_chart(title: &str, x_label: &str, y_label: &str, series: &[Series
                     .legend(move |(x, y)| Circle::new((x + 7, y), 3, c.filled()));
             }
         }
-        if series.len() > 1 {
-            let _ = chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .draw();
-        }
+        legend(&mut chart, series.len());
         let _ = root.present();
     }
     svg
@@ -249,16 +238,24 @@ pub fn bar_chart(
                 });
             }
         }
-        if series.len() > 1 {
-            let _ = chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .draw();
-        }
+        legend(&mut chart, series.len());
         let _ = root.present();
     }
     svg
+}
+
+/// The series legend of an x–y chart, drawn when it has more than one entry.
+fn legend<'a, 'b: 'a>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    entries: usize,
+) {
+    if entries > 1 {
+        let _ = chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw();
+    }
 }
 
 fn svg_error(title: &str) -> String {
