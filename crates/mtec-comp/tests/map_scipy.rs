@@ -17,13 +17,12 @@ fn compare(outside: Outside, expected: &str) -> f64 {
     let cols =
         ["x_mm", "y_mm", "z_mm", "ex_um", "ey_um", "ez_um"].map(|c| t.f64_column(c).unwrap());
     let mut worst: f64 = 0.0;
-    for i in 0..cols[0].len() {
-        let e = map
-            .try_error_um([cols[0][i], cols[1][i], cols[2][i]])
-            .unwrap();
-        for c in 0..3 {
-            worst = worst.max((e[c] - cols[3 + c][i]).abs());
-        }
+    for r in (0..cols[0].len()).map(|i| cols.each_ref().map(|c| c[i])) {
+        let e = map.try_error_um([r[0], r[1], r[2]]).unwrap();
+        worst = e
+            .iter()
+            .zip(&r[3..])
+            .fold(worst, |w, (a, b)| w.max((a - b).abs()));
     }
     worst
 }
