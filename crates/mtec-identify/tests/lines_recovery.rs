@@ -246,16 +246,17 @@ fn absorbed_combinations_follow_the_exact_kinematics() {
 /// travel of the 1σ band) of the truth, compared as max over the travel of |f̂ − f*| with f* the
 /// truth (combination) projected on the identification's basis (see `truth_combination`).
 ///
-/// Run at degree 4: the combination EXY − y·ECY is quartic when ECY is cubic, so at degree 3
-/// the polynomial cannot hold what EXY absorbs, and that bias (not noise) moves EXY and the
-/// correlated EC0Y by up to 5σ on some seeds. At degree 4 the estimand is representable and
-/// every element passes; degree 3 stays the default because it predicts the volumetric error
-/// better (fewer parameters, less noise).
+/// Run at degree 4 on 12 seeds (largest deviation measured: 2.8σ): the combination EXY − y·ECY
+/// is quartic when ECY is cubic, so at degree 3 the polynomial cannot hold what EXY absorbs,
+/// and that bias (not noise) moves EXY by many σ. At degree 4 the estimand is representable and
+/// every element passes; the same degree-4 identification also meets the 1 µm volumetric
+/// condition (see above). Degree 3 stays the default: it predicts the volumetric error as well
+/// with fewer parameters.
 #[test]
 fn identified_elements_lie_within_three_sigma_of_the_truth() {
     let mut worst: (f64, String) = (0.0, String::new());
     let mut failures = Vec::new();
-    for seed in 1..=4 {
+    for seed in 1..=12 {
         let (m, data, truth) = scenario(seed);
         let id = identify(&m, &data, 4).unwrap();
         for er in &id.report.elements {
