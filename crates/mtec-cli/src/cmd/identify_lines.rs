@@ -12,7 +12,8 @@ pub const LONG_ABOUT: &str =
     "Identify the 21 error elements of a three-axis machine from laser lines (9-line method).
 
 Each error motion is a polynomial of its axis position (zero at the travel's lower end;
-straightness without a linear term), squareness a constant; every straightness channel gets
+straightness measured from its least-squares reference line, ISO 230-1), squareness a
+constant; every straightness channel gets
 its own alignment slope (reported, never turned into squareness). The observation model is
 the machine's first-order kinematics; the fit is weighted least squares. The report says
 which elements the design cannot identify (named, with what they are confounded with, and
@@ -24,6 +25,8 @@ Data (CSV, SPEC §4): line,step,x_mm,y_mm,z_mm,ux,uy,uz,reading_um — one row p
 channel; the reading is the laser reading minus the commanded displacement from the line's
 first point, projected on the unit direction (ux,uy,uz). Name a line's channels `X1`
 (along the line) and `X1.y`, `X1.z` (straightness). The design is read from the points.
+/// An optional `run` column (1, 2, ...) holds repeat runs: each run of a channel has its own
+/// zero and alignment slope, and least squares averages the runs.
 
 --design checks the data against a built-in design; without --data it analyses that design
 alone (what it can identify) on the machine.
@@ -37,8 +40,8 @@ Examples:
 /// Identify the 21 error elements of a three-axis machine from laser lines (9-line method).
 ///
 /// Each error motion is a polynomial of its axis position (zero at the travel's lower end;
-/// straightness without a linear term), squareness a constant; every straightness channel gets
-/// its own alignment slope (reported, never turned into squareness). The observation model is
+/// straightness measured from its least-squares reference line, ISO 230-1), squareness a
+/// constant; every straightness channel gets its own alignment slope (reported, never turned into squareness). The observation model is
 /// the machine's first-order kinematics; the fit is weighted least squares. The report says
 /// which elements the design cannot identify (named, with what they are confounded with, and
 /// given no numbers), the rank, singular values and condition number, the residual RMS and the
@@ -49,6 +52,8 @@ Examples:
 /// channel; the reading is the laser reading minus the commanded displacement from the line's
 /// first point, projected on the unit direction (ux,uy,uz). Name a line's channels `X1`
 /// (along the line) and `X1.y`, `X1.z` (straightness). The design is read from the points.
+/// An optional `run` column (1, 2, ...) holds repeat runs: each run of a channel has its own
+/// zero and alignment slope, and least squares averages the runs.
 ///
 /// --design checks the data against a built-in design; without --data it analyses that design
 /// alone (what it can identify) on the machine.
