@@ -13,8 +13,7 @@ pub const LONG_ABOUT: &str =
 
 Each error motion is a polynomial of its axis position (zero at the travel's lower end;
 straightness measured from its least-squares reference line, ISO 230-1), squareness a
-constant; every straightness channel gets
-its own alignment slope (reported, never turned into squareness). The observation model is
+constant; every straightness channel gets its own alignment slope (reported, never turned into squareness). The observation model is
 the machine's first-order kinematics; the fit is weighted least squares. The report says
 which elements the design cannot identify (named, with what they are confounded with, and
 given no numbers), the rank, singular values and condition number, the residual RMS and the
@@ -25,8 +24,8 @@ Data (CSV, SPEC §4): line,step,x_mm,y_mm,z_mm,ux,uy,uz,reading_um — one row p
 channel; the reading is the laser reading minus the commanded displacement from the line's
 first point, projected on the unit direction (ux,uy,uz). Name a line's channels `X1`
 (along the line) and `X1.y`, `X1.z` (straightness). The design is read from the points.
-/// An optional `run` column (1, 2, ...) holds repeat runs: each run of a channel has its own
-/// zero and alignment slope, and least squares averages the runs.
+An optional `run` column (1, 2, ...) holds repeat runs: each run of a channel has its own
+zero and alignment slope, and least squares averages the runs.
 
 --design checks the data against a built-in design; without --data it analyses that design
 alone (what it can identify) on the machine.
@@ -37,32 +36,7 @@ Examples:
   mtec volumetric --machine d/machine.toml --errors d/errors.json --points pts.csv
   mtec identify lines --machine d/machine.toml --design nine-line";
 
-/// Identify the 21 error elements of a three-axis machine from laser lines (9-line method).
-///
-/// Each error motion is a polynomial of its axis position (zero at the travel's lower end;
-/// straightness measured from its least-squares reference line, ISO 230-1), squareness a
-/// constant; every straightness channel gets its own alignment slope (reported, never turned into squareness). The observation model is
-/// the machine's first-order kinematics; the fit is weighted least squares. The report says
-/// which elements the design cannot identify (named, with what they are confounded with, and
-/// given no numbers), the rank, singular values and condition number, the residual RMS and the
-/// 1-sigma uncertainty of every identified element. Predictions of the identified set are valid
-/// at the tool offset of the measurement.
-///
-/// Data (CSV, SPEC §4): line,step,x_mm,y_mm,z_mm,ux,uy,uz,reading_um — one row per point and
-/// channel; the reading is the laser reading minus the commanded displacement from the line's
-/// first point, projected on the unit direction (ux,uy,uz). Name a line's channels `X1`
-/// (along the line) and `X1.y`, `X1.z` (straightness). The design is read from the points.
-/// An optional `run` column (1, 2, ...) holds repeat runs: each run of a channel has its own
-/// zero and alignment slope, and least squares averages the runs.
-///
-/// --design checks the data against a built-in design; without --data it analyses that design
-/// alone (what it can identify) on the machine.
-///
-/// Examples:
-///   mtec simulate vmc-9line --out d --seed 1
-///   mtec identify lines --machine d/machine.toml --data d/lines.csv -o d/errors.json
-///   mtec volumetric --machine d/machine.toml --errors d/errors.json --points pts.csv
-///   mtec identify lines --machine d/machine.toml --design nine-line
+/// Options of `mtec identify lines` (its help text is [`LONG_ABOUT`]).
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Machine description (TOML): chain, travels, tool offset of the measurement.
