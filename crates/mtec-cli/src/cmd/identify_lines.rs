@@ -13,8 +13,9 @@ pub const LONG_ABOUT: &str =
 
 Each error motion is a polynomial of its axis position (zero at the travel's lower end;
 straightness measured from its least-squares reference line, ISO 230-1), squareness a
-constant; every straightness channel gets its own alignment slope (reported, never turned into squareness). The observation model is
-the machine's first-order kinematics; the fit is weighted least squares. The report says
+constant; every straightness channel gets its own alignment slope (reported, never turned
+into squareness). The observation model is the machine's first-order kinematics; the fit is
+weighted least squares. The report says
 which elements the design cannot identify (named, with what they are confounded with, and
 given no numbers), the rank, singular values and condition number, the residual RMS and the
 1-sigma uncertainty of every identified element. Predictions of the identified set are valid
