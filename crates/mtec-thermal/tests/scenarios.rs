@@ -4,7 +4,7 @@
 use mtec_io::Table;
 use mtec_thermal::select::{select_sensors, SelectOptions};
 use mtec_thermal::validate::rows_of_experiments;
-use mtec_thermal::{ExpAmbient, Fit, Mlr, Predict, RidgeSelect, ThermalData};
+use mtec_thermal::{ExpAmbient, ExpAmbientModel, Fit, Mlr, Predict, RidgeSelect, ThermalData};
 use std::path::Path;
 
 fn scenario_data(name: &str, seed: u64, target: &str) -> ThermalData {
@@ -124,34 +124,74 @@ fn spindle_sensors_ridge_selection() {
     eprintln!("worst ratio without s4: {worst_clean:.3}");
 }
 
-/// Trained on three ambient levels, the exp-ambient model predicts the fourth within 2 µm RMS.
+fn exp_ambient_held_out(
+    data: &ThermalData,
+    fitter: &ExpAmbient,
+    held: &str,
+) -> (f64, f64, ExpAmbientModel) {
+    let train_exps: Vec<String> = ["1", "2", "3", "4"]
+        .iter()
+        .filter(|e| **e != held)
+        .map(|e| e.to_string())
+        .collect();
+    let train = rows_of_experiments(data, &train_exps).unwrap();
+    let test = rows_of_experiments(data, &[held.to_string()]).unwrap();
+    let m = fitter.fit_rows(data, &train).unwrap();
+    (rmse_on(&m, data, &train), rmse_on(&m, data, &test), m)
+}
+
+/// Trained on three ambient levels, the exp-ambient model predicts the fourth (25 °C) within
+/// 2 µm RMS, on seeds 1–4 (or `SEED=n`), with b_b, k_b > 0 at every training level. On this
+/// scenario the error lags the bearing and nut sensors (column head and screw are slower
+/// bodies), so it is convex in their rises: the saturating form runs to its linear limit, b_b and
+/// k_b are held at the cap, and the model says that b_a, b_b (k_a, k_b) are not separately
+/// determined — asserted here, because it is what the data support (see exp_ambient.rs).
+/// ΔT_up from the group {up, column} (the column head carries the fixed bearing) and ΔT_nut
+/// from {nut, up} (the screw runs between nut and fixed bearing), each the first principal
+/// component, predict better than the single sensors.
 #[test]
 fn feed_axis_ambient_predicts_unseen_ambient() {
-    let seed: u64 = std::env::var("SEED")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(1);
-    let data = scenario_data("feed-axis-ambient", seed, "ez_um");
-    for held in ["3", "4", "2"] {
-        let train_exps: Vec<String> = ["1", "2", "3", "4"]
-            .iter()
-            .filter(|e| **e != held)
-            .map(|e| e.to_string())
-            .collect();
-        let train = rows_of_experiments(&data, &train_exps).unwrap();
-        let test = rows_of_experiments(&data, &[held.to_string()]).unwrap();
-        let fitter = ExpAmbient {
-            up_sensor: "up".into(),
-            nut_sensor: "nut".into(),
-        };
-        let m = fitter.fit_rows(&data, &train).unwrap();
-        let y = data.target_um().unwrap();
-        let max_err = test.iter().map(|&i| y[i].abs()).fold(0.0, f64::max);
-        let rt = rmse_on(&m, &data, &test);
-        eprintln!("held out exp {held}: train RMSE {:.3}, test RMSE {rt:.3} um (max |error| {max_err:.1} um); degree {}; {:?}", rmse_on(&m, &data, &train), m.degree, m.training_levels);
-        if held == "3" {
-            assert!(rt < 2.0, "{rt}");
+    let seeds: Vec<u64> = match std::env::var("SEED").ok().and_then(|s| s.parse().ok()) {
+        Some(s) => vec![s],
+        None => (1..=4).collect(),
+    };
+    let single = ExpAmbient {
+        up_sensor: "up".into(),
+        nut_sensor: "nut".into(),
+        ..Default::default()
+    };
+    let groups = ExpAmbient {
+        up_sensors: vec!["up".into(), "column".into()],
+        nut_sensors: vec!["nut".into(), "up".into()],
+        ..Default::default()
+    };
+    for seed in seeds {
+        let data = scenario_data("feed-axis-ambient", seed, "ez_um");
+        let (rtr, rt, m) = exp_ambient_held_out(&data, &single, "3");
+        eprintln!(
+            "seed {seed}, held out 25 °C: train RMSE {rtr:.3}, test RMSE {rt:.3} um; degree {}",
+            m.degree
+        );
+        for l in &m.identifiability {
+            eprintln!("  {l:?}");
+            assert!(l.b_b_c > 0.0 && l.k_b_c > 0.0, "seed {seed}: {l:?}");
         }
+        assert!(rt < 2.0, "seed {seed}: {rt}");
+        assert!(
+            m.warnings
+                .iter()
+                .any(|w| w.contains("b_a and b_b are not separately determined")),
+            "seed {seed}: {:?}",
+            m.warnings
+        );
+        let (_, rg, mg) = exp_ambient_held_out(&data, &groups, "3");
+        eprintln!(
+            "  groups: test RMSE {rg:.3} um; weights up {:?}, nut {:?}",
+            mg.up_group, mg.nut_group
+        );
+        assert_eq!(mg.up_group.len(), 2);
+        assert!((mg.up_group.iter().map(|g| g.weight).sum::<f64>() - 1.0).abs() < 1e-12);
+        assert!(rg < rt, "seed {seed}: groups {rg} vs single {rt}");
     }
 }
 
