@@ -294,46 +294,87 @@ fn ambient_ranking(
     rows: &[usize],
     heat: &[Vec<f64>],
 ) -> Vec<usize> {
-    let x = nalgebra::DMatrix::from_fn(rows.len(), heat.len(), |r, m| heat[m][rows[r]]);
+    let n = rows.len();
+    let x = nalgebra::DMatrix::from_fn(n, heat.len(), |r, m| heat[m][rows[r]]);
     let names: Vec<String> = (0..heat.len()).map(|m| format!("heat{m}")).collect();
+    // a rank-deficient bank ranks nothing (as the per-sensor OLS would refuse every sensor)
+    if ols(&x, &vec![0.0; n], &names).is_err() {
+        return Vec::new();
+    }
+    // one thin QR of the centred bank serves every sensor: residual = t_c − Q Qᵀ t_c
+    let mut xc = x;
+    for mut col in xc.column_iter_mut() {
+        let m = col.sum() / n as f64;
+        col.add_scalar_mut(-m);
+    }
+    let q = xc.qr().q();
     let mut r2: Vec<(usize, f64)> = Vec::new();
     for (j, s) in data.sensor_names.iter().enumerate() {
         if s == input || !s.ends_with("_c") {
             continue;
         }
         let t: Vec<f64> = rows.iter().map(|&i| data.temps_c[(i, j)]).collect();
-        let mean = t.iter().sum::<f64>() / t.len() as f64;
-        let sst: f64 = t.iter().map(|v| (v - mean).powi(2)).sum();
+        let mean = t.iter().sum::<f64>() / n as f64;
+        let tc = nalgebra::DVector::from_iterator(n, t.iter().map(|v| v - mean));
+        let sst = tc.norm_squared();
         if !(sst > 0.0) {
             continue;
         }
-        let Ok(fit) = ols(&x, &t, &names) else {
-            continue;
-        };
-        let sse: f64 = (0..rows.len())
-            .map(|r| {
-                let f = fit.intercept
-                    + (0..heat.len())
-                        .map(|m| fit.coefficients[m] * x[(r, m)])
-                        .sum::<f64>();
-                (t[r] - f).powi(2)
-            })
-            .sum();
+        let sse = (&tc - &q * (q.tr_mul(&tc))).norm_squared();
         r2.push((j, 1.0 - sse / sst));
     }
     r2.sort_by(|a, b| a.1.total_cmp(&b.1));
     r2.into_iter().map(|(j, _)| j).collect()
 }
 
+/// Temperature columns and their lags on the whole record, computed once per fit (the grid
+/// search would otherwise filter the same sensors for every configuration and fold).
+struct SensorCache {
+    temps: Vec<Vec<f64>>,
+    lags: Vec<(f64, Vec<Vec<f64>>)>,
+}
+
+impl SensorCache {
+    fn new(data: &ThermalData, lag_taus: &[f64]) -> Self {
+        let temps: Vec<Vec<f64>> = (0..data.sensor_names.len())
+            .map(|j| data.sensor(j))
+            .collect();
+        let lags = lag_taus
+            .iter()
+            .map(|&tau| {
+                (
+                    tau,
+                    temps.iter().map(|t| lag_filter(data, t, tau)).collect(),
+                )
+            })
+            .collect();
+        SensorCache { temps, lags }
+    }
+
+    fn lag(&self, data: &ThermalData, j: usize, tau: f64) -> std::borrow::Cow<'_, [f64]> {
+        match self.lags.iter().find(|(t, _)| *t == tau) {
+            Some((_, cols)) => std::borrow::Cow::Borrowed(&cols[j]),
+            None => std::borrow::Cow::Owned(lag_filter(data, &self.temps[j], tau)),
+        }
+    }
+}
+
+/// The ridge problem of the last configuration, keyed by (heat-feature set, ambient count,
+/// ambient lag): configurations that differ only in k share it.
+type ProblemMemo = Option<((usize, usize, Option<f64>), RidgeProblem)>;
+
 /// Least-squares fit of one configuration with given heat features and ambient ranking.
+#[allow(clippy::too_many_arguments)]
 fn fit_config(
     data: &ThermalData,
     input: &str,
     rows: &[usize],
     y: &[f64],
     cfg: &HeatInputConfig,
-    heat: &[Vec<f64>],
+    (heat_index, heat): (usize, &[Vec<f64>]),
     ranking: &[usize],
+    cache: &SensorCache,
+    memo: &mut ProblemMemo,
 ) -> Result<HeatInputModel, ThermalError> {
     if ranking.len() < cfg.ambient_sensors {
         return Err(ThermalError::Invalid(format!(
@@ -343,26 +384,32 @@ fn fit_config(
         )));
     }
     let amb = &ranking[..cfg.ambient_sensors];
-    let mut cols: Vec<Vec<f64>> = heat.to_vec();
-    cols.extend(amb.iter().map(|&j| data.sensor(j)));
-    if let Some(tau) = cfg.ambient_lag_min {
-        cols.extend(amb.iter().map(|&j| lag_filter(data, &data.sensor(j), tau)));
+    let key = (heat_index, cfg.ambient_sensors, cfg.ambient_lag_min);
+    if memo.as_ref().is_none_or(|(k, _)| *k != key) {
+        let mut cols: Vec<&[f64]> = heat.iter().map(|c| c.as_slice()).collect();
+        cols.extend(amb.iter().map(|&j| cache.temps[j].as_slice()));
+        let lagged: Vec<std::borrow::Cow<'_, [f64]>> = match cfg.ambient_lag_min {
+            Some(tau) => amb.iter().map(|&j| cache.lag(data, j, tau)).collect(),
+            None => Vec::new(),
+        };
+        cols.extend(lagged.iter().map(|c| c.as_ref()));
+        let x = nalgebra::DMatrix::from_fn(rows.len(), cols.len(), |r, j| cols[j][rows[r]]);
+        let mut names: Vec<String> = cfg
+            .taus_min
+            .iter()
+            .map(|t| format!("lag(p,{t}min)"))
+            .collect();
+        names.extend(amb.iter().map(|&j| data.sensor_names[j].clone()));
+        if let Some(tau) = cfg.ambient_lag_min {
+            names.extend(
+                amb.iter()
+                    .map(|&j| format!("lag({},{tau}min)", data.sensor_names[j])),
+            );
+        }
+        *memo = Some((key, RidgeProblem::new(&x, y, &names)?));
     }
-    let x = nalgebra::DMatrix::from_fn(rows.len(), cols.len(), |r, j| cols[j][rows[r]]);
-    let mut names: Vec<String> = cfg
-        .taus_min
-        .iter()
-        .map(|t| format!("lag(p,{t}min)"))
-        .collect();
-    names.extend(amb.iter().map(|&j| data.sensor_names[j].clone()));
-    if let Some(tau) = cfg.ambient_lag_min {
-        names.extend(
-            amb.iter()
-                .map(|&j| format!("lag({},{tau}min)", data.sensor_names[j])),
-        );
-    }
+    let prob = &memo.as_ref().expect("set above").1;
     let (h, a) = (heat.len(), amb.len());
-    let prob = RidgeProblem::new(&x, y, &names)?;
     let beta = prob.standardised(cfg.k)?;
     let (b0, b) = prob.destandardise(&beta);
     Ok(HeatInputModel {
@@ -418,12 +465,14 @@ impl HeatInput {
         for &rest in &self.rest_factors {
             for &alpha in &self.alphas {
                 for bank in &self.banks {
-                    for &k in &self.ks {
-                        for &a in &self.ambient_counts {
-                            for &lag in &self.ambient_lags {
-                                if a == 0 && lag.is_some() {
-                                    continue;
-                                }
+                    // k innermost: configurations that differ only in k share one ridge
+                    // factorisation in the grid search
+                    for &a in &self.ambient_counts {
+                        for &lag in &self.ambient_lags {
+                            if a == 0 && lag.is_some() {
+                                continue;
+                            }
+                            for &k in &self.ks {
                                 out.push(HeatInputConfig {
                                     alpha,
                                     taus_min: bank.clone(),
@@ -503,6 +552,8 @@ impl Fit for HeatInput {
                 }
             }
         }
+        let lag_taus: Vec<f64> = self.ambient_lags.iter().flatten().copied().collect();
+        let cache = SensorCache::new(data, &lag_taus);
         let heat_of = |c: &HeatInputConfig| -> &Vec<Vec<f64>> {
             &heat_cache
                 .iter()
@@ -536,6 +587,7 @@ impl Fit for HeatInput {
                     .iter()
                     .map(|(_, h)| ambient_ranking(data, &self.input, &train, h))
                     .collect();
+                let mut memo: ProblemMemo = None;
                 for (ci, c) in configs.iter().enumerate() {
                     let hi = heat_cache
                         .iter()
@@ -549,11 +601,13 @@ impl Fit for HeatInput {
                         &train,
                         &ytr,
                         c,
-                        &heat_cache[hi].1,
+                        (hi, &heat_cache[hi].1),
                         &rankings[hi],
+                        &cache,
+                        &mut memo,
                     ) {
                         Ok(m) => {
-                            let pred = m.predict_rows(data, &heat_cache[hi].1, test);
+                            let pred = m.predict_rows(data, &heat_cache[hi].1, test, &cache);
                             sse[ci] += test
                                 .iter()
                                 .zip(pred)
@@ -582,7 +636,17 @@ impl Fit for HeatInput {
         };
         let heat = heat_of(&cfg);
         let ranking = ambient_ranking(data, &self.input, rows, heat);
-        let mut m = fit_config(data, &self.input, rows, &y, &cfg, heat, &ranking)?;
+        let mut m = fit_config(
+            data,
+            &self.input,
+            rows,
+            &y,
+            &cfg,
+            (usize::MAX, heat),
+            &ranking,
+            &cache,
+            &mut None,
+        )?;
         m.inner_cv_rmse_um = rmse;
         Ok(m)
     }
@@ -590,15 +654,21 @@ impl Fit for HeatInput {
 
 impl HeatInputModel {
     /// Prediction on `rows` from precomputed heat features (inner CV).
-    fn predict_rows(&self, data: &ThermalData, heat: &[Vec<f64>], rows: &[usize]) -> Vec<f64> {
-        let amb: Vec<Vec<f64>> = self
+    fn predict_rows(
+        &self,
+        data: &ThermalData,
+        heat: &[Vec<f64>],
+        rows: &[usize],
+        cache: &SensorCache,
+    ) -> Vec<f64> {
+        let idx: Vec<usize> = self
             .ambient_sensors
             .iter()
             .filter_map(|s| data.sensor_names.iter().position(|n| n == s))
-            .map(|j| data.sensor(j))
             .collect();
-        let lags: Vec<Vec<f64>> = match self.ambient_lag_min {
-            Some(tau) => amb.iter().map(|t| lag_filter(data, t, tau)).collect(),
+        let amb: Vec<&[f64]> = idx.iter().map(|&j| cache.temps[j].as_slice()).collect();
+        let lags: Vec<std::borrow::Cow<'_, [f64]>> = match self.ambient_lag_min {
+            Some(tau) => idx.iter().map(|&j| cache.lag(data, j, tau)).collect(),
             None => Vec::new(),
         };
         rows.iter()
