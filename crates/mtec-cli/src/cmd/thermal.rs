@@ -47,12 +47,16 @@ enum Sub {
     /// --max-sensors sensors, each with a first-order lag of fitted time constant, scored by
     /// leaving out whole blocks of --block-min minutes or experiments), heat-input (drift =
     /// response to the spindle power: δ = b₀ + Σ c_m·L_τm[(n/1000)^α] + ambient sensors, n from
-    /// the --input column, α, τ bank, ridge k and ambient sensors chosen by leaving out blocks of
-    /// the training rows). --lag adds a first-order lag of each sensor with a fitted time
+    /// the --input column, time constants s·τ at rest (s = 1…4: a turning spindle cools faster),
+    /// α, τ bank, s, ridge k and ambient sensors chosen by leaving out blocks of the training
+    /// rows). --lag adds a first-order lag of each sensor with a fitted time
     /// constant (mlr, ridge, ridge-select).
     ///
     /// Example: mtec thermal fit --data thermal.csv --target ez_um --model exp-ambient
     /// --sensors up,nut --train 1,2,4 --test 3 -o z.json
+    ///
+    /// Sensor groups: mtec thermal fit --data thermal.csv --target ez_um --model exp-ambient
+    /// --up-sensors up,column --nut-sensors nut,up --train 1,2,4 --test 3 -o zg.json
     Fit(FitArgs),
     /// Predicts the drift with a model file; metrics when the data hold the target.
     ///
@@ -594,6 +598,12 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
                 .map(|(c, s)| format!("{c:.5} ± {s:.5}"))
                 .collect();
             println!("  {name:<12} {}", terms.join(", "));
+        }
+        if !m.held_at_cap.is_empty() {
+            println!(
+                "  held at the linear-limit cap (100 × the largest training rise, not fitted; ± 0 means held): {}",
+                m.held_at_cap.join(", ")
+            );
         }
         for l in &m.identifiability {
             println!(
