@@ -321,7 +321,9 @@ fn print_selection(sel: &Selection, target: &str) {
             if v.severe { "severe" } else { "" }
         );
     }
-    println!("\nRidge-trace elimination (rules: stable-small, unstable-to-zero, unstable)");
+    println!(
+        "\nRidge-trace elimination (rules: stable-small, unstable-to-zero, unstable, sign-change)"
+    );
     for (i, s) in sel.steps.iter().enumerate() {
         println!(
             "  step {}: {:<17} removed {:<24} at k = {:.4}; remaining {}",
