@@ -171,6 +171,78 @@ fn exp_ambient_fit_and_refusals() {
     assert!(file["test_metrics"]["rmse_um"].as_f64().unwrap() < 2.0);
     assert_eq!(file["model"]["kind"], "exp-ambient");
 
+    // b_b, k_b positive; the linear-limit warning goes to stderr
+    for l in file["model"]["identifiability"].as_array().unwrap() {
+        assert!(l["b_b_c"].as_f64().unwrap() > 0.0 && l["k_b_c"].as_f64().unwrap() > 0.0);
+    }
+    assert!(
+        stderr(&o).contains("b_a and b_b are not separately determined"),
+        "{}",
+        stderr(&o)
+    );
+
+    // ΔT_up, ΔT_nut from sensor groups (first principal component of each)
+    let g = dir.path().join("zg.json");
+    let o = mtec(&[
+        "thermal",
+        "fit",
+        "--data",
+        d,
+        "--target",
+        "ez_um",
+        "--model",
+        "exp-ambient",
+        "--up-sensors",
+        "up,column",
+        "--nut-sensors",
+        "nut,up",
+        "--train",
+        "1,2,4",
+        "--test",
+        "3",
+        "-o",
+        g.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let gf: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&g).unwrap()).unwrap();
+    let up = gf["model"]["up_group"].as_array().unwrap();
+    assert_eq!(up.len(), 2);
+    assert_eq!(up[1]["sensor"], "column_c");
+    assert!(String::from_utf8_lossy(&o.stdout).contains("first principal component"));
+    assert!(
+        gf["test_metrics"]["rmse_um"].as_f64().unwrap()
+            < file["test_metrics"]["rmse_um"].as_f64().unwrap()
+    );
+    let o = mtec(&[
+        "thermal",
+        "predict",
+        "--model",
+        g.to_str().unwrap(),
+        "--data",
+        d,
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // groups go with exp-ambient only
+    let o = mtec(&[
+        "thermal",
+        "fit",
+        "--data",
+        d,
+        "--target",
+        "ez_um",
+        "--model",
+        "mlr",
+        "--up-sensors",
+        "up",
+        "--nut-sensors",
+        "nut",
+        "-o",
+        dir.path().join("w.json").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+
     // one ambient level: refused, exit 2, message says why
     let o = mtec(&[
         "thermal",

@@ -23,8 +23,14 @@ fn main() {
     let out = args.next().map(PathBuf::from);
     let table = Table::read(&path).expect("readable file");
     let rpm = table.f64_column("spindle_rpm").expect("spindle_rpm column");
+    // MTEC_REST_FACTORS=1 reproduces the model without rest time constants (before/after)
+    let rest_factors: Vec<f64> = std::env::var("MTEC_REST_FACTORS")
+        .ok()
+        .map(|s| s.split(',').filter_map(|v| v.parse().ok()).collect())
+        .unwrap_or_else(|| HeatInput::default().rest_factors);
     let fitter = HeatInput {
         block_min: Some(BLOCK_MIN),
+        rest_factors,
         ..Default::default()
     };
     println!("nested leave-one-block-out RMSE (um), 8 blocks of {BLOCK_MIN} min");
@@ -42,8 +48,8 @@ fn main() {
         let hi = block_cv(&fitter, &d, &blocks).unwrap().pooled_rmse_um;
         let m = fitter.fit(&d).unwrap();
         println!(
-            "ch{ch}  {mlr:>8.3} {hi:>10.3}  α={} τ={:?} k={} ambient={:?} lag {:?}",
-            m.alpha, m.taus_min, m.k, m.ambient_sensors, m.ambient_lag_min
+            "ch{ch}  {mlr:>8.3} {hi:>10.3}  α={} τ={:?} rest×{} k={} ambient={:?} lag {:?}",
+            m.alpha, m.taus_min, m.rest_tau_factor, m.k, m.ambient_sensors, m.ambient_lag_min
         );
         if let Some(dir) = &out {
             let train_metrics = m.evaluate(&d).unwrap();

@@ -5,8 +5,13 @@
 //! factors, the ridge trace and sensor elimination by its rules, the comparison table (full MLR,
 //! ridge-selected, simple-correlation top-n), and the ambient-adaptive exponential feed-axis
 //! model — plus thermal-dynamics features (first-order lags with fitted time constants,
-//! temperature rates) so a linear model follows duty cycles it was not trained on, and
-//! `lag-select`, a forward selection of a few sensors with lags scored on held-out blocks.
+//! temperature rates) so a linear model follows duty cycles it was not trained on,
+//! `lag-select`, a forward selection of a few sensors with lags scored on held-out blocks, and
+//! `heat-input`, the drift as the lagged response to the spindle power (with longer time
+//! constants at rest than while running) plus ambient sensors. The exp-ambient model keeps its
+//! time-constant-like parameters positive, reports when the data cannot separate them from the
+//! amplitudes, and can take its temperature rises from sensor groups (first principal
+//! component).
 //! Every model `fit`s and `predict`s through the traits in [`model`], serialises to versioned
 //! JSON (`mtec.thermal-model/1`) and is scored by one [`Metrics`] type.
 //!

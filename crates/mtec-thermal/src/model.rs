@@ -261,10 +261,15 @@ impl Fit for RidgeSelect {
 }
 
 /// The exp-ambient feed-axis model fitter (see [`crate::exp_ambient`]).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct ExpAmbient {
     pub up_sensor: String,
     pub nut_sensor: String,
+    /// When not empty, ΔT_up is the first principal component of these sensors' rises (and
+    /// `up_sensor` is ignored).
+    pub up_sensors: Vec<String>,
+    /// Likewise for ΔT_nut.
+    pub nut_sensors: Vec<String>,
 }
 
 impl Fit for ExpAmbient {
@@ -274,7 +279,18 @@ impl Fit for ExpAmbient {
         data: &ThermalData,
         rows: &[usize],
     ) -> Result<ExpAmbientModel, ThermalError> {
-        ExpAmbientModel::fit(&data.rows(rows), &self.up_sensor, &self.nut_sensor)
+        let pick = |group: &[String], one: &str| {
+            if group.is_empty() {
+                vec![one.to_string()]
+            } else {
+                group.to_vec()
+            }
+        };
+        ExpAmbientModel::fit_groups(
+            &data.rows(rows),
+            &pick(&self.up_sensors, &self.up_sensor),
+            &pick(&self.nut_sensors, &self.nut_sensor),
+        )
     }
 }
 
@@ -292,7 +308,8 @@ impl Predict for ExpAmbientModel {
 #[serde(tag = "kind", rename_all = "kebab-case")]
 pub enum ThermalModel {
     Linear(LinearModel),
-    ExpAmbient(ExpAmbientModel),
+    /// Boxed: the model carries many coefficient vectors (keeps the enum small).
+    ExpAmbient(Box<ExpAmbientModel>),
     HeatInput(crate::heat_input::HeatInputModel),
 }
 

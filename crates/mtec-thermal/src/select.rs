@@ -16,12 +16,32 @@
 //! - rule `stable-small`: drop every sensor that is stable and small;
 //!   rule `unstable-to-zero`: drop every sensor that is unstable and small at k* (it fell to zero
 //!   quickly as k grew);
-//!   rule `unstable`: when neither fired, drop the one sensor with the largest swing.
+//!   rule `unstable`: when neither fired, drop the one sensor with the largest swing;
+//!   rule `sign-change` (last resort, when none of the three fired): drop the one sensor whose
+//!   coefficient changes sign along the whole trace (k > 0) with the largest swing there. The
+//!   swing of the first three rules is read over k ≤ k* only, and k* can be the second grid
+//!   point; a coefficient that crosses zero later on the trace is the source's "unstable"
+//!   coefficient all the same (Hoerl & Kennard read sign changes as the mark of collinearity).
+//!   Added because spindle-sensors seed 3 stopped at five sensors with s7 going from −0.14 to
+//!   +0.15 along the trace.
 //! - repeat on the remaining sensors (new trace, new k*) until no rule fires.
 //!
 //! Tried and rejected on the `spindle-sensors` scenario over seeds 1–8: dropping one sensor per
 //! step instead of all that a rule names, lower thresholds, and continuing while max VIF > 10 —
-//! the last always ends at two sensors and loses test accuracy.
+//! the last always ends at two sensors and loses test accuracy. Also rejected (second round):
+//! `stable_step` 0.005/0.015/0.02, `small` 0.2/0.25, `unstable` 0.3; k* as "the trace never turns
+//! faster than `stable_step` again" or "stays below it for 5/10/25 grid steps"; one k* from the
+//! full trace for every step; the swing read without k = 0; the final k by generalised
+//! cross-validation. Each fixed one seed and broke others: the selection among near-equivalent
+//! collinear subsets is decided by sampling noise of a 120-row run, not by a threshold.
+//!
+//! Known limit (measured on seeds 1–8, see `tests/scenarios.rs`): a sensor that carries no drift
+//! but moves with one that does over the whole training run (spindle-sensors: the rear bearing
+//! s4 with the front bearing s1 while the spindle never stops) gets a stable, equal share of the
+//! ridge trace and is kept; no rule can drop it, because the run holds no information that tells
+//! the two apart. Seeds 3 and 7 keep s4 and predict the unseen duty cycle (with a stop) 12–14 %
+//! worse than the full model; without s4 they are within 6 %. Train on a run that also stops the
+//! spindle (or contains whatever separates the sensors) when selecting sensors for a machine.
 //!
 //! The comparison table then fits: the full MLR (all sensors), the ridge model at the final k*
 //! on the selected sensors, and the MLR on the n sensors with the largest simple correlation
@@ -262,6 +282,16 @@ pub fn select_sensors(
             }
         }
         if drop.is_empty() {
+            // last resort (module docs): a coefficient that changes sign along the trace
+            if let Some(j) = (0..keep.len())
+                .filter(|&j| trace_sign_change(&trace, j))
+                .max_by(|&a, &b| trace_swing(&trace, a).total_cmp(&trace_swing(&trace, b)))
+            {
+                drop = vec![j];
+                rule = "sign-change";
+            }
+        }
+        if drop.is_empty() {
             break;
         }
         if drop.len() == keep.len() {
@@ -343,6 +373,25 @@ pub fn select_sensors(
         comparison,
         options: opt,
     })
+}
+
+/// Whether coefficient j changes sign along the trace for k > 0 (k = 0, OLS, is left out: with
+/// near-dependent sensors its coefficients are noise).
+fn trace_sign_change(trace: &RidgeTrace, j: usize) -> bool {
+    let v = trace.coefficients[1..].iter().map(|r| r[j]);
+    let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+        (l.min(x), h.max(x))
+    });
+    lo < 0.0 && hi > 0.0
+}
+
+/// max − min of coefficient j along the trace for k > 0.
+fn trace_swing(trace: &RidgeTrace, j: usize) -> f64 {
+    let v = trace.coefficients[1..].iter().map(|r| r[j]);
+    let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+        (l.min(x), h.max(x))
+    });
+    hi - lo
 }
 
 /// Indices of the `n` regressors with the largest |Pearson correlation| with y (ties by order).

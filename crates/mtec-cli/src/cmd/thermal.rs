@@ -40,17 +40,23 @@ enum Sub {
     ///
     /// Models: mlr (all or --sensors), ridge (k from the ridge trace or --k), ridge-select
     /// (sensors chosen by the ridge trace), exp-ambient (δ = k·x + b with exponential
-    /// saturation in the temperature rises of --sensors UP,NUT and cubic-in-ambient
-    /// coefficients; needs ambient_c and position_mm), lag-select (forward selection of up to
+    /// saturation in the temperature rises of --sensors UP,NUT, or of the first principal
+    /// components of --up-sensors A,B --nut-sensors C,D, and cubic-in-ambient coefficients, b_b
+    /// and k_b kept positive; needs ambient_c and position_mm; warns when the rises stay in the
+    /// exponential's linear range, where b_a and b_b cannot be told apart), lag-select (forward selection of up to
     /// --max-sensors sensors, each with a first-order lag of fitted time constant, scored by
     /// leaving out whole blocks of --block-min minutes or experiments), heat-input (drift =
     /// response to the spindle power: δ = b₀ + Σ c_m·L_τm[(n/1000)^α] + ambient sensors, n from
-    /// the --input column, α, τ bank, ridge k and ambient sensors chosen by leaving out blocks of
-    /// the training rows). --lag adds a first-order lag of each sensor with a fitted time
+    /// the --input column, time constants s·τ at rest (s = 1…4: a turning spindle cools faster),
+    /// α, τ bank, s, ridge k and ambient sensors chosen by leaving out blocks of the training
+    /// rows). --lag adds a first-order lag of each sensor with a fitted time
     /// constant (mlr, ridge, ridge-select).
     ///
     /// Example: mtec thermal fit --data thermal.csv --target ez_um --model exp-ambient
     /// --sensors up,nut --train 1,2,4 --test 3 -o z.json
+    ///
+    /// Sensor groups: mtec thermal fit --data thermal.csv --target ez_um --model exp-ambient
+    /// --up-sensors up,column --nut-sensors nut,up --train 1,2,4 --test 3 -o zg.json
     Fit(FitArgs),
     /// Predicts the drift with a model file; metrics when the data hold the target.
     ///
@@ -122,6 +128,24 @@ struct Common {
     /// heat-input: the heat-source column (spindle speed, rpm).
     #[arg(long, default_value = "spindle_rpm")]
     input: String,
+    /// exp-ambient: ΔT_up from several sensors — the first principal component of their
+    /// (standardised) rises, as a weighted mean in °C. Goes with --nut-sensors, instead of
+    /// --sensors.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        requires = "nut_sensors",
+        conflicts_with = "sensors"
+    )]
+    up_sensors: Vec<String>,
+    /// exp-ambient: ΔT_nut from several sensors (like --up-sensors).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        requires = "up_sensors",
+        conflicts_with = "sensors"
+    )]
+    nut_sensors: Vec<String>,
 }
 
 #[derive(clap::Args)]
@@ -297,7 +321,9 @@ fn print_selection(sel: &Selection, target: &str) {
             if v.severe { "severe" } else { "" }
         );
     }
-    println!("\nRidge-trace elimination (rules: stable-small, unstable-to-zero, unstable)");
+    println!(
+        "\nRidge-trace elimination (rules: stable-small, unstable-to-zero, unstable, sign-change)"
+    );
     for (i, s) in sel.steps.iter().enumerate() {
         println!(
             "  step {}: {:<17} removed {:<24} at k = {:.4}; remaining {}",
@@ -395,19 +421,28 @@ fn fit_model(c: &Common, data: &ThermalData, rows: &[usize]) -> Result<ThermalMo
             }
             .fit_rows(data, rows)?,
         ),
+        ModelKind::ExpAmbient if !c.up_sensors.is_empty() => ThermalModel::ExpAmbient(Box::new(
+            ExpAmbient {
+                up_sensors: c.up_sensors.clone(),
+                nut_sensors: c.nut_sensors.clone(),
+                ..Default::default()
+            }
+            .fit_rows(data, rows)?,
+        )),
         ModelKind::ExpAmbient => {
             let [up, nut] = c.sensors.as_slice() else {
                 return Err(ThermalError::Invalid(
-                    "exp-ambient needs --sensors UP,NUT: the upper-bearing sensor, then the ball-screw-nut sensor".into(),
+                    "exp-ambient needs --sensors UP,NUT: the upper-bearing sensor, then the ball-screw-nut sensor (or --up-sensors A,B --nut-sensors C,D for sensor groups)".into(),
                 ));
             };
-            ThermalModel::ExpAmbient(
+            ThermalModel::ExpAmbient(Box::new(
                 ExpAmbient {
                     up_sensor: up.clone(),
                     nut_sensor: nut.clone(),
+                    ..Default::default()
                 }
                 .fit_rows(data, rows)?,
-            )
+            ))
         }
     })
 }
@@ -422,6 +457,11 @@ fn check_common(c: &Common) -> Result<(), CliError> {
     }
     if c.model == ModelKind::LagSelect && c.max_sensors == 0 {
         return Err(CliError::usage("--max-sensors must be at least 1"));
+    }
+    if c.model != ModelKind::ExpAmbient && !c.up_sensors.is_empty() {
+        return Err(CliError::usage(
+            "--up-sensors and --nut-sensors go with --model exp-ambient",
+        ));
     }
     if c.model == ModelKind::ExpAmbient && c.lag {
         return Err(CliError::usage(
@@ -533,14 +573,26 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
     };
     if let ThermalModel::ExpAmbient(m) = &file.model {
         println!(
-            "exp-ambient: δ = k·x + b, b = b_a(1 − exp(−ΔT_up/b_b)), k = k_a(1 − exp(−ΔT_nut/k_b)); polynomials of degree {} in u = (T_a − 20 °C)/10 °C (coefficient ± standard uncertainty, ascending powers)",
+            "exp-ambient: δ = k·x + b, b = b_a(1 − exp(−ΔT_up/b_b)), k = k_a(1 − exp(−ΔT_nut/k_b)); b_a, ln b_b, k_a, ln k_b polynomials of degree {} in u = (T_a − 20 °C)/10 °C (coefficient ± standard uncertainty, ascending powers)",
             m.degree
         );
+        for (name, group) in [("ΔT_up", &m.up_group), ("ΔT_nut", &m.nut_group)] {
+            if !group.is_empty() {
+                let terms: Vec<String> = group
+                    .iter()
+                    .map(|g| format!("{:.4}·Δ{}", g.weight, g.sensor))
+                    .collect();
+                println!(
+                    "  {name} = {} (first principal component)",
+                    terms.join(" + ")
+                );
+            }
+        }
         for (name, c, sd) in [
             ("b_a [um]", &m.b_a, &m.b_a_sd),
-            ("b_b [C]", &m.b_b, &m.b_b_sd),
+            ("ln b_b [C]", &m.ln_b_b, &m.ln_b_b_sd),
             ("k_a [um/mm]", &m.k_a, &m.k_a_sd),
-            ("k_b [C]", &m.k_b, &m.k_b_sd),
+            ("ln k_b [C]", &m.ln_k_b, &m.ln_k_b_sd),
         ] {
             let terms: Vec<String> = c
                 .iter()
@@ -548,6 +600,21 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
                 .map(|(c, s)| format!("{c:.5} ± {s:.5}"))
                 .collect();
             println!("  {name:<12} {}", terms.join(", "));
+        }
+        if !m.held_at_cap.is_empty() {
+            println!(
+                "  held at the linear-limit cap (100 × the largest training rise, not fitted; ± 0 means held): {}",
+                m.held_at_cap.join(", ")
+            );
+        }
+        for l in &m.identifiability {
+            println!(
+                "  at {} °C: b_b = {:.4} °C (max ΔT_up {:.2} °C), k_b = {:.4} °C (max ΔT_nut {:.2} °C)",
+                l.ambient_c, l.b_b_c, l.max_dt_up_c, l.k_b_c, l.max_dt_nut_c
+            );
+        }
+        for w in &m.warnings {
+            eprintln!("warning: {w}");
         }
     }
     show("train", &file.train_metrics);
