@@ -31,6 +31,7 @@ pub mod lm;
 pub mod metrics;
 mod progress;
 mod rng;
+pub mod rotary;
 pub mod synthetic;
 
 pub use baseline::{compare_on_split, evaluate_bpnn, train_bpnn_baseline, SplitComparison};
