@@ -114,13 +114,16 @@ fn header_error(t: &Table, msg: String) -> CliError {
 }
 
 /// Reads the log into sequences. `targets` empty or absent columns with `need_targets = false`
-/// give zero targets (prediction only).
+/// give zero targets (prediction only). `strict_time`: a time may not repeat within a sequence
+/// (the sequence model's rows are time steps; the BPNN takes rows one by one and only uses the
+/// time order for its validation tail).
 fn load(
     path: &Path,
     feature_names: &[String],
     targets: &[String],
     sequence_by: Option<&str>,
     need_targets: bool,
+    strict_time: bool,
 ) -> Result<Loaded, CliError> {
     let t = Table::read(path)?;
     t.require(&["time_min"])?;
@@ -184,7 +187,7 @@ fn load(
         for (_, mut rows) in seqs {
             rows.sort_by(|a, b| a.0.total_cmp(&b.0));
             for w in rows.windows(2) {
-                if w[0].0 == w[1].0 {
+                if strict_time && w[0].0 == w[1].0 {
                     return Err(CliError::Input(t.error_at(
                         &t.rows[w[1].1],
                         "time_min",
@@ -361,7 +364,14 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
         None => None,
     };
     drop(table);
-    let loaded = load(r.data, &features, &targets, seq_by.as_deref(), true)?;
+    let loaded = load(
+        r.data,
+        &features,
+        &targets,
+        seq_by.as_deref(),
+        true,
+        r.kind == NnKind::CnnLstm,
+    )?;
     let train_ids = parse_ids(r.train, "train")?;
     let mut test_ids = parse_ids(r.test, "test")?;
     if !test_ids.is_empty() && train_ids.is_empty() {
@@ -557,7 +567,8 @@ pub fn predict(
             .map(str::to_string),
         NnModel::Bpnn(_) => None,
     };
-    let loaded = load(data, features, targets, seq_by.as_deref(), false)?;
+    let strict = matches!(model, NnModel::CnnLstm(_));
+    let loaded = load(data, features, targets, seq_by.as_deref(), false, strict)?;
     let pred = match &model {
         NnModel::CnnLstm(m) => m.predict(&loaded.data).map_err(|e| nn_error(data, e))?,
         NnModel::Bpnn(m) => loaded
