@@ -20,8 +20,8 @@
 //!
 //! Decisions where the source is silent:
 //! - The angle enters as one feature `angle_deg` (as in the source: "temperatures and angle"),
-//!   z-scored like every feature. The sequences do not wrap at 360°: the angle is a fixed label
-//!   of each sequence, not a time series.
+//!   z-scored like every feature, or as `cos_angle, sin_angle` ([`AngleEncoding::CosSin`],
+//!   continuous across 0°/360°). The angle is a fixed label of each sequence, not a time series.
 //! - The readings are compared *after* the mean and first harmonic are removed from both the
 //!   measured and the predicted signal of each mode: the raw readings carry a new set-up error
 //!   (ball and cup eccentricity, ~10 µm) at every installation, which no model of the axis can or
