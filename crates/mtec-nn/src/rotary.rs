@@ -424,3 +424,168 @@ pub fn compare_readings(
         change_residual_ratio: ratio(c_max_r, c_max_y),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mtec_identify::ballbar::identify::Measurement;
+
+    fn setup() -> Setup {
+        Setup::preset(Setup::default_dims()).unwrap()
+    }
+
+    const N: usize = 24;
+
+    fn angles() -> Vec<f64> {
+        (0..N).map(|i| i as f64 * 360.0 / N as f64).collect()
+    }
+
+    /// Harmonics 2–3 only (no content the removal touches, see `harmonics.rs`) plus, optionally,
+    /// a uniform axial growth and a constant tilt, which the method cannot see.
+    fn motions(c_deg: f64, growth: f64) -> ErrorMotions {
+        let r = c_deg.to_radians();
+        ErrorMotions {
+            exc_um: 2.0 * (3.0 * r).cos(),
+            eyc_um: 2.5 * (3.0 * r).sin(),
+            ezc_um: 1.2 * (2.0 * r).sin() + growth,
+            eac_urad: 20.0 * (2.0 * r).cos(),
+            ebc_urad: -20.0 * (2.0 * r).sin() + 3.0 * growth,
+            ecc_urad: 0.0,
+        }
+    }
+
+    #[test]
+    fn observable_part_keeps_visible_motions_and_drops_growth_and_tilt() {
+        let rows: Vec<ErrorMotionsAt> = angles()
+            .into_iter()
+            .map(|c| ErrorMotionsAt {
+                experiment: 1,
+                time_min: 0.0,
+                angle_deg: c,
+                motions: motions(c, 5.0),
+            })
+            .collect();
+        let seen = observable_motions(&setup(), &rows).unwrap();
+        assert_eq!(seen.len(), N);
+        for r in &seen {
+            let want = motions(r.angle_deg, 0.0).observable();
+            for k in 0..5 {
+                assert!(
+                    (r.motions[k] - want[k]).abs() < 1e-9,
+                    "{k}: {:?}",
+                    r.motions
+                );
+            }
+        }
+    }
+
+    /// Readings worked by hand: measured readings are the model readings of known motions at
+    /// two times; predicting those motions exactly leaves no residual, predicting the t = 0
+    /// motions at both times leaves exactly the thermal change as residual.
+    #[test]
+    fn readings_comparison_by_construction() {
+        let s = setup();
+        let change = |c: f64| ErrorMotions {
+            exc_um: 0.8 * (2.0 * c.to_radians()).cos(),
+            ..Default::default()
+        };
+        let at = |t: f64, c: f64| {
+            let mut m = motions(c, 0.0);
+            if t > 0.0 {
+                m.exc_um += change(c).exc_um;
+            }
+            m
+        };
+        let items = [0.0, 20.0]
+            .iter()
+            .map(|&t| Measurement {
+                experiment: 3,
+                time_min: t,
+                angles_deg: angles(),
+                dl_um: (0..5)
+                    .map(|m| {
+                        angles()
+                            .iter()
+                            .map(|&c| predicted_dl_um(&s, c, &at(t, c))[m] + 7.0)
+                            .collect()
+                    })
+                    .collect(),
+                first_line: 2,
+            })
+            .collect();
+        let measured = Measurements { items };
+        let rows = |f: &dyn Fn(f64, f64) -> ErrorMotions| -> Vec<MotionRow> {
+            [0.0, 20.0]
+                .iter()
+                .flat_map(|&t| angles().into_iter().map(move |c| (t, c)))
+                .map(|(t, c)| MotionRow {
+                    experiment: 3,
+                    time_min: t,
+                    angle_deg: c,
+                    motions: f(t, c).observable(),
+                })
+                .collect()
+        };
+        let exact = compare_readings(&s, &measured, 3, &rows(&at)).unwrap();
+        assert_eq!(exact.n, 2 * 5 * N);
+        assert!(exact.max_abs_residual_um < 1e-9 && exact.residual_ratio < 1e-9);
+        assert!(exact.max_abs_measured_um > 1.0);
+        let stale = compare_readings(&s, &measured, 3, &rows(&|_, c| at(0.0, c))).unwrap();
+        // the t = 20 readings differ by the change's readings, cleaned like every signal
+        let mut want = 0.0f64;
+        for m in 0..5 {
+            let sig: Vec<f64> = angles()
+                .iter()
+                .map(|&c| predicted_dl_um(&s, c, &change(c))[m])
+                .collect();
+            for v in remove_mean_and_first_harmonic(&angles(), &sig).unwrap() {
+                want = want.max(v.abs());
+            }
+        }
+        assert!(want > 0.3, "{want}");
+        assert!((stale.max_abs_residual_um - want).abs() < 1e-9);
+        assert!((stale.change_max_abs_measured_um - want).abs() < 1e-9);
+        assert!((stale.change_residual_ratio - 1.0).abs() < 1e-9);
+        // an experiment without measurements is refused
+        assert!(compare_readings(&s, &measured, 4, &rows(&at)).is_err());
+    }
+
+    #[test]
+    fn dataset_needs_a_temperature_row_for_every_measurement() {
+        let row = |t: f64, c: f64| IdentifiedRow {
+            experiment: 1,
+            time_min: t,
+            angle_deg: c,
+            motions: motions(c, 0.0),
+        };
+        let temps = TemperatureLog {
+            sensor_names: vec!["T1_c".into(), "T2_c".into()],
+            rows: [
+                ((1, 0), vec![20.0, 20.1]),
+                ((1, key(20.0)), vec![21.0, 20.5]),
+            ]
+            .into_iter()
+            .collect(),
+        };
+        let rows = vec![
+            row(20.0, 90.0),
+            row(0.0, 0.0),
+            row(0.0, 90.0),
+            row(20.0, 0.0),
+        ];
+        let d = RotaryDataset::build(&temps, &rows, AngleEncoding::Degrees).unwrap();
+        assert_eq!(d.data.feature_names, ["T1_c", "T2_c", "angle_deg"]);
+        let seq = &d.data.experiments[0].sequences[1]; // angle 90, times in order
+        assert_eq!(
+            seq.features,
+            vec![vec![20.0, 20.1, 90.0], vec![21.0, 20.5, 90.0]]
+        );
+        assert_eq!(d.labels[&1][1], (90.0, vec![0.0, 20.0]));
+        let cs = RotaryDataset::build(&temps, &rows, AngleEncoding::CosSin).unwrap();
+        assert_eq!(cs.data.feature_names.len(), 4);
+        let mut missing = rows.clone();
+        missing.push(row(40.0, 0.0));
+        let e = RotaryDataset::build(&temps, &missing, AngleEncoding::Degrees).unwrap_err();
+        assert!(e.to_string().contains("experiment 1 at 40 min"), "{e}");
+    }
+}
