@@ -167,10 +167,14 @@ fn check_architecture(a: &Architecture, n_features: usize) -> Result<()> {
             a.kernel
         )));
     }
-    if n_features < 2 {
-        return Err(NnError::Config(
-            "the convolution and pooling need at least 2 features".into(),
-        ));
+    // candle 0.11's Conv1d gradient underflows (panics) when the input is shorter than the
+    // kernel, so fewer features than the kernel width is refused here, not left to candle
+    if n_features < a.kernel.max(2) {
+        return Err(NnError::Config(format!(
+            "the convolution over the features needs at least {} features (kernel {}, pooling 2); the data have {n_features}",
+            a.kernel.max(2),
+            a.kernel
+        )));
     }
     Ok(())
 }

@@ -106,9 +106,9 @@ enum ModelKind {
     ExpAmbient,
     LagSelect,
     HeatInput,
-    /// Neural: CNN-LSTM sequence model (thermal_nn.rs).
+    /// Neural: CNN-LSTM sequence model (several targets; --window, --sequence-by, ...).
     CnnLstm,
-    /// Neural: one-hidden-layer BPNN on the current row (thermal_nn.rs).
+    /// Neural: one-hidden-layer BPNN on the current row (several targets; --hidden).
     Bpnn,
 }
 
@@ -127,7 +127,7 @@ struct Common {
     /// Thermal log (CSV).
     #[arg(long)]
     data: PathBuf,
-    /// Target column (`ez_um` or `ez`).
+    /// Target column (`ez_um` or `ez`); cnn-lstm and bpnn take several, comma-separated.
     #[arg(long)]
     target: String,
     /// Model family.

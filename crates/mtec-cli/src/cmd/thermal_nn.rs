@@ -352,6 +352,17 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
             "no feature columns: the file has no `_c` sensor column and no --features".into(),
         ));
     }
+    let kernel = CnnLstmConfig::default().architecture.kernel;
+    if r.kind == NnKind::CnnLstm && features.len() < kernel {
+        return Err(header_error(
+            &table,
+            format!(
+                "the CNN-LSTM's convolution (width {kernel}) needs at least {kernel} features; the data have {}: {} (add --features columns)",
+                features.len(),
+                features.join(", ")
+            ),
+        ));
+    }
     if let Some(t) = features.iter().find(|f| targets.contains(f)) {
         return Err(CliError::usage(format!(
             "`{t}` is both a feature and a target"
