@@ -33,6 +33,7 @@ fn export(d: &ThermalDataset, dir: &str) {
 }
 
 fn main() {
+    mtec_nn::threads::prefer_single_thread();
     let args: Vec<String> = std::env::args().collect();
     let arg = |name: &str| {
         args.iter()

@@ -6,7 +6,6 @@
 
 use mtec_identify::ballbar::{identify, ErrorMotions, Measurements, Setup};
 use mtec_io::Table;
-use mtec_nn::cnn_lstm::Architecture;
 use mtec_nn::metrics::{channel_metrics, ChannelMetrics};
 use mtec_nn::rotary::{
     compare_readings, observable_motions, AngleEncoding, ErrorMotionsAt, MotionRow,
@@ -81,20 +80,12 @@ fn observable_truth(s: &Scenario, experiment: u32) -> Vec<MotionRow> {
     observable_motions(&s.setup, &rows).unwrap()
 }
 
+/// The source-sized network (Conv1d 16×3, LSTM 32, window 16; 14 821 parameters) with early
+/// stopping on the last 15 % of every training sequence, at most 40 epochs.
 fn cnn_config() -> CnnLstmConfig {
     CnnLstmConfig {
-        architecture: Architecture {
-            window: 6,
-            conv_channels: 8,
-            kernel: 3,
-            lstm_hidden: 24,
-        },
         max_epochs: 40,
-        batch_size: 32,
-        learning_rate: 1e-2,
-        validation_fraction: 0.15,
-        patience: 10,
-        seed: 3,
+        patience: 15,
         ..CnnLstmConfig::default()
     }
 }
@@ -119,7 +110,8 @@ struct Outcome {
     bpnn_readings: ReadingComparison,
 }
 
-fn run(s: &Scenario) -> Outcome {
+fn run(s: &Scenario, bpnn_iterations: usize) -> Outcome {
+    mtec_nn::threads::prefer_single_thread();
     let (train, test) = s.data.data.split(&[1, 2, 4], &[3]).unwrap();
     let t0 = std::time::Instant::now();
     let (cnn, report) = train_cnn_lstm(&train, &cnn_config()).unwrap();
@@ -134,7 +126,7 @@ fn run(s: &Scenario) -> Outcome {
     );
     let bpnn_cfg = BpnnTrainConfig {
         hidden: 10,
-        max_epochs: 60,
+        max_epochs: bpnn_iterations,
         seed: 3,
         ..BpnnTrainConfig::default()
     };
@@ -204,23 +196,23 @@ fn report(o: &Outcome) {
     }
 }
 
-/// What holds on `dbb-rotary` (seed 2), run in CI:
+/// What holds on `dbb-rotary` (seed 2), run in CI (source-sized CNN-LSTM, ≤ 40 epochs; BPNN
+/// 10-10-5 with at most 60 Levenberg–Marquardt iterations to stay within the CI budget):
 /// - the labels are right: the identified motions of experiment 3 match the true motions (their
 ///   observable part) to the identification noise (< 0.3 µm, < 1 µrad RMS), and the scenario's
 ///   thermal change is not negligible (> 2 µm in the readings);
-/// - the pipeline maps predictions back to readings correctly: the BPNN baseline's predicted
-///   readings leave a max residual below 40 % of the largest measured reading (the source's
-///   criterion; the source reports 38 %), and its predictions are as close to the truth as to
-///   the identified motions (within 0.1 µm / 1 µrad);
-/// - the CNN-LSTM learns the angular pattern (test RMSE < 25 % of each channel's range) and is
-///   as close to the truth as to the identified motions, but it does NOT beat the BPNN here: see
-///   `acceptance_cnn_lstm_beats_bpnn_on_dbb_rotary` and docs/methods.md.
+/// - both models' predicted readings leave a max residual below 40 % of the largest measured
+///   reading (the source's criterion; the source reports 38 %), and their predictions are as
+///   close to the truth as to the identified motions (within 0.1 µm / 1 µrad);
+/// - the CNN-LSTM's RMSE is below 10 % of each channel's range.
+///
+/// The RMSE comparison with a converged BPNN is the ignored test below.
 #[test]
 fn dbb_rotary_pipeline_against_truth_and_readings() {
     let s = scenario(2);
     assert_eq!(s.data.data.experiments.len(), 4);
     assert_eq!(s.data.data.scored_rows(), 4 * 13 * 72);
-    let o = run(&s);
+    let o = run(&s, 60);
     report(&o);
     for m in &o.identified_vs_truth {
         let bound = if m.channel.ends_with("_um") { 0.3 } else { 1.0 };
@@ -247,8 +239,13 @@ fn dbb_rotary_pipeline_against_truth_and_readings() {
             i.rmse
         );
     }
-    // the CNN-LSTM learns the angular pattern (RMSE well below each channel's range) and
-    // is as close to the truth as to the identified motions
+    // the CNN-LSTM: predicted readings within the source's criterion, RMSE well below each
+    // channel's range, as close to the truth as to the identified motions
+    assert!(
+        o.cnn_readings.residual_ratio < 0.4,
+        "CNN-LSTM readings residual ratio {}",
+        o.cnn_readings.residual_ratio
+    );
     for ((c, t), b) in o
         .cnn_vs_identified
         .iter()
@@ -256,7 +253,7 @@ fn dbb_rotary_pipeline_against_truth_and_readings() {
         .zip(&o.bpnn_vs_identified)
     {
         assert!(
-            c.rmse < 0.25 * c.range,
+            c.rmse < 0.1 * c.range,
             "{}: CNN-LSTM RMSE {} of range {}",
             c.channel,
             c.rmse,
@@ -270,7 +267,6 @@ fn dbb_rotary_pipeline_against_truth_and_readings() {
             t.rmse,
             c.rmse
         );
-        // the documented finding: here the BPNN is the better model on every channel
         eprintln!(
             "{}: CNN-LSTM/BPNN RMSE ratio {:.2}",
             c.channel,
@@ -280,19 +276,20 @@ fn dbb_rotary_pipeline_against_truth_and_readings() {
 }
 
 /// The acceptance criterion on `dbb-rotary`: CNN-LSTM RMSE (experiment 3) below the
-/// BPNN's and a max reading residual < 40 % of the largest measured reading. It FAILS with the
-/// implementation and scenario as they are (CNN-LSTM ≈ 3–5× the BPNN's RMSE): the scenario's
-/// error motions are an instantaneous function of the measured temperatures (no lag between
-/// sensor and structure, so a temperature history carries no extra information), and three
-/// training experiments give only 39 distinct temperature states, which the CNN-LSTM fits
-/// (training RMSE at the BPNN's level) but does not interpolate to experiment 3. Kept runnable
-/// (`cargo test -p mtec-nn --test dbb_rotary_pipeline -- --ignored`) so that a better model or
-/// a scenario with thermal lag can be checked against it.
+/// BPNN's and a max reading residual < 40 % of the largest measured reading, with the BPNN
+/// trained for 200 LM iterations (still improving slowly). The readings part holds (27 %); the RMSE
+/// part FAILS: CNN-LSTM 1.23 against BPNN 0.93 (overall, mixed µm/µrad), the BPNN better on
+/// every channel. Why (docs/methods.md §10.1): the scenario's error motions are an
+/// instantaneous function of the temperatures the sensors read (no lag between sensor and
+/// structure), so a temperature history carries no extra information, and three training
+/// experiments give only 39 distinct temperature states. Kept runnable
+/// (`cargo test -p mtec-nn --test dbb_rotary_pipeline -- --ignored`, ~1 min) so that a better
+/// model or a scenario with thermal lag can be checked against it.
 #[test]
-#[ignore = "fails on dbb-rotary: CNN-LSTM does not beat the BPNN (see the doc comment)"]
+#[ignore = "fails on dbb-rotary: the converged BPNN has the lower RMSE (see the doc comment)"]
 fn acceptance_cnn_lstm_beats_bpnn_on_dbb_rotary() {
     let s = scenario(2);
-    let o = run(&s);
+    let o = run(&s, 200);
     report(&o);
     let (c, b) = (
         SplitComparison::overall_rmse(&o.cnn_vs_identified),

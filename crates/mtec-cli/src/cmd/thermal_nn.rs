@@ -307,6 +307,8 @@ fn print_metrics(what: &str, m: &[ChannelMetrics]) {
 
 /// `thermal fit --model cnn-lstm|bpnn`.
 pub fn fit(r: FitRequest) -> Result<(), CliError> {
+    // the CLI has no other thread yet: one candle thread is ~8x faster for these nets
+    mtec_nn::threads::prefer_single_thread();
     let nn = r.nn;
     let table = Table::read(r.data)?;
     let mut targets = Vec::new();
@@ -567,6 +569,7 @@ pub fn predict(
     json: bool,
     output: Option<&PathBuf>,
 ) -> Result<(), CliError> {
+    mtec_nn::threads::prefer_single_thread();
     let (features, targets, provenance) = match &model {
         NnModel::CnnLstm(m) => (&m.feature_names, &m.target_names, &m.provenance),
         NnModel::Bpnn(m) => (&m.input_names, &m.output_names, &m.provenance),
