@@ -26,8 +26,8 @@ use candle_core::{Device, Tensor, Var};
 use candle_nn::optim::{AdamW, Optimizer as _, ParamsAdamW};
 use nalgebra::{DMatrix, DVector};
 use rand::seq::SliceRandom;
-use std::sync::atomic::{AtomicBool, Ordering};
 use serde::{Deserialize, Serialize};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Which optimiser trains the network.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -225,13 +225,13 @@ fn glorot_init(n_in: usize, n_h: usize, n_out: usize, seed: u64) -> Vec<f64> {
         n_h * n_in,
         (6.0 / (n_in + n_h) as f64).sqrt(),
     ));
-    theta.extend(std::iter::repeat(0.0).take(n_h));
+    theta.extend(std::iter::repeat_n(0.0, n_h));
     theta.extend(rng::uniform(
         &mut r,
         n_out * n_h,
         (6.0 / (n_h + n_out) as f64).sqrt(),
     ));
-    theta.extend(std::iter::repeat(0.0).take(n_out));
+    theta.extend(std::iter::repeat_n(0.0, n_out));
     theta
 }
 

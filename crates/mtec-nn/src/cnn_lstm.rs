@@ -161,7 +161,7 @@ fn check_architecture(a: &Architecture, n_features: usize) -> Result<()> {
             "window, conv_channels and lstm_hidden must be at least 1".into(),
         ));
     }
-    if a.kernel % 2 == 0 {
+    if a.kernel.is_multiple_of(2) {
         return Err(NnError::Config(format!(
             "the kernel size must be odd (same padding), got {}",
             a.kernel

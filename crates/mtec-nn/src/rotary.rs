@@ -256,9 +256,15 @@ fn ballbar(e: mtec_identify::ballbar::BallbarError) -> NnError {
     NnError::Data(format!("ballbar model: {e}"))
 }
 
+/// (experiment, time key) → (time in min, [(angle in deg, value)] sorted by angle).
+type ByMeasurement<T> = BTreeMap<(u32, i64), (f64, Vec<(f64, T)>)>;
+
+/// Cleaned readings `[mode][angle]`: predicted and measured, of one measurement.
+type ReadingPair = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
 /// Rows grouped by (experiment, time) and sorted by angle.
-fn by_measurement(rows: &[MotionRow]) -> BTreeMap<(u32, i64), (f64, Vec<(f64, [f64; 5])>)> {
-    let mut g: BTreeMap<(u32, i64), (f64, Vec<(f64, [f64; 5])>)> = BTreeMap::new();
+fn by_measurement(rows: &[MotionRow]) -> ByMeasurement<[f64; 5]> {
+    let mut g: ByMeasurement<[f64; 5]> = BTreeMap::new();
     for r in rows {
         g.entry((r.experiment, key(r.time_min)))
             .or_insert_with(|| (r.time_min, Vec::new()))
@@ -288,7 +294,7 @@ fn cleaned_readings(setup: &Setup, series: &[(f64, ErrorMotions)]) -> Result<Vec
 /// The part of `rows`' motions the ballbar method sees (module docs, item 3), same order and
 /// labels. Each (experiment, time) must cover one full revolution at evenly spaced angles.
 pub fn observable_motions(setup: &Setup, rows: &[ErrorMotionsAt]) -> Result<Vec<MotionRow>> {
-    let mut g: BTreeMap<(u32, i64), (f64, Vec<(f64, ErrorMotions)>)> = BTreeMap::new();
+    let mut g: ByMeasurement<ErrorMotions> = BTreeMap::new();
     for r in rows {
         g.entry((r.experiment, key(r.time_min)))
             .or_insert_with(|| (r.time_min, Vec::new()))
@@ -352,7 +358,7 @@ pub fn compare_readings(
 ) -> Result<ReadingComparison> {
     let pred = by_measurement(predicted);
     // (time key) → [mode][angle] of predicted and measured cleaned readings
-    let mut pairs: Vec<(Vec<Vec<f64>>, Vec<Vec<f64>>)> = Vec::new();
+    let mut pairs: Vec<ReadingPair> = Vec::new();
     for m in measured
         .items
         .iter()
@@ -390,8 +396,8 @@ pub fn compare_readings(
     }
     let stats = |diff: &dyn Fn(usize, usize, usize) -> (f64, f64)| {
         let (mut sq, mut n, mut max_r, mut max_y) = (0.0, 0usize, 0.0f64, 0.0f64);
-        for k in 0..pairs.len() {
-            for (m, row) in pairs[k].1.iter().enumerate() {
+        for (k, pair) in pairs.iter().enumerate() {
+            for (m, row) in pair.1.iter().enumerate() {
                 for j in 0..row.len() {
                     let (p, y) = diff(k, m, j);
                     sq += (p - y) * (p - y);
@@ -469,12 +475,8 @@ mod tests {
         assert_eq!(seen.len(), N);
         for r in &seen {
             let want = motions(r.angle_deg, 0.0).observable();
-            for k in 0..5 {
-                assert!(
-                    (r.motions[k] - want[k]).abs() < 1e-9,
-                    "{k}: {:?}",
-                    r.motions
-                );
+            for (got, w) in r.motions.iter().zip(want) {
+                assert!((got - w).abs() < 1e-9, "{:?} vs {want:?}", r.motions);
             }
         }
     }

@@ -65,7 +65,7 @@ enum Sub {
     /// mtec thermal fit --model cnn-lstm --data id/motions.csv
     /// --target EXC_um,EYC_um,EZC_um,EAC_urad,EBC_urad --sequence-by angle_deg
     /// --features angle_deg --window 6 --train 1,2,4 --test 3 -o rotary.json
-    Fit(FitArgs),
+    Fit(Box<FitArgs>),
     /// Predicts the drift with a model file; metrics when the data hold the target. Also reads
     /// the neural models (`mtec.cnn-lstm/1`, `mtec.bpnn/1`): then one `pred_<target>` column per
     /// target (and `<target>,res_<target>` when the data hold it).
@@ -203,8 +203,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
     match args.cmd {
         Sub::Select(a) => select(a),
         Sub::Fit(a) => match a.common.model.neural() {
-            Some(kind) => fit_neural(kind, a),
-            None => fit(a),
+            Some(kind) => fit_neural(kind, *a),
+            None => fit(*a),
         },
         Sub::Predict(a) => match super::thermal_nn::read_model(&a.model)? {
             Some(m) => super::thermal_nn::predict(m, &a.model, &a.data, a.json, a.output.as_ref()),
