@@ -2,15 +2,24 @@
 # CNN-LSTM: mtec (candle, CPU) against PyTorch on the same architecture, data, split and
 # hyper-parameters. Prints the time-per-epoch ratio and both test RMSEs.
 #
-# Data: the synthetic rotary-axis thermal model of mtec_nn::synthetic (24 angles × 49 steps ×
-# 4 experiments; T1..T9, cos/sin of the angle → EXC, EYC, EZC, EAC, EBC), exported by the
-# `rotary_cnn_lstm` example. Train on experiments 1, 2, 4, test on 3. Both sides train a fixed
-# number of epochs (no early stopping) and keep the weights of the best validation epoch.
+# Data (DATA=dbb-rotary, the default): the virtual machine's `dbb-rotary` campaign (seed 2),
+# error motions identified by the ballbar method, one sequence per experiment and angle (72 angles
+# x 13 measurement times x 4 experiments; T1..T9 + angle_deg -> EXC, EYC, EZC, EAC, EBC),
+# exported by the `dbb_rotary_cnn_lstm` example. DATA=synthetic uses the analytic model of
+# mtec_nn::synthetic instead (24 angles x 49 steps; `rotary_cnn_lstm` example). Train on
+# experiments 1, 2, 4, test on 3. Both sides train a fixed number of epochs (no early stopping)
+# and keep the weights of the best validation epoch.
 #
 # Not run by CI. Needs network access to PyPI for torch (the PyPI wheel; it runs on the CPU).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 EPOCHS="${EPOCHS:-40}"
+DATA="${DATA:-dbb-rotary}"
+case "$DATA" in
+  dbb-rotary) EXAMPLE=dbb_rotary_cnn_lstm ;;
+  synthetic) EXAMPLE=rotary_cnn_lstm ;;
+  *) echo "DATA must be dbb-rotary or synthetic" >&2; exit 2 ;;
+esac
 VENV="${VENV:-/tmp/venv-mtec-bench-torch}"
 WORK="$(mktemp -d)"
 trap 'rm -rf "$WORK"' EXIT
@@ -20,9 +29,11 @@ if [ ! -x "$VENV/bin/python" ]; then
   "$VENV/bin/pip" install --quiet torch numpy
 fi
 
-cargo build --release -p mtec-nn --example rotary_cnn_lstm
-./target/release/examples/rotary_cnn_lstm --epochs "$EPOCHS" --fixed --export "$WORK" | tee "$WORK/mtec.txt"
+cargo build --release -p mtec-nn --example "$EXAMPLE"
+echo "load before training: $(uptime)"
+./target/release/examples/"$EXAMPLE" --epochs "$EPOCHS" --fixed --export "$WORK" | tee "$WORK/mtec.txt"
 "$VENV/bin/python" bench/cnn_lstm_torch.py "$WORK/rotary.csv" "$EPOCHS" | tee "$WORK/torch.txt"
+echo "load after training: $(uptime)"
 
 mtec_spe=$(grep '^MTEC_SECONDS_PER_EPOCH=' "$WORK/mtec.txt" | cut -d= -f2)
 mtec_rmse=$(grep '^MTEC_TEST_RMSE=' "$WORK/mtec.txt" | cut -d= -f2)

@@ -23,6 +23,7 @@ The workflow, and the commands for each step:
   compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
                 (`compensate table`)
   thermal       thermal drift models from temperature logs: select sensors, fit, predict
+                (regression models, or neural: `thermal fit --model cnn-lstm|bpnn`)
   sensitivity   which error elements drive the volumetric error (EFAST/Sobol/Morris), tolerances
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.

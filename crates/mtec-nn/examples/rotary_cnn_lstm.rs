@@ -9,30 +9,14 @@
 
 use mtec_nn::synthetic::{rotary_thermal, RotaryThermalSpec};
 use mtec_nn::{compare_on_split, BpnnTrainConfig, CnnLstmConfig, SplitComparison, ThermalDataset};
-use std::fmt::Write as _;
 
 fn export(d: &ThermalDataset, dir: &str) {
     std::fs::create_dir_all(dir).expect("create export dir");
-    let mut s = String::from("experiment,sequence,step,");
-    s += &d.feature_names.join(",");
-    s += ",";
-    s += &d.target_names.join(",");
-    s += "\n";
-    for e in &d.experiments {
-        for (k, seq) in e.sequences.iter().enumerate() {
-            for t in 0..seq.len() {
-                let _ = write!(s, "{},{},{}", e.id, k, t);
-                for v in seq.features[t].iter().chain(&seq.targets[t]) {
-                    let _ = write!(s, ",{v}");
-                }
-                s.push('\n');
-            }
-        }
-    }
-    std::fs::write(format!("{dir}/rotary.csv"), s).expect("write export");
+    std::fs::write(format!("{dir}/rotary.csv"), d.to_csv()).expect("write export");
 }
 
 fn main() {
+    mtec_nn::threads::prefer_single_thread();
     let args: Vec<String> = std::env::args().collect();
     let arg = |name: &str| {
         args.iter()

@@ -27,6 +27,7 @@ use candle_nn::optim::{AdamW, Optimizer as _, ParamsAdamW};
 use nalgebra::{DMatrix, DVector};
 use rand::seq::SliceRandom;
 use serde::{Deserialize, Serialize};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Which optimiser trains the network.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -57,6 +58,9 @@ pub struct BpnnTrainConfig {
     pub seed: u64,
     /// Show a progress bar on the terminal.
     pub progress: bool,
+    /// When this flag turns true (e.g. Ctrl-C in the CLI), training stops after the current
+    /// epoch and keeps the best epoch's weights.
+    pub stop: Option<&'static AtomicBool>,
 }
 
 impl Default for BpnnTrainConfig {
@@ -72,6 +76,7 @@ impl Default for BpnnTrainConfig {
             patience: None,
             seed: 42,
             progress: false,
+            stop: None,
         }
     }
 }
@@ -220,13 +225,13 @@ fn glorot_init(n_in: usize, n_h: usize, n_out: usize, seed: u64) -> Vec<f64> {
         n_h * n_in,
         (6.0 / (n_in + n_h) as f64).sqrt(),
     ));
-    theta.extend(std::iter::repeat(0.0).take(n_h));
+    theta.extend(std::iter::repeat_n(0.0, n_h));
     theta.extend(rng::uniform(
         &mut r,
         n_out * n_h,
         (6.0 / (n_h + n_out) as f64).sqrt(),
     ));
-    theta.extend(std::iter::repeat(0.0).take(n_out));
+    theta.extend(std::iter::repeat_n(0.0, n_out));
     theta
 }
 
@@ -310,9 +315,19 @@ impl LmProblem for BpnnLeastSquares<'_> {
     }
 }
 
+/// True when the caller's stop flag is set.
+pub(crate) fn user_stop(flag: Option<&'static AtomicBool>) -> bool {
+    flag.is_some_and(|f| f.load(Ordering::Relaxed))
+}
+
+pub(crate) fn user_stop_reason(epoch: usize, best_epoch: usize) -> String {
+    format!("stopped by the user after epoch {epoch}; keeping the best epoch {best_epoch}")
+}
+
 /// Early-stopping bookkeeping shared by both optimisers.
 struct EarlyStop {
     patience: usize,
+    stop: Option<&'static AtomicBool>,
     best: f64,
     best_epoch: usize,
     best_theta: Vec<f64>,
@@ -320,9 +335,10 @@ struct EarlyStop {
 }
 
 impl EarlyStop {
-    fn new(patience: usize, theta0: &[f64]) -> Self {
+    fn new(patience: usize, stop: Option<&'static AtomicBool>, theta0: &[f64]) -> Self {
         EarlyStop {
             patience,
+            stop,
             best: f64::INFINITY,
             best_epoch: 0,
             best_theta: theta0.to_vec(),
@@ -345,7 +361,11 @@ impl EarlyStop {
             self.best = watch;
             self.best_epoch = epoch;
             self.best_theta = theta.to_vec();
-        } else if epoch - self.best_epoch >= self.patience {
+        }
+        if user_stop(self.stop) {
+            return Some(user_stop_reason(epoch, self.best_epoch));
+        }
+        if epoch - self.best_epoch >= self.patience {
             return Some(format!(
                 "early stop: no validation improvement for {} epochs (best epoch {})",
                 self.patience, self.best_epoch
@@ -371,7 +391,7 @@ fn train_lm(
         ..LmConfig::default()
     };
     let n_rows = (train.x.len() * template.n_out()) as f64;
-    let mut stop = EarlyStop::new(config.patience.unwrap_or(6), &theta0);
+    let mut stop = EarlyStop::new(config.patience.unwrap_or(6), config.stop, &theta0);
     let progress = Progress::new(config.progress, config.max_epochs, "BPNN (LM)");
     let outcome = lm::minimise(&problem, &theta0, &lm_config, |it, theta, sse| {
         let train_mse = sse / n_rows;
@@ -446,7 +466,7 @@ fn train_adam(
     let batch = config.batch_size.unwrap_or(n).clamp(1, n);
     let mut order: Vec<u32> = (0..n as u32).collect();
     let mut shuffle_rng = rng::seeded(config.seed ^ SPLIT_STREAM.rotate_left(17));
-    let mut stop = EarlyStop::new(config.patience.unwrap_or(50), &theta0);
+    let mut stop = EarlyStop::new(config.patience.unwrap_or(50), config.stop, &theta0);
     let progress = Progress::new(config.progress, config.max_epochs, "BPNN (Adam)");
     let mut stop_reason = format!("maximum of {} epochs", config.max_epochs);
     let mut epochs = 0;

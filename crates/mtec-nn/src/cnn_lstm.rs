@@ -35,6 +35,7 @@ use candle_nn::optim::{AdamW, Optimizer as _, ParamsAdamW};
 use rand::seq::SliceRandom;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 pub const FORMAT: &str = "mtec.cnn-lstm/1";
@@ -64,6 +65,9 @@ pub struct CnnLstmConfig {
     pub patience: usize,
     pub seed: u64,
     pub progress: bool,
+    /// When this flag turns true (e.g. Ctrl-C in the CLI), training stops after the current
+    /// epoch and keeps the best epoch's weights.
+    pub stop: Option<&'static AtomicBool>,
 }
 
 impl Default for CnnLstmConfig {
@@ -83,6 +87,7 @@ impl Default for CnnLstmConfig {
             patience: 15,
             seed: 42,
             progress: false,
+            stop: None,
         }
     }
 }
@@ -156,16 +161,20 @@ fn check_architecture(a: &Architecture, n_features: usize) -> Result<()> {
             "window, conv_channels and lstm_hidden must be at least 1".into(),
         ));
     }
-    if a.kernel % 2 == 0 {
+    if a.kernel.is_multiple_of(2) {
         return Err(NnError::Config(format!(
             "the kernel size must be odd (same padding), got {}",
             a.kernel
         )));
     }
-    if n_features < 2 {
-        return Err(NnError::Config(
-            "the convolution and pooling need at least 2 features".into(),
-        ));
+    // candle 0.11's Conv1d gradient underflows (panics) when the input is shorter than the
+    // kernel, so fewer features than the kernel width is refused here, not left to candle
+    if n_features < a.kernel.max(2) {
+        return Err(NnError::Config(format!(
+            "the convolution over the features needs at least {} features (kernel {}, pooling 2); the data have {n_features}",
+            a.kernel.max(2),
+            a.kernel
+        )));
     }
     Ok(())
 }
@@ -379,7 +388,12 @@ pub fn train_cnn_lstm(
         let watch = val_loss.unwrap_or(train_loss);
         if watch < best.0 {
             best = (watch, epoch, snapshot(&vars)?);
-        } else if epoch - best.1 >= config.patience {
+        }
+        if crate::bpnn_train::user_stop(config.stop) {
+            stop_reason = crate::bpnn_train::user_stop_reason(epoch, best.1);
+            break;
+        }
+        if epoch - best.1 >= config.patience {
             stop_reason = format!(
                 "early stop: no validation improvement for {} epochs (best epoch {})",
                 config.patience, best.1

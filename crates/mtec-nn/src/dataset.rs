@@ -140,6 +140,29 @@ impl ThermalDataset {
         Ok((self.select(train)?, self.select(test)?))
     }
 
+    /// Every row as CSV `experiment,sequence,step,<features>,<targets>` (sequence and step
+    /// counted from 0): the exchange format of `bench/cnn_lstm.sh` with its PyTorch peer.
+    pub fn to_csv(&self) -> String {
+        use std::fmt::Write as _;
+        let mut s = format!(
+            "experiment,sequence,step,{},{}\n",
+            self.feature_names.join(","),
+            self.target_names.join(",")
+        );
+        for e in &self.experiments {
+            for (k, seq) in e.sequences.iter().enumerate() {
+                for t in 0..seq.len() {
+                    let _ = write!(s, "{},{k},{t}", e.id);
+                    for v in seq.features[t].iter().chain(&seq.targets[t]) {
+                        let _ = write!(s, ",{v}");
+                    }
+                    s.push('\n');
+                }
+            }
+        }
+        s
+    }
+
     /// Scored rows flattened (features at time t → targets at t): the BPNN baseline's data.
     pub fn rows(&self) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
         let mut x = Vec::new();
@@ -190,6 +213,16 @@ mod tests {
         assert_eq!(te.rows().0, vec![vec![3.0, 2.0], vec![3.0, 3.0]]);
         assert!(d.split(&[1, 3], &[3]).is_err());
         assert!(d.split(&[1, 9], &[3]).is_err());
+    }
+
+    #[test]
+    fn csv_export_by_hand() {
+        let mut d = ds();
+        d.experiments.truncate(1);
+        assert_eq!(
+            d.to_csv(),
+            "experiment,sequence,step,t1_c,angle_deg,exc_um\n1,0,0,1,1,0\n1,0,1,1,2,1\n1,0,2,1,3,2\n"
+        );
     }
 
     #[test]

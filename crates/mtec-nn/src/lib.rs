@@ -31,7 +31,9 @@ pub mod lm;
 pub mod metrics;
 mod progress;
 mod rng;
+pub mod rotary;
 pub mod synthetic;
+pub mod threads;
 
 pub use baseline::{compare_on_split, evaluate_bpnn, train_bpnn_baseline, SplitComparison};
 pub use bpnn::{Activation, Bpnn};

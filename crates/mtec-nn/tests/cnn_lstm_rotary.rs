@@ -27,7 +27,9 @@ fn small_config(epochs: usize) -> CnnLstmConfig {
     }
 }
 
+/// Every test starts here: one candle thread (`mtec_nn::threads`, set once before any training).
 fn data() -> mtec_nn::ThermalDataset {
+    mtec_nn::threads::prefer_single_thread();
     rotary_thermal(&RotaryThermalSpec {
         angles: 4,
         ..RotaryThermalSpec::default()

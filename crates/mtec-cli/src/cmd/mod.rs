@@ -11,6 +11,7 @@ pub mod model_loader;
 pub mod sensitivity;
 pub mod simulate;
 pub mod thermal;
+pub mod thermal_nn;
 pub mod volumetric;
 
 pub mod compensate;

@@ -52,13 +52,29 @@ enum Sub {
     /// rows). --lag adds a first-order lag of each sensor with a fitted time
     /// constant (mlr, ridge, ridge-select).
     ///
+    /// Neural models (any number of comma-separated --target columns; the model file is
+    /// `mtec.cnn-lstm/1` or `mtec.bpnn/1`): cnn-lstm (1-D convolution over the features of each
+    /// time step, max pooling, LSTM over --window steps, dense output; one sequence per
+    /// experiment, or per value of --sequence-by within it) and bpnn (one hidden layer of
+    /// --hidden sigmoid units on the current row, Levenberg–Marquardt). Features: the sensors,
+    /// then --features columns. Training shows epoch, loss and validation loss (the tail of
+    /// every training sequence), stops early when the validation loss no longer improves, and
+    /// on Ctrl-C keeps the best epoch so far.
+    ///
     /// Example: mtec thermal fit --data thermal.csv --target ez_um --model exp-ambient
     /// --sensors up,nut --train 1,2,4 --test 3 -o z.json
     ///
     /// Sensor groups: mtec thermal fit --data thermal.csv --target ez_um --model exp-ambient
     /// --up-sensors up,column --nut-sensors nut,up --train 1,2,4 --test 3 -o zg.json
-    Fit(FitArgs),
-    /// Predicts the drift with a model file; metrics when the data hold the target.
+    ///
+    /// Example (rotary axis, after `mtec identify ballbar --temps temps.csv --out id`):
+    /// mtec thermal fit --model cnn-lstm --data id/motions.csv
+    /// --target EXC_um,EYC_um,EZC_um,EAC_urad,EBC_urad --sequence-by angle_deg
+    /// --features angle_deg --window 6 --train 1,2,4 --test 3 -o rotary.json
+    Fit(Box<FitArgs>),
+    /// Predicts the drift with a model file; metrics when the data hold the target. Also reads
+    /// the neural models (`mtec.cnn-lstm/1`, `mtec.bpnn/1`): then one `pred_<target>` column per
+    /// target (and `<target>,res_<target>` when the data hold it).
     ///
     /// Example: mtec thermal predict --model z.json --data thermal.csv --json
     Predict(PredictArgs),
@@ -96,6 +112,20 @@ enum ModelKind {
     ExpAmbient,
     LagSelect,
     HeatInput,
+    /// Neural: CNN-LSTM sequence model (several targets; --window, --sequence-by, ...).
+    CnnLstm,
+    /// Neural: one-hidden-layer BPNN on the current row (several targets; --hidden).
+    Bpnn,
+}
+
+impl ModelKind {
+    fn neural(self) -> Option<super::thermal_nn::NnKind> {
+        match self {
+            ModelKind::CnnLstm => Some(super::thermal_nn::NnKind::CnnLstm),
+            ModelKind::Bpnn => Some(super::thermal_nn::NnKind::Bpnn),
+            _ => None,
+        }
+    }
 }
 
 #[derive(clap::Args)]
@@ -103,7 +133,7 @@ struct Common {
     /// Thermal log (CSV).
     #[arg(long)]
     data: PathBuf,
-    /// Target column (`ez_um` or `ez`).
+    /// Target column (`ez_um` or `ez`); cnn-lstm and bpnn take several, comma-separated.
     #[arg(long)]
     target: String,
     /// Model family.
@@ -164,6 +194,8 @@ struct FitArgs {
     /// Model file to write (JSON).
     #[arg(short = 'o', long = "output")]
     output: PathBuf,
+    #[command(flatten)]
+    nn: super::thermal_nn::NnArgs,
 }
 
 #[derive(clap::Args)]
@@ -194,10 +226,39 @@ struct CvArgs {
 pub fn run(args: Args) -> Result<(), CliError> {
     match args.cmd {
         Sub::Select(a) => select(a),
-        Sub::Fit(a) => fit(a),
-        Sub::Predict(a) => predict(a),
+        Sub::Fit(a) => match a.common.model.neural() {
+            Some(kind) => fit_neural(kind, *a),
+            None => fit(*a),
+        },
+        Sub::Predict(a) => match super::thermal_nn::read_model(&a.model)? {
+            Some(m) => super::thermal_nn::predict(m, &a.model, &a.data, a.json, a.output.as_ref()),
+            None => predict(a),
+        },
+        Sub::Cv(a) if a.common.model.neural().is_some() => Err(CliError::usage(
+            "thermal cv runs the regression models; for cnn-lstm and bpnn use thermal fit --train ... --test ...",
+        )),
         Sub::Cv(a) => cv(a),
     }
+}
+
+/// `--model cnn-lstm|bpnn`: the options the neural fit does not take are refused here.
+fn fit_neural(kind: super::thermal_nn::NnKind, a: FitArgs) -> Result<(), CliError> {
+    let c = &a.common;
+    if c.k.is_some() || c.lag || c.block_min.is_some() || a.train_until.is_some() {
+        return Err(CliError::usage(
+            "--k, --lag, --block-min and --train-until go with the regression models; the neural models split by --train/--test experiments",
+        ));
+    }
+    super::thermal_nn::fit(super::thermal_nn::FitRequest {
+        kind,
+        data: &c.data,
+        target: &c.target,
+        sensors: &c.sensors,
+        train: &a.train,
+        test: &a.test,
+        output: &a.output,
+        nn: &a.nn,
+    })
 }
 
 fn load(path: &Path, target: Option<&str>, require: bool) -> Result<ThermalData, CliError> {
@@ -429,6 +490,11 @@ fn fit_model(c: &Common, data: &ThermalData, rows: &[usize]) -> Result<ThermalMo
             }
             .fit_rows(data, rows)?,
         )),
+        ModelKind::CnnLstm | ModelKind::Bpnn => {
+            return Err(ThermalError::Invalid(
+                "the neural models are fitted by `thermal fit --model cnn-lstm|bpnn`".into(),
+            ))
+        }
         ModelKind::ExpAmbient => {
             let [up, nut] = c.sensors.as_slice() else {
                 return Err(ThermalError::Invalid(

@@ -1,0 +1,268 @@
+//! `mtec thermal fit|predict --model cnn-lstm|bpnn` end to end on the `dbb-rotary` campaign:
+//! simulate, identify the error motions with `mtec identify ballbar --temps`, train on
+//! experiments 1, 2, 4 (few epochs), predict, and bad input (exit 2).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn mtec(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mtec"))
+        .args(args)
+        .output()
+        .expect("mtec runs")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// `motions.csv` (identified motions + T1..T9) of `dbb-rotary` seed 1.
+fn motions(dir: &Path) -> PathBuf {
+    let out = mtec_sim::run_scenario("dbb-rotary", 1).unwrap();
+    for f in &out.files {
+        std::fs::write(dir.join(&f.name), &f.contents).unwrap();
+    }
+    let p = |n: &str| dir.join(n).to_str().unwrap().to_string();
+    let o = mtec(&[
+        "identify",
+        "ballbar",
+        "--setup",
+        &p("setup.toml"),
+        "--data",
+        &p("dbb.csv"),
+        "--temps",
+        &p("temps.csv"),
+        "--out",
+        &p("id"),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    dir.join("id").join("motions.csv")
+}
+
+const TARGETS: &str = "EXC_um,EYC_um,EZC_um,EAC_urad,EBC_urad";
+
+#[test]
+fn cnn_lstm_and_bpnn_fit_and_predict_rotary_motions() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = motions(dir.path());
+    let d = data.to_str().unwrap();
+    let model = dir.path().join("cnn.json");
+    let o = mtec(&[
+        "thermal",
+        "fit",
+        "--model",
+        "cnn-lstm",
+        "--data",
+        d,
+        "--target",
+        TARGETS,
+        "--sequence-by",
+        "angle_deg",
+        "--features",
+        "angle_deg",
+        "--window",
+        "4",
+        "--conv-channels",
+        "4",
+        "--lstm-hidden",
+        "8",
+        "--epochs",
+        "3",
+        "--train",
+        "1,2,4",
+        "--test",
+        "3",
+        "--quiet",
+        "-o",
+        model.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let out = text(&o);
+    assert!(
+        out.contains("CNN-LSTM") && out.contains("test") && out.contains("EBC_urad"),
+        "{out}"
+    );
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    assert_eq!(m["format"], "mtec.cnn-lstm/1");
+    assert_eq!(m["architecture"]["window"], 4);
+    assert_eq!(m["provenance"]["sequence_by"], "angle_deg");
+    assert_eq!(
+        m["provenance"]["train_experiments"],
+        serde_json::json!([1, 2, 4])
+    );
+    assert_eq!(m["provenance"]["test_metrics"].as_array().unwrap().len(), 5);
+    assert_eq!(m["provenance"]["training"]["report"]["epochs"], 3);
+    // T1..T9 then the angle
+    let f = m["feature_names"].as_array().unwrap();
+    assert_eq!(f.len(), 10);
+    assert_eq!(f[9], "angle_deg");
+
+    // predict: one row per experiment, time and angle, metrics against the motions in the file
+    let o = mtec(&[
+        "thermal",
+        "predict",
+        "--model",
+        model.to_str().unwrap(),
+        "--data",
+        d,
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let p: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(p["n"], 4 * 13 * 72);
+    assert_eq!(p["predictions"][0].as_array().unwrap().len(), 5);
+    let rmse = p["metrics"][0]["rmse"].as_f64().unwrap();
+    assert!(rmse.is_finite() && rmse > 0.0);
+
+    // BPNN on the same split, predictions as CSV
+    let bp = dir.path().join("bpnn.json");
+    let o = mtec(&[
+        "thermal",
+        "fit",
+        "--model",
+        "bpnn",
+        "--data",
+        d,
+        "--target",
+        TARGETS,
+        "--features",
+        "angle_deg",
+        "--hidden",
+        "4",
+        "--epochs",
+        "3",
+        "--train",
+        "1,2,4",
+        "--test",
+        "3",
+        "--quiet",
+        "-o",
+        bp.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let b: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&bp).unwrap()).unwrap();
+    assert_eq!(b["format"], "mtec.bpnn/1");
+    assert_eq!(b["w1"].as_array().unwrap().len(), 4);
+    let csv_path = dir.path().join("pred.csv");
+    let o = mtec(&[
+        "thermal",
+        "predict",
+        "--model",
+        bp.to_str().unwrap(),
+        "--data",
+        d,
+        "-o",
+        csv_path.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let csv = std::fs::read_to_string(&csv_path).unwrap();
+    let header = csv.lines().next().unwrap();
+    assert!(
+        header.starts_with("experiment,time_min,pred_EXC_um") && header.contains("res_EBC_urad"),
+        "{header}"
+    );
+    assert_eq!(csv.lines().count(), 1 + 4 * 13 * 72);
+}
+
+#[test]
+fn bad_neural_fits_exit_2_with_the_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = motions(dir.path());
+    let d = data.to_str().unwrap();
+    let out = dir.path().join("m.json");
+    let o_ = out.to_str().unwrap();
+    let fit = |extra: &[&str]| {
+        let mut a = vec![
+            "thermal", "fit", "--data", d, "--quiet", "--epochs", "1", "-o", o_,
+        ];
+        a.extend_from_slice(extra);
+        mtec(&a)
+    };
+    // unknown target: named, at the header line
+    let o = fit(&["--model", "cnn-lstm", "--target", "EXC_um,EQC_um"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("EQC_um") && text(&o).contains("motions.csv:1:"),
+        "{}",
+        text(&o)
+    );
+    // an experiment the file does not hold
+    let o = fit(&[
+        "--model", "bpnn", "--target", TARGETS, "--train", "1,9", "--test", "3",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("no experiment 9"), "{}", text(&o));
+    // options of the regression models
+    let o = fit(&["--model", "cnn-lstm", "--target", TARGETS, "--lag"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    // a sequence model needs one row per time in a sequence: without --sequence-by the 72
+    // angles of one measurement share their time, located at the first repeat
+    let o = fit(&["--model", "cnn-lstm", "--target", TARGETS]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("motions.csv:3:2") && text(&o).contains("appears twice"),
+        "{}",
+        text(&o)
+    );
+    // a window of 0
+    let o = fit(&[
+        "--model",
+        "cnn-lstm",
+        "--target",
+        TARGETS,
+        "--sequence-by",
+        "angle_deg",
+        "--window",
+        "0",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("window"), "{}", text(&o));
+    // thermal cv does not run the neural models
+    let o = mtec(&[
+        "thermal", "cv", "--data", d, "--target", "EXC_um", "--model", "bpnn",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(!out.exists());
+
+    // a damaged model file: right format, a weight missing
+    let o = fit(&[
+        "--model",
+        "cnn-lstm",
+        "--target",
+        TARGETS,
+        "--sequence-by",
+        "angle_deg",
+        "--window",
+        "2",
+        "--conv-channels",
+        "2",
+        "--lstm-hidden",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    m["weights"].as_object_mut().unwrap().remove("fc.bias");
+    let broken = dir.path().join("broken.json");
+    std::fs::write(&broken, m.to_string()).unwrap();
+    let o = mtec(&[
+        "thermal",
+        "predict",
+        "--model",
+        broken.to_str().unwrap(),
+        "--data",
+        d,
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("broken.json") && text(&o).contains("fc.bias"),
+        "{}",
+        text(&o)
+    );
+}

@@ -1,0 +1,110 @@
+//! The source-sized CNN-LSTM on the virtual machine's `dbb-rotary` campaign: simulate (seed 2),
+//! identify EXC EYC EZC EAC EBC with the ballbar method, train on experiments 1, 2, 4 (features
+//! T1..T9 + angle), test on 3, against the BPNN baseline; map the predictions back to ballbar
+//! readings. Prints the training time (goal: < 60 s on 2 cores in release).
+//!
+//!     cargo run --release -p mtec-nn --example dbb_rotary_cnn_lstm [-- --epochs N --fixed
+//!         --seed S --export DIR]
+//!
+//! `--fixed` trains exactly N epochs (no early stopping) for timing against PyTorch;
+//! `--export DIR` writes the dataset as `DIR/rotary.csv` for `bench/cnn_lstm.sh`.
+
+use mtec_identify::ballbar::{identify, Measurements, Setup};
+use mtec_io::Table;
+use mtec_nn::rotary::{compare_readings, AngleEncoding, RotaryDataset, TemperatureLog};
+use mtec_nn::{compare_on_split, BpnnTrainConfig, CnnLstmConfig, SplitComparison, ThermalDataset};
+use std::path::Path;
+
+fn export(d: &ThermalDataset, dir: &str) {
+    std::fs::create_dir_all(dir).expect("create export dir");
+    std::fs::write(format!("{dir}/rotary.csv"), d.to_csv()).expect("write export");
+}
+
+fn main() {
+    mtec_nn::threads::prefer_single_thread();
+    let args: Vec<String> = std::env::args().collect();
+    let arg = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+    };
+    let seed: u64 = arg("--seed").map_or(2, |s| s.parse().expect("--seed S"));
+    let out = mtec_sim::run_scenario("dbb-rotary", seed).expect("scenario");
+    let file = |n: &str| &out.files.iter().find(|f| f.name == n).expect(n).contents;
+    let setup = Setup::parse(Path::new("setup.toml"), file("setup.toml")).expect("setup");
+    let dbb = Table::parse(Path::new("dbb.csv"), file("dbb.csv")).expect("dbb.csv");
+    let measurements = Measurements::from_table(&dbb, &setup).expect("measurements");
+    let id = identify(&setup, &measurements).expect("identification");
+    let temps = Table::parse(Path::new("temps.csv"), file("temps.csv")).expect("temps.csv");
+    let temps = TemperatureLog::from_table(&temps).expect("temperatures");
+    let rotary = RotaryDataset::build(&temps, &id.rows, AngleEncoding::Degrees).expect("dataset");
+    if let Some(dir) = arg("--export") {
+        export(&rotary.data, &dir);
+    }
+    let mut cfg = CnnLstmConfig {
+        progress: true,
+        ..CnnLstmConfig::default()
+    };
+    if let Some(n) = arg("--epochs") {
+        cfg.max_epochs = n.parse().expect("--epochs N");
+    }
+    if args.iter().any(|a| a == "--fixed") {
+        cfg.patience = usize::MAX / 2;
+    }
+    let bpnn_cfg = BpnnTrainConfig {
+        hidden: 10,
+        max_epochs: 200,
+        ..BpnnTrainConfig::default()
+    };
+    let (cnn, bpnn, cmp) =
+        compare_on_split(&rotary.data, &[1, 2, 4], &[3], &cfg, &bpnn_cfg).expect("training");
+    let r = &cmp.cnn_lstm_training;
+    println!(
+        "CNN-LSTM: {} parameters, {} train windows, {} epochs (best {}), {:.2} s, {:.4} s/epoch; {}",
+        r.parameters,
+        r.train_windows,
+        r.epochs,
+        r.best_epoch,
+        r.seconds,
+        r.seconds_per_epoch,
+        r.stop_reason
+    );
+    println!("channel    CNN-LSTM rmse  mae  ratio | BPNN rmse  mae  ratio | range");
+    for (m, n) in cmp.cnn_lstm.iter().zip(&cmp.bpnn) {
+        println!(
+            "{:9} {:8.3} {:6.3} {:6.3} | {:8.3} {:6.3} {:6.3} | {:6.2}",
+            m.channel, m.rmse, m.mae, m.residual_ratio, n.rmse, n.mae, n.residual_ratio, m.range
+        );
+    }
+    println!(
+        "overall test RMSE: CNN-LSTM {:.4}, BPNN {:.4}",
+        SplitComparison::overall_rmse(&cmp.cnn_lstm),
+        SplitComparison::overall_rmse(&cmp.bpnn)
+    );
+    let (_, test) = rotary.data.split(&[1, 2, 4], &[3]).expect("split");
+    let pc = rotary
+        .label(&test, &cnn.predict(&test).expect("predict"))
+        .expect("labels");
+    let (xb, _) = test.rows();
+    let pb: Vec<Vec<f64>> = xb.iter().map(|x| bpnn.predict(x).expect("bpnn")).collect();
+    let pb = rotary.label(&test, &pb).expect("labels");
+    for (name, p) in [("CNN-LSTM", &pc), ("BPNN", &pb)] {
+        let c = compare_readings(&setup, &measurements, 3, p).expect("readings");
+        println!(
+            "{name:8} readings of exp 3: max residual {:.2} um of max measured {:.2} um ({:.1} %, change {:+.1} %); thermal change alone: {:.2} of {:.2} um ({:.1} %)",
+            c.max_abs_residual_um,
+            c.max_abs_measured_um,
+            100.0 * c.residual_ratio,
+            100.0 * (c.residual_ratio - 1.0),
+            c.change_max_abs_residual_um,
+            c.change_max_abs_measured_um,
+            100.0 * c.change_residual_ratio
+        );
+    }
+    println!("MTEC_SECONDS_PER_EPOCH={:.6}", r.seconds_per_epoch);
+    println!(
+        "MTEC_TEST_RMSE={:.6}",
+        SplitComparison::overall_rmse(&cmp.cnn_lstm)
+    );
+}

@@ -1,0 +1,593 @@
+//! The rotary-axis pipeline of the source's CNN-LSTM study, from ballbar measurements to a
+//! sequence dataset and from predicted error motions back to predicted ballbar readings.
+//!
+//! 1. [`TemperatureLog`]: the temperatures at each measurement (`experiment,time_min,<s>_c...`,
+//!    e.g. `dbb-rotary`'s `temps.csv`).
+//! 2. [`RotaryDataset::build`]: joins the per-experiment, per-time, per-angle error motions that
+//!    `mtec_identify::ballbar::identify` recovered with those temperatures into a
+//!    [`ThermalDataset`]: one sequence per (experiment, angle), its rows the measurement times;
+//!    features the temperatures and the angle; targets `EXC_um EYC_um EZC_um EAC_urad EBC_urad`.
+//! 3. [`observable_motions`]: any motions (a model's predictions, a simulation's truth) pushed
+//!    through the ballbar method's own path — first-order bar-length model
+//!    (`predicted_dl_um`), mean and first harmonic removed per mode, per-angle solve — i.e. the
+//!    part of them the five modes can see. The identified motions are exactly this part of the
+//!    true motions (see `mtec_identify::ballbar::harmonics`), so a truth must be compared after
+//!    this map.
+//! 4. [`compare_readings`]: predicted motions → predicted bar-length changes of every mode
+//!    (`predicted_dl_um`, mean and first harmonic removed like the measured signal) against the
+//!    measured readings after the same removal; the source's figure is the largest residual
+//!    against the largest measured reading (7.4 µm against 19.3 µm, −61.6 %).
+//!
+//! Decisions where the source is silent:
+//! - The angle enters as one feature `angle_deg` (as in the source: "temperatures and angle"),
+//!   z-scored like every feature, or as `cos_angle, sin_angle` ([`AngleEncoding::CosSin`],
+//!   continuous across 0°/360°). The angle is a fixed label of each sequence, not a time series.
+//! - The readings are compared *after* the mean and first harmonic are removed from both the
+//!   measured and the predicted signal of each mode: the raw readings carry a new set-up error
+//!   (ball and cup eccentricity, ~10 µm) at every installation, which no model of the axis can or
+//!   should predict; the source's readings were likewise "after eccentricity removal".
+//! - The largest measured change is `max |cleaned reading|` over the experiment's modes, times
+//!   and angles (the error one would be left with without a model), the residual is
+//!   `max |predicted − measured|`; the ratio of the two is the source's "residual ratio". The
+//!   same ratio for the *thermal change alone* (every reading minus the reading at the same mode
+//!   and angle at the experiment's first time, predicted likewise) is reported next to it,
+//!   because the static part of the motions repeats in every experiment and dominates the first
+//!   ratio.
+//!
+//! Where it lives: here in `mtec-nn` (which then depends on `mtec-identify` for the ballbar model
+//! and on `mtec-io` for the temperature file, both without any NN code), so that the CLI and the
+//! tests share one implementation; `mtec-sim` is a dev-dependency only (the `dbb-rotary`
+//! acceptance test).
+
+use crate::dataset::{Experiment, Sequence, ThermalDataset};
+use crate::error::{NnError, Result};
+use mtec_identify::ballbar::identify::solve_angle;
+use mtec_identify::ballbar::{
+    predicted_dl_um, remove_mean_and_first_harmonic, ErrorMotions, IdentifiedRow, Measurements,
+    Setup,
+};
+use mtec_io::{InputError, Table};
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Target names of the rotary dataset, in `ErrorMotions::observable` order.
+pub const TARGET_NAMES: [&str; 5] = ["EXC_um", "EYC_um", "EZC_um", "EAC_urad", "EBC_urad"];
+/// The angle feature's name.
+pub const ANGLE_FEATURE: &str = "angle_deg";
+
+/// How the table angle enters the features.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AngleEncoding {
+    /// One feature `angle_deg` (0..360).
+    #[default]
+    Degrees,
+    /// Two features `cos_angle`, `sin_angle`: continuous across 0°/360°.
+    CosSin,
+}
+
+/// Keys of times and angles: µmin and µdeg, so that 20.0 and 20.000000001 meet.
+fn key(v: f64) -> i64 {
+    (v * 1e6).round() as i64
+}
+
+/// Temperatures (°C) of every sensor at each (experiment, time).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TemperatureLog {
+    pub sensor_names: Vec<String>,
+    /// (experiment, time in µmin) → temperatures in `sensor_names` order.
+    pub rows: BTreeMap<(i64, i64), Vec<f64>>,
+}
+
+impl TemperatureLog {
+    /// Reads `experiment,time_min,<sensor>_c...` (every `_c` column is a sensor). A repeated
+    /// (experiment, time) is an error at its line.
+    pub fn from_table(t: &Table) -> std::result::Result<TemperatureLog, InputError> {
+        t.require(&["experiment", "time_min"])?;
+        let sensor_names = t.columns_with_suffix("_c");
+        if sensor_names.is_empty() {
+            return Err(InputError::file(
+                &t.path,
+                "the temperature file has no sensor column (names ending in `_c`)",
+            ));
+        }
+        let exp = t.i64_column("experiment")?;
+        let time = t.f64_column("time_min")?;
+        let cols: Vec<Vec<f64>> = sensor_names
+            .iter()
+            .map(|n| t.f64_column(n))
+            .collect::<std::result::Result<_, _>>()?;
+        let mut rows = BTreeMap::new();
+        for (i, row) in t.rows.iter().enumerate() {
+            let temps: Vec<f64> = cols.iter().map(|c| c[i]).collect();
+            if rows.insert((exp[i], key(time[i])), temps).is_some() {
+                return Err(t.error_at(
+                    row,
+                    "time_min",
+                    format!(
+                        "experiment {} at {} min appears twice in the temperature file",
+                        exp[i], time[i]
+                    ),
+                ));
+            }
+        }
+        Ok(TemperatureLog { sensor_names, rows })
+    }
+}
+
+/// A rotary dataset and, for every sequence, the angle and measurement times it stands for.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RotaryDataset {
+    pub data: ThermalDataset,
+    /// experiment id → per sequence (angle in deg, times in min).
+    pub labels: BTreeMap<u32, Vec<(f64, Vec<f64>)>>,
+}
+
+/// One predicted or measured row: where it is and the five motions.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MotionRow {
+    pub experiment: u32,
+    pub time_min: f64,
+    pub angle_deg: f64,
+    /// `[EXC, EYC, EZC (µm), EAC, EBC (µrad)]`.
+    pub motions: [f64; 5],
+}
+
+impl RotaryDataset {
+    /// Joins identified motions with the temperatures (see the module docs). Every
+    /// (experiment, time) of `rows` needs a temperature row; every experiment the same angles is
+    /// not required, but each (experiment, angle) sequence is ordered by time.
+    pub fn build(
+        temps: &TemperatureLog,
+        rows: &[IdentifiedRow],
+        angle_encoding: AngleEncoding,
+    ) -> Result<RotaryDataset> {
+        // experiment → angle key → [(time, motions)]
+        type Series = Vec<(f64, [f64; 5])>;
+        let mut groups: BTreeMap<u32, BTreeMap<i64, (f64, Series)>> = BTreeMap::new();
+        for r in rows {
+            let e = u32::try_from(r.experiment).map_err(|_| {
+                NnError::Data(format!(
+                    "experiment numbers must be 0 or more, got {}",
+                    r.experiment
+                ))
+            })?;
+            groups
+                .entry(e)
+                .or_default()
+                .entry(key(r.angle_deg))
+                .or_insert_with(|| (r.angle_deg, Vec::new()))
+                .1
+                .push((r.time_min, r.motions.observable()));
+        }
+        if groups.is_empty() {
+            return Err(NnError::Data("no identified motions".into()));
+        }
+        let mut experiments = Vec::new();
+        let mut labels = BTreeMap::new();
+        for (e, by_angle) in groups {
+            let mut sequences = Vec::new();
+            let mut lab = Vec::new();
+            for (_, (angle, mut series)) in by_angle {
+                series.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let mut features = Vec::with_capacity(series.len());
+                for (t, _) in &series {
+                    let temp = temps.rows.get(&(e as i64, key(*t))).ok_or_else(|| {
+                        NnError::Data(format!(
+                            "no temperatures for experiment {e} at {t} min (the temperature file \
+                             must have a row for every measurement)"
+                        ))
+                    })?;
+                    let mut f = temp.clone();
+                    match angle_encoding {
+                        AngleEncoding::Degrees => f.push(angle),
+                        AngleEncoding::CosSin => {
+                            f.push(angle.to_radians().cos());
+                            f.push(angle.to_radians().sin());
+                        }
+                    }
+                    features.push(f);
+                }
+                lab.push((angle, series.iter().map(|s| s.0).collect()));
+                sequences.push(Sequence {
+                    features,
+                    targets: series.iter().map(|s| s.1.to_vec()).collect(),
+                    warmup: 0,
+                });
+            }
+            labels.insert(e, lab);
+            experiments.push(Experiment { id: e, sequences });
+        }
+        let mut feature_names = temps.sensor_names.clone();
+        match angle_encoding {
+            AngleEncoding::Degrees => feature_names.push(ANGLE_FEATURE.into()),
+            AngleEncoding::CosSin => {
+                feature_names.push("cos_angle".into());
+                feature_names.push("sin_angle".into());
+            }
+        }
+        let data = ThermalDataset {
+            feature_names,
+            target_names: TARGET_NAMES.iter().map(|s| s.to_string()).collect(),
+            experiments,
+        };
+        data.validate()?;
+        Ok(RotaryDataset { data, labels })
+    }
+
+    /// Attaches (experiment, time, angle) to predictions made on `subset` (a selection of this
+    /// dataset's experiments, e.g. the test part of a split), in the order models predict:
+    /// experiment, sequence, scored row.
+    pub fn label(&self, subset: &ThermalDataset, pred: &[Vec<f64>]) -> Result<Vec<MotionRow>> {
+        let mut out = Vec::with_capacity(pred.len());
+        let mut it = pred.iter();
+        for e in &subset.experiments {
+            let lab = self.labels.get(&e.id).ok_or_else(|| {
+                NnError::Data(format!("experiment {} is not in this dataset", e.id))
+            })?;
+            for (s, seq) in e.sequences.iter().enumerate() {
+                let (angle, times) = &lab[s];
+                for t in seq.scored_rows() {
+                    let p = it.next().ok_or_else(|| {
+                        NnError::Data("fewer predictions than scored rows".into())
+                    })?;
+                    if p.len() != 5 {
+                        return Err(NnError::Data(format!(
+                            "a prediction has {} channels, expected the five motions",
+                            p.len()
+                        )));
+                    }
+                    out.push(MotionRow {
+                        experiment: e.id,
+                        time_min: times[t],
+                        angle_deg: *angle,
+                        motions: [p[0], p[1], p[2], p[3], p[4]],
+                    });
+                }
+            }
+        }
+        if it.next().is_some() {
+            return Err(NnError::Data("more predictions than scored rows".into()));
+        }
+        Ok(out)
+    }
+}
+
+fn ballbar(e: mtec_identify::ballbar::BallbarError) -> NnError {
+    NnError::Data(format!("ballbar model: {e}"))
+}
+
+/// (experiment, time key) → (time in min, [(angle in deg, value)] sorted by angle).
+type ByMeasurement<T> = BTreeMap<(u32, i64), (f64, Vec<(f64, T)>)>;
+
+/// Cleaned readings `[mode][angle]`: predicted and measured, of one measurement.
+type ReadingPair = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
+/// Rows grouped by (experiment, time) and sorted by angle.
+fn by_measurement(rows: &[MotionRow]) -> ByMeasurement<[f64; 5]> {
+    let mut g: ByMeasurement<[f64; 5]> = BTreeMap::new();
+    for r in rows {
+        g.entry((r.experiment, key(r.time_min)))
+            .or_insert_with(|| (r.time_min, Vec::new()))
+            .1
+            .push((r.angle_deg, r.motions));
+    }
+    for (_, v) in g.values_mut() {
+        v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    g
+}
+
+/// Cleaned model readings `[mode][angle]` of motions over one revolution.
+fn cleaned_readings(setup: &Setup, series: &[(f64, ErrorMotions)]) -> Result<Vec<Vec<f64>>> {
+    let angles: Vec<f64> = series.iter().map(|s| s.0).collect();
+    (0..setup.modes.len())
+        .map(|m| {
+            let raw: Vec<f64> = series
+                .iter()
+                .map(|(c, e)| predicted_dl_um(setup, *c, e)[m])
+                .collect();
+            remove_mean_and_first_harmonic(&angles, &raw).map_err(ballbar)
+        })
+        .collect()
+}
+
+/// The part of `rows`' motions the ballbar method sees (module docs, item 3), same order and
+/// labels. Each (experiment, time) must cover one full revolution at evenly spaced angles.
+pub fn observable_motions(setup: &Setup, rows: &[ErrorMotionsAt]) -> Result<Vec<MotionRow>> {
+    let mut g: ByMeasurement<ErrorMotions> = BTreeMap::new();
+    for r in rows {
+        g.entry((r.experiment, key(r.time_min)))
+            .or_insert_with(|| (r.time_min, Vec::new()))
+            .1
+            .push((r.angle_deg, r.motions));
+    }
+    let mut out = Vec::with_capacity(rows.len());
+    for ((e, _), (time, mut series)) in g {
+        series.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let cleaned = cleaned_readings(setup, &series)?;
+        for (j, (c, _)) in series.iter().enumerate() {
+            let y: [f64; 5] = std::array::from_fn(|i| cleaned[i][j]);
+            out.push(MotionRow {
+                experiment: e,
+                time_min: time,
+                angle_deg: *c,
+                motions: solve_angle(setup, *c, y).map_err(ballbar)?,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// All six motions (ECC included) at one experiment, time and angle: a simulation's truth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ErrorMotionsAt {
+    pub experiment: u32,
+    pub time_min: f64,
+    pub angle_deg: f64,
+    pub motions: ErrorMotions,
+}
+
+/// Predicted against measured ballbar readings of one experiment (µm), see the module docs.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ReadingComparison {
+    pub experiment: u32,
+    /// Readings compared (modes × angles × times).
+    pub n: usize,
+    pub rmse_um: f64,
+    /// max |predicted − measured| over modes, angles and times.
+    pub max_abs_residual_um: f64,
+    /// max |measured| (cleaned readings).
+    pub max_abs_measured_um: f64,
+    /// `max_abs_residual_um / max_abs_measured_um` (the source: 7.4 / 19.3 = 0.384).
+    pub residual_ratio: f64,
+    /// The same for the thermal change alone (readings minus those at the first time).
+    pub change_rmse_um: f64,
+    pub change_max_abs_residual_um: f64,
+    pub change_max_abs_measured_um: f64,
+    pub change_residual_ratio: f64,
+}
+
+/// Maps predicted motions of one experiment to predicted readings of every mode and compares
+/// them with the measured readings (both cleaned of mean and first harmonic). `predicted` must
+/// hold every angle of every measurement of `experiment` in `measured`.
+pub fn compare_readings(
+    setup: &Setup,
+    measured: &Measurements,
+    experiment: u32,
+    predicted: &[MotionRow],
+) -> Result<ReadingComparison> {
+    let pred = by_measurement(predicted);
+    // (time key) → [mode][angle] of predicted and measured cleaned readings
+    let mut pairs: Vec<ReadingPair> = Vec::new();
+    for m in measured
+        .items
+        .iter()
+        .filter(|m| m.experiment == experiment as i64)
+    {
+        let Some((_, series)) = pred.get(&(experiment, key(m.time_min))) else {
+            return Err(NnError::Data(format!(
+                "no predictions for experiment {experiment} at {} min",
+                m.time_min
+            )));
+        };
+        let angles: Vec<i64> = series.iter().map(|s| key(s.0)).collect();
+        if angles != m.angles_deg.iter().map(|a| key(*a)).collect::<Vec<_>>() {
+            return Err(NnError::Data(format!(
+                "the predictions for experiment {experiment} at {} min are not at the measured angles",
+                m.time_min
+            )));
+        }
+        let motions: Vec<(f64, ErrorMotions)> = series
+            .iter()
+            .map(|(c, p)| (*c, ErrorMotions::from_observable(*p)))
+            .collect();
+        let p = cleaned_readings(setup, &motions)?;
+        let y = m
+            .dl_um
+            .iter()
+            .map(|s| remove_mean_and_first_harmonic(&m.angles_deg, s).map_err(ballbar))
+            .collect::<Result<Vec<_>>>()?;
+        pairs.push((p, y));
+    }
+    if pairs.is_empty() {
+        return Err(NnError::Data(format!(
+            "the measurements hold no experiment {experiment}"
+        )));
+    }
+    let stats = |diff: &dyn Fn(usize, usize, usize) -> (f64, f64)| {
+        let (mut sq, mut n, mut max_r, mut max_y) = (0.0, 0usize, 0.0f64, 0.0f64);
+        for (k, pair) in pairs.iter().enumerate() {
+            for (m, row) in pair.1.iter().enumerate() {
+                for j in 0..row.len() {
+                    let (p, y) = diff(k, m, j);
+                    sq += (p - y) * (p - y);
+                    n += 1;
+                    max_r = max_r.max((p - y).abs());
+                    max_y = max_y.max(y.abs());
+                }
+            }
+        }
+        ((sq / n.max(1) as f64).sqrt(), max_r, max_y, n)
+    };
+    let (rmse, max_r, max_y, n) = stats(&|k, m, j| (pairs[k].0[m][j], pairs[k].1[m][j]));
+    let (c_rmse, c_max_r, c_max_y, _) = stats(&|k, m, j| {
+        (
+            pairs[k].0[m][j] - pairs[0].0[m][j],
+            pairs[k].1[m][j] - pairs[0].1[m][j],
+        )
+    });
+    let ratio = |r: f64, y: f64| if y > 0.0 { r / y } else { f64::INFINITY };
+    Ok(ReadingComparison {
+        experiment,
+        n,
+        rmse_um: rmse,
+        max_abs_residual_um: max_r,
+        max_abs_measured_um: max_y,
+        residual_ratio: ratio(max_r, max_y),
+        change_rmse_um: c_rmse,
+        change_max_abs_residual_um: c_max_r,
+        change_max_abs_measured_um: c_max_y,
+        change_residual_ratio: ratio(c_max_r, c_max_y),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mtec_identify::ballbar::identify::Measurement;
+
+    fn setup() -> Setup {
+        Setup::preset(Setup::default_dims()).unwrap()
+    }
+
+    const N: usize = 24;
+
+    fn angles() -> Vec<f64> {
+        (0..N).map(|i| i as f64 * 360.0 / N as f64).collect()
+    }
+
+    /// Harmonics 2–3 only (no content the removal touches, see `harmonics.rs`) plus, optionally,
+    /// a uniform axial growth and a constant tilt, which the method cannot see.
+    fn motions(c_deg: f64, growth: f64) -> ErrorMotions {
+        let r = c_deg.to_radians();
+        ErrorMotions {
+            exc_um: 2.0 * (3.0 * r).cos(),
+            eyc_um: 2.5 * (3.0 * r).sin(),
+            ezc_um: 1.2 * (2.0 * r).sin() + growth,
+            eac_urad: 20.0 * (2.0 * r).cos(),
+            ebc_urad: -20.0 * (2.0 * r).sin() + 3.0 * growth,
+            ecc_urad: 0.0,
+        }
+    }
+
+    #[test]
+    fn observable_part_keeps_visible_motions_and_drops_growth_and_tilt() {
+        let rows: Vec<ErrorMotionsAt> = angles()
+            .into_iter()
+            .map(|c| ErrorMotionsAt {
+                experiment: 1,
+                time_min: 0.0,
+                angle_deg: c,
+                motions: motions(c, 5.0),
+            })
+            .collect();
+        let seen = observable_motions(&setup(), &rows).unwrap();
+        assert_eq!(seen.len(), N);
+        for r in &seen {
+            let want = motions(r.angle_deg, 0.0).observable();
+            for (got, w) in r.motions.iter().zip(want) {
+                assert!((got - w).abs() < 1e-9, "{:?} vs {want:?}", r.motions);
+            }
+        }
+    }
+
+    /// Readings worked by hand: measured readings are the model readings of known motions at
+    /// two times; predicting those motions exactly leaves no residual, predicting the t = 0
+    /// motions at both times leaves exactly the thermal change as residual.
+    #[test]
+    fn readings_comparison_by_construction() {
+        let s = setup();
+        let change = |c: f64| ErrorMotions {
+            exc_um: 0.8 * (2.0 * c.to_radians()).cos(),
+            ..Default::default()
+        };
+        let at = |t: f64, c: f64| {
+            let mut m = motions(c, 0.0);
+            if t > 0.0 {
+                m.exc_um += change(c).exc_um;
+            }
+            m
+        };
+        let items = [0.0, 20.0]
+            .iter()
+            .map(|&t| Measurement {
+                experiment: 3,
+                time_min: t,
+                angles_deg: angles(),
+                dl_um: (0..5)
+                    .map(|m| {
+                        angles()
+                            .iter()
+                            .map(|&c| predicted_dl_um(&s, c, &at(t, c))[m] + 7.0)
+                            .collect()
+                    })
+                    .collect(),
+                first_line: 2,
+            })
+            .collect();
+        let measured = Measurements { items };
+        let rows = |f: &dyn Fn(f64, f64) -> ErrorMotions| -> Vec<MotionRow> {
+            [0.0, 20.0]
+                .iter()
+                .flat_map(|&t| angles().into_iter().map(move |c| (t, c)))
+                .map(|(t, c)| MotionRow {
+                    experiment: 3,
+                    time_min: t,
+                    angle_deg: c,
+                    motions: f(t, c).observable(),
+                })
+                .collect()
+        };
+        let exact = compare_readings(&s, &measured, 3, &rows(&at)).unwrap();
+        assert_eq!(exact.n, 2 * 5 * N);
+        assert!(exact.max_abs_residual_um < 1e-9 && exact.residual_ratio < 1e-9);
+        assert!(exact.max_abs_measured_um > 1.0);
+        let stale = compare_readings(&s, &measured, 3, &rows(&|_, c| at(0.0, c))).unwrap();
+        // the t = 20 readings differ by the change's readings, cleaned like every signal
+        let mut want = 0.0f64;
+        for m in 0..5 {
+            let sig: Vec<f64> = angles()
+                .iter()
+                .map(|&c| predicted_dl_um(&s, c, &change(c))[m])
+                .collect();
+            for v in remove_mean_and_first_harmonic(&angles(), &sig).unwrap() {
+                want = want.max(v.abs());
+            }
+        }
+        assert!(want > 0.3, "{want}");
+        assert!((stale.max_abs_residual_um - want).abs() < 1e-9);
+        assert!((stale.change_max_abs_measured_um - want).abs() < 1e-9);
+        assert!((stale.change_residual_ratio - 1.0).abs() < 1e-9);
+        // an experiment without measurements is refused
+        assert!(compare_readings(&s, &measured, 4, &rows(&at)).is_err());
+    }
+
+    #[test]
+    fn dataset_needs_a_temperature_row_for_every_measurement() {
+        let row = |t: f64, c: f64| IdentifiedRow {
+            experiment: 1,
+            time_min: t,
+            angle_deg: c,
+            motions: motions(c, 0.0),
+        };
+        let temps = TemperatureLog {
+            sensor_names: vec!["T1_c".into(), "T2_c".into()],
+            rows: [
+                ((1, 0), vec![20.0, 20.1]),
+                ((1, key(20.0)), vec![21.0, 20.5]),
+            ]
+            .into_iter()
+            .collect(),
+        };
+        let rows = vec![
+            row(20.0, 90.0),
+            row(0.0, 0.0),
+            row(0.0, 90.0),
+            row(20.0, 0.0),
+        ];
+        let d = RotaryDataset::build(&temps, &rows, AngleEncoding::Degrees).unwrap();
+        assert_eq!(d.data.feature_names, ["T1_c", "T2_c", "angle_deg"]);
+        let seq = &d.data.experiments[0].sequences[1]; // angle 90, times in order
+        assert_eq!(
+            seq.features,
+            vec![vec![20.0, 20.1, 90.0], vec![21.0, 20.5, 90.0]]
+        );
+        assert_eq!(d.labels[&1][1], (90.0, vec![0.0, 20.0]));
+        let cs = RotaryDataset::build(&temps, &rows, AngleEncoding::CosSin).unwrap();
+        assert_eq!(cs.data.feature_names.len(), 4);
+        let mut missing = rows.clone();
+        missing.push(row(40.0, 0.0));
+        let e = RotaryDataset::build(&temps, &missing, AngleEncoding::Degrees).unwrap_err();
+        assert!(e.to_string().contains("experiment 1 at 40 min"), "{e}");
+    }
+}
