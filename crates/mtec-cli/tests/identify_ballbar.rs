@@ -1,40 +1,19 @@
 //! `mtec identify ballbar` end to end: scenario files in, motions and conditioning out; bad input
 //! exits 2 with a located message.
 
-use std::path::Path;
-use std::process::Command;
+mod support;
 
-fn write_scenario(dir: &Path) {
-    let out = mtec_sim::run_scenario("dbb-rotary", 2).unwrap();
-    for f in out.files {
-        std::fs::write(dir.join(f.name), f.contents).unwrap();
-    }
-}
+use support::mtec;
 
-fn mtec(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_mtec"))
-        .args(args)
-        .output()
-        .unwrap()
+fn write_scenario(dir: &std::path::Path) {
+    support::write_scenario("dbb-rotary", 2, dir);
 }
 
 #[test]
 fn identifies_and_joins_temperatures() {
     let dir = tempfile::tempdir().unwrap();
     write_scenario(dir.path());
-    let p = |n: &str| dir.path().join(n).to_string_lossy().into_owned();
-    let o = mtec(&[
-        "identify",
-        "ballbar",
-        "--setup",
-        &p("setup.toml"),
-        "--data",
-        &p("dbb.csv"),
-        "--temps",
-        &p("temps.csv"),
-        "--out",
-        &p("id"),
-    ]);
+    let o = support::identify_ballbar(dir.path());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let csv = std::fs::read_to_string(dir.path().join("id/motions.csv")).unwrap();
     let mut lines = csv.lines();
@@ -55,6 +34,7 @@ fn identifies_and_joins_temperatures() {
     assert!(dir.path().join("id/time_EBC.svg").exists());
 
     // --json prints the same rows
+    let p = |n: &str| dir.path().join(n).to_string_lossy().into_owned();
     let o = mtec(&[
         "identify",
         "ballbar",

@@ -1,13 +1,11 @@
 //! `mtec iso230-2` and `mtec circular` end to end: simulated files in, reports out, exit codes.
 
+mod support;
+
 use std::path::Path;
-use std::process::Command;
 
 fn mtec(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_mtec"))
-        .args(args)
-        .output()
-        .unwrap();
+    let out = support::mtec(args);
     (
         out.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -16,10 +14,7 @@ fn mtec(args: &[&str]) -> (i32, String, String) {
 }
 
 fn write_scenario(name: &str, dir: &Path) {
-    let out = mtec_sim::run_scenario(name, 11).unwrap();
-    for f in out.files {
-        std::fs::write(dir.join(&f.name), f.contents).unwrap();
-    }
+    support::write_scenario(name, 11, dir);
 }
 
 #[test]

@@ -1,24 +1,15 @@
 //! `mtec thermal` end to end: select, fit, predict on simulated logs, and bad input (exit 2).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod support;
 
-fn mtec(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mtec"))
-        .args(args)
-        .output()
-        .expect("mtec runs")
-}
+use std::path::{Path, PathBuf};
+use support::{mtec, stderr};
 
 fn scenario(dir: &Path, name: &str) -> PathBuf {
     let out = mtec_sim::run_scenario(name, 1).unwrap();
     let p = dir.join(format!("{name}.csv"));
     std::fs::write(&p, &out.files[0].contents).unwrap();
     p
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).to_string()
 }
 
 #[test]

@@ -2,43 +2,15 @@
 //! simulate, identify the error motions with `mtec identify ballbar --temps`, train on
 //! experiments 1, 2, 4 (few epochs), predict, and bad input (exit 2).
 
+mod support;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn mtec(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mtec"))
-        .args(args)
-        .output()
-        .expect("mtec runs")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
+use support::{identify_ballbar, mtec, text, write_scenario};
 
 /// `motions.csv` (identified motions + T1..T9) of `dbb-rotary` seed 1.
 fn motions(dir: &Path) -> PathBuf {
-    let out = mtec_sim::run_scenario("dbb-rotary", 1).unwrap();
-    for f in &out.files {
-        std::fs::write(dir.join(&f.name), &f.contents).unwrap();
-    }
-    let p = |n: &str| dir.join(n).to_str().unwrap().to_string();
-    let o = mtec(&[
-        "identify",
-        "ballbar",
-        "--setup",
-        &p("setup.toml"),
-        "--data",
-        &p("dbb.csv"),
-        "--temps",
-        &p("temps.csv"),
-        "--out",
-        &p("id"),
-    ]);
+    write_scenario("dbb-rotary", 1, dir);
+    let o = identify_ballbar(dir);
     assert!(o.status.success(), "{}", text(&o));
     dir.join("id").join("motions.csv")
 }

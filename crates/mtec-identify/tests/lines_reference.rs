@@ -1,5 +1,7 @@
 //! Independent references: cases worked by hand, and NumPy's least squares on the same matrix.
 
+mod support;
+
 use mtec_identify::lines::{identify, LineData};
 use mtec_io::Table;
 use mtec_model::{ErrorElement, Machine};
@@ -128,17 +130,9 @@ fn least_squares_agrees_with_numpy_lstsq() {
 
 /// Kept design columns (in layout order) and readings of X1, X2, X3 of `vmc-9line` seed 1.
 fn three_x_line_design() -> (nalgebra::DMatrix<f64>, nalgebra::DVector<f64>) {
-    let out = mtec_sim::run_scenario("vmc-9line", 1).unwrap();
-    let csv = &out
-        .files
-        .iter()
-        .find(|f| f.name == "lines.csv")
-        .unwrap()
-        .contents;
-    let mut d = data(csv);
+    let (m, mut d, _) = support::vmc_9line(1);
     d.channels
         .retain(|c| ["X1", "X2", "X3"].contains(&c.line.as_str()) && c.run == 1);
-    let m = Machine::vmc_xyfz(100.0);
     let layout = mtec_identify::lines::Layout::new(&m, 3, &d).unwrap();
     let (a, y) = mtec_identify::lines::model::design_matrix(&m, &layout, &d);
     let an = mtec_identify::lines::identifiability::analyse(&a, &y, &layout).unwrap();
