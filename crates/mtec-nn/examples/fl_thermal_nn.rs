@@ -4,7 +4,7 @@
 //! Compared on the same folds with the BPNN baseline and an all-sensor MLR (the thermal issue's
 //! reference: least squares with intercept on the 16 temperatures).
 //!
-//!     cargo run --release -p mtec-nn --example fl_thermal -- PATH/train.csv
+//!     cargo run --release -p mtec-nn --example fl_thermal_nn -- PATH/train.csv
 //!
 //! Features: the 16 temperatures, resampled to 2 min (every 8th row of the 15 s log); targets:
 //! ch1..ch5 (µm). A held-out cycle's windows see the temperatures of the preceding 30 min
