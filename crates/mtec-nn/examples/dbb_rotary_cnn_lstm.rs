@@ -4,8 +4,10 @@
 //! readings. Prints the training time (goal: < 60 s on 2 cores in release).
 //!
 //!     cargo run --release -p mtec-nn --example dbb_rotary_cnn_lstm [-- --epochs N --fixed
-//!         --seed S --export DIR]
+//!         --seed S --export DIR --cos-sin]
 //!
+//! `--cos-sin` gives both models the angle as cos/sin (`AngleEncoding::CosSin`) instead of
+//! degrees;
 //! `--fixed` trains exactly N epochs (no early stopping) for timing against PyTorch;
 //! `--export DIR` writes the dataset as `DIR/rotary.csv` for `bench/cnn_lstm.sh`.
 
@@ -38,7 +40,16 @@ fn main() {
     let id = identify(&setup, &measurements).expect("identification");
     let temps = Table::parse(Path::new("temps.csv"), file("temps.csv")).expect("temps.csv");
     let temps = TemperatureLog::from_table(&temps).expect("temperatures");
-    let rotary = RotaryDataset::build(&temps, &id.rows, AngleEncoding::Degrees).expect("dataset");
+    let rotary = RotaryDataset::build(
+        &temps,
+        &id.rows,
+        if args.iter().any(|a| a == "--cos-sin") {
+            AngleEncoding::CosSin
+        } else {
+            AngleEncoding::Degrees
+        },
+    )
+    .expect("dataset");
     if let Some(dir) = arg("--export") {
         export(&rotary.data, &dir);
     }
