@@ -46,9 +46,12 @@ use mtec_identify::ballbar::{
     predicted_dl_um, remove_mean_and_first_harmonic, ErrorMotions, IdentifiedRow, Measurements,
     Setup,
 };
-use mtec_io::{InputError, Table};
 use serde::Serialize;
 use std::collections::BTreeMap;
+
+/// The temperature file of a campaign (moved to the ballbar module, where `mtec identify
+/// ballbar --temps` reads it too).
+pub use mtec_identify::ballbar::TemperatureLog;
 
 /// Target names of the rotary dataset, in `ErrorMotions::observable` order.
 pub const TARGET_NAMES: [&str; 5] = ["EXC_um", "EYC_um", "EZC_um", "EAC_urad", "EBC_urad"];
@@ -68,50 +71,6 @@ pub enum AngleEncoding {
 /// Keys of times and angles: µmin and µdeg, so that 20.0 and 20.000000001 meet.
 fn key(v: f64) -> i64 {
     (v * 1e6).round() as i64
-}
-
-/// Temperatures (°C) of every sensor at each (experiment, time).
-#[derive(Debug, Clone, PartialEq)]
-pub struct TemperatureLog {
-    pub sensor_names: Vec<String>,
-    /// (experiment, time in µmin) → temperatures in `sensor_names` order.
-    pub rows: BTreeMap<(i64, i64), Vec<f64>>,
-}
-
-impl TemperatureLog {
-    /// Reads `experiment,time_min,<sensor>_c...` (every `_c` column is a sensor). A repeated
-    /// (experiment, time) is an error at its line.
-    pub fn from_table(t: &Table) -> std::result::Result<TemperatureLog, InputError> {
-        t.require(&["experiment", "time_min"])?;
-        let sensor_names = t.columns_with_suffix("_c");
-        if sensor_names.is_empty() {
-            return Err(InputError::file(
-                &t.path,
-                "the temperature file has no sensor column (names ending in `_c`)",
-            ));
-        }
-        let exp = t.i64_column("experiment")?;
-        let time = t.f64_column("time_min")?;
-        let cols: Vec<Vec<f64>> = sensor_names
-            .iter()
-            .map(|n| t.f64_column(n))
-            .collect::<std::result::Result<_, _>>()?;
-        let mut rows = BTreeMap::new();
-        for (i, row) in t.rows.iter().enumerate() {
-            let temps: Vec<f64> = cols.iter().map(|c| c[i]).collect();
-            if rows.insert((exp[i], key(time[i])), temps).is_some() {
-                return Err(t.error_at(
-                    row,
-                    "time_min",
-                    format!(
-                        "experiment {} at {} min appears twice in the temperature file",
-                        exp[i], time[i]
-                    ),
-                ));
-            }
-        }
-        Ok(TemperatureLog { sensor_names, rows })
-    }
 }
 
 /// A rotary dataset and, for every sequence, the angle and measurement times it stands for.

@@ -1,10 +1,11 @@
 //! `mtec identify ballbar`: rotary-axis error motions from ballbar readings in five modes.
 
 use crate::error::CliError;
-use mtec_identify::ballbar::{identify, BallbarError, Identification, Measurements, Setup};
+use mtec_identify::ballbar::{
+    identify, time_key, BallbarError, Identification, Measurements, Setup, TemperatureLog,
+};
 use mtec_io::{InputError, OutputGuard, Table};
 use mtec_report::rotary::{rotary_figures, MotionSample};
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 pub const LONG_ABOUT: &str = "\
@@ -64,55 +65,18 @@ pub struct Args {
     pub json: bool,
 }
 
-/// Temperatures by (experiment, time in µmin).
-struct Temps {
-    names: Vec<String>,
-    rows: BTreeMap<(i64, i64), Vec<f64>>,
-}
-
-fn time_key(t: f64) -> i64 {
-    (t * 1e6).round() as i64
-}
-
-fn read_temps(path: &Path) -> Result<Temps, InputError> {
-    let t = Table::read(path)?;
-    t.require(&["experiment", "time_min"])?;
-    let names = t.columns_with_suffix("_c");
-    if names.is_empty() {
-        return Err(InputError::line(
-            path,
-            t.header_line,
-            "no temperature column: expected columns named <sensor>_c (degrees Celsius)",
-        ));
-    }
-    let exp = t.i64_column("experiment")?;
-    let time = t.f64_column("time_min")?;
-    let cols: Vec<Vec<f64>> = names
-        .iter()
-        .map(|n| t.f64_column(n))
-        .collect::<Result<_, _>>()?;
-    let mut rows = BTreeMap::new();
-    for (i, row) in t.rows.iter().enumerate() {
-        let v: Vec<f64> = cols.iter().map(|c| c[i]).collect();
-        if rows.insert((exp[i], time_key(time[i])), v).is_some() {
-            return Err(t.error_at(
-                row,
-                "time_min",
-                format!("experiment {} at {} min appears twice", exp[i], time[i]),
-            ));
-        }
-    }
-    Ok(Temps { names, rows })
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
     let setup = Setup::read(&args.setup)?;
     let table = Table::read(&args.data)?;
     let data = Measurements::from_table(&table, &setup)?;
-    let temps = args.temps.as_deref().map(read_temps).transpose()?;
+    let temps = args
+        .temps
+        .as_deref()
+        .map(TemperatureLog::read)
+        .transpose()?;
     if let (Some(t), Some(path)) = (&temps, &args.temps) {
         for m in &data.items {
-            if !t.rows.contains_key(&(m.experiment, time_key(m.time_min))) {
+            if t.at(m.experiment, m.time_min).is_none() {
                 return Err(InputError::line(
                     &args.data,
                     m.first_line,
@@ -179,7 +143,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 });
                 if let Some(t) = &temps {
                     let v = &t.rows[&(r.experiment, time_key(r.time_min))];
-                    for (n, x) in t.names.iter().zip(v) {
+                    for (n, x) in t.sensor_names.iter().zip(v) {
                         o[n] = serde_json::json!(x);
                     }
                 }
@@ -224,11 +188,11 @@ fn default_out(data: &Path) -> PathBuf {
     data.with_file_name(format!("{stem}-ballbar"))
 }
 
-fn motions_csv(result: &Identification, temps: Option<&Temps>) -> String {
+fn motions_csv(result: &Identification, temps: Option<&TemperatureLog>) -> String {
     let mut s =
         String::from("experiment,time_min,angle_deg,EXC_um,EYC_um,EZC_um,EAC_urad,EBC_urad");
     if let Some(t) = temps {
-        for n in &t.names {
+        for n in &t.sensor_names {
             s.push(',');
             s.push_str(n);
         }

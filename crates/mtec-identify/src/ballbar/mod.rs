@@ -51,6 +51,7 @@ pub mod harmonics;
 pub mod identify;
 pub mod model;
 pub mod setup;
+pub mod temps;
 
 pub use conditioning::{
     check_identifiable, conditioning_report, revolution_observability, score_mode_set,
@@ -64,6 +65,7 @@ pub use model::{
     OBSERVABLE_NAMES,
 };
 pub use setup::{Mode, PresetDims, Setup};
+pub use temps::{time_key, TemperatureLog};
 
 /// Why a ballbar identification cannot be done (no file location: the caller adds it).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
