@@ -111,6 +111,21 @@ fn with_lags(
     Ok(f)
 }
 
+/// The temperature features of `sensors` (all when empty), with their fitted lags when `lag`.
+fn sensor_features(
+    data: &ThermalData,
+    rows: &[usize],
+    sensors: &[String],
+    lag: bool,
+) -> Result<Vec<Feature>, ThermalError> {
+    let features = temp_features(data, sensors)?;
+    if lag {
+        with_lags(data, rows, features)
+    } else {
+        Ok(features)
+    }
+}
+
 /// The target on the given rows.
 pub fn target_rows(data: &ThermalData, rows: &[usize]) -> Result<Vec<f64>, ThermalError> {
     let y = data.target_um()?;
@@ -129,10 +144,7 @@ impl Fit for Mlr {
     type Model = LinearModel;
     fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<LinearModel, ThermalError> {
         let y = &target_rows(data, rows)?;
-        let mut features = temp_features(data, &self.sensors)?;
-        if self.lag {
-            features = with_lags(data, rows, features)?;
-        }
+        let features = sensor_features(data, rows, &self.sensors, self.lag)?;
         let x = design(data, &features)?.select_rows(rows.iter());
         let names: Vec<String> = features.iter().map(|f| f.name()).collect();
         let fit = ols(&x, y, &names)?;
@@ -198,10 +210,7 @@ impl Fit for Ridge {
     type Model = LinearModel;
     fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<LinearModel, ThermalError> {
         let y = &target_rows(data, rows)?;
-        let mut features = temp_features(data, &self.sensors)?;
-        if self.lag {
-            features = with_lags(data, rows, features)?;
-        }
+        let features = sensor_features(data, rows, &self.sensors, self.lag)?;
         ridge_model(
             LinearMethod::Ridge,
             data,
@@ -234,29 +243,19 @@ impl Fit for RidgeSelect {
             &names,
             self.options,
         )?;
-        let mut features = temp_features(data, &sel.selected)?;
-        if self.lag {
-            features = with_lags(data, rows, features)?;
-            ridge_model(
-                LinearMethod::RidgeSelect,
-                data,
-                rows,
-                y,
-                features,
-                None,
-                self.options,
-            )
-        } else {
-            ridge_model(
-                LinearMethod::RidgeSelect,
-                data,
-                rows,
-                y,
-                features,
-                Some(sel.k),
-                self.options,
-            )
-        }
+        let features = sensor_features(data, rows, &sel.selected, self.lag)?;
+        // with lags the selection's k (read without them) no longer applies: the lagged design
+        // gets its own k where its ridge trace stabilises
+        let k = if self.lag { None } else { Some(sel.k) };
+        ridge_model(
+            LinearMethod::RidgeSelect,
+            data,
+            rows,
+            y,
+            features,
+            k,
+            self.options,
+        )
     }
 }
 
