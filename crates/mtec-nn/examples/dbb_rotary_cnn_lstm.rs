@@ -11,26 +11,19 @@
 //! `--fixed` trains exactly N epochs (no early stopping) for timing against PyTorch;
 //! `--export DIR` writes the dataset as `DIR/rotary.csv` for `bench/cnn_lstm.sh`.
 
+mod support;
+
 use mtec_identify::ballbar::{identify, Measurements, Setup};
 use mtec_io::Table;
 use mtec_nn::rotary::{compare_readings, AngleEncoding, RotaryDataset, TemperatureLog};
-use mtec_nn::{compare_on_split, BpnnTrainConfig, CnnLstmConfig, SplitComparison, ThermalDataset};
+use mtec_nn::{compare_on_split, BpnnTrainConfig, CnnLstmConfig, SplitComparison};
 use std::path::Path;
-
-fn export(d: &ThermalDataset, dir: &str) {
-    std::fs::create_dir_all(dir).expect("create export dir");
-    std::fs::write(format!("{dir}/rotary.csv"), d.to_csv()).expect("write export");
-}
+use support::{export, ExampleArgs};
 
 fn main() {
     mtec_nn::threads::prefer_single_thread();
-    let args: Vec<String> = std::env::args().collect();
-    let arg = |name: &str| {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
+    let args = ExampleArgs::from_env();
+    let arg = |name: &str| args.value(name);
     let seed: u64 = arg("--seed").map_or(2, |s| s.parse().expect("--seed S"));
     let out = mtec_sim::run_scenario("dbb-rotary", seed).expect("scenario");
     let file = |n: &str| &out.files.iter().find(|f| f.name == n).expect(n).contents;
@@ -43,7 +36,7 @@ fn main() {
     let rotary = RotaryDataset::build(
         &temps,
         &id.rows,
-        if args.iter().any(|a| a == "--cos-sin") {
+        if args.flag("--cos-sin") {
             AngleEncoding::CosSin
         } else {
             AngleEncoding::Degrees
@@ -60,7 +53,7 @@ fn main() {
     if let Some(n) = arg("--epochs") {
         cfg.max_epochs = n.parse().expect("--epochs N");
     }
-    if args.iter().any(|a| a == "--fixed") {
+    if args.flag("--fixed") {
         cfg.patience = usize::MAX / 2;
     }
     let bpnn_cfg = BpnnTrainConfig {

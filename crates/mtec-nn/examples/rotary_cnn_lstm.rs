@@ -7,24 +7,17 @@
 //! `--fixed` trains exactly N epochs (no early stopping) for timing against PyTorch;
 //! `--export DIR` writes the data as CSV for `bench/cnn_lstm.sh`.
 
-use mtec_nn::synthetic::{rotary_thermal, RotaryThermalSpec};
-use mtec_nn::{compare_on_split, BpnnTrainConfig, CnnLstmConfig, SplitComparison, ThermalDataset};
+mod support;
 
-fn export(d: &ThermalDataset, dir: &str) {
-    std::fs::create_dir_all(dir).expect("create export dir");
-    std::fs::write(format!("{dir}/rotary.csv"), d.to_csv()).expect("write export");
-}
+use mtec_nn::synthetic::{rotary_thermal, RotaryThermalSpec};
+use mtec_nn::{compare_on_split, BpnnTrainConfig, CnnLstmConfig, SplitComparison};
+use support::{export, ExampleArgs};
 
 fn main() {
     mtec_nn::threads::prefer_single_thread();
-    let args: Vec<String> = std::env::args().collect();
-    let arg = |name: &str| {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
-    let fixed = args.iter().any(|a| a == "--fixed");
+    let args = ExampleArgs::from_env();
+    let arg = |name: &str| args.value(name);
+    let fixed = args.flag("--fixed");
     let spec = RotaryThermalSpec {
         angles: 24,
         ..RotaryThermalSpec::default()
