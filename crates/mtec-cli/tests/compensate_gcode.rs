@@ -8,6 +8,18 @@ fn mtec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_mtec"))
 }
 
+/// `mtec compensate gcode --model MODEL PROGRAM -o OUT`.
+fn compensate(model: &Path, program: &Path, out: impl AsRef<Path>) -> std::process::Output {
+    mtec()
+        .args(["compensate", "gcode", "--model"])
+        .arg(model)
+        .arg(program)
+        .arg("-o")
+        .arg(out.as_ref())
+        .output()
+        .unwrap()
+}
+
 fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
@@ -26,14 +38,7 @@ fn zero_model_copies_the_program_and_poly_model_corrects_it() {
         r#"{"format": "mtec.zero-model/1"}"#,
     );
     let out = dir.path().join("out.ngc");
-    let st = mtec()
-        .args(["compensate", "gcode", "--model"])
-        .arg(&zero)
-        .arg(&prog)
-        .arg("-o")
-        .arg(&out)
-        .status()
-        .unwrap();
+    let st = compensate(&zero, &prog, &out).status;
     assert_eq!(st.code(), Some(0));
     assert_eq!(std::fs::read(&out).unwrap(), PROGRAM.as_bytes());
 
@@ -45,14 +50,7 @@ fn zero_model_copies_the_program_and_poly_model_corrects_it() {
             "terms": [{"powers": [0,0,0], "coef_um": [10.0, 0.0, 0.0]},
                       {"powers": [1,0,0], "coef_um": [0.05, 0.0, 0.0]}]}"#,
     );
-    let o = mtec()
-        .args(["compensate", "gcode", "--model"])
-        .arg(&poly)
-        .arg(&prog)
-        .arg("-o")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = compensate(&poly, &prog, &out);
     assert_eq!(
         o.status.code(),
         Some(0),
@@ -84,14 +82,7 @@ fn unsupported_line_exits_2_with_file_line_column_and_writes_nothing() {
         r#"{"format": "mtec.zero-model/1"}"#,
     );
     let out = dir.path().join("out.ngc");
-    let o = mtec()
-        .args(["compensate", "gcode", "--model"])
-        .arg(&zero)
-        .arg(&prog)
-        .arg("-o")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = compensate(&zero, &prog, &out);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("p.ngc:3:4:"), "{err}");
@@ -126,14 +117,7 @@ fn bad_model_bad_offsets_and_overwriting_the_input_exit_2() {
     let dir = tempfile::tempdir().unwrap();
     let prog = write(dir.path(), "p.ngc", "G21\n");
     let bad = write(dir.path(), "bad.json", "{\"format\": \"mtec.poly-model/1\",\n \"terms\": [{\"powers\": [1,0], \"coef_um\": [1,2,3]}]}");
-    let o = mtec()
-        .args(["compensate", "gcode", "--model"])
-        .arg(&bad)
-        .arg(&prog)
-        .arg("-o")
-        .arg(dir.path().join("o.ngc"))
-        .output()
-        .unwrap();
+    let o = compensate(&bad, &prog, dir.path().join("o.ngc"));
     assert_eq!(o.status.code(), Some(2));
     assert!(
         String::from_utf8_lossy(&o.stderr).contains("bad.json:2:"),
@@ -164,14 +148,7 @@ fn bad_model_bad_offsets_and_overwriting_the_input_exit_2() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("G60"));
 
-    let o = mtec()
-        .args(["compensate", "gcode", "--model"])
-        .arg(&zero)
-        .arg(&prog)
-        .arg("-o")
-        .arg(&prog)
-        .output()
-        .unwrap();
+    let o = compensate(&zero, &prog, &prog);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("overwrite"));
     assert_eq!(std::fs::read_to_string(&prog).unwrap(), "G21\n");
