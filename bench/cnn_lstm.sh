@@ -4,7 +4,8 @@
 #
 # Data (DATA=dbb-rotary, the default): the virtual machine's `dbb-rotary` campaign (seed 2),
 # error motions identified by the ballbar method, one sequence per experiment and angle (72 angles
-# x 13 measurement times x 4 experiments; T1..T9 + angle_deg -> EXC, EYC, EZC, EAC, EBC),
+# x 13 measurement times x 4 experiments; T1..T9 + the angle's harmonics cos/sin(kC), k = 1..3
+# (HARMONICS=0: angle_deg) -> EXC, EYC, EZC, EAC, EBC),
 # exported by the `dbb_rotary_cnn_lstm` example. DATA=synthetic uses the analytic model of
 # mtec_nn::synthetic instead (24 angles x 49 steps; `rotary_cnn_lstm` example). Train on
 # experiments 1, 2, 4, test on 3. Both sides train a fixed number of epochs (no early stopping)
@@ -15,8 +16,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 EPOCHS="${EPOCHS:-40}"
 DATA="${DATA:-dbb-rotary}"
+HARMONICS="${HARMONICS:-3}"
+EXTRA=()
+LR_FINAL=1
 case "$DATA" in
-  dbb-rotary) EXAMPLE=dbb_rotary_cnn_lstm ;;
+  # the dbb-rotary example decays the step size to 5 % (cosine); the synthetic one keeps it
+  dbb-rotary) EXAMPLE=dbb_rotary_cnn_lstm; LR_FINAL=0.05
+    [ "$HARMONICS" -gt 0 ] && EXTRA=(--harmonics "$HARMONICS") ;;
   synthetic) EXAMPLE=rotary_cnn_lstm ;;
   *) echo "DATA must be dbb-rotary or synthetic" >&2; exit 2 ;;
 esac
@@ -31,8 +37,8 @@ fi
 
 cargo build --release -p mtec-nn --example "$EXAMPLE"
 echo "load before training: $(uptime)"
-./target/release/examples/"$EXAMPLE" --epochs "$EPOCHS" --fixed --export "$WORK" | tee "$WORK/mtec.txt"
-"$VENV/bin/python" bench/cnn_lstm_torch.py "$WORK/rotary.csv" "$EPOCHS" | tee "$WORK/torch.txt"
+./target/release/examples/"$EXAMPLE" --epochs "$EPOCHS" --fixed --export "$WORK" "${EXTRA[@]}" | tee "$WORK/mtec.txt"
+"$VENV/bin/python" bench/cnn_lstm_torch.py "$WORK/rotary.csv" "$EPOCHS" "$LR_FINAL" | tee "$WORK/torch.txt"
 echo "load after training: $(uptime)"
 
 mtec_spe=$(grep '^MTEC_SECONDS_PER_EPOCH=' "$WORK/mtec.txt" | cut -d= -f2)

@@ -1,6 +1,6 @@
 """The CNN-LSTM of mtec_nn::cnn_lstm rebuilt in PyTorch (same layer names, shapes, gate order,
 initialisation bounds, windowing, normalisation, validation split and optimiser), for
-bench/cnn_lstm.sh. Usage: python cnn_lstm_torch.py rotary.csv EPOCHS"""
+bench/cnn_lstm.sh. Usage: python cnn_lstm_torch.py rotary.csv EPOCHS [LR_FINAL_FRACTION]"""
 import sys, time, csv
 import numpy as np
 import torch
@@ -8,9 +8,12 @@ from torch import nn
 
 WINDOW, C, K, H = 16, 16, 3, 32
 BATCH, LR, VAL_FRACTION = 64, 3e-3, 0.15
+# cosine decay of the step size over the epochs to LR x this fraction (1: constant), as mtec's
+# CnnLstmConfig::final_learning_rate_fraction; third argument, default 1
 TRAIN, TEST = [1, 2, 4], [3]
 
 path, epochs = sys.argv[1], int(sys.argv[2])
+LR_FINAL_FRACTION = float(sys.argv[3]) if len(sys.argv) > 3 else 1.0
 torch.manual_seed(42)
 rows = list(csv.reader(open(path)))
 header, body = rows[0], np.array(rows[1:], dtype=float)
@@ -66,6 +69,9 @@ opt = torch.optim.Adam(model.parameters(), lr=LR)
 best, best_state = float("inf"), None
 t0 = time.perf_counter()
 for epoch in range(epochs):
+    frac = LR_FINAL_FRACTION + (1 - LR_FINAL_FRACTION) * 0.5 * (1 + np.cos(np.pi * epoch / epochs))
+    for g in opt.param_groups:
+        g["lr"] = LR * frac
     perm = torch.randperm(len(xt))
     model.train()
     for i in range(0, len(xt), BATCH):

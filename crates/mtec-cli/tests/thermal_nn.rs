@@ -104,6 +104,8 @@ fn cnn_lstm_and_bpnn_fit_and_predict_rotary_motions() {
         TARGETS,
         "--features",
         "angle_deg",
+        "--angle-harmonics",
+        "2",
         "--hidden",
         "4",
         "--epochs",
@@ -121,6 +123,22 @@ fn cnn_lstm_and_bpnn_fit_and_predict_rotary_motions() {
         serde_json::from_str(&std::fs::read_to_string(&bp).unwrap()).unwrap();
     assert_eq!(b["format"], "mtec.bpnn/1");
     assert_eq!(b["w1"].as_array().unwrap().len(), 4);
+    // T1..T9 then the angle's first two harmonics, which predict computes from angle_deg
+    let names: Vec<&str> = b["input_names"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names[9..],
+        [
+            "cos_1(angle_deg)",
+            "sin_1(angle_deg)",
+            "cos_2(angle_deg)",
+            "sin_2(angle_deg)"
+        ]
+    );
     let csv_path = dir.path().join("pred.csv");
     let o = mtec(&[
         "thermal",
@@ -195,6 +213,33 @@ fn bad_neural_fits_exit_2_with_the_reason() {
     ]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("window"), "{}", text(&o));
+    // a harmonic of a column the file does not have; no harmonic at all
+    let o = fit(&[
+        "--model",
+        "bpnn",
+        "--target",
+        TARGETS,
+        "--features",
+        "cos_2(table_deg)",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("table_deg") && text(&o).contains("motions.csv:1:"),
+        "{}",
+        text(&o)
+    );
+    let o = fit(&[
+        "--model",
+        "bpnn",
+        "--target",
+        TARGETS,
+        "--features",
+        "angle_deg",
+        "--angle-harmonics",
+        "0",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("--angle-harmonics"), "{}", text(&o));
     // thermal cv does not run the neural models
     let o = mtec(&[
         "thermal", "cv", "--data", d, "--target", "EXC_um", "--model", "bpnn",

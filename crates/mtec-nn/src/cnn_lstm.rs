@@ -60,6 +60,9 @@ pub struct CnnLstmConfig {
     pub max_epochs: usize,
     pub batch_size: usize,
     pub learning_rate: f64,
+    /// Cosine decay of the step size over `max_epochs`, from `learning_rate` to
+    /// `learning_rate × final_learning_rate_fraction` (1 = constant step size).
+    pub final_learning_rate_fraction: f64,
     pub validation_fraction: f64,
     /// Epochs without validation improvement before stopping.
     pub patience: usize,
@@ -83,6 +86,7 @@ impl Default for CnnLstmConfig {
             max_epochs: 60,
             batch_size: 64,
             learning_rate: 3e-3,
+            final_learning_rate_fraction: 1.0,
             validation_fraction: 0.15,
             patience: 15,
             seed: 42,
@@ -292,6 +296,11 @@ pub fn train_cnn_lstm(
             "batch_size and max_epochs must be at least 1".into(),
         ));
     }
+    if !(config.final_learning_rate_fraction > 0.0 && config.final_learning_rate_fraction <= 1.0) {
+        return Err(NnError::Config(
+            "final_learning_rate_fraction must be in (0, 1]".into(),
+        ));
+    }
     if !(0.0..0.9).contains(&config.validation_fraction) {
         return Err(NnError::Config(
             "validation_fraction must be in [0, 0.9)".into(),
@@ -360,6 +369,7 @@ pub fn train_cnn_lstm(
     let mut epochs = 0;
     for epoch in 1..=config.max_epochs {
         epochs = epoch;
+        adam.set_learning_rate(cosine_step_size(config, epoch));
         order.shuffle(&mut shuffle);
         let mut loss_sum = 0.0;
         for chunk in order.chunks(config.batch_size) {
@@ -451,6 +461,14 @@ pub fn train_cnn_lstm(
         history,
     };
     Ok((model, report))
+}
+
+/// Step size of `epoch` (1-based): cosine annealing (Loshchilov & Hutter 2017, eq. 5) from
+/// `learning_rate` to `learning_rate × final_learning_rate_fraction` over `max_epochs`.
+fn cosine_step_size(config: &CnnLstmConfig, epoch: usize) -> f64 {
+    let (lr, f) = (config.learning_rate, config.final_learning_rate_fraction);
+    let progress = (epoch - 1) as f64 / config.max_epochs.max(1) as f64;
+    lr * (f + (1.0 - f) * 0.5 * (1.0 + (std::f64::consts::PI * progress).cos()))
 }
 
 fn snapshot(vars: &BTreeMap<String, Var>) -> Result<BTreeMap<String, StoredTensor>> {

@@ -20,8 +20,10 @@
 //!
 //! Decisions where the source is silent:
 //! - The angle enters as one feature `angle_deg` (as in the source: "temperatures and angle"),
-//!   z-scored like every feature, or as `cos_angle, sin_angle` ([`AngleEncoding::CosSin`],
-//!   continuous across 0°/360°). The angle is a fixed label of each sequence, not a time series.
+//!   z-scored like every feature, or as its first n harmonics `cos_k(angle_deg)`,
+//!   `sin_k(angle_deg)` ([`AngleEncoding::Harmonics`], continuous across 0°/360°; the static
+//!   error motions are sums of such harmonics, so a network need not build them from the raw
+//!   angle). The angle is a fixed label of each sequence, not a time series.
 //! - The readings are compared *after* the mean and first harmonic are removed from both the
 //!   measured and the predicted signal of each mode: the raw readings carry a new set-up error
 //!   (ball and cup eccentricity, ~10 µm) at every installation, which no model of the axis can or
@@ -64,8 +66,89 @@ pub enum AngleEncoding {
     /// One feature `angle_deg` (0..360).
     #[default]
     Degrees,
-    /// Two features `cos_angle`, `sin_angle`: continuous across 0°/360°.
-    CosSin,
+    /// `2n` features `cos_k(angle_deg)`, `sin_k(angle_deg)` for k = 1..=n: the Fourier basis in
+    /// which the error motions of a rotary axis are written (ISO 230-7 harmonics), continuous
+    /// across 0°/360°. `Harmonics(1)` is the plain cos/sin encoding.
+    Harmonics(u8),
+}
+
+impl AngleEncoding {
+    /// The features this encoding adds after the temperatures.
+    pub fn feature_names(self) -> Vec<String> {
+        match self {
+            AngleEncoding::Degrees => vec![ANGLE_FEATURE.into()],
+            AngleEncoding::Harmonics(n) => harmonic_feature_names(ANGLE_FEATURE, n),
+        }
+    }
+    /// The feature values at `angle_deg`, in `feature_names` order.
+    pub fn features(self, angle_deg: f64) -> Vec<f64> {
+        match self {
+            AngleEncoding::Degrees => vec![angle_deg],
+            AngleEncoding::Harmonics(n) => (1..=n)
+                .flat_map(|k| {
+                    [Trig::Cos, Trig::Sin].map(|trig| HarmonicFeature {
+                        trig,
+                        order: k,
+                        column: String::new(),
+                    })
+                })
+                .map(|h| h.value(angle_deg))
+                .collect(),
+        }
+    }
+}
+
+/// `cos_1(col), sin_1(col), …, cos_n(col), sin_n(col)`.
+pub fn harmonic_feature_names(column: &str, n: u8) -> Vec<String> {
+    (1..=n)
+        .flat_map(|k| [format!("cos_{k}({column})"), format!("sin_{k}({column})")])
+        .collect()
+}
+
+/// cos or sin.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Trig {
+    Cos,
+    Sin,
+}
+
+/// A feature derived from an angle column in degrees: `cos_k(col)` = cos(k·col), `sin_k(col)`
+/// = sin(k·col). Model files store these names, so a model trained on them recomputes them
+/// from the angle column of any data file.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct HarmonicFeature {
+    pub trig: Trig,
+    /// Harmonic order k ≥ 1.
+    pub order: u8,
+    /// The angle column (degrees).
+    pub column: String,
+}
+
+impl HarmonicFeature {
+    /// Parses `cos_k(col)` / `sin_k(col)`; any other name is not a harmonic feature.
+    pub fn parse(name: &str) -> Option<HarmonicFeature> {
+        let (trig, rest) = if let Some(r) = name.strip_prefix("cos_") {
+            (Trig::Cos, r)
+        } else {
+            (Trig::Sin, name.strip_prefix("sin_")?)
+        };
+        let (order, rest) = rest.split_once('(')?;
+        let column = rest.strip_suffix(')')?;
+        let order: u8 = order.parse().ok().filter(|k| *k >= 1)?;
+        (!column.is_empty()).then(|| HarmonicFeature {
+            trig,
+            order,
+            column: column.to_string(),
+        })
+    }
+    /// The feature at an angle in degrees.
+    pub fn value(&self, angle_deg: f64) -> f64 {
+        let a = f64::from(self.order) * angle_deg.to_radians();
+        match self.trig {
+            Trig::Cos => a.cos(),
+            Trig::Sin => a.sin(),
+        }
+    }
 }
 
 /// Keys of times and angles: µmin and µdeg, so that 20.0 and 20.000000001 meet.
@@ -137,13 +220,7 @@ impl RotaryDataset {
                         ))
                     })?;
                     let mut f = temp.clone();
-                    match angle_encoding {
-                        AngleEncoding::Degrees => f.push(angle),
-                        AngleEncoding::CosSin => {
-                            f.push(angle.to_radians().cos());
-                            f.push(angle.to_radians().sin());
-                        }
-                    }
+                    f.extend(angle_encoding.features(angle));
                     features.push(f);
                 }
                 lab.push((angle, series.iter().map(|s| s.0).collect()));
@@ -157,13 +234,7 @@ impl RotaryDataset {
             experiments.push(Experiment { id: e, sequences });
         }
         let mut feature_names = temps.sensor_names.clone();
-        match angle_encoding {
-            AngleEncoding::Degrees => feature_names.push(ANGLE_FEATURE.into()),
-            AngleEncoding::CosSin => {
-                feature_names.push("cos_angle".into());
-                feature_names.push("sin_angle".into());
-            }
-        }
+        feature_names.extend(angle_encoding.feature_names());
         let data = ThermalDataset {
             feature_names,
             target_names: TARGET_NAMES.iter().map(|s| s.to_string()).collect(),
@@ -284,6 +355,49 @@ pub struct ErrorMotionsAt {
     pub time_min: f64,
     pub angle_deg: f64,
     pub motions: ErrorMotions,
+}
+
+/// The true motions of one experiment from a `dbb-rotary` truth document (`mtec.truth/1`:
+/// `motions` holds columns `experiment, time_min, angle_deg, EXC_um … ECC_urad`). Compare them
+/// with predictions after [`observable_motions`].
+pub fn truth_motions(truth: &serde_json::Value, experiment: u32) -> Result<Vec<ErrorMotionsAt>> {
+    let col = |n: &str| -> Result<Vec<f64>> {
+        truth["motions"][n]
+            .as_array()
+            .and_then(|a| a.iter().map(|v| v.as_f64()).collect::<Option<Vec<f64>>>())
+            .ok_or_else(|| NnError::Data(format!("the truth has no numeric motions column {n}")))
+    };
+    let (exp, time, angle) = (col("experiment")?, col("time_min")?, col("angle_deg")?);
+    let e = [
+        "EXC_um", "EYC_um", "EZC_um", "EAC_urad", "EBC_urad", "ECC_urad",
+    ]
+    .iter()
+    .map(|n| col(n))
+    .collect::<Result<Vec<_>>>()?;
+    if e.iter()
+        .chain([&time, &angle])
+        .any(|c| c.len() != exp.len())
+    {
+        return Err(NnError::Data(
+            "the truth's motions columns differ in length".into(),
+        ));
+    }
+    Ok((0..exp.len())
+        .filter(|&i| exp[i] == f64::from(experiment))
+        .map(|i| ErrorMotionsAt {
+            experiment,
+            time_min: time[i],
+            angle_deg: angle[i],
+            motions: ErrorMotions {
+                exc_um: e[0][i],
+                eyc_um: e[1][i],
+                ezc_um: e[2][i],
+                eac_urad: e[3][i],
+                ebc_urad: e[4][i],
+                ecc_urad: e[5][i],
+            },
+        })
+        .collect())
 }
 
 /// Predicted against measured ballbar readings of one experiment (µm), see the module docs.
@@ -512,6 +626,26 @@ mod tests {
     }
 
     #[test]
+    fn harmonic_feature_names_parse_back() {
+        for name in harmonic_feature_names("angle_deg", 3) {
+            let h = HarmonicFeature::parse(&name).unwrap();
+            assert_eq!(h.column, "angle_deg");
+            assert_eq!(
+                harmonic_feature_names(&h.column, h.order)
+                    [2 * (h.order as usize - 1) + usize::from(h.trig == Trig::Sin)],
+                name
+            );
+        }
+        let h = HarmonicFeature::parse("sin_3(c_deg)").unwrap();
+        assert!((h.value(30.0) - 1.0).abs() < 1e-12); // sin 90°
+        for bad in [
+            "cos_0(a)", "cos_1()", "tan_1(a)", "cos_x(a)", "cos_1(a", "T1_c",
+        ] {
+            assert!(HarmonicFeature::parse(bad).is_none(), "{bad}");
+        }
+    }
+
+    #[test]
     fn dataset_needs_a_temperature_row_for_every_measurement() {
         let row = |t: f64, c: f64| IdentifiedRow {
             experiment: 1,
@@ -542,8 +676,21 @@ mod tests {
             vec![vec![20.0, 20.1, 90.0], vec![21.0, 20.5, 90.0]]
         );
         assert_eq!(d.labels[&1][1], (90.0, vec![0.0, 20.0]));
-        let cs = RotaryDataset::build(&temps, &rows, AngleEncoding::CosSin).unwrap();
-        assert_eq!(cs.data.feature_names.len(), 4);
+        let cs = RotaryDataset::build(&temps, &rows, AngleEncoding::Harmonics(2)).unwrap();
+        assert_eq!(
+            cs.data.feature_names[2..],
+            [
+                "cos_1(angle_deg)",
+                "sin_1(angle_deg)",
+                "cos_2(angle_deg)",
+                "sin_2(angle_deg)"
+            ]
+        );
+        // angle 90°: cos 90 = 0, sin 90 = 1, cos 180 = −1, sin 180 = 0
+        let f = &cs.data.experiments[0].sequences[1].features[0][2..];
+        for (got, want) in f.iter().zip([0.0, 1.0, -1.0, 0.0]) {
+            assert!((got - want).abs() < 1e-12, "{f:?}");
+        }
         let mut missing = rows.clone();
         missing.push(row(40.0, 0.0));
         let e = RotaryDataset::build(&temps, &missing, AngleEncoding::Degrees).unwrap_err();

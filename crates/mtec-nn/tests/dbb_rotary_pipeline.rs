@@ -4,11 +4,11 @@
 //! 1, 2, 4 → predictions for experiment 3, against the BPNN baseline, against the identified and
 //! the true motions, and mapped back to ballbar readings.
 
-use mtec_identify::ballbar::{identify, ErrorMotions, Measurements, Setup};
+use mtec_identify::ballbar::{identify, Measurements, Setup};
 use mtec_io::Table;
 use mtec_nn::metrics::{channel_metrics, ChannelMetrics};
 use mtec_nn::rotary::{
-    compare_readings, observable_motions, AngleEncoding, ErrorMotionsAt, MotionRow,
+    compare_readings, observable_motions, truth_motions, AngleEncoding, MotionRow,
     ReadingComparison, RotaryDataset, TemperatureLog, TARGET_NAMES,
 };
 use mtec_nn::{
@@ -35,7 +35,7 @@ fn scenario(seed: u64) -> Scenario {
         &Table::parse(Path::new("temps.csv"), file("temps.csv")).unwrap(),
     )
     .unwrap();
-    let data = RotaryDataset::build(&temps, &id.rows, AngleEncoding::Degrees).unwrap();
+    let data = RotaryDataset::build(&temps, &id.rows, AngleEncoding::Harmonics(3)).unwrap();
     Scenario {
         setup,
         measurements,
@@ -46,38 +46,7 @@ fn scenario(seed: u64) -> Scenario {
 
 /// The true motions of one experiment, as the ballbar method would see them.
 fn observable_truth(s: &Scenario, experiment: u32) -> Vec<MotionRow> {
-    let m = &s.truth["motions"];
-    let col = |n: &str| -> Vec<f64> {
-        m[n].as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect()
-    };
-    let (exp, time, angle) = (col("experiment"), col("time_min"), col("angle_deg"));
-    let e: Vec<Vec<f64>> = [
-        "EXC_um", "EYC_um", "EZC_um", "EAC_urad", "EBC_urad", "ECC_urad",
-    ]
-    .iter()
-    .map(|n| col(n))
-    .collect();
-    let rows: Vec<ErrorMotionsAt> = (0..exp.len())
-        .filter(|&i| exp[i] as u32 == experiment)
-        .map(|i| ErrorMotionsAt {
-            experiment,
-            time_min: time[i],
-            angle_deg: angle[i],
-            motions: ErrorMotions {
-                exc_um: e[0][i],
-                eyc_um: e[1][i],
-                ezc_um: e[2][i],
-                eac_urad: e[3][i],
-                ebc_urad: e[4][i],
-                ecc_urad: e[5][i],
-            },
-        })
-        .collect();
-    observable_motions(&s.setup, &rows).unwrap()
+    observable_motions(&s.setup, &truth_motions(&s.truth, experiment).unwrap()).unwrap()
 }
 
 /// The source-sized network (Conv1d 16×3, LSTM 32, window 16; 14 821 parameters) with early
@@ -86,6 +55,7 @@ fn cnn_config() -> CnnLstmConfig {
     CnnLstmConfig {
         max_epochs: 40,
         patience: 15,
+        final_learning_rate_fraction: 0.05,
         ..CnnLstmConfig::default()
     }
 }
@@ -196,14 +166,17 @@ fn report(o: &Outcome) {
     }
 }
 
-/// What holds on `dbb-rotary` (seed 2), run in CI (source-sized CNN-LSTM, ≤ 40 epochs; BPNN
-/// 10-10-5 with at most 60 Levenberg–Marquardt iterations to stay within the CI budget):
+/// What holds on `dbb-rotary` (seed 2), run in CI (features T1..T9 and the angle's first three
+/// harmonics; source-sized CNN-LSTM, ≤ 40 epochs with the step size decayed to 5 %; BPNN 10-10-5
+/// with at most 60 Levenberg–Marquardt iterations to stay within the CI budget):
 /// - the labels are right: the identified motions of experiment 3 match the true motions (their
 ///   observable part) to the identification noise (< 0.3 µm, < 1 µrad RMS), and the scenario's
 ///   thermal change is not negligible (> 2 µm in the readings);
+/// - both models come close to the identification noise, the floor no model can beat;
 /// - both models' predicted readings leave a max residual below 40 % of the largest measured
-///   reading (the source's criterion; the source reports 38 %), and their predictions are as
-///   close to the truth as to the identified motions (within 0.1 µm / 1 µrad);
+///   reading and below 40 % of the largest thermal change (the source's criterion; the source
+///   reports 38 %), and their predictions are as close to the truth as to the identified motions
+///   (within 0.1 µm / 1 µrad);
 /// - the CNN-LSTM's RMSE is below 10 % of each channel's range.
 ///
 /// The RMSE comparison with a converged BPNN is the ignored test below.
@@ -224,6 +197,25 @@ fn dbb_rotary_pipeline_against_truth_and_readings() {
         );
     }
     assert!(o.bpnn_readings.change_max_abs_measured_um > 2.0);
+    // with the angle as harmonics the BPNN comes close to the floor no model can beat, the
+    // identification's own error (overall RMSE vs identified ≤ 1.5 × that of the identified
+    // motions vs the truth; 0.355 against 0.276), and the CNN-LSTM within 1.75 × (0.416)
+    let floor = SplitComparison::overall_rmse(&o.identified_vs_truth);
+    let (c, b) = (
+        SplitComparison::overall_rmse(&o.cnn_vs_identified),
+        SplitComparison::overall_rmse(&o.bpnn_vs_identified),
+    );
+    assert!(b < 1.5 * floor, "BPNN {b} vs floor {floor}");
+    assert!(c < 1.75 * floor, "CNN-LSTM {c} vs floor {floor}");
+    // the thermal change alone (readings minus those at t = 0) is also predicted within the
+    // source's 40 % (BPNN 19 %, CNN-LSTM 26 %)
+    for r in [&o.bpnn_readings, &o.cnn_readings] {
+        assert!(
+            r.change_residual_ratio < 0.4,
+            "thermal change residual ratio {}",
+            r.change_residual_ratio
+        );
+    }
     assert!(
         o.bpnn_readings.residual_ratio < 0.4,
         "BPNN readings residual ratio {}",
@@ -277,14 +269,14 @@ fn dbb_rotary_pipeline_against_truth_and_readings() {
 
 /// The acceptance criterion on `dbb-rotary`: CNN-LSTM RMSE (experiment 3) below the
 /// BPNN's and a max reading residual < 40 % of the largest measured reading, with the BPNN
-/// trained for 200 LM iterations (still improving slowly). The readings part holds (27 %); the RMSE
-/// part FAILS: CNN-LSTM 1.23 against BPNN 0.93 (overall, mixed µm/µrad), the BPNN better on
-/// every channel. Why (docs/methods.md §10.1): the scenario's error motions are an
-/// instantaneous function of the temperatures the sensors read (no lag between sensor and
-/// structure), so a temperature history carries no extra information, and three training
-/// experiments give only 39 distinct temperature states. Kept runnable
-/// (`cargo test -p mtec-nn --test dbb_rotary_pipeline -- --ignored`, ~1 min) so that a better
-/// model or a scenario with thermal lag can be checked against it.
+/// trained for 200 LM iterations. The readings part holds (CNN-LSTM 8.5 %; thermal change alone
+/// 26 %); the RMSE part FAILS: CNN-LSTM 0.416 against BPNN 0.353 (overall, mixed µm/µrad), where
+/// the identification noise alone gives 0.276. Why (docs/methods.md §10.1): the scenario's error
+/// motions are an instantaneous function of the temperatures the sensors read (no lag between
+/// sensor and structure), so a temperature history carries no extra information, and the BPNN
+/// is already within 0.2 of the noise floor; on seeds 1–5 the BPNN wins every time. Kept
+/// runnable (`cargo test -p mtec-nn --test dbb_rotary_pipeline -- --ignored`, ~1 min) so that a
+/// better model or a scenario with thermal lag can be checked against it.
 #[test]
 #[ignore = "fails on dbb-rotary: the converged BPNN has the lower RMSE (see the doc comment)"]
 fn acceptance_cnn_lstm_beats_bpnn_on_dbb_rotary() {

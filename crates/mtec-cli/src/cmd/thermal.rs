@@ -70,7 +70,7 @@ enum Sub {
     /// Example (rotary axis, after `mtec identify ballbar --temps temps.csv --out id`):
     /// mtec thermal fit --model cnn-lstm --data id/motions.csv
     /// --target EXC_um,EYC_um,EZC_um,EAC_urad,EBC_urad --sequence-by angle_deg
-    /// --features angle_deg --window 6 --train 1,2,4 --test 3 -o rotary.json
+    /// --features angle_deg --angle-harmonics 3 --train 1,2,4 --test 3 -o rotary.json
     Fit(Box<FitArgs>),
     /// Predicts the drift with a model file; metrics when the data hold the target. Also reads
     /// the neural models (`mtec.cnn-lstm/1`, `mtec.bpnn/1`): then one `pred_<target>` column per

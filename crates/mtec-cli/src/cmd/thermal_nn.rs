@@ -9,6 +9,9 @@
 //! Decisions where the spec is silent:
 //! - Features: the sensors (`--sensors`, default every `_c` column but `ambient_c`, as for the
 //!   regression models) followed by the `--features` columns (e.g. `angle_deg`, `ambient_c`).
+//!   An angle column may enter as its harmonics `cos_k(col)`, `sin_k(col)` (`--angle-harmonics
+//!   N`, or named one by one in `--features`); the model file stores those names and
+//!   `thermal predict` computes them again from the angle column.
 //! - Rows of one sequence are time steps in `time_min` order (sorted here, a repeated time is an
 //!   error); the CNN-LSTM's window counts rows, so resample irregular logs first.
 //! - The model file is the network's own versioned format (`mtec.cnn-lstm/1`, `mtec.bpnn/1`);
@@ -21,6 +24,7 @@ use crate::error::CliError;
 use mtec_io::{InputError, OutputGuard, Table};
 use mtec_nn::cnn_lstm::Architecture;
 use mtec_nn::metrics::{channel_metrics, ChannelMetrics};
+use mtec_nn::rotary::{harmonic_feature_names, HarmonicFeature, Trig};
 use mtec_nn::{
     train_bpnn_baseline, train_cnn_lstm, Activation, Bpnn, BpnnTrainConfig, CnnLstm, CnnLstmConfig,
     Experiment, NnError, Optimizer, Sequence, ThermalDataset,
@@ -37,8 +41,14 @@ pub struct NnArgs {
     #[arg(long)]
     pub sequence_by: Option<String>,
     /// Extra feature columns after the sensors (e.g. `angle_deg`, `ambient_c`, `position_mm`).
+    /// `cos_K(COL)` / `sin_K(COL)` is cos/sin of K times the angle column COL (degrees).
     #[arg(long, value_delimiter = ',')]
     pub features: Vec<String>,
+    /// Give each --features angle column (name ending in `_deg`) as its first N harmonics
+    /// cos_k(COL), sin_k(COL), k = 1..N, instead of degrees: continuous across 0°/360°, and the
+    /// static error motions of a rotary axis are sums of such harmonics (3 is a good start).
+    #[arg(long, value_name = "N")]
+    pub angle_harmonics: Option<u8>,
     /// Largest number of training epochs (cnn-lstm, bpnn: Levenberg–Marquardt iterations).
     #[arg(long)]
     pub epochs: Option<usize>,
@@ -57,6 +67,10 @@ pub struct NnArgs {
     /// cnn-lstm: Adam step size [default: 0.003].
     #[arg(long)]
     pub learning_rate: Option<f64>,
+    /// cnn-lstm: cosine decay of the step size over --epochs down to this fraction of
+    /// --learning-rate (1 = constant) [default: 1].
+    #[arg(long, value_name = "F")]
+    pub final_lr_fraction: Option<f64>,
     /// cnn-lstm: mini-batch size [default: 64].
     #[arg(long)]
     pub batch_size: Option<usize>,
@@ -137,10 +151,18 @@ fn load(
         Some(c) => Some(t.f64_column(c)?),
         None => None,
     };
+    // a column of the file, or a harmonic `cos_k(col)` of one (the file's column wins)
     let feats: Vec<Vec<f64>> = feature_names
         .iter()
-        .map(|n| t.f64_column(n))
-        .collect::<Result<_, _>>()?;
+        .map(|n| match HarmonicFeature::parse(n).filter(|_| !t.has(n)) {
+            Some(h) => Ok(t
+                .f64_column(&h.column)?
+                .into_iter()
+                .map(|deg| h.value(deg))
+                .collect()),
+            None => t.f64_column(n),
+        })
+        .collect::<Result<_, InputError>>()?;
     let has_targets = !targets.is_empty() && targets.iter().all(|n| t.has(n));
     if need_targets && !has_targets {
         let missing: Vec<&str> = targets
@@ -341,11 +363,29 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
             })
             .collect::<Result<_, _>>()?
     };
+    if nn.angle_harmonics == Some(0) {
+        return Err(CliError::usage(
+            "--angle-harmonics needs at least 1 harmonic",
+        ));
+    }
     for f in &nn.features {
-        let name = resolve(&table, f)
-            .ok_or_else(|| header_error(&table, format!("missing feature column `{f}`")))?;
-        if !features.contains(&name) {
-            features.push(name);
+        let derived = HarmonicFeature::parse(f);
+        let column = derived.as_ref().map_or(f.as_str(), |h| h.column.as_str());
+        let name = resolve(&table, column)
+            .ok_or_else(|| header_error(&table, format!("missing feature column `{column}`")))?;
+        let names = match (&derived, nn.angle_harmonics) {
+            (Some(h), _) => vec![format!(
+                "{}_{}({name})",
+                if h.trig == Trig::Cos { "cos" } else { "sin" },
+                h.order
+            )],
+            (None, Some(n)) if name.ends_with("_deg") => harmonic_feature_names(&name, n),
+            (None, _) => vec![name],
+        };
+        for name in names {
+            if !features.contains(&name) {
+                features.push(name);
+            }
         }
     }
     if features.is_empty() {
@@ -442,6 +482,9 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
                 max_epochs: nn.epochs.unwrap_or(d.max_epochs),
                 batch_size: nn.batch_size.unwrap_or(d.batch_size),
                 learning_rate: nn.learning_rate.unwrap_or(d.learning_rate),
+                final_learning_rate_fraction: nn
+                    .final_lr_fraction
+                    .unwrap_or(d.final_learning_rate_fraction),
                 patience: nn.patience.unwrap_or(d.patience),
                 seed: nn.seed,
                 progress: !nn.quiet,
