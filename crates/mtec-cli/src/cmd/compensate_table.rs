@@ -29,7 +29,9 @@ Formats:
 
 Sampling: 1-D tables run along --axis over --range FROM:TO:STEP (default: the map's grid along
 that axis), the other coordinates at --at X,Y,Z (default: the centre of the map's grid box, or
-0,0,0 for other models).
+0,0,0 for other models). Models without a grid (BPNN, kinematic) need --range (and the
+--x/y/z-range for beckhoff); a BPNN extrapolates without warning outside the box it was fitted
+on, so keep the ranges inside it.
 
 Example:
   mtec compensate table --model map.json --format sinumerik-lec --axis X -o x_lec.ini
@@ -49,7 +51,8 @@ pub enum Format {
 /// `mtec compensate table`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Error model JSON (mtec.map/1, ...).
+    /// Error model JSON: a map (mtec.map/1), a kinematic error model, a BPNN fitted by
+    /// `map fit --model bpnn` (mtec.bpnn/1), or a poly/zero model.
     #[arg(long)]
     model: PathBuf,
     /// Controller table format.
@@ -115,7 +118,8 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> Result<(), CliError> {
-    let model = mtec_comp::load_error_model(&a.model)?;
+    // the CLI's loader: maps and kinematic models (mtec-comp) and the BPNN, poly and zero models
+    let model = super::model_loader::load_error_model(&a.model)?;
     let map = load_map_if_grid(&a.model)?;
     let axis = parse_axis("--axis", &a.axis)?;
     let output_axis = match &a.output_axis {
