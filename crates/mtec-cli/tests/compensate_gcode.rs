@@ -110,6 +110,18 @@ fn unsupported_line_exits_2_with_file_line_column_and_writes_nothing() {
     assert_eq!(o.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&o.stderr).contains("warning:"));
     assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&prog).unwrap());
+
+    // a script that printed 0.00001 as 1e-05: a controller would go to X1, mtec refuses it
+    std::fs::remove_file(&out).unwrap();
+    let prog = write(dir.path(), "e.ngc", "G21\nG0 X0 Y0 Z0\nG1 X1e-05 F100\n");
+    let o = compensate(&zero, &prog, &out);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("e.ngc:3:6:") && err.contains("exponent"),
+        "{err}"
+    );
+    assert!(!out.exists());
 }
 
 #[test]

@@ -308,11 +308,38 @@ fn lex_value(line: &[u8], i: usize) -> Result<(Value, usize), LexError> {
             if digits == 0 {
                 return Err(err(i.saturating_sub(1), "word without a number"));
             }
+            exponent_check(line, i, end)?;
             let value =
                 parse_number(&line[i..end]).ok_or_else(|| err(i, "number cannot be read"))?;
             Ok((Value::Number(value), end))
         }
     }
+}
+
+/// Refuses a number written with an exponent (`X1e-05`, as printf's `%g` or Python write small
+/// values): G-code has no exponent, so a controller reads `X1` and then an `E-05` word, and the
+/// axis goes to 1 mm instead of 0.00001 mm. `end` is where the digits of the number at `i` end.
+fn exponent_check(line: &[u8], i: usize, end: usize) -> Result<(), LexError> {
+    let n = line.len();
+    if end >= n || !matches!(line[end], b'e' | b'E') {
+        return Ok(());
+    }
+    let mut k = end + 1;
+    if k < n && matches!(line[k], b'+' | b'-') {
+        k += 1;
+    }
+    if k >= n || !line[k].is_ascii_digit() {
+        return Ok(());
+    }
+    let text = String::from_utf8_lossy(&line[i..digits_end(line, k)]);
+    Err(err(
+        end,
+        format!(
+            "`{text}` is exponent notation, which G-code does not have: a controller reads the \
+             number up to the E and then an E word; write the number in plain decimals (or put a \
+             blank before the E if E is a word on your control)"
+        ),
+    ))
 }
 
 /// Parses `[+-]digits[.digits]` (either side of the point may be empty) as f64.
@@ -331,6 +358,19 @@ mod tests {
         let mut v = Vec::new();
         lex_line(line.as_bytes(), 0, &mut v).unwrap();
         v.into_iter().map(|t| t.kind).collect()
+    }
+
+    #[test]
+    fn exponent_notation_is_refused_where_the_e_is() {
+        let mut v = Vec::new();
+        for (line, col) in [("G1 X1e-05 Y2", 6), ("G1 X1.5E3", 8), ("g1 x-2e+1", 7)] {
+            let e = lex_line(line.as_bytes(), 0, &mut v).unwrap_err();
+            assert_eq!(e.column, col, "{line}: {e:?}");
+            assert!(e.message.contains("exponent"), "{}", e.message);
+        }
+        // an E word after a blank, or an E not followed by a number, is not an exponent
+        assert_eq!(kinds("G1 X1 E5").len(), 3);
+        assert!(lex_line(b"G1 X1E", 0, &mut v).is_err()); // E without a value, as before
     }
 
     #[test]
