@@ -1,5 +1,6 @@
 //! Shared by the rotary CNN-LSTM examples: their command-line flags and the dataset export
-//! that `bench/cnn_lstm.sh` reads.
+//! that `bench/cnn_lstm.sh` reads, and the real-data example's flags.
+#![allow(dead_code)] // each example uses its own part of this module
 
 use mtec_nn::ThermalDataset;
 
