@@ -3,7 +3,8 @@
 //!
 //! What it is for: turning a predicted volumetric error into something that makes the machine cut
 //! true. [`map`] builds a volumetric error map from a measured grid (trilinear interpolation, the
-//! controller-style baseline); [`load`] reads any model file by its `"format"`; [`correction`]
+//! controller-style baseline); [`bpnn`] evaluates a fitted one-hidden-layer network (trained by
+//! `mtec-nn`); [`load`] reads any model file by its `"format"`; [`correction`]
 //! solves p + e(p) = target for the command p; [`table`] writes controller compensation tables
 //! (LinuxCNC, Siemens CEC/LEC, FANUC, HEIDENHAIN, Beckhoff) with a checker of each format's rules;
 //! [`rt`] evaluates corrections each interpolation cycle without allocating (its C ABI lives in
@@ -11,6 +12,7 @@
 //!
 //! What it is not for: identifying or fitting errors; it takes an [`ErrorModel`] from elsewhere.
 
+pub mod bpnn;
 pub mod correction;
 pub mod gcode;
 pub mod kinematic;

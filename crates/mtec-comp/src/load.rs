@@ -1,7 +1,8 @@
 //! Reading any compensable model file: dispatch on the JSON `"format"` field.
 //!
-//! Known formats: `mtec.map/1` (a [`GridMap`]). The kinematic error models (`mtec.errors/1`,
-//! with a machine) and fitted networks (`mtec.bpnn/1`) plug in here as further match arms.
+//! Known formats: `mtec.map/1` (a [`GridMap`]), `mtec.kinematic-model/1` (identified error
+//! functions on a machine) and `mtec.bpnn/1` (a network fitted to a volumetric grid by
+//! `mtec map fit --model bpnn`, 3 inputs and 3 outputs).
 
 use crate::map::{GridMap, MapFile, MAP_FORMAT};
 use crate::ErrorModel;
@@ -9,7 +10,11 @@ use mtec_io::InputError;
 use std::path::Path;
 
 /// The model formats this build can load, for messages.
-pub const KNOWN_FORMATS: &[&str] = &[MAP_FORMAT, crate::kinematic::KINEMATIC_FORMAT];
+pub const KNOWN_FORMATS: &[&str] = &[
+    MAP_FORMAT,
+    crate::kinematic::KINEMATIC_FORMAT,
+    crate::bpnn::FORMAT,
+];
 
 /// Loads an error model file, whatever its kind, as an [`ErrorModel`].
 pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> {
@@ -25,6 +30,11 @@ pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> 
             let m = crate::kinematic::KinematicModel::from_file(f, path.display().to_string())
                 .map_err(|e| InputError::file(path, e))?;
             Ok(Box::new(m))
+        }
+        crate::bpnn::FORMAT => {
+            let net = crate::bpnn::Bpnn::load_volumetric(&text)
+                .map_err(|e| InputError::file(path, e.to_string()))?;
+            Ok(Box::new(net))
         }
         other => Err(located_format_error(
             path,

@@ -52,7 +52,7 @@ pub fn evaluate_bpnn(net: &Bpnn, data: &ThermalDataset) -> Result<Vec<ChannelMet
     let (x, y) = data.rows();
     let pred = x
         .iter()
-        .map(|r| net.predict(r))
+        .map(|r| net.predict(r).map_err(NnError::from))
         .collect::<Result<Vec<_>>>()?;
     Ok(channel_metrics(&data.target_names, &pred, &y))
 }

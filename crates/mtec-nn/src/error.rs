@@ -19,3 +19,12 @@ pub enum NnError {
 }
 
 pub type Result<T> = std::result::Result<T, NnError>;
+
+impl From<mtec_comp::bpnn::BpnnError> for NnError {
+    fn from(e: mtec_comp::bpnn::BpnnError) -> NnError {
+        match e {
+            mtec_comp::bpnn::BpnnError::Data(m) => NnError::Data(m),
+            mtec_comp::bpnn::BpnnError::Model(m) => NnError::Model(m),
+        }
+    }
+}

@@ -21,7 +21,11 @@
 //! exports is plain Rust data.
 
 pub mod baseline;
-pub mod bpnn;
+/// The network as plain data lives in `mtec-comp` (a compensable model, evaluated without
+/// candle); re-exported here, where it is trained.
+pub mod bpnn {
+    pub use mtec_comp::bpnn::*;
+}
 pub mod bpnn_train;
 pub mod cnn_lstm;
 pub mod dataset;

@@ -31,7 +31,8 @@ extern "C" {
 /* Opaque handle of a loaded model. */
 typedef struct MtecRt MtecRt;
 
-/* Loads a model file (mtec.map/1, ...). NULL on failure: see mtec_rt_last_error(). */
+/* Loads a model file (mtec.map/1, mtec.kinematic-model/1, mtec.bpnn/1). NULL on failure:
+   see mtec_rt_last_error(). */
 MtecRt *mtec_rt_load(const char *path);
 
 /* Message of the last failed mtec_rt_load on this thread ("" if none). */

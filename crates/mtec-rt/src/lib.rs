@@ -2,7 +2,7 @@
 //! HAL component, a PLC runtime, a motion card driver) that call it once per servo or
 //! interpolation cycle.
 //!
-//! What it is for: `mtec_rt_load(path)` loads any model file mtec reads (`mtec.map/1`, …) outside
+//! What it is for: `mtec_rt_load(path)` loads a grid map, kinematic model or BPNN map (`mtec.map/1`, …) outside
 //! the real-time loop; `mtec_rt_correction(handle, x, y, z, out_um)` then returns the correction
 //! (µm, to add to the X, Y, Z axis commands) that makes the tool reach (x, y, z) mm, without
 //! allocating, locking or blocking; `mtec_rt_free(handle)` releases it. The header is

@@ -33,12 +33,6 @@ pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> 
         )
     })?;
     match format {
-        "mtec.bpnn/1" => {
-            let text = mtec_io::read_text(path)?;
-            let net = mtec_nn::Bpnn::load_volumetric(&text)
-                .map_err(|e| InputError::file(path, e.to_string()))?;
-            Ok(Box::new(BpnnModel(net)))
-        }
         "mtec.zero-model/1" => Ok(Box::new(ZeroModel {
             source: path.display().to_string(),
         })),
@@ -47,7 +41,7 @@ pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> 
             let model = PolyModel::new(file, path)?;
             Ok(Box::new(model))
         }
-        // every other model kind (maps, kinematic models, ...) is read by mtec-comp
+        // every other model kind (maps, kinematic models, BPNN maps, ...) is read by mtec-comp
         _ => mtec_comp::load_error_model(path),
     }
 }
@@ -135,17 +129,5 @@ impl ErrorModel for PolyModel {
     }
     fn describe(&self) -> String {
         self.describe.clone()
-    }
-}
-
-/// A BPNN volumetric map (3 inputs x, y, z in mm; 3 outputs ex, ey, ez in µm) as an error model.
-pub struct BpnnModel(pub mtec_nn::Bpnn);
-
-impl ErrorModel for BpnnModel {
-    fn error_um(&self, p_mm: [f64; 3]) -> [f64; 3] {
-        self.0.error_um(p_mm)
-    }
-    fn describe(&self) -> String {
-        self.0.describe()
     }
 }

@@ -596,9 +596,9 @@ pub fn read_model(path: &Path) -> Result<Option<NnModel>, CliError> {
         mtec_nn::cnn_lstm::FORMAT => {
             Some(NnModel::CnnLstm(CnnLstm::from_json(&text).map_err(bad)?))
         }
-        f if f == mtec_nn::bpnn::FORMAT => {
-            Some(NnModel::Bpnn(Bpnn::from_json(&text).map_err(bad)?))
-        }
+        f if f == mtec_nn::bpnn::FORMAT => Some(NnModel::Bpnn(
+            Bpnn::from_json(&text).map_err(|e| bad(e.into()))?,
+        )),
         _ => None,
     })
 }
@@ -635,7 +635,7 @@ pub fn predict(
             .iter()
             .map(|r| m.predict(r))
             .collect::<Result<_, _>>()
-            .map_err(|e| nn_error(data, e))?,
+            .map_err(|e| nn_error(data, e.into()))?,
     };
     let meas = loaded.has_targets.then(|| loaded.data.rows().1);
     let metrics = meas.as_ref().map(|y| channel_metrics(targets, &pred, y));

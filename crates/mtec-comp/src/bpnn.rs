@@ -12,9 +12,26 @@
 //! `input_offset`, `input_scale` (x_n = (x − offset)/scale), `output_offset`, `output_scale`
 //! (y = offset + scale·y_n), `w1` (rows = hidden units), `b1`, `w2` (rows = outputs), `b2`, and
 //! free-form `provenance`. Loading checks every shape and that all numbers are finite.
+//!
+//! Where it lives: here in `mtec-comp`, beside the grid map, because a fitted network is a
+//! compensable model like any other (`load_error_model`, the real-time library). Training is in
+//! `mtec-nn`, which re-exports this module; evaluating needs no neural-network library.
 
-use crate::error::{NnError, Result};
+use crate::model::ErrorModel;
 use serde::{Deserialize, Serialize};
+
+/// What is wrong with a network's input or file.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BpnnError {
+    /// The input does not fit the network (wrong length).
+    #[error("invalid data: {0}")]
+    Data(String),
+    /// The document is not a valid `mtec.bpnn/1` network.
+    #[error("invalid model file: {0}")]
+    Model(String),
+}
+
+type Result<T> = std::result::Result<T, BpnnError>;
 
 pub const FORMAT: &str = "mtec.bpnn/1";
 
@@ -249,7 +266,7 @@ impl Bpnn {
     /// Prediction in physical units for one input vector (length `n_in`, else an error).
     pub fn predict(&self, x: &[f64]) -> Result<Vec<f64>> {
         if x.len() != self.n_in() {
-            return Err(NnError::Data(format!(
+            return Err(BpnnError::Data(format!(
                 "the network takes {} inputs, got {}",
                 self.n_in(),
                 x.len()
@@ -349,7 +366,7 @@ impl Bpnn {
     /// Parses and validates an `mtec.bpnn/1` document.
     pub fn from_json(text: &str) -> Result<Bpnn> {
         let net: Bpnn = serde_json::from_str(text).map_err(|e| {
-            NnError::Model(format!("line {}, column {}: {e}", e.line(), e.column()))
+            BpnnError::Model(format!("line {}, column {}: {e}", e.line(), e.column()))
         })?;
         net.validate()?;
         Ok(net)
@@ -359,7 +376,7 @@ impl Bpnn {
     pub fn load_volumetric(text: &str) -> Result<Bpnn> {
         let net = Bpnn::from_json(text)?;
         if !net.is_volumetric() {
-            return Err(NnError::Model(format!(
+            return Err(BpnnError::Model(format!(
                 "a volumetric map needs 3 inputs (x, y, z) and 3 outputs (ex, ey, ez); this network is {}-{}-{}",
                 net.n_in(),
                 net.n_hidden(),
@@ -371,15 +388,15 @@ impl Bpnn {
 
     fn validate(&self) -> Result<()> {
         if self.format != FORMAT {
-            return Err(NnError::Model(format!(
+            return Err(BpnnError::Model(format!(
                 "format is \"{}\", expected \"{FORMAT}\"",
                 self.format
             )));
         }
         let (n_in, n_h, n_out) = (self.n_in(), self.n_hidden(), self.n_out());
-        let bad = |what: &str| Err(NnError::Model(format!("{what} has the wrong shape")));
+        let bad = |what: &str| Err(BpnnError::Model(format!("{what} has the wrong shape")));
         if n_in == 0 || n_h == 0 || n_out == 0 {
-            return Err(NnError::Model("empty layer".into()));
+            return Err(BpnnError::Model("empty layer".into()));
         }
         if self.input_scale.len() != n_in || self.input_names.len() != n_in {
             return bad("input_scale/input_names");
@@ -402,11 +419,20 @@ impl Bpnn {
             && self.input_scale.iter().all(|v| v.is_finite() && *v != 0.0)
             && self.output_scale.iter().all(|v| v.is_finite() && *v != 0.0);
         if !all_finite {
-            return Err(NnError::Model(
+            return Err(BpnnError::Model(
                 "a weight or normalisation value is not finite (or a scale is 0)".into(),
             ));
         }
         Ok(())
+    }
+}
+
+impl ErrorModel for Bpnn {
+    fn error_um(&self, p_mm: [f64; 3]) -> [f64; 3] {
+        Bpnn::error_um(self, p_mm)
+    }
+    fn describe(&self) -> String {
+        Bpnn::describe(self)
     }
 }
 
