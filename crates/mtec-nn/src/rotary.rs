@@ -80,28 +80,29 @@ impl AngleEncoding {
             AngleEncoding::Harmonics(n) => harmonic_feature_names(ANGLE_FEATURE, n),
         }
     }
-    /// The feature values at `angle_deg`, in `feature_names` order.
+    /// The feature values at `angle_deg`, in `feature_names` order (computed from the names, so
+    /// the two cannot disagree).
     pub fn features(self, angle_deg: f64) -> Vec<f64> {
-        match self {
-            AngleEncoding::Degrees => vec![angle_deg],
-            AngleEncoding::Harmonics(n) => (1..=n)
-                .flat_map(|k| {
-                    [Trig::Cos, Trig::Sin].map(|trig| HarmonicFeature {
-                        trig,
-                        order: k,
-                        column: String::new(),
-                    })
-                })
-                .map(|h| h.value(angle_deg))
-                .collect(),
-        }
+        self.feature_names()
+            .iter()
+            .map(|n| HarmonicFeature::parse(n).map_or(angle_deg, |h| h.value(angle_deg)))
+            .collect()
     }
 }
 
 /// `cos_1(col), sin_1(col), …, cos_n(col), sin_n(col)`.
 pub fn harmonic_feature_names(column: &str, n: u8) -> Vec<String> {
     (1..=n)
-        .flat_map(|k| [format!("cos_{k}({column})"), format!("sin_{k}({column})")])
+        .flat_map(|order| {
+            [Trig::Cos, Trig::Sin].map(|trig| {
+                HarmonicFeature {
+                    trig,
+                    order,
+                    column: column.to_string(),
+                }
+                .name()
+            })
+        })
         .collect()
 }
 
@@ -140,6 +141,14 @@ impl HarmonicFeature {
             order,
             column: column.to_string(),
         })
+    }
+    /// `cos_k(col)` or `sin_k(col)`.
+    pub fn name(&self) -> String {
+        let trig = match self.trig {
+            Trig::Cos => "cos",
+            Trig::Sin => "sin",
+        };
+        format!("{trig}_{}({})", self.order, self.column)
     }
     /// The feature at an angle in degrees.
     pub fn value(&self, angle_deg: f64) -> f64 {

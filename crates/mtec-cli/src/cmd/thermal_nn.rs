@@ -24,7 +24,7 @@ use crate::error::CliError;
 use mtec_io::{InputError, OutputGuard, Table};
 use mtec_nn::cnn_lstm::Architecture;
 use mtec_nn::metrics::{channel_metrics, ChannelMetrics};
-use mtec_nn::rotary::{harmonic_feature_names, HarmonicFeature, Trig};
+use mtec_nn::rotary::{harmonic_feature_names, HarmonicFeature};
 use mtec_nn::{
     train_bpnn_baseline, train_cnn_lstm, Activation, Bpnn, BpnnTrainConfig, CnnLstm, CnnLstmConfig,
     Experiment, NnError, Optimizer, Sequence, ThermalDataset,
@@ -373,12 +373,8 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
         let column = derived.as_ref().map_or(f.as_str(), |h| h.column.as_str());
         let name = resolve(&table, column)
             .ok_or_else(|| header_error(&table, format!("missing feature column `{column}`")))?;
-        let names = match (&derived, nn.angle_harmonics) {
-            (Some(h), _) => vec![format!(
-                "{}_{}({name})",
-                if h.trig == Trig::Cos { "cos" } else { "sin" },
-                h.order
-            )],
+        let names = match (derived, nn.angle_harmonics) {
+            (Some(h), _) => vec![HarmonicFeature { column: name, ..h }.name()],
             (None, Some(n)) if name.ends_with("_deg") => harmonic_feature_names(&name, n),
             (None, _) => vec![name],
         };
