@@ -240,6 +240,17 @@ fn bad_neural_fits_exit_2_with_the_reason() {
     ]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("--angle-harmonics"), "{}", text(&o));
+    // harmonics asked for, but no angle column among the features
+    let o = fit(&[
+        "--model",
+        "bpnn",
+        "--target",
+        TARGETS,
+        "--angle-harmonics",
+        "3",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("_deg"), "{}", text(&o));
     // thermal cv does not run the neural models
     let o = mtec(&[
         "thermal", "cv", "--data", d, "--target", "EXC_um", "--model", "bpnn",

@@ -368,6 +368,16 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
             "--angle-harmonics needs at least 1 harmonic",
         ));
     }
+    if nn.angle_harmonics.is_some()
+        && !nn
+            .features
+            .iter()
+            .any(|f| resolve(&table, f).is_some_and(|name| name.ends_with("_deg")))
+    {
+        return Err(CliError::usage(
+            "--angle-harmonics needs an angle column in degrees (name ending in `_deg`) among --features",
+        ));
+    }
     for f in &nn.features {
         let derived = HarmonicFeature::parse(f);
         let column = derived.as_ref().map_or(f.as_str(), |h| h.column.as_str());
