@@ -106,6 +106,7 @@ fn cnn_lstm_and_bpnn_fit_and_predict_rotary_motions() {
         "angle_deg",
         "--angle-harmonics",
         "2",
+        "--rises",
         "--hidden",
         "4",
         "--epochs",
@@ -158,6 +159,23 @@ fn cnn_lstm_and_bpnn_fit_and_predict_rotary_motions() {
         "{header}"
     );
     assert_eq!(csv.lines().count(), 1 + 4 * 13 * 72);
+    // fitted on rises of the nine sensors: predict applies them again, so its residuals on
+    // the test experiment give the RMSE the fit reported
+    assert_eq!(b["provenance"]["rises"], 9);
+    let cols: Vec<&str> = header.split(',').collect();
+    let res = cols.iter().position(|c| *c == "res_EXC_um").unwrap();
+    let r: Vec<f64> = csv
+        .lines()
+        .skip(1)
+        .filter(|l| l.starts_with("3,"))
+        .map(|l| l.split(',').nth(res).unwrap().parse().unwrap())
+        .collect();
+    let rmse = (r.iter().map(|v| v * v).sum::<f64>() / r.len() as f64).sqrt();
+    let fit_rmse = b["provenance"]["test_metrics"][0]["rmse"].as_f64().unwrap();
+    assert!(
+        (rmse - fit_rmse).abs() < 1e-3 * fit_rmse.max(1e-3),
+        "{rmse} vs {fit_rmse}"
+    );
 }
 
 #[test]

@@ -4,8 +4,10 @@
 //! readings. Prints the training time (goal: < 60 s on 2 cores in release).
 //!
 //!     cargo run --release -p mtec-nn --example dbb_rotary_cnn_lstm [-- --epochs N --fixed
-//!         --seed S --export DIR --harmonics N --bpnn-hidden H --lr L --batch B]
+//!         --seed S --export DIR --harmonics N --rises --bpnn-hidden H --lr L --batch B]
 //!
+//! `--rises` gives both models the temperatures as rises over each experiment's first
+//! measurement (`ThermalDataset::rises`);
 //! `--harmonics N` gives both models the angle as its first N harmonics cos/sin(k·C)
 //! (`AngleEncoding::Harmonics`) instead of degrees (N = 1: plain cos/sin);
 //! `--fixed` trains exactly N epochs (no early stopping) for timing against PyTorch;
@@ -51,6 +53,10 @@ fn main() {
         },
     )
     .expect("dataset");
+    let mut rotary = rotary;
+    if args.flag("--rises") {
+        rotary.data = rotary.data.rises(temps.sensor_names.len());
+    }
     if let Some(dir) = arg("--export") {
         export(&rotary.data, &dir);
     }

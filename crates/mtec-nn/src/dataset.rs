@@ -140,6 +140,26 @@ impl ThermalDataset {
         Ok((self.select(train)?, self.select(test)?))
     }
 
+    /// The same data with the first `n` features (the temperatures) as rises over each
+    /// sequence's first row. Thermal errors are defined against the state of the static
+    /// (t = 0) measurement, so a rise is what they depend on; absolute temperatures also carry
+    /// the room's level, which differs from one experiment to the next (an experiment that
+    /// starts colder than every training one lies outside their range).
+    pub fn rises(&self, n: usize) -> ThermalDataset {
+        let mut out = self.clone();
+        for seq in out.experiments.iter_mut().flat_map(|e| &mut e.sequences) {
+            let Some(first) = seq.features.first().cloned() else {
+                continue;
+            };
+            for row in &mut seq.features {
+                for (v, v0) in row.iter_mut().zip(&first).take(n) {
+                    *v -= v0;
+                }
+            }
+        }
+        out
+    }
+
     /// Every row as CSV `experiment,sequence,step,<features>,<targets>` (sequence and step
     /// counted from 0): the exchange format of `bench/cnn_lstm.sh` with its PyTorch peer.
     pub fn to_csv(&self) -> String {
@@ -213,6 +233,27 @@ mod tests {
         assert_eq!(te.rows().0, vec![vec![3.0, 2.0], vec![3.0, 3.0]]);
         assert!(d.split(&[1, 3], &[3]).is_err());
         assert!(d.split(&[1, 9], &[3]).is_err());
+    }
+
+    #[test]
+    fn rises_over_each_sequence_start() {
+        let mut d = ds();
+        d.experiments[0].sequences[0].features = vec![vec![20.5, 1.0], vec![21.0, 2.0]];
+        d.experiments[0].sequences[0].targets = vec![vec![0.0], vec![1.0]];
+        let r = d.rises(1);
+        // the first feature minus its value at the sequence's first row; the second untouched
+        assert_eq!(
+            r.experiments[0].sequences[0].features,
+            vec![vec![0.0, 1.0], vec![0.5, 2.0]]
+        );
+        assert_eq!(
+            r.experiments[1].sequences[0].features,
+            vec![vec![0.0, 1.0], vec![0.0, 2.0], vec![0.0, 3.0]]
+        );
+        assert_eq!(
+            r.experiments[1].sequences[0].targets,
+            d.experiments[1].sequences[0].targets
+        );
     }
 
     #[test]

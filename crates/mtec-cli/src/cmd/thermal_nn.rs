@@ -12,6 +12,8 @@
 //!   An angle column may enter as its harmonics `cos_k(col)`, `sin_k(col)` (`--angle-harmonics
 //!   N`, or named one by one in `--features`); the model file stores those names and
 //!   `thermal predict` computes them again from the angle column.
+//! - `--rises`: the sensor features as rises over each sequence's first row; the model file
+//!   records how many leading features are rises (`provenance.rises`) and predict does the same.
 //! - Rows of one sequence are time steps in `time_min` order (sorted here, a repeated time is an
 //!   error); the CNN-LSTM's window counts rows, so resample irregular logs first.
 //! - The model file is the network's own versioned format (`mtec.cnn-lstm/1`, `mtec.bpnn/1`);
@@ -49,6 +51,12 @@ pub struct NnArgs {
     /// static error motions of a rotary axis are sums of such harmonics (3 is a good start).
     #[arg(long, value_name = "N")]
     pub angle_harmonics: Option<u8>,
+    /// The sensors as rises over the first row of each sequence (of each experiment without
+    /// --sequence-by) instead of absolute temperatures: thermal errors are defined against the
+    /// state of the first (static) measurement, and a room that starts warmer or colder than in
+    /// the training runs then does not throw the model. `thermal predict` applies it again.
+    #[arg(long)]
+    pub rises: bool,
     /// Largest number of training epochs (cnn-lstm, bpnn: Levenberg–Marquardt iterations).
     #[arg(long)]
     pub epochs: Option<usize>,
@@ -363,6 +371,7 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
             })
             .collect::<Result<_, _>>()?
     };
+    let n_sensors = features.len();
     if nn.angle_harmonics == Some(0) {
         return Err(CliError::usage(
             "--angle-harmonics needs at least 1 harmonic",
@@ -423,7 +432,7 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
         None => None,
     };
     drop(table);
-    let loaded = load(
+    let mut loaded = load(
         r.data,
         &features,
         &targets,
@@ -431,6 +440,9 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
         true,
         r.kind == NnKind::CnnLstm,
     )?;
+    // the leading sensor features as rises (0: absolute temperatures)
+    let rises = if nn.rises { n_sensors } else { 0 };
+    loaded.data = loaded.data.rises(rises);
     let train_ids = parse_ids(r.train, "train")?;
     let mut test_ids = parse_ids(r.test, "test")?;
     if !test_ids.is_empty() && train_ids.is_empty() {
@@ -468,6 +480,7 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
         serde_json::json!({
             "data": r.data.display().to_string(),
             "sequence_by": seq_by,
+            "rises": rises,
             "train_experiments": train_exps,
             "test_experiments": test.as_ref().map(|t| t.experiments.iter().map(|e| e.id).collect::<Vec<_>>()),
             "train_metrics": train_m,
@@ -623,15 +636,20 @@ pub fn predict(
         NnModel::CnnLstm(m) => (&m.feature_names, &m.target_names, &m.provenance),
         NnModel::Bpnn(m) => (&m.input_names, &m.output_names, &m.provenance),
     };
-    let seq_by = match &model {
-        NnModel::CnnLstm(_) => provenance
-            .get("sequence_by")
-            .and_then(|v| v.as_str())
-            .map(str::to_string),
-        NnModel::Bpnn(_) => None,
-    };
+    // the sequences of the fit (a BPNN takes rows one by one; its sequences only matter for
+    // where the rises start)
+    let seq_by = provenance
+        .get("sequence_by")
+        .and_then(|v| v.as_str())
+        .map(str::to_string);
     let strict = matches!(model, NnModel::CnnLstm(_));
-    let loaded = load(data, features, targets, seq_by.as_deref(), false, strict)?;
+    let mut loaded = load(data, features, targets, seq_by.as_deref(), false, strict)?;
+    // trained on rises of the first k features (`thermal fit --rises`): the same here
+    let rises = provenance
+        .get("rises")
+        .and_then(|v| v.as_u64())
+        .unwrap_or(0) as usize;
+    loaded.data = loaded.data.rises(rises.min(features.len()));
     let pred = match &model {
         NnModel::CnnLstm(m) => m.predict(&loaded.data).map_err(|e| nn_error(data, e))?,
         NnModel::Bpnn(m) => loaded
