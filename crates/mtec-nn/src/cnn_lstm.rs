@@ -616,3 +616,29 @@ impl CnnLstm {
         Ok(m)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Cosine annealing worked by hand: lr at the first epoch, the midpoint of lr and lr·f half
+    /// way, lr·f + (lr − lr·f)·(1 + cos(π·9/10))/2 at the last of ten epochs.
+    #[test]
+    fn cosine_step_size_by_hand() {
+        let c = CnnLstmConfig {
+            max_epochs: 10,
+            learning_rate: 1e-2,
+            final_learning_rate_fraction: 0.1,
+            ..CnnLstmConfig::default()
+        };
+        assert!((cosine_step_size(&c, 1) - 1e-2).abs() < 1e-15);
+        assert!((cosine_step_size(&c, 6) - 0.5 * (1e-2 + 1e-3)).abs() < 1e-15);
+        let last = 1e-3 + 0.5 * 9e-3 * (1.0 + (0.9 * std::f64::consts::PI).cos());
+        assert!((cosine_step_size(&c, 10) - last).abs() < 1e-15);
+        let constant = CnnLstmConfig {
+            final_learning_rate_fraction: 1.0,
+            ..c
+        };
+        assert!((1..=10).all(|e| cosine_step_size(&constant, e) == 1e-2));
+    }
+}

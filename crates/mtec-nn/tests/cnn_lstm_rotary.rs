@@ -136,4 +136,15 @@ fn bad_configurations_are_refused() {
         ..small_config(1)
     };
     assert!(train_cnn_lstm(&d, &zero).is_err());
+    for f in [0.0, 1.5, f64::NAN] {
+        let decay = CnnLstmConfig {
+            final_learning_rate_fraction: f,
+            ..small_config(1)
+        };
+        let e = train_cnn_lstm(&d, &decay).unwrap_err();
+        assert!(
+            e.to_string().contains("final_learning_rate_fraction"),
+            "{e}"
+        );
+    }
 }
