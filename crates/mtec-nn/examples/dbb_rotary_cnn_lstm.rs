@@ -24,7 +24,7 @@ use mtec_nn::rotary::{
 };
 use mtec_nn::{compare_on_split, BpnnTrainConfig, CnnLstmConfig, SplitComparison};
 use std::path::Path;
-use support::{export, ExampleArgs};
+use support::{export, print_bench_lines, print_comparison, ExampleArgs};
 
 /// Cosine decay of the step size to 5 % over the epochs: on this campaign (seed 2, harmonics
 /// 3) test RMSE 0.396 against 0.440 with a constant step size.
@@ -95,18 +95,7 @@ fn main() {
         r.seconds_per_epoch,
         r.stop_reason
     );
-    println!("channel    CNN-LSTM rmse  mae  ratio | BPNN rmse  mae  ratio | range");
-    for (m, n) in cmp.cnn_lstm.iter().zip(&cmp.bpnn) {
-        println!(
-            "{:9} {:8.3} {:6.3} {:6.3} | {:8.3} {:6.3} {:6.3} | {:6.2}",
-            m.channel, m.rmse, m.mae, m.residual_ratio, n.rmse, n.mae, n.residual_ratio, m.range
-        );
-    }
-    println!(
-        "overall test RMSE: CNN-LSTM {:.4}, BPNN {:.4}",
-        SplitComparison::overall_rmse(&cmp.cnn_lstm),
-        SplitComparison::overall_rmse(&cmp.bpnn)
-    );
+    print_comparison(&cmp);
     let (_, test) = rotary.data.split(&[1, 2, 4], &[3]).expect("split");
     let pc = rotary
         .label(&test, &cnn.predict(&test).expect("predict"))
@@ -150,9 +139,5 @@ fn main() {
             100.0 * c.change_residual_ratio
         );
     }
-    println!("MTEC_SECONDS_PER_EPOCH={:.6}", r.seconds_per_epoch);
-    println!(
-        "MTEC_TEST_RMSE={:.6}",
-        SplitComparison::overall_rmse(&cmp.cnn_lstm)
-    );
+    print_bench_lines(&cmp);
 }

@@ -10,8 +10,8 @@
 mod support;
 
 use mtec_nn::synthetic::{rotary_thermal, RotaryThermalSpec};
-use mtec_nn::{compare_on_split, BpnnTrainConfig, CnnLstmConfig, SplitComparison};
-use support::{export, ExampleArgs};
+use mtec_nn::{compare_on_split, BpnnTrainConfig, CnnLstmConfig};
+use support::{export, print_bench_lines, print_comparison, ExampleArgs};
 
 fn main() {
     mtec_nn::threads::prefer_single_thread();
@@ -47,21 +47,6 @@ fn main() {
         "CNN-LSTM: {} parameters, {} train windows, {} epochs (best {}), {:.2} s, {:.4} s/epoch",
         r.parameters, r.train_windows, r.epochs, r.best_epoch, r.seconds, r.seconds_per_epoch
     );
-    println!("channel    CNN-LSTM rmse  mae  ratio | BPNN rmse  mae  ratio | range");
-    for (m, n) in cmp.cnn_lstm.iter().zip(&cmp.bpnn) {
-        println!(
-            "{:9} {:8.3} {:6.3} {:6.3} | {:8.3} {:6.3} {:6.3} | {:6.2}",
-            m.channel, m.rmse, m.mae, m.residual_ratio, n.rmse, n.mae, n.residual_ratio, m.range
-        );
-    }
-    println!(
-        "overall test RMSE: CNN-LSTM {:.4}, BPNN {:.4}",
-        SplitComparison::overall_rmse(&cmp.cnn_lstm),
-        SplitComparison::overall_rmse(&cmp.bpnn)
-    );
-    println!("MTEC_SECONDS_PER_EPOCH={:.6}", r.seconds_per_epoch);
-    println!(
-        "MTEC_TEST_RMSE={:.6}",
-        SplitComparison::overall_rmse(&cmp.cnn_lstm)
-    );
+    print_comparison(&cmp);
+    print_bench_lines(&cmp);
 }
