@@ -192,83 +192,85 @@ fn bad_neural_fits_exit_2_with_the_reason() {
         a.extend_from_slice(extra);
         mtec(&a)
     };
+    // a refused fit: exit 2, and the message holds every needle
+    let refused = |extra: &[&str], needles: &[&str]| {
+        let o = fit(extra);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {}", text(&o));
+        for n in needles {
+            assert!(text(&o).contains(n), "{extra:?}: no `{n}` in {}", text(&o));
+        }
+    };
     // unknown target: named, at the header line
-    let o = fit(&["--model", "cnn-lstm", "--target", "EXC_um,EQC_um"]);
-    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
-    assert!(
-        text(&o).contains("EQC_um") && text(&o).contains("motions.csv:1:"),
-        "{}",
-        text(&o)
+    refused(
+        &["--model", "cnn-lstm", "--target", "EXC_um,EQC_um"],
+        &["EQC_um", "motions.csv:1:"],
     );
     // an experiment the file does not hold
-    let o = fit(&[
-        "--model", "bpnn", "--target", TARGETS, "--train", "1,9", "--test", "3",
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
-    assert!(text(&o).contains("no experiment 9"), "{}", text(&o));
+    refused(
+        &[
+            "--model", "bpnn", "--target", TARGETS, "--train", "1,9", "--test", "3",
+        ],
+        &["no experiment 9"],
+    );
     // options of the regression models
-    let o = fit(&["--model", "cnn-lstm", "--target", TARGETS, "--lag"]);
-    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    refused(&["--model", "cnn-lstm", "--target", TARGETS, "--lag"], &[]);
     // a sequence model needs one row per time in a sequence: without --sequence-by the 72
     // angles of one measurement share their time, located at the first repeat
-    let o = fit(&["--model", "cnn-lstm", "--target", TARGETS]);
-    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
-    assert!(
-        text(&o).contains("motions.csv:3:2") && text(&o).contains("appears twice"),
-        "{}",
-        text(&o)
+    refused(
+        &["--model", "cnn-lstm", "--target", TARGETS],
+        &["motions.csv:3:2", "appears twice"],
     );
     // a window of 0
-    let o = fit(&[
-        "--model",
-        "cnn-lstm",
-        "--target",
-        TARGETS,
-        "--sequence-by",
-        "angle_deg",
-        "--window",
-        "0",
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
-    assert!(text(&o).contains("window"), "{}", text(&o));
-    // a harmonic of a column the file does not have; no harmonic at all
-    let o = fit(&[
-        "--model",
-        "bpnn",
-        "--target",
-        TARGETS,
-        "--features",
-        "cos_2(table_deg)",
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
-    assert!(
-        text(&o).contains("table_deg") && text(&o).contains("motions.csv:1:"),
-        "{}",
-        text(&o)
+    refused(
+        &[
+            "--model",
+            "cnn-lstm",
+            "--target",
+            TARGETS,
+            "--sequence-by",
+            "angle_deg",
+            "--window",
+            "0",
+        ],
+        &["window"],
     );
-    let o = fit(&[
-        "--model",
-        "bpnn",
-        "--target",
-        TARGETS,
-        "--features",
-        "angle_deg",
-        "--angle-harmonics",
-        "0",
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
-    assert!(text(&o).contains("--angle-harmonics"), "{}", text(&o));
-    // harmonics asked for, but no angle column among the features
-    let o = fit(&[
-        "--model",
-        "bpnn",
-        "--target",
-        TARGETS,
-        "--angle-harmonics",
-        "3",
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
-    assert!(text(&o).contains("_deg"), "{}", text(&o));
+    // a harmonic of a column the file does not have; no harmonic at all; harmonics asked for
+    // but no angle column among the features
+    refused(
+        &[
+            "--model",
+            "bpnn",
+            "--target",
+            TARGETS,
+            "--features",
+            "cos_2(table_deg)",
+        ],
+        &["table_deg", "motions.csv:1:"],
+    );
+    refused(
+        &[
+            "--model",
+            "bpnn",
+            "--target",
+            TARGETS,
+            "--features",
+            "angle_deg",
+            "--angle-harmonics",
+            "0",
+        ],
+        &["--angle-harmonics"],
+    );
+    refused(
+        &[
+            "--model",
+            "bpnn",
+            "--target",
+            TARGETS,
+            "--angle-harmonics",
+            "3",
+        ],
+        &["_deg"],
+    );
     // thermal cv does not run the neural models
     let o = mtec(&[
         "thermal", "cv", "--data", d, "--target", "EXC_um", "--model", "bpnn",

@@ -23,18 +23,27 @@ fn write_map(dir: &std::path::Path, outside: Outside) -> CString {
     CString::new(path.to_str().unwrap()).unwrap()
 }
 
+/// Loads `path` (must succeed) and asks for the correction at `p` (must be OK).
+///
+/// # Safety
+/// The returned handle must be freed with `mtec_rt_free`.
+unsafe fn load_and_correct(path: &CString, p: [f64; 3]) -> (*mut MtecRt, [f64; 3]) {
+    let h = mtec_rt_load(path.as_ptr());
+    assert!(!h.is_null());
+    let mut out = [9.0; 3];
+    assert_eq!(
+        mtec_rt_correction(h, p[0], p[1], p[2], out.as_mut_ptr()),
+        MTEC_RT_OK
+    );
+    (h, out)
+}
+
 #[test]
 fn load_correct_free() {
     let dir = tempfile::tempdir().unwrap();
     let path = write_map(dir.path(), Outside::Refuse);
     unsafe {
-        let h = mtec_rt_load(path.as_ptr());
-        assert!(!h.is_null());
-        let mut out = [9.0; 3];
-        assert_eq!(
-            mtec_rt_correction(h, 40.0, 50.0, 60.0, out.as_mut_ptr()),
-            MTEC_RT_OK
-        );
+        let (h, mut out) = load_and_correct(&path, [40.0, 50.0, 60.0]);
         let px = (40.0 - 0.005) / (1.0 + 1e-5);
         let cx = (px - 40.0) * 1e3;
         assert!((out[0] - cx).abs() < 1e-4, "{} vs {cx}", out[0]);
@@ -91,13 +100,7 @@ fn bpnn_map_loads_and_corrects() {
     std::fs::write(&path, net.to_json()).unwrap();
     let path = CString::new(path.to_str().unwrap()).unwrap();
     unsafe {
-        let h = mtec_rt_load(path.as_ptr());
-        assert!(!h.is_null());
-        let mut out = [9.0; 3];
-        assert_eq!(
-            mtec_rt_correction(h, 40.0, 50.0, 60.0, out.as_mut_ptr()),
-            MTEC_RT_OK
-        );
+        let (h, out) = load_and_correct(&path, [40.0, 50.0, 60.0]);
         let px = (40.0 - 0.005) / (1.0 + 5e-6);
         let cx = (px - 40.0) * 1e3;
         assert!((out[0] - cx).abs() < 1e-4, "{} vs {cx}", out[0]);
