@@ -582,6 +582,10 @@ impl ErrorModel for GridMap {
         self.try_error_um(p_mm).unwrap_or([f64::NAN; 3])
     }
 
+    fn as_grid(&self) -> Option<&GridMap> {
+        Some(self)
+    }
+
     fn describe(&self) -> String {
         let r = |a: usize| {
             let ax = &self.axes_mm[a];

@@ -8,4 +8,9 @@ pub trait ErrorModel: Send + Sync {
     fn error_um(&self, p_mm: [f64; 3]) -> [f64; 3];
     /// One line saying what the model is and where it came from (written into outputs as provenance).
     fn describe(&self) -> String;
+    /// The model as a trilinear grid map, when it is one: G-code rewriting then bounds the
+    /// path error exactly from the grid's cells instead of sampling (see `gcode::bound`).
+    fn as_grid(&self) -> Option<&crate::GridMap> {
+        None
+    }
 }

@@ -16,9 +16,16 @@
 //! 4 = 102.0
 //! ```
 //!
-//! Decision: without an offsets file every work offset is zero (program coordinates are used as
-//! machine coordinates) and no tool has a known length, so `G43` is an unsupported construct —
-//! evaluating the model at a point off by a tool length would compensate the wrong place.
+//! Decisions:
+//! - Without an offsets file (or a file without `[work_offsets_mm]`) only the system active at
+//!   program start (G54 unless `active` says otherwise) is known, as zero: program coordinates are
+//!   taken as machine coordinates. A program that selects another system (G55…G59.3) is refused
+//!   at that word: taking a missing offset as zero would compensate the wrong place.
+//! - With `[work_offsets_mm]`, exactly the systems it lists are known; selecting (or starting
+//!   in) any other is refused the same way.
+//! - No tool has a known length unless the file gives it, so `G43` for an unknown tool is an
+//!   unsupported construct — evaluating the model at a point off by a tool length would
+//!   compensate the wrong place.
 
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -46,15 +53,35 @@ pub struct Offsets {
     pub active: usize,
     /// Tool number → length in mm.
     pub tool_length_mm: BTreeMap<u32, f64>,
+    /// Which work systems have a known offset (see the module docs).
+    pub known: [bool; 9],
 }
 
 impl Default for Offsets {
+    /// No offsets file: G54 known as zero, the other systems unknown.
     fn default() -> Self {
         Offsets {
             work_mm: [[0.0; 3]; 9],
             active: 0,
             tool_length_mm: BTreeMap::new(),
+            known: [true, false, false, false, false, false, false, false, false],
         }
+    }
+}
+
+impl Offsets {
+    /// Offsets with every system known (the given values; zero where not set).
+    pub fn all_known(work_mm: [[f64; 3]; 9]) -> Offsets {
+        Offsets {
+            work_mm,
+            known: [true; 9],
+            ..Offsets::default()
+        }
+    }
+
+    /// The offset of work system `index` (0 = G54 … 8 = G59.3) when it is known.
+    pub fn work(&self, index: usize) -> Option<[f64; 3]> {
+        (index < 9 && self.known[index]).then(|| self.work_mm[index])
     }
 }
 
@@ -92,15 +119,24 @@ impl OffsetsFile {
                 })
         };
         let mut out = Offsets::default();
+        if !self.work_offsets_mm.is_empty() {
+            out.known = [false; 9];
+        }
         for (name, v) in &self.work_offsets_mm {
             let i = find(name)?;
             if !v.iter().all(|x| x.is_finite()) {
                 return Err(format!("work offset {name} is not finite"));
             }
             out.work_mm[i] = *v;
+            out.known[i] = true;
         }
         if let Some(a) = &self.active {
             out.active = find(a)?;
+            if self.work_offsets_mm.is_empty() {
+                // no offsets listed: the active system is the one taken as zero
+                out.known = [false; 9];
+                out.known[out.active] = true;
+            }
         }
         for (k, len) in &self.tool_lengths_mm {
             let t: u32 = k

@@ -6,6 +6,7 @@
 
 use super::arc::{self, Arc, Plane};
 use super::block::{Block, Issue};
+use super::bound::{norm, PathBound};
 use super::format::{apply_edits, decimal_value, format_number, to_decimal, write_decimal, Edit};
 use super::lexer::{lex_line, Token, TokenKind, Value};
 use super::offsets::{work_system_index, Offsets};
@@ -63,6 +64,12 @@ pub struct RewriteOptions {
     /// Machine position (mm) at program start, when known (e.g. the home position; on a lathe
     /// the Y position that programs never state). `None`: unknown until programmed.
     pub start_position_mm: Option<[f64; 3]>,
+    /// Sample spacing (mm) of the dense path check for models that are not grid maps
+    /// (`--check-step-mm`); grid maps are bounded exactly (see [`super::bound`]).
+    pub check_step_mm: f64,
+    /// Longest line the target controller reads (`--max-line-chars`; LinuxCNC: 255). A
+    /// rewritten or added line longer than this is refused; the header comment is shortened.
+    pub max_line_chars: usize,
 }
 
 impl Default for RewriteOptions {
@@ -79,6 +86,8 @@ impl Default for RewriteOptions {
             offsets: Offsets::default(),
             max_pieces_per_move: 100_000,
             start_position_mm: None,
+            check_step_mm: 0.5,
+            max_line_chars: LINUXCNC_MAX_LINE_CHARS,
         }
     }
 }
@@ -102,11 +111,45 @@ impl RewriteOptions {
                 self.max_segment_mm
             ));
         }
+        pos(self.check_step_mm, "--check-step-mm")?;
         if self.decimals_mm > 9 || self.decimals_inch > 9 {
             return Err("--decimals must be at most 9".into());
         }
+        // rounding a written word moves the command by up to half a unit of its last digit on
+        // each axis; that must leave room for the correction's own path error
+        for (d, units, flag) in [
+            (self.decimals_mm, Units::Mm, "--decimals-mm"),
+            (self.decimals_inch, Units::Inch, "--decimals-inch"),
+        ] {
+            let r = rounding_um(d, units);
+            if r > self.tolerance_um / 2.0 {
+                let need = (0..=9)
+                    .find(|&k| rounding_um(k, units) <= self.tolerance_um / 2.0)
+                    .map(|k| format!("use {flag} {k} or more"))
+                    .unwrap_or_else(|| "raise --tolerance-um".into());
+                return Err(format!(
+                    "{flag} {d} rounds every corrected word by up to {r:.3} um (half a unit of the last digit, on three axes), more than half of --tolerance-um {}: the correction would be lost in rounding; {need}",
+                    self.tolerance_um
+                ));
+            }
+        }
+        if self.max_line_chars < 80 {
+            return Err(format!(
+                "--max-line-chars {} is too short for a rewritten block (at least 80)",
+                self.max_line_chars
+            ));
+        }
         Ok(())
     }
+}
+
+/// LinuxCNC's interpreter refuses longer lines ("Command too long"; LINELEN in rs274ngc).
+pub const LINUXCNC_MAX_LINE_CHARS: usize = 255;
+
+/// Largest distance (µm) a written position moves when its words are rounded to `decimals`
+/// digits: half a unit of the last digit on each of three axes, √3·½·10⁻ᵈ program units.
+pub fn rounding_um(decimals: usize, units: Units) -> f64 {
+    3f64.sqrt() * 0.5 * 10f64.powi(-(decimals as i32)) * units.mm_per_unit() * 1e3
 }
 
 /// What kind of problem stopped the rewrite.
@@ -249,6 +292,10 @@ struct Rewriter<'a> {
     block: Block,
     /// Work list of the move splitting, kept to avoid an allocation per move.
     split_stack: Vec<(f64, [f64; 3], f64, [f64; 3])>,
+    /// Bounds the path error of each output piece (exact for grid maps).
+    bound: PathBound<'a>,
+    /// The current block moves in machine coordinates (G53).
+    g53: bool,
 }
 
 /// A target point with the correction to apply there.
@@ -293,6 +340,8 @@ impl<'a> Rewriter<'a> {
             lower: false,
             emitted: false,
             split_stack: Vec::new(),
+            bound: PathBound::new(model, opt.check_step_mm),
+            g53: false,
             block: Block::default(),
             pieces: Vec::new(),
         }
@@ -458,6 +507,21 @@ impl<'a> Rewriter<'a> {
         if bom {
             self.out_buf.drain(..3); // no edit touches the mark: the lexer starts after it
         }
+        let longest_added = self.extra_lines.iter().map(|l| l.len()).max().unwrap_or(0);
+        let edited = self.out_buf.len();
+        if (edited > self.opt.max_line_chars && edited > body.len())
+            || longest_added > self.opt.max_line_chars
+        {
+            return Err(GcodeError::At(self.diag(
+                1,
+                ProblemKind::Correction,
+                format!(
+                    "the rewritten line would be {} characters, over the controller's limit of {} (--max-line-chars; LinuxCNC refuses longer lines): shorten its comments",
+                    edited.max(longest_added),
+                    self.opt.max_line_chars
+                ),
+            )));
+        }
         let sep: &[u8] = if ending.is_empty() { b"\n" } else { ending };
         for l in &self.extra_lines {
             self.out_buf.extend_from_slice(sep);
@@ -566,6 +630,13 @@ impl<'a> Rewriter<'a> {
             }
         }
 
+        // a G2/G3 block with centre words and no axis words is a full circle (LinuxCNC
+        // executes `G3 I-50`, and a line `I-50` in modal G2): it moves like any other arc
+        let arc_words = [b'I', b'J', b'K'].iter().any(|&l| b.word(l).is_some());
+        let mode_now = motion_word.map(|(m, _)| m).unwrap_or(self.st.motion);
+        let has_axis = has_axis
+            || (arc_words && axis_consumer.is_none() && matches!(mode_now, Motion::Cw | Motion::Ccw));
+
         // --- modal state changes, in the controller's order of execution ------------------
         let st = &mut self.st;
         if b.has_g(930).is_some() {
@@ -618,7 +689,19 @@ impl<'a> Rewriter<'a> {
                 }
                 490 => st.tool_length_mm = Some(0.0),
                 540 | 550 | 560 | 570 | 580 | 590 | 591 | 592 | 593 => {
-                    st.work = work_system_index(code)
+                    st.work = work_system_index(code);
+                    if let Some(i) = st.work.filter(|&i| !self.opt.offsets.known[i]) {
+                        st.work = None;
+                        issues.push(Issue {
+                            token: Some(tok),
+                            message: format!(
+                                "{} is selected but its offset is not known: give it in the offsets file (--offsets, [work_offsets_mm] {} = [x, y, z]); taking it as zero would compensate the wrong place",
+                                g_name(code),
+                                super::offsets::WORK_SYSTEMS[i]
+                            ),
+                            poisons_all: false,
+                        });
+                    }
                 }
                 900 => st.absolute = Some(true),
                 910 => st.absolute = Some(false),
@@ -635,7 +718,7 @@ impl<'a> Rewriter<'a> {
             motion = Some(m);
             let tok = axis_letters
                 .iter()
-                .chain([b'A', b'B', b'C', b'U', b'V', b'W'].iter())
+                .chain([b'A', b'B', b'C', b'U', b'V', b'W', b'I', b'J', b'K'].iter())
                 .find_map(|&l| b.word(l))
                 .map(|w| w.token)
                 .or(b.polar);
@@ -799,7 +882,7 @@ impl<'a> Rewriter<'a> {
         if g53 {
             return Some(0.0);
         }
-        let w = self.opt.offsets.work_mm[self.st.work?][axis];
+        let w = self.opt.offsets.work(self.st.work?)?[axis];
         Some(if axis == 2 {
             w + self.st.tool_length_mm?
         } else {
@@ -846,6 +929,15 @@ impl<'a> Rewriter<'a> {
             );
             return self.unsupported(d);
         }
+        if g53 && !matches!(m, Motion::Rapid | Motion::Linear) {
+            let d = self.diag(
+                col,
+                ProblemKind::Syntax,
+                "G53 needs G0 or G1 (LinuxCNC: \"Must use g0 or g1 with g53\")".into(),
+            );
+            return self.unsupported(d);
+        }
+        self.g53 = g53;
         let scale = units.mm_per_unit();
         let mut offsets = [0.0; 3];
         for (a, off) in offsets.iter_mut().enumerate() {
@@ -855,8 +947,13 @@ impl<'a> Rewriter<'a> {
                     let d = self.diag(
                         col,
                         ProblemKind::Unsupported,
-                        "work offset or tool length not known here (after an unsupported line)"
-                            .into(),
+                        match self.st.work {
+                            Some(i) if !self.opt.offsets.known[i] => format!(
+                                "work offset {} (in effect) is not known: give it in the offsets file (--offsets, [work_offsets_mm])",
+                                super::offsets::WORK_SYSTEMS[i]
+                            ),
+                            _ => "work offset or tool length not known here (after an unsupported line)".into(),
+                        },
                     );
                     self.unsupported(d)?;
                     self.st.prog = [None; 3];
@@ -942,7 +1039,7 @@ impl<'a> Rewriter<'a> {
         let start_p = start.map(|s| s.unwrap_or(0.0));
 
         match (m, c_start) {
-            (Motion::Linear, Some(c0)) if !g53 => {
+            (Motion::Linear, Some(c0)) => {
                 let mut pieces = std::mem::take(&mut self.pieces);
                 pieces.clear();
                 self.split_linear(start_p, target, c0, c_end, &mut pieces, col)?;
@@ -972,19 +1069,17 @@ impl<'a> Rewriter<'a> {
                         return Ok(());
                     }
                 };
-                let tol = self.opt.tolerance_um * 1e-3;
-                let mut keep = dist(c_end, c0) < tol / 2.0;
-                const SAMPLES: usize = 16;
-                let mut i = 1;
-                while keep && i < SAMPLES {
-                    let p = arc.point(i as f64 / SAMPLES as f64);
-                    let c = self.correct(p, col)?;
-                    keep = dist(c, c0) < tol / 2.0;
-                    i += 1;
-                }
+                // kept as an arc when the bound of its path error allows it (NaN: linearised,
+                // where the pieces report the missing model value)
+                let keep = self.arc_bound_um(&arc, c0, c_end) <= self.opt.tolerance_um;
                 if keep {
-                    // endpoints move with the correction; the centre moves with the start's
-                    if self.st.arc_absolute == Some(true) {
+                    let moved = c0 != [0.0; 3] || c_end != [0.0; 3];
+                    if let Some(rw) = b.word(b'R').filter(|_| moved) {
+                        // R kept with a corrected end point moves the centre, badly so near
+                        // 180°: the corrected arc is written in centre form instead
+                        self.r_to_center(&arc, rw.token, start_p, c0, offsets, scale);
+                    } else if self.st.arc_absolute == Some(true) {
+                        // endpoints move with the correction; the centre moves with the start's
                         for (a, l) in [b'I', b'J', b'K'].iter().enumerate() {
                             if let Some(w) = b.word(*l) {
                                 if c0[a] != 0.0 {
@@ -1031,8 +1126,8 @@ impl<'a> Rewriter<'a> {
                 }
             }
             _ => {
-                // rapids, G53 moves and feed moves from an unknown start: end point only
-                if m != Motion::Rapid && !g53 {
+                // rapids and feed moves from an unknown start: end point only
+                if m != Motion::Rapid {
                     self.report.moves_end_point_only += 1;
                 }
                 let pieces = [(target, c_end)];
@@ -1043,6 +1138,75 @@ impl<'a> Rewriter<'a> {
         }
         self.st.prog = target.map(Some);
         Ok(())
+    }
+
+    /// A bound (µm) on the tool's distance from the nominal arc when the arc is written as an
+    /// arc with its start corrected by `c0` and its end by `c1`: the centre moves with `c0`, so
+    /// the path error is at most twice the model's variation over the arc (once along the
+    /// way, once through the end radius), plus the solve residuals and the rounding of the end
+    /// point and the centre.
+    fn arc_bound_um(&mut self, arc: &Arc, c0: [f64; 3], c1: [f64; 3]) -> f64 {
+        let (mut lo, mut hi) = arc_box(arc);
+        let margin = norm(c0).max(norm(c1));
+        for i in 0..3 {
+            lo[i] -= margin;
+            hi[i] += margin;
+        }
+        let r = arc.r_start.max(arc.r_end);
+        let n_normal = arc.end[arc.plane.normal] - arc.start[arc.plane.normal];
+        let length = (arc.sweep.abs() * r).hypot(n_normal);
+        let n = ((length / self.opt.check_step_mm).ceil() as usize).clamp(16, 1_000_000);
+        let mut samples = (0..=n).map(|k| {
+            let p = arc.point(k as f64 / n as f64);
+            [0, 1, 2].map(|i| p[i] + c0[i])
+        });
+        let v = self.bound.variation_um(lo, hi, &mut samples);
+        let pa = [0, 1, 2].map(|i| arc.start[i] + c0[i]);
+        let pb = [0, 1, 2].map(|i| arc.end[i] + c1[i]);
+        let ea = self.bound.error_um(pa);
+        let eb = self.bound.error_um(pb);
+        let ra = norm([0, 1, 2].map(|i| (pa[i] - arc.start[i]) * 1e3 + ea[i]));
+        let rb = norm([0, 1, 2].map(|i| (pb[i] - arc.end[i]) * 1e3 + eb[i]));
+        2.0 * v + ra + rb + 2.0 * self.rounding_now_um()
+    }
+
+    /// Replaces the R word of an arc kept as an arc by its centre offsets (I, J, K of the
+    /// plane), centre = nominal centre moved with the start's correction `c0`.
+    #[allow(clippy::too_many_arguments)]
+    fn r_to_center(
+        &mut self,
+        arc: &Arc,
+        r_token: usize,
+        start: [f64; 3],
+        c0: [f64; 3],
+        offsets: [f64; 3],
+        scale: f64,
+    ) {
+        let lower = self.lower;
+        let sep = self.sep_for_line();
+        let d = self.decimals();
+        let absolute_center = self.st.arc_absolute == Some(true);
+        let mut text = String::new();
+        for (k, axis) in [arc.plane.first, arc.plane.second].into_iter().enumerate() {
+            let v = if absolute_center {
+                (arc.center[k] + c0[axis] - offsets[axis]) / scale
+            } else {
+                // incremental: from the written start (start + c0) to the centre + c0
+                (arc.center[k] - start[axis]) / scale
+            };
+            if k > 0 {
+                text.push_str(sep);
+            }
+            text.push(case_letter([b'I', b'J', b'K'][axis], lower) as char);
+            let (_, n) = rounded(v, d);
+            write_rounded(v, d, n, &mut text);
+        }
+        let span = self.tokens[r_token].span.clone();
+        self.edits.push(Edit {
+            span,
+            text,
+            order: 0,
+        });
     }
 
     /// The correction at a target (mm), with the error located at the block.
@@ -1071,10 +1235,39 @@ impl<'a> Rewriter<'a> {
         }
     }
 
-    /// Splits the straight move a→b so that along each piece the correction changes by less
-    /// than the tolerance (checked at both ends and the middle) and no piece of a compensated
-    /// move is longer than `max_segment_mm`. Pushes (target, correction) of each piece's end;
-    /// the last is exactly (b, c_b).
+    /// Half a unit of the last written digit on three axes, µm (see [`rounding_um`]).
+    fn rounding_now_um(&self) -> f64 {
+        match self.st.units {
+            Some(Units::Inch) => rounding_um(self.opt.decimals_inch, Units::Inch),
+            _ => rounding_um(self.opt.decimals_mm, Units::Mm),
+        }
+    }
+
+    /// A bound (µm) on the tool's distance from the nominal segment ta→tb while the axes move
+    /// straight from ta + ca to tb + cb: the solve residuals at the ends, the model's departure
+    /// from its chord between them ([`PathBound`]) and the rounding of the written words.
+    fn piece_bound_um(&mut self, ta: [f64; 3], ca: [f64; 3], tb: [f64; 3], cb: [f64; 3]) -> f64 {
+        let pa = [0, 1, 2].map(|i| ta[i] + ca[i]);
+        let pb = [0, 1, 2].map(|i| tb[i] + cb[i]);
+        let ea = self.bound.error_um(pa);
+        let eb = self.bound.error_um(pb);
+        let ra = norm([0, 1, 2].map(|i| (pa[i] - ta[i]) * 1e3 + ea[i]));
+        let rb = norm([0, 1, 2].map(|i| (pb[i] - tb[i]) * 1e3 + eb[i]));
+        self.bound.chord_departure_um(pa, pb, ea, eb) + ra.max(rb) + self.rounding_now_um()
+    }
+
+    fn no_model_value(&self, col: usize) -> GcodeError {
+        GcodeError::At(self.diag(
+            col,
+            ProblemKind::Correction,
+            "the error model has no finite value along this move (a map with outside = refuse, and the move leaves its grid?)".into(),
+        ))
+    }
+
+    /// Splits the straight move a→b into pieces whose path error, bounded by
+    /// [`Self::piece_bound_um`], is at most `--tolerance-um`; no piece of a compensated move is
+    /// longer than `max_segment_mm`. Pushes (target, correction) of each piece's end; the last
+    /// is exactly (b, c_b).
     fn split_linear(
         &mut self,
         a: [f64; 3],
@@ -1084,7 +1277,7 @@ impl<'a> Rewriter<'a> {
         pieces: &mut Vec<Piece>,
         col: usize,
     ) -> Result<(), GcodeError> {
-        let tol = self.opt.tolerance_um * 1e-3;
+        let tol = self.opt.tolerance_um;
         let len = dist(a, b);
         let lerp = |t: f64| -> [f64; 3] {
             if t >= 1.0 {
@@ -1093,11 +1286,17 @@ impl<'a> Rewriter<'a> {
                 [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * t)
             }
         };
-        let c_mid = self.correct(lerp(0.5), col)?;
         let zero = [0.0; 3];
-        if c_a == zero && c_b == zero && c_mid == zero {
-            pieces.push((b, c_b)); // nothing to compensate: the move is left whole
-            return Ok(());
+        if c_a == zero && c_b == zero {
+            // nothing to correct at the ends: the move stays whole when the model is flat along it
+            let bound = self.piece_bound_um(a, c_a, b, c_b);
+            if bound.is_nan() {
+                return Err(self.no_model_value(col));
+            }
+            if bound <= tol {
+                pieces.push((b, c_b));
+                return Ok(());
+            }
         }
         let n0 = ((len / self.opt.max_segment_mm).ceil() as usize).max(1);
         if n0 > self.opt.max_pieces_per_move {
@@ -1117,19 +1316,29 @@ impl<'a> Rewriter<'a> {
             stack.clear();
             stack.push((t_prev, c_prev, t1, c1));
             while let Some((t0, c0, t1, c1)) = stack.pop() {
-                let tm = 0.5 * (t0 + t1);
-                let cm = if n0 == 1 && t0 == 0.0 && t1 == 1.0 {
-                    c_mid
-                } else {
-                    self.correct(lerp(tm), col)?
-                };
-                let ok = dist(c1, c0) < tol && dist(cm, c0) < tol && dist(cm, c1) < tol;
-                if ok || (t1 - t0) * len < 1e-9 {
+                let bound = self.piece_bound_um(lerp(t0), c0, lerp(t1), c1);
+                if bound.is_nan() {
+                    self.split_stack = stack;
+                    return Err(self.no_model_value(col));
+                }
+                if bound <= tol {
                     pieces.push((lerp(t1), c1));
                     if pieces.len() > self.opt.max_pieces_per_move {
+                        self.split_stack = stack;
                         return Err(self.too_many(col));
                     }
+                } else if (t1 - t0) * len < 1e-6 {
+                    self.split_stack = stack;
+                    return Err(GcodeError::At(self.diag(
+                        col,
+                        ProblemKind::Correction,
+                        format!(
+                            "the path cannot be kept within --tolerance-um {tol}: {bound:.3} um on a piece shorter than 1 nm (is the error model continuous here?)"
+                        ),
+                    )));
                 } else {
+                    let tm = 0.5 * (t0 + t1);
+                    let cm = self.correct(lerp(tm), col)?;
                     stack.push((tm, cm, t1, c1));
                     stack.push((t0, c0, tm, cm));
                 }
@@ -1227,7 +1436,13 @@ impl<'a> Rewriter<'a> {
         self.lower
     }
 
-    fn sep_for(&self, _b: &Block) -> &'static str {
+    fn sep_for(&self, b: &Block) -> &'static str {
+        let _ = b;
+        self.sep_for_line()
+    }
+
+    /// " " when the current line separates its words with blanks, "" otherwise.
+    fn sep_for_line(&self) -> &'static str {
         let spaced = self
             .tokens
             .windows(2)
@@ -1367,7 +1582,8 @@ impl<'a> Rewriter<'a> {
         }
         // --- the other pieces as new lines -----------------------------------------------
         for &(t, c) in &pieces[1..] {
-            let mut line = case("G1", lower);
+            // G53 is not modal: every piece of a machine-coordinate move repeats it
+            let mut line = case(if self.g53 { "G53 G1" } else { "G1" }, lower);
             let mut moved = false;
             for a in 0..3 {
                 if let Some(text) =
@@ -1447,6 +1663,40 @@ impl<'a> Rewriter<'a> {
     }
 }
 
+/// An axis-aligned box (mm) holding every point of the arc: its end points and, at both radii,
+/// the in-plane extremes (multiples of 90°) its sweep passes.
+fn arc_box(arc: &Arc) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [0.0; 3];
+    let mut hi = [0.0; 3];
+    for i in 0..3 {
+        lo[i] = arc.start[i].min(arc.end[i]);
+        hi[i] = arc.start[i].max(arc.end[i]);
+    }
+    let (f, s) = (arc.plane.first, arc.plane.second);
+    let (a0, a1) = if arc.sweep >= 0.0 {
+        (arc.theta_start, arc.theta_start + arc.sweep)
+    } else {
+        (arc.theta_start + arc.sweep, arc.theta_start)
+    };
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    let mut k = (a0 / half_pi).ceil();
+    let mut angles = vec![a0, a1];
+    while k * half_pi <= a1 && angles.len() < 12 {
+        angles.push(k * half_pi);
+        k += 1.0;
+    }
+    for th in angles {
+        for r in [arc.r_start, arc.r_end] {
+            let p = [arc.center[0] + r * th.cos(), arc.center[1] + r * th.sin()];
+            lo[f] = lo[f].min(p[0]);
+            hi[f] = hi[f].max(p[0]);
+            lo[s] = lo[s].min(p[1]);
+            hi[s] = hi[s].max(p[1]);
+        }
+    }
+    (lo, hi)
+}
+
 /// `v` rounded to `decimals` digits: the value the written word stands for, and its count.
 fn rounded(v: f64, decimals: usize) -> (f64, Option<i64>) {
     match to_decimal(v, decimals) {
@@ -1503,12 +1753,24 @@ pub fn header_comment(model: &dyn ErrorModel, opt: &RewriteOptions) -> String {
             _ => '?',
         })
         .collect();
-    format!(
-        "(mtec compensate gcode {}: lines below corrected with model: {}; tolerance {} um, max segment {} mm, chord tolerance {} um)",
-        env!("CARGO_PKG_VERSION"),
-        describe,
-        opt.tolerance_um,
-        opt.max_segment_mm,
-        opt.chord_tolerance_um
-    )
+    let knobs = format!(
+        "; tolerance {} um, max segment {} mm, chord tolerance {} um)",
+        opt.tolerance_um, opt.max_segment_mm, opt.chord_tolerance_um
+    );
+    let head = format!(
+        "(mtec compensate gcode {}: lines below corrected with model: ",
+        env!("CARGO_PKG_VERSION")
+    );
+    // the whole comment stays within the controller's line length: the model's description
+    // is shortened (with "...") when it would not fit
+    let room = opt
+        .max_line_chars
+        .saturating_sub(head.len() + knobs.len())
+        .max(8);
+    let describe = if describe.len() > room {
+        format!("{}...", &describe[..room - 3])
+    } else {
+        describe
+    };
+    format!("{head}{describe}{knobs}")
 }

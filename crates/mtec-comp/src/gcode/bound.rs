@@ -1,0 +1,317 @@
+//! The path bound: how far the tool can stray from the nominal path along one output move.
+//!
+//! A rewritten straight move commands the axes from `P0` to `P1`; the machine puts the tool at
+//! `T(s) = P(s) + e(P(s))` with `P(s) = P0 + s·(P1 − P0)`, `s ∈ [0, 1]`. With `Pk = tk + ck`
+//! and the residuals `rk = Pk + e(Pk) − tk` of the correction solve at the ends, the deviation
+//! from the nominal point `t(s) = t0 + s·(t1 − t0)` is
+//!
+//! `T(s) − t(s) = (1 − s)·r0 + s·r1 + g(s)`, `g(s) = e(P(s)) − [(1 − s)·e(P0) + s·e(P1)]`,
+//!
+//! so `|T(s) − t(s)| ≤ max(|r0|, |r1|) + max_s |g(s)|`: the correction is exact at the ends and
+//! the whole error along the move is the departure of the model from its chord, `g`.
+//!
+//! How `max |g|` is bounded depends on what is known about the model:
+//! - **Trilinear grid maps** ([`GridMap`]): along a straight line, inside one cell, the
+//!   trilinear polynomial is a cubic in `s` (a product of three affine functions of `s`); the
+//!   clamped and extrapolated regions outside the grid are cubic too, and change form only at
+//!   grid planes. The move is cut where it crosses a grid plane, the cubic of each piece is
+//!   found from four values (Newton's forward differences) and its extremes from the roots of
+//!   its derivative: the maximum is exact, not sampled, so a single-node bump between two
+//!   sample points cannot hide.
+//! - **Other models** (kinematic, polynomial, BPNN): smooth, with no structure mtec can bound
+//!   in closed form; `g` is evaluated at samples no further apart than `check_step_mm` (a
+//!   dense check, documented as such).
+//!
+//! For an arc kept as an arc, [`PathBound::variation_um`] bounds `|e(p) − e(q)|` over a box
+//! holding the arc: for a grid map the range of the node values of the cells the box touches
+//! (trilinear interpolation is a convex combination of its cell's nodes), otherwise samples.
+
+use crate::{map::Outside, ErrorModel, GridMap};
+
+/// Bounds the model's departure from its chord along moves; reuses its buffers.
+pub struct PathBound<'a> {
+    model: &'a dyn ErrorModel,
+    grid: Option<&'a GridMap>,
+    check_step_mm: f64,
+    breaks: Vec<f64>,
+}
+
+/// Euclidean norm of a 3-vector.
+pub fn norm(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+fn lerp(a: [f64; 3], b: [f64; 3], s: f64) -> [f64; 3] {
+    [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * s)
+}
+
+/// Largest |p(v)| on v ∈ [0, 3] of the cubic through (0, g0), (1, g1), (2, g2), (3, g3).
+fn cubic_max_abs(g: [f64; 4]) -> f64 {
+    // Newton forward differences: p(v) = g0 + d1·v + d2·v(v−1)/2 + d3·v(v−1)(v−2)/6
+    let d1 = g[1] - g[0];
+    let d2 = g[2] - 2.0 * g[1] + g[0];
+    let d3 = g[3] - 3.0 * g[2] + 3.0 * g[1] - g[0];
+    // in powers of v: c0 + c1·v + c2·v² + c3·v³
+    let c1 = d1 - d2 / 2.0 + d3 / 3.0;
+    let c2 = d2 / 2.0 - d3 / 2.0;
+    let c3 = d3 / 6.0;
+    let p = |v: f64| g[0] + v * (c1 + v * (c2 + v * c3));
+    let mut m = g[0].abs().max(g[3].abs());
+    // p'(v) = c1 + 2·c2·v + 3·c3·v² = 0
+    let (a, b, c) = (3.0 * c3, 2.0 * c2, c1);
+    let mut consider = |v: f64| {
+        if v > 0.0 && v < 3.0 {
+            m = m.max(p(v).abs());
+        }
+    };
+    let scale = a.abs().max(b.abs()).max(c.abs());
+    if scale == 0.0 {
+        return m;
+    }
+    if a.abs() <= 1e-14 * scale {
+        if b != 0.0 {
+            consider(-c / b);
+        }
+    } else {
+        let disc = b * b - 4.0 * a * c;
+        if disc >= 0.0 {
+            // the stable form of the two roots
+            let q = -0.5 * (b + b.signum() * disc.sqrt());
+            if q != 0.0 {
+                consider(q / a);
+                consider(c / q);
+            } else {
+                consider(0.0);
+            }
+        }
+    }
+    m
+}
+
+impl<'a> PathBound<'a> {
+    /// `check_step_mm`: sample spacing of the dense check for models without a grid structure.
+    pub fn new(model: &'a dyn ErrorModel, check_step_mm: f64) -> Self {
+        PathBound {
+            model,
+            grid: model.as_grid(),
+            check_step_mm,
+            breaks: Vec::new(),
+        }
+    }
+
+    /// True when the bound is exact (a grid map), false when it comes from samples.
+    pub fn is_exact(&self) -> bool {
+        self.grid.is_some()
+    }
+
+    /// `max_s |g(s)|` in µm along the command segment p0 → p1 (mm), given the model's values
+    /// `e0`, `e1` at the ends. NaN when the model has no value somewhere along it.
+    pub fn chord_departure_um(
+        &mut self,
+        p0: [f64; 3],
+        p1: [f64; 3],
+        e0: [f64; 3],
+        e1: [f64; 3],
+    ) -> f64 {
+        let g = |model: &dyn ErrorModel, s: f64| -> [f64; 3] {
+            let e = model.error_um(lerp(p0, p1, s));
+            [0, 1, 2].map(|i| e[i] - (e0[i] + (e1[i] - e0[i]) * s))
+        };
+        match self.grid {
+            Some(grid) => {
+                self.breaks.clear();
+                self.breaks.push(0.0);
+                let axes = grid.axes_mm();
+                for a in 0..3 {
+                    let d = p1[a] - p0[a];
+                    let ax = &axes[a];
+                    if ax.len() < 2 || d == 0.0 {
+                        continue;
+                    }
+                    let (lo, hi) = if d > 0.0 { (p0[a], p1[a]) } else { (p1[a], p0[a]) };
+                    let first = ax.partition_point(|&x| x <= lo);
+                    let last = ax.partition_point(|&x| x < hi);
+                    for &x in &ax[first..last] {
+                        self.breaks.push((x - p0[a]) / d);
+                    }
+                }
+                self.breaks.push(1.0);
+                self.breaks
+                    .sort_unstable_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+                let mut worst = [0.0f64; 3];
+                let mut g_prev = g(self.model, 0.0);
+                let mut s_prev = 0.0;
+                for k in 1..self.breaks.len() {
+                    let s1 = self.breaks[k];
+                    if !(s1 > s_prev) {
+                        continue;
+                    }
+                    let h = (s1 - s_prev) / 3.0;
+                    let ga = g(self.model, s_prev + h);
+                    let gb = g(self.model, s_prev + 2.0 * h);
+                    let g1 = g(self.model, s1);
+                    for i in 0..3 {
+                        let m = cubic_max_abs([g_prev[i], ga[i], gb[i], g1[i]]);
+                        worst[i] = if m.is_nan() { f64::NAN } else { worst[i].max(m) };
+                    }
+                    g_prev = g1;
+                    s_prev = s1;
+                }
+                norm(worst)
+            }
+            None => {
+                let len = norm([0, 1, 2].map(|i| p1[i] - p0[i]));
+                let n = ((len / self.check_step_mm).ceil() as usize).clamp(4, 1_000_000);
+                let mut worst = 0.0f64;
+                for k in 1..n {
+                    let v = norm(g(self.model, k as f64 / n as f64));
+                    if v.is_nan() {
+                        return f64::NAN;
+                    }
+                    worst = worst.max(v);
+                }
+                worst
+            }
+        }
+    }
+
+    /// A bound of `max |e(p) − e(q)|` (µm) for p, q in the box `lo..hi` (mm), for a grid map;
+    /// for other models the largest |e(p) − e(first)| over `samples` (points of the path).
+    /// Infinity when a grid map extrapolates beyond its nodes inside the box.
+    pub fn variation_um(
+        &mut self,
+        lo: [f64; 3],
+        hi: [f64; 3],
+        samples: &mut dyn Iterator<Item = [f64; 3]>,
+    ) -> f64 {
+        match self.grid {
+            Some(grid) => {
+                let axes = grid.axes_mm();
+                let mut range = [[0usize; 2]; 3];
+                for a in 0..3 {
+                    let ax = &axes[a];
+                    let n = ax.len();
+                    if n == 1 {
+                        range[a] = [0, 0];
+                        continue;
+                    }
+                    let outside = lo[a] < ax[0] || hi[a] > ax[n - 1];
+                    if outside && grid.outside() != Outside::Clamp {
+                        return f64::INFINITY;
+                    }
+                    // nodes of the cells that hold lo..hi: the last node ≤ lo to the first ≥ hi
+                    let i0 = ax.partition_point(|&x| x <= lo[a]).saturating_sub(1);
+                    let i1 = ax.partition_point(|&x| x < hi[a]).min(n - 1);
+                    range[a] = [i0.min(n - 1), i1.max(i0.min(n - 1))];
+                }
+                let mut min = [f64::INFINITY; 3];
+                let mut max = [f64::NEG_INFINITY; 3];
+                for i in range[0][0]..=range[0][1] {
+                    for j in range[1][0]..=range[1][1] {
+                        for k in range[2][0]..=range[2][1] {
+                            let v = grid.node_um(i, j, k);
+                            for c in 0..3 {
+                                min[c] = min[c].min(v[c]);
+                                max[c] = max[c].max(v[c]);
+                            }
+                        }
+                    }
+                }
+                norm([0, 1, 2].map(|c| max[c] - min[c]))
+            }
+            None => {
+                let Some(first) = samples.next() else {
+                    return 0.0;
+                };
+                let e0 = self.model.error_um(first);
+                let mut worst = 0.0f64;
+                for p in samples {
+                    let e = self.model.error_um(p);
+                    let v = norm([0, 1, 2].map(|i| e[i] - e0[i]));
+                    if v.is_nan() {
+                        return f64::NAN;
+                    }
+                    worst = worst.max(v);
+                }
+                worst
+            }
+        }
+    }
+
+    /// The model's error at `p` (µm).
+    pub fn error_um(&self, p: [f64; 3]) -> [f64; 3] {
+        self.model.error_um(p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::map::Outside;
+
+    #[test]
+    fn cubic_maximum_is_found_between_the_nodes() {
+        // p(v) = v(v−1)(v−2)·(−1): values 0 at the first three nodes, −6 at v = 3; its interior
+        // extremes at v = 1 ± 1/√3 have |p| = 2/(3√3) ≈ 0.3849
+        let m = cubic_max_abs([0.0, 0.0, 0.0, -6.0]);
+        assert!((m - 6.0).abs() < 1e-12);
+        let m = cubic_max_abs([0.0, 0.0, 0.0, 0.0]);
+        assert_eq!(m, 0.0);
+        // a parabola with its top at v = 1.5: p = −(v − 1.5)² + 2.25 → p(1.5) = 2.25
+        let p = |v: f64| -(v - 1.5) * (v - 1.5) + 2.25;
+        let m = cubic_max_abs([p(0.0), p(1.0), p(2.0), p(3.0)]);
+        assert!((m - 2.25).abs() < 1e-12, "{m}");
+        // the cubic with interior extremes only: v(v−1.5)(v−3) has |p| = 1.299 at v = 1.5 ± √3/2
+        let q = |v: f64| v * (v - 1.5) * (v - 3.0);
+        let m = cubic_max_abs([q(0.0), q(1.0), q(2.0), q(3.0)]);
+        let v = 1.5 - 3f64.sqrt() / 2.0;
+        assert!((m - q(v).abs()).abs() < 1e-12, "{m}");
+    }
+
+    fn bump_map() -> GridMap {
+        // 0..100 mm in steps of 10 on x and y, one z: a 30 µm bump in ey at node (5, 5)
+        let xs: Vec<f64> = (0..=10).map(|i| i as f64 * 10.0).collect();
+        let mut values = vec![[0.0; 3]; 11 * 11];
+        values[5 * 11 + 5] = [0.0, 30.0, 0.0];
+        GridMap::new([xs.clone(), xs, vec![0.0]], values, Outside::Clamp, "bump").unwrap()
+    }
+
+    #[test]
+    fn a_single_node_bump_between_samples_is_seen_exactly() {
+        let map = bump_map();
+        let mut b = PathBound::new(&map, 1.0);
+        // a line through the bump's node: the departure from the (zero) chord is the bump
+        let p0 = [0.0, 50.0, 0.0];
+        let p1 = [100.0, 50.0, 0.0];
+        let m = b.chord_departure_um(p0, p1, [0.0; 3], [0.0; 3]);
+        assert!((m - 30.0).abs() < 1e-9, "{m}");
+        // a line 2.5 mm off the node row: the tent function gives 30·(1 − 0.25) = 22.5 µm
+        let m = b.chord_departure_um([0.0, 52.5, 0.0], [100.0, 52.5, 0.0], [0.0; 3], [0.0; 3]);
+        assert!((m - 22.5).abs() < 1e-9, "{m}");
+        // a diagonal through the node: along it the bump is (1−|u|)² shaped, peak 30 at the node
+        let m = b.chord_departure_um([40.0, 40.0, 0.0], [60.0, 60.0, 0.0], [0.0; 3], [0.0; 3]);
+        assert!((m - 30.0).abs() < 1e-9, "{m}");
+        // dense sampling of the same function never exceeds the exact bound
+        for k in 0..=1000 {
+            let s = k as f64 / 1000.0;
+            let e = map.error_um(lerp([40.0, 41.0, 0.0], [60.0, 58.0, 0.0], s));
+            let exact =
+                b.chord_departure_um([40.0, 41.0, 0.0], [60.0, 58.0, 0.0], [0.0; 3], [0.0; 3]);
+            assert!(norm(e) <= exact + 1e-9);
+        }
+    }
+
+    #[test]
+    fn variation_over_a_box_holds_the_node_range() {
+        let map = bump_map();
+        let mut b = PathBound::new(&map, 1.0);
+        let none = &mut std::iter::empty();
+        assert_eq!(b.variation_um([0.0, 0.0, 0.0], [39.0, 39.0, 0.0], none), 0.0);
+        assert_eq!(b.variation_um([41.0, 41.0, 0.0], [45.0, 45.0, 0.0], none), 30.0);
+        assert_eq!(b.variation_um([61.0, 0.0, 0.0], [62.0, 100.0, 0.0], none), 0.0);
+        assert_eq!(b.variation_um([60.0, 0.0, 0.0], [62.0, 100.0, 0.0], none), 0.0);
+        assert_eq!(b.variation_um([59.9, 0.0, 0.0], [62.0, 100.0, 0.0], none), 30.0);
+        // clamped outside the box: still the edge nodes
+        assert_eq!(b.variation_um([-20.0, -20.0, 0.0], [5.0, 5.0, 0.0], none), 0.0);
+    }
+}
