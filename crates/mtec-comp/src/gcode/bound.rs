@@ -128,7 +128,11 @@ impl<'a> PathBound<'a> {
                     if ax.len() < 2 || d == 0.0 {
                         continue;
                     }
-                    let (lo, hi) = if d > 0.0 { (p0[a], p1[a]) } else { (p1[a], p0[a]) };
+                    let (lo, hi) = if d > 0.0 {
+                        (p0[a], p1[a])
+                    } else {
+                        (p1[a], p0[a])
+                    };
                     let first = ax.partition_point(|&x| x <= lo);
                     let last = ax.partition_point(|&x| x < hi);
                     for &x in &ax[first..last] {
@@ -152,7 +156,11 @@ impl<'a> PathBound<'a> {
                     let g1 = g(self.model, s1);
                     for i in 0..3 {
                         let m = cubic_max_abs([g_prev[i], ga[i], gb[i], g1[i]]);
-                        worst[i] = if m.is_nan() { f64::NAN } else { worst[i].max(m) };
+                        worst[i] = if m.is_nan() {
+                            f64::NAN
+                        } else {
+                            worst[i].max(m)
+                        };
                     }
                     g_prev = g1;
                     s_prev = s1;
@@ -306,12 +314,30 @@ mod tests {
         let map = bump_map();
         let mut b = PathBound::new(&map, 1.0);
         let none = &mut std::iter::empty();
-        assert_eq!(b.variation_um([0.0, 0.0, 0.0], [39.0, 39.0, 0.0], none), 0.0);
-        assert_eq!(b.variation_um([41.0, 41.0, 0.0], [45.0, 45.0, 0.0], none), 30.0);
-        assert_eq!(b.variation_um([61.0, 0.0, 0.0], [62.0, 100.0, 0.0], none), 0.0);
-        assert_eq!(b.variation_um([60.0, 0.0, 0.0], [62.0, 100.0, 0.0], none), 0.0);
-        assert_eq!(b.variation_um([59.9, 0.0, 0.0], [62.0, 100.0, 0.0], none), 30.0);
+        assert_eq!(
+            b.variation_um([0.0, 0.0, 0.0], [39.0, 39.0, 0.0], none),
+            0.0
+        );
+        assert_eq!(
+            b.variation_um([41.0, 41.0, 0.0], [45.0, 45.0, 0.0], none),
+            30.0
+        );
+        assert_eq!(
+            b.variation_um([61.0, 0.0, 0.0], [62.0, 100.0, 0.0], none),
+            0.0
+        );
+        assert_eq!(
+            b.variation_um([60.0, 0.0, 0.0], [62.0, 100.0, 0.0], none),
+            0.0
+        );
+        assert_eq!(
+            b.variation_um([59.9, 0.0, 0.0], [62.0, 100.0, 0.0], none),
+            30.0
+        );
         // clamped outside the box: still the edge nodes
-        assert_eq!(b.variation_um([-20.0, -20.0, 0.0], [5.0, 5.0, 0.0], none), 0.0);
+        assert_eq!(
+            b.variation_um([-20.0, -20.0, 0.0], [5.0, 5.0, 0.0], none),
+            0.0
+        );
     }
 }

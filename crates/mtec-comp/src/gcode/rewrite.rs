@@ -635,7 +635,9 @@ impl<'a> Rewriter<'a> {
         let arc_words = [b'I', b'J', b'K'].iter().any(|&l| b.word(l).is_some());
         let mode_now = motion_word.map(|(m, _)| m).unwrap_or(self.st.motion);
         let has_axis = has_axis
-            || (arc_words && axis_consumer.is_none() && matches!(mode_now, Motion::Cw | Motion::Ccw));
+            || (arc_words
+                && axis_consumer.is_none()
+                && matches!(mode_now, Motion::Cw | Motion::Ccw));
 
         // --- modal state changes, in the controller's order of execution ------------------
         let st = &mut self.st;

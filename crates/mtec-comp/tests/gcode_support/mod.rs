@@ -67,6 +67,66 @@ pub struct Move {
     pub end: [f64; 3],
     /// Points along the move (for arcs: dense samples; for lines: start and end).
     pub path: Vec<[f64; 3]>,
+    /// The exact geometry of an arc move.
+    pub arc: Option<ArcGeom>,
+}
+
+/// An arc (or helix) of the reference interpreter: in-plane axes f, g about normal n.
+#[derive(Debug, Clone, Copy)]
+pub struct ArcGeom {
+    pub f: usize,
+    pub g: usize,
+    pub n: usize,
+    pub c: [f64; 2],
+    pub r0: f64,
+    pub r1: f64,
+    pub a0: f64,
+    pub sweep: f64,
+    pub start: [f64; 3],
+    pub end: [f64; 3],
+}
+
+impl ArcGeom {
+    /// The point at fraction t of the sweep (radius and normal axis linear in t, as LinuxCNC).
+    pub fn point(&self, t: f64) -> [f64; 3] {
+        let th = self.a0 + self.sweep * t;
+        let r = self.r0 + (self.r1 - self.r0) * t;
+        let mut p = [0.0; 3];
+        p[self.f] = self.c[0] + r * th.cos();
+        p[self.g] = self.c[1] + r * th.sin();
+        p[self.n] = self.start[self.n] + (self.end[self.n] - self.start[self.n]) * t;
+        p
+    }
+
+    /// Distance from q to the arc, measured to the arc's points at q's own angle (every turn)
+    /// and to its ends: exact for a circle, an upper bound for a helix or spiral.
+    pub fn distance(&self, q: [f64; 3]) -> f64 {
+        let phi = (q[self.g] - self.c[1]).atan2(q[self.f] - self.c[0]);
+        let two_pi = 2.0 * std::f64::consts::PI;
+        let mut best = dist(q, self.point(0.0)).min(dist(q, self.point(1.0)));
+        if self.sweep == 0.0 {
+            return best;
+        }
+        // t = (phi − a0 + 2πm) / sweep in [0, 1]
+        let base = phi - self.a0;
+        let m_lo = ((-base).min(self.sweep - base) / two_pi).floor() as i64 - 1;
+        let m_hi = ((-base).max(self.sweep - base) / two_pi).ceil() as i64 + 1;
+        for m in m_lo..=m_hi {
+            let t = (base + two_pi * m as f64) / self.sweep;
+            if (0.0..=1.0).contains(&t) {
+                best = best.min(dist(q, self.point(t)));
+            }
+        }
+        best
+    }
+}
+
+/// Distance from q to a move: exact for arcs, to the segment for straight moves.
+pub fn dist_to_move(q: [f64; 3], m: &Move) -> f64 {
+    match &m.arc {
+        Some(a) => a.distance(q),
+        None => dist_to_path(q, &m.path),
+    }
 }
 
 /// Interprets the subset: G0 G1 G2 G3 (I J K or R, P turns), G17/18/19, G20/21, G90/91,
@@ -125,10 +185,18 @@ pub fn interpret(
             }
         }
         let letters = [b'X', b'Y', b'Z'];
-        if !letters.iter().any(|l| w.contains_key(l)) {
+        // a G2/G3 block with centre words only is a full circle (LinuxCNC runs `G3 I-5`)
+        let full_circle =
+            (mode == 2 || mode == 3) && [b'I', b'J', b'K'].iter().any(|l| w.contains_key(l));
+        if !letters.iter().any(|l| w.contains_key(l)) && !full_circle {
             continue;
         }
-        let off = [work[wcs][0], work[wcs][1], work[wcs][2] + tool];
+        // G53: this block only, machine coordinates
+        let off = if gs.contains(&530) {
+            [0.0; 3]
+        } else {
+            [work[wcs][0], work[wcs][1], work[wcs][2] + tool]
+        };
         let mut end = pos;
         for a in 0..3 {
             if let Some(v) = w.get(&letters[a]) {
@@ -146,6 +214,7 @@ pub fn interpret(
         if !known {
             continue;
         }
+        let mut arc = None;
         let path = if mode == 2 || mode == 3 {
             let (f, g2, n) = plane;
             let c = if let Some(r) = w.get(&b'R') {
@@ -190,6 +259,18 @@ pub fn interpret(
             sweep += sweep.signum() * 2.0 * std::f64::consts::PI * (turns - 1.0);
             let r0 = (s[f] - c[0]).hypot(s[g2] - c[1]);
             let r1 = (e[f] - c[0]).hypot(e[g2] - c[1]);
+            arc = Some(ArcGeom {
+                f,
+                g: g2,
+                n,
+                c,
+                r0,
+                r1,
+                a0,
+                sweep,
+                start: s,
+                end: e,
+            });
             let k = 400;
             (0..=k)
                 .map(|i| {
@@ -212,6 +293,7 @@ pub fn interpret(
             start: s,
             end: e,
             path,
+            arc,
         });
     }
     moves
@@ -329,4 +411,78 @@ pub fn check_lands_on_target(
         );
     }
     (worst_end, worst_path)
+}
+
+/// The densest check of a rewritten program: every output move is sampled every `step_mm`
+/// (arcs at their 400 path points), each sample pushed through the machine p + e(p), and its
+/// distance to the original path measured (moves matched in order, rapids only at their ends).
+/// Returns the largest distance (mm); panics naming the output line when it exceeds `tol_mm`.
+pub fn check_path_dense(
+    input: &str,
+    output: &str,
+    model: &dyn ErrorModel,
+    work: &[[f64; 3]; 6],
+    start: Option<[f64; 3]>,
+    step_mm: f64,
+    tol_mm: f64,
+) -> f64 {
+    let tools = BTreeMap::new();
+    let want = interpret(input, work, &tools, start);
+    let got = interpret(output, work, &tools, start);
+    assert!(!want.is_empty(), "no moves in the input");
+    let mut j = 0usize;
+    let mut worst: f64 = 0.0;
+    for g in &got {
+        // samples of the commanded path
+        let mut pts: Vec<[f64; 3]> = Vec::new();
+        match &g.arc {
+            Some(a) => {
+                let len = (a.sweep.abs() * a.r0.max(a.r1)).hypot(a.end[a.n] - a.start[a.n]);
+                let n = ((len / step_mm).ceil() as usize).clamp(16, 200_000);
+                pts.extend((0..=n).map(|i| a.point(i as f64 / n as f64)));
+            }
+            None => {
+                let n = ((dist(g.start, g.end) / step_mm).ceil() as usize).clamp(1, 200_000);
+                for i in 0..=n {
+                    let t = i as f64 / n as f64;
+                    pts.push([0, 1, 2].map(|a| g.start[a] + (g.end[a] - g.start[a]) * t));
+                }
+            }
+        }
+        let reached = machine(model, g.end);
+        let mut k = j;
+        while dist_to_move(reached, &want[k]) > tol_mm {
+            k += 1;
+            assert!(
+                k < want.len(),
+                "output line {}: its end {:?} reaches no remaining original move",
+                g.line,
+                reached
+            );
+        }
+        j = k;
+        if g.rapid {
+            continue;
+        }
+        // the samples may lie on the original move k or on the ones before it since j
+        for p in &pts {
+            let q = machine(model, *p);
+            let d = (0..=k)
+                .rev()
+                .take(3)
+                .filter(|&m| m >= j.saturating_sub(2))
+                .map(|m| dist_to_move(q, &want[m]))
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                d <= tol_mm,
+                "output line {}: the tool reaches {:?}, {:.3} um off the original path (bound {:.3} um)",
+                g.line,
+                q,
+                d * 1e3,
+                tol_mm * 1e3
+            );
+            worst = worst.max(d);
+        }
+    }
+    worst
 }
