@@ -10,10 +10,17 @@ use std::path::{Path, PathBuf};
 const LONG_ABOUT: &str = "\
 Rewrites an NC program (RS274/NGC as LinuxCNC reads it, or common Fanuc style) so that every
 commanded point is corrected for the machine's volumetric error: the command p that makes the
-machine reach the target t solves p + e(p) = t. Feed moves are split where the correction
-changes along them (by less than --tolerance-um per piece, no piece longer than
---max-segment-mm), arcs are turned into chords where the correction varies along them, rapids
-are corrected at their end points.
+machine reach the target t solves p + e(p) = t. Every feed move (G1, G2/G3 including full
+circles without axis words, G53 G1) is split until a bound of the tool's distance from the
+programmed path is at most --tolerance-um on every piece (no piece longer than
+--max-segment-mm); arcs stay arcs (R arcs are written with their centre I/J/K) when the bound
+allows it, otherwise they become chords of sagitta <= --chord-tolerance-um, each split the same
+way. The bound is exact for trilinear grid maps (the map is cubic along a line inside a cell:
+moves are cut at cell planes and each cubic's maximum is solved), and for other models it is
+checked at samples every --check-step-mm. Rapids are corrected at their end points. The
+documented guarantee: every point of the compensated path lies within --tolerance-um of the
+programmed path (plus --chord-tolerance-um on linearised arcs), the rounding of the written
+words included; options that cannot hold it (too few --decimals-mm) are refused.
 
 Only the words that change are edited: comments, line numbers, unknown words, spacing and line
 endings are kept. With a zero model the output is byte-identical to the input. A comment naming
@@ -36,6 +43,10 @@ Offsets (--offsets, TOML) map program to machine coordinates (machine = program 
   G54 = [250.0, 120.0, -300.0]
   [tool_lengths_mm]
   1 = 85.25
+
+Without --offsets only G54 is known (as zero: program coordinates are machine coordinates); a
+program that selects another work system is refused at that word. Every written line is at
+most --max-line-chars long (255: LinuxCNC's limit); the header comment is shortened to fit.
 
 Example:
   mtec compensate gcode --model model.json part.ngc -o part-comp.ngc --offsets offsets.toml";
@@ -67,7 +78,8 @@ pub struct Args {
     /// Where to write the corrected program (never an input; written atomically).
     #[arg(short, long, value_name = "OUT.ngc")]
     pub output: PathBuf,
-    /// Largest change of the correction along one output piece, in um.
+    /// Largest distance of the compensated path from the programmed one, in um (the bound
+    /// every output piece is split to).
     #[arg(long, default_value_t = 0.5)]
     pub tolerance_um: f64,
     /// Longest piece of a compensated feed move, in mm.
@@ -97,6 +109,12 @@ pub struct Args {
     /// Machine position at program start, "x,y,z" in mm (e.g. home; on a lathe the fixed Y).
     #[arg(long, value_name = "X,Y,Z")]
     pub start_position_mm: Option<String>,
+    /// Sample spacing of the path check for models that are not grid maps, in mm.
+    #[arg(long, default_value_t = 0.5)]
+    pub check_step_mm: f64,
+    /// Longest line the controller reads (LinuxCNC: 255); longer rewritten lines are refused.
+    #[arg(long, default_value_t = 255)]
+    pub max_line_chars: usize,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
@@ -116,6 +134,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
         },
         decimals_mm: args.decimals_mm,
         decimals_inch: args.decimals_inch,
+        check_step_mm: args.check_step_mm,
+        max_line_chars: args.max_line_chars,
         ..RewriteOptions::default()
     };
     if let Some(s) = &args.start_position_mm {

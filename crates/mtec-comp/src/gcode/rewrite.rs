@@ -1521,6 +1521,14 @@ impl<'a> Rewriter<'a> {
             .filter_map(|&l| b.word(l))
             .map(|w| self.tokens[w.token].span.end)
             .max()
+            .or_else(|| {
+                // no axis word (a full circle): after the line's last word, before a comment
+                self.tokens
+                    .iter()
+                    .rev()
+                    .find(|t| matches!(t.kind, TokenKind::Word { .. }))
+                    .map(|t| t.span.end)
+            })
             .unwrap_or(0);
         let (t0, c0) = pieces[0];
         let last = pieces.len() == 1;
