@@ -1,12 +1,18 @@
 //! Fuzz target for the G-code lexer and rewriter (issue 10): any bytes must give a result or a
 //! located error — never a panic or a hang — and the invariants must hold:
 //! a zero model leaves the bytes unchanged (pass-through mode), and with a model no line is
-//! lost (output lines = input lines + added lines + header).
+//! lost (output lines = input lines + added lines + header). When the bytes are a program in
+//! the subset the tests' reference interpreter reads (G0–G3, G17–G19, G21, G90/G91, X Y Z I J K
+//! R P F N words and comments, every axis set by the first move), the compensated path must
+//! also stay within the documented bound of the original one (issue 15).
 //!
 //! Run for 10 minutes (nightly toolchain, `cargo install cargo-fuzz`):
 //!   cd fuzz && cargo +nightly fuzz run gcode_rewrite corpus/gcode_rewrite seeds/gcode_rewrite -- \
 //!       -max_total_time=600 -max_len=4096
 #![no_main]
+
+#[path = "../../crates/mtec-comp/tests/gcode_support/mod.rs"]
+mod gcode_support;
 
 use libfuzzer_sys::fuzz_target;
 use mtec_comp::gcode::{rewrite, OnUnsupported, RewriteOptions};
@@ -70,5 +76,45 @@ fuzz_target!(|data: &[u8]| {
         max_pieces_per_move: 10_000,
         ..RewriteOptions::default()
     };
-    let _ = rewrite(data, &mut out, &Poly, &strict);
+    if rewrite(data, &mut out, &Poly, &strict).is_ok() {
+        if let (Ok(text), Ok(written)) = (std::str::from_utf8(data), String::from_utf8(out)) {
+            if in_reference_subset(text) {
+                let bound = (strict.tolerance_um + strict.chord_tolerance_um) * 1e-3;
+                gcode_support::check_path_dense(text, &written, &Poly, &[[0.0; 3]; 6], None, 0.05, bound);
+            }
+        }
+    }
 });
+
+/// The programs the reference interpreter of the tests reads exactly: plain words of the
+/// letters it knows, G codes it models, the first line with a motion setting X, Y and Z.
+fn in_reference_subset(text: &str) -> bool {
+    let mut first_move = true;
+    for line in text.lines() {
+        let code = line.split(['(', ';']).next().unwrap_or("");
+        if code.contains(['#', '[', 'O', 'o', '/', '%', '@', '^']) || line.matches('(').count() > 1 {
+            return false;
+        }
+        let upper = code.to_ascii_uppercase();
+        let words: Vec<&str> = upper.split_whitespace().collect();
+        for w in &words {
+            let (l, v) = w.split_at(1);
+            if !"GXYZIJKRPFN".contains(l) || v.parse::<f64>().is_err() {
+                return false;
+            }
+            if l == "G" && !["0", "1", "2", "3", "17", "18", "19", "21", "90", "91"].contains(&v) {
+                return false;
+            }
+        }
+        let moves = words.iter().any(|w| "XYZIJK".contains(&w[..1]));
+        if moves && first_move {
+            if !["X", "Y", "Z"].iter().all(|a| words.iter().any(|w| w.starts_with(a)))
+                || !words.iter().any(|w| *w == "G0" || *w == "G1")
+            {
+                return false;
+            }
+            first_move = false;
+        }
+    }
+    true
+}
