@@ -425,3 +425,13 @@ fn the_bound_is_an_option_and_holds_for_hand_built_profiles() {
     let err = table::sinumerik::write_lec(&nan_limit, &Default::default()).unwrap_err();
     assert!(err.to_string().contains("positive number"), "{err}");
 }
+
+/// One rule for tables and programs: the default bound of `compensate table` is the one of
+/// `compensate gcode`.
+#[test]
+fn the_table_bound_defaults_to_the_gcode_bound() {
+    assert_eq!(
+        table::DEFAULT_MAX_CORRECTION_UM,
+        mtec_comp::gcode::RewriteOptions::default().max_correction_um
+    );
+}
