@@ -74,6 +74,11 @@ impl Destination {
         if path.as_os_str() == "-" {
             return Ok(Destination::Stdout);
         }
+        if path.as_os_str().is_empty() {
+            return Err(OutputError::Refused(
+                "the output path is empty: give a file name, or - for stdout".into(),
+            ));
+        }
         let meta = match std::fs::symlink_metadata(path) {
             Ok(m) => m,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {

@@ -132,12 +132,16 @@ fn a_replaced_file_keeps_its_permissions() {
 }
 
 #[test]
-fn dash_is_stdout() {
+fn dash_is_stdout_and_an_empty_path_is_refused() {
     assert_eq!(
         Destination::of(Path::new("-")).unwrap(),
         Destination::Stdout
     );
     assert!(Destination::of(Path::new("-")).unwrap().is_stdout());
+    assert!(matches!(
+        Destination::of(Path::new("")),
+        Err(OutputError::Refused(_))
+    ));
     // `./-` is a file named `-`
     assert!(matches!(
         Destination::of(Path::new("./-")).unwrap(),
