@@ -23,6 +23,17 @@ impl CliError {
     }
 }
 
+/// An output mtec will not write (an input, a directory, a block device) is the user's mistake
+/// (exit 2); a failed write is not (exit 1).
+impl From<mtec_io::OutputError> for CliError {
+    fn from(e: mtec_io::OutputError) -> Self {
+        match e {
+            mtec_io::OutputError::Refused(m) => CliError::Usage(m),
+            e @ mtec_io::OutputError::Io { .. } => CliError::Internal(e.into()),
+        }
+    }
+}
+
 impl From<std::io::Error> for CliError {
     fn from(e: std::io::Error) -> Self {
         CliError::Internal(e.into())

@@ -113,3 +113,100 @@ fn bpnn_model_writes_a_linuxcnc_table_equal_to_its_predictions() {
         assert!((e - want).abs() < 0.1, "x {}: {e} vs {want}", r[0]);
     }
 }
+
+/// Issue 15, defect 7: a 10 mm (or 1e297 um) correction is refused with exit code 2 and a message
+/// naming the axis, the table position and the value, for every format; no file is written.
+/// Just under the limit the table is written, and `--max-correction-um` moves the limit.
+#[test]
+fn a_correction_beyond_max_correction_um_is_refused_with_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let poly = |name: &str, c: &str| {
+        std::fs::write(
+            p(name),
+            format!(
+                r#"{{"format": "mtec.poly-model/1", "terms": [{{"powers": [0,0,0], "coef_um": [{c}, 0, 0]}}]}}"#
+            ),
+        )
+        .unwrap();
+    };
+    poly("ten_mm.json", "10000");
+    poly("huge.json", "1e297");
+    poly("under.json", "499.9");
+    let table = |model: &str, format: &str, out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "compensate",
+            "table",
+            "--model",
+            model,
+            "--format",
+            format,
+            "--axis",
+            "X",
+            "--range",
+            "0:100:50",
+            "--x-range",
+            "0:100:50",
+            "--y-range",
+            "0:10:10",
+            "--z-range",
+            "0:10:10",
+            "-o",
+            out,
+        ];
+        args.extend_from_slice(extra);
+        mtec(&args)
+    };
+    for format in [
+        "linuxcnc",
+        "sinumerik-cec",
+        "sinumerik-lec",
+        "fanuc",
+        "heidenhain",
+        "beckhoff",
+    ] {
+        let out = p(&format!("{format}.COM"));
+        for (model, value) in [("ten_mm.json", "-10000.000 um"), ("huge.json", "-1e297 um")] {
+            let o = table(&p(model), format, &out, &[]);
+            let t = text(&o);
+            assert_eq!(o.status.code(), Some(2), "{format} {model}: {t}");
+            assert!(t.contains(model), "{format}: names the model: {t}");
+            assert!(t.contains("the X correction at"), "{format}: {t}");
+            assert!(t.contains(value), "{format}: {t}");
+            assert!(t.contains("--max-correction-um 500"), "{format}: {t}");
+            if format == "beckhoff" {
+                assert!(t.contains("machine point 0, 0, 0 mm"), "{format}: {t}");
+            } else {
+                assert!(t.contains("table position X = 0 mm"), "{format}: {t}");
+            }
+            assert!(
+                !std::path::Path::new(&out).exists(),
+                "{format}: nothing written"
+            );
+        }
+        let o = table(&p("under.json"), format, &out, &[]);
+        assert!(o.status.success(), "{format}: {}", text(&o));
+        assert!(std::path::Path::new(&out).exists(), "{format}");
+    }
+    // the limit is an option, refused when not a positive number
+    let o = table(
+        &p("ten_mm.json"),
+        "linuxcnc",
+        &p("wide.comp"),
+        &["--max-correction-um", "20000"],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(std::fs::read_to_string(p("wide.comp"))
+        .unwrap()
+        .starts_with("0.000000 -10.000000 -10.000000\n"));
+    let o = table(
+        &p("under.json"),
+        "linuxcnc",
+        &p("bad.comp"),
+        &["--max-correction-um", "0"],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("--max-correction-um"), "{}", text(&o));
+    let o = mtec(&["compensate", "table", "--help"]);
+    assert!(text(&o).contains("--max-correction-um"), "{}", text(&o));
+}

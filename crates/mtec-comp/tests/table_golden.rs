@@ -182,6 +182,8 @@ fn fanuc_rotary_golden_and_sum_rule() {
         step_mm: 90.0,
         comp_um: vec![0.0, 3.0, 1.0, -2.0, 0.0],
         rotary: true,
+        max_correction_um: table::DEFAULT_MAX_CORRECTION_UM,
+        at_mm: [0.0; 3],
     };
     let opts = table::fanuc::FanucOptions {
         axis_number: 4,
@@ -259,7 +261,7 @@ NR    X            Y            Z            ACTIVE
 #[test]
 fn beckhoff_golden() {
     let axes = [vec![0.0, 100.0], vec![0.0], vec![0.0, 50.0]];
-    let text = table::beckhoff::write(&Affine, &axes, "test model").unwrap();
+    let text = table::beckhoff::write(&Affine, &axes, "test model", 500.0).unwrap();
     assert_eq!(
         text,
         "// volumetric error map written by mtec (TF5280 ISG CSV format)
@@ -275,4 +277,161 @@ X Y Z EXX EYY EZZ
     let missing = text.replace("100.0 0.0 50.0 0.005000 0.004000 0.000000\n", "");
     let err = table::beckhoff::check(&missing).unwrap_err();
     assert!(err.to_string().contains("complete grid"), "{err}");
+}
+
+/// Issue 15, defect 7: a constant error of `e_um` on every axis (a model in the wrong units, a
+/// broken fit).
+struct Constant(f64);
+impl ErrorModel for Constant {
+    fn error_um(&self, _p: [f64; 3]) -> [f64; 3] {
+        [self.0; 3]
+    }
+    fn describe(&self) -> String {
+        format!("constant {} um", self.0)
+    }
+}
+
+/// Every writer's output for a constant model of `e_um`, sampled along X over 0..200 step 100
+/// (FANUC with its reference at 0, Heidenhain as Z = F(X), Beckhoff on a 2×1×1 grid).
+fn every_writer(e_um: f64) -> Vec<(&'static str, Result<String, TableError>)> {
+    let m = Constant(e_um);
+    let p = |out: Axis| {
+        axis_profile(&m, Axis::X, out, 0.0, 200.0, 100.0, [0.0, 10.0, 20.0])
+            .map(|p| p.with_max_correction_um(table::DEFAULT_MAX_CORRECTION_UM))
+    };
+    let b = || p(Axis::X);
+    vec![
+        (
+            "linuxcnc 1",
+            b().and_then(|p| table::linuxcnc::write(&p, 1)),
+        ),
+        (
+            "linuxcnc 0",
+            b().and_then(|p| table::linuxcnc::write(&p, 0)),
+        ),
+        (
+            "sinumerik-cec",
+            p(Axis::Y).and_then(|p| table::sinumerik::write_cec(&p, &Default::default())),
+        ),
+        (
+            "sinumerik-lec",
+            b().and_then(|p| table::sinumerik::write_lec(&p, &Default::default())),
+        ),
+        (
+            "fanuc",
+            b().and_then(|p| table::fanuc::write(&p, &Default::default())),
+        ),
+        (
+            "heidenhain",
+            p(Axis::Z).and_then(|p| table::heidenhain::write(&p, "ZX.COM", "C.CMA").map(|t| t.com)),
+        ),
+        (
+            "beckhoff",
+            table::beckhoff::write(
+                &m,
+                &[vec![0.0, 100.0], vec![0.0], vec![0.0]],
+                "test",
+                table::DEFAULT_MAX_CORRECTION_UM,
+            ),
+        ),
+    ]
+}
+
+#[test]
+fn every_writer_refuses_a_10_mm_correction() {
+    for (name, r) in every_writer(10_000.0) {
+        let err = r.expect_err(name);
+        let msg = err.to_string();
+        assert!(matches!(err, TableError::TooLarge { .. }), "{name}: {msg}");
+        assert!(msg.contains("-10000.000 um"), "{name}: {msg}");
+        assert!(msg.contains("--max-correction-um 500"), "{name}: {msg}");
+        // the position: the first table point, x = 0 (y = 10, z = 20 for the 1-D tables)
+        if name == "beckhoff" {
+            assert!(msg.contains("machine point 0, 0, 0 mm"), "{name}: {msg}");
+            assert!(msg.contains("17320.5"), "{name}: vector length: {msg}");
+        } else {
+            assert!(msg.contains("table position X = 0 mm"), "{name}: {msg}");
+            assert!(msg.contains("machine point 0, 10, 20 mm"), "{name}: {msg}");
+        }
+    }
+}
+
+#[test]
+fn every_writer_refuses_a_1e297_correction() {
+    for (name, r) in every_writer(1e297) {
+        let err = r.expect_err(name);
+        let msg = err.to_string();
+        assert!(matches!(err, TableError::TooLarge { .. }), "{name}: {msg}");
+        assert!(msg.contains("-1e297 um"), "{name}: {msg}");
+    }
+}
+
+#[test]
+fn every_writer_refuses_an_infinite_correction() {
+    for (name, r) in every_writer(f64::INFINITY) {
+        let err = r.expect_err(name);
+        assert!(
+            err.to_string().contains("not a finite number"),
+            "{name}: {err}"
+        );
+    }
+}
+
+/// Just under the bound every writer writes its table (the Beckhoff vector: 288 um per axis is
+/// 498.8 um long).
+#[test]
+fn every_writer_writes_a_correction_just_under_the_bound() {
+    for (name, r) in every_writer(499.9) {
+        if name == "beckhoff" {
+            continue;
+        }
+        let text = r.unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(!text.is_empty(), "{name}");
+    }
+    let lin = every_writer(499.9).remove(0).1.unwrap();
+    assert!(lin.starts_with("0.000000 -0.499900 -0.499900\n"), "{lin}");
+    let m = Constant(288.0);
+    table::beckhoff::write(&m, &[vec![0.0, 100.0], vec![0.0], vec![0.0]], "t", 500.0).unwrap();
+    let err = table::beckhoff::write(
+        &Constant(289.0),
+        &[vec![0.0], vec![0.0], vec![0.0]],
+        "t",
+        500.0,
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("500.56"), "{err}");
+}
+
+/// The bound is the caller's: raised, a 10 mm table is written; a profile built by hand is held
+/// to it too; a bound that is not a positive number is refused.
+#[test]
+fn the_bound_is_an_option_and_holds_for_hand_built_profiles() {
+    let m = Constant(10_000.0);
+    let p = axis_profile(&m, Axis::X, Axis::X, 0.0, 100.0, 100.0, [0.0; 3]).unwrap();
+    let wide = p.clone().with_max_correction_um(20_000.0);
+    assert!(table::linuxcnc::write(&wide, 1)
+        .unwrap()
+        .starts_with("0.000000 -10.000000 -10.000000\n"));
+    let by_hand = AxisProfile {
+        comp_um: vec![0.0, 600.0],
+        ..p.with_max_correction_um(500.0)
+    };
+    let err = table::linuxcnc::write(&by_hand, 1).unwrap_err();
+    assert!(
+        err.to_string().contains("table position X = 100 mm"),
+        "{err}"
+    );
+    let nan_limit = by_hand.with_max_correction_um(f64::NAN);
+    let err = table::sinumerik::write_lec(&nan_limit, &Default::default()).unwrap_err();
+    assert!(err.to_string().contains("positive number"), "{err}");
+}
+
+/// One rule for tables and programs: the default bound of `compensate table` is the one of
+/// `compensate gcode`.
+#[test]
+fn the_table_bound_defaults_to_the_gcode_bound() {
+    assert_eq!(
+        table::DEFAULT_MAX_CORRECTION_UM,
+        mtec_comp::gcode::RewriteOptions::default().max_correction_um
+    );
 }

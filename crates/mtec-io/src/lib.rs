@@ -2,8 +2,9 @@
 //!
 //! What it is for: reading CSV tables (with `#` comments, unit-suffixed column names), TOML and
 //! JSON documents into typed values, with every failure reported as an [`InputError`] that names
-//! the file, the line and the column; writing outputs atomically (temporary file + rename) and
-//! refusing to overwrite an input.
+//! the file, the line and the column; writing every output through one routine (a file
+//! atomically by temporary file + rename, a device, FIFO or `-` straight through, a symlink's
+//! target beside that target) and refusing to overwrite an input.
 //!
 //! What it is not for: the meaning of a file. Which columns a measurement needs and what their
 //! values must satisfy is decided by the crate that owns the measurement (`mtec-measure`,
@@ -15,7 +16,7 @@ mod write;
 
 pub use error::{InputError, Located};
 pub use table::{Table, TableRow};
-pub use write::{write_atomic, OutputGuard};
+pub use write::{write_output, Destination, Output, OutputError, OutputGuard};
 
 use std::path::Path;
 

@@ -3,9 +3,9 @@
 use crate::cmd::model_loader::load_error_model;
 use crate::error::CliError;
 use mtec_comp::gcode::{rewrite, GcodeError, OffsetsFile, OnUnsupported, RewriteOptions, Units};
-use mtec_io::InputError;
+use mtec_io::{InputError, OutputGuard};
 use std::io::{BufReader, BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 const LONG_ABOUT: &str = "\
 Rewrites an NC program (RS274/NGC as LinuxCNC reads it, or common Fanuc style) so that every
@@ -75,7 +75,8 @@ pub struct Args {
     /// The NC program to correct.
     #[arg(value_name = "IN.ngc")]
     pub input: PathBuf,
-    /// Where to write the corrected program (never an input; written atomically).
+    /// Where to write the corrected program (never an input; a file is replaced atomically, a
+    /// device or FIFO written in place, `-` is stdout).
     #[arg(short, long, value_name = "OUT.ngc")]
     pub output: PathBuf,
     /// Largest distance of the compensated path from the programmed one, in um (the bound
@@ -159,49 +160,26 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     options.validate().map_err(CliError::Usage)?;
 
-    for inp in [&args.input, &args.model]
-        .into_iter()
-        .chain(args.offsets.as_ref())
-    {
-        if same_file(inp, &args.output) {
-            return Err(CliError::usage(format!(
-                "refusing to overwrite the input file {}",
-                args.output.display()
-            )));
-        }
+    // the one output routine of mtec-io: a file atomically, a device, FIFO or `-` straight
+    // through, a link's target; an input, a directory or a block device refused before any work
+    let mut guard = OutputGuard::new(&[&args.input, &args.model]);
+    if let Some(p) = &args.offsets {
+        guard.add_input(p);
     }
+    let dest = guard.check(&args.output)?;
     let input = std::fs::File::open(&args.input)
         .map_err(|e| InputError::file(&args.input, format!("cannot read: {e}")))?;
     let reader = BufReader::with_capacity(1 << 16, input);
 
-    let tmp = temp_path(&args.output);
-    if let Some(parent) = tmp.parent() {
-        std::fs::create_dir_all(parent)?;
-    }
-    let result = (|| -> Result<_, CliError> {
-        let file = std::fs::File::create(&tmp)?;
-        let mut writer = BufWriter::with_capacity(1 << 16, file);
-        let report =
-            rewrite(reader, &mut writer, model.as_ref(), &options).map_err(|e| match e {
-                GcodeError::At(d) => {
-                    CliError::Input(InputError::at(&args.input, d.line, d.column, d.message))
-                }
-                GcodeError::Io(e) => {
-                    CliError::Internal(anyhow::anyhow!("{}: {e}", args.input.display()))
-                }
-            })?;
-        let file = writer.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()?;
-        std::fs::rename(&tmp, &args.output)?;
-        Ok(report)
-    })();
-    let report = match result {
-        Ok(r) => r,
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(e);
+    // dropped on error, an unfinished output leaves the target untouched
+    let mut writer = BufWriter::with_capacity(1 << 16, dest.open()?);
+    let report = rewrite(reader, &mut writer, model.as_ref(), &options).map_err(|e| match e {
+        GcodeError::At(d) => {
+            CliError::Input(InputError::at(&args.input, d.line, d.column, d.message))
         }
-    };
+        GcodeError::Io(e) => CliError::Internal(anyhow::anyhow!("{}: {e}", args.input.display())),
+    })?;
+    writer.into_inner().map_err(|e| e.into_error())?.commit()?;
     let stderr = std::io::stderr();
     let mut err = stderr.lock();
     for w in &report.warnings {
@@ -221,7 +199,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
             report.warnings_total - report.warnings.len()
         );
     }
-    println!(
+    let mut say = super::messages(&dest);
+    let _ = writeln!(
+        say,
         "{}: {} lines read, {} written ({} added by splitting); {} moves corrected, {} arcs linearised, largest correction {:.2} um; {} warnings",
         args.output.display(),
         report.lines_read,
@@ -233,29 +213,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
         report.warnings_total
     );
     if report.rapids_not_compensated > 0 || report.moves_end_point_only > 0 {
-        println!(
+        let _ = writeln!(
+            say,
             "  {} rapids before all axes were known copied uncorrected; {} feed moves from an unknown start corrected at their end point only",
             report.rapids_not_compensated, report.moves_end_point_only
         );
     }
     Ok(())
-}
-
-fn temp_path(out: &Path) -> PathBuf {
-    let parent = match out.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = out
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    parent.join(format!(".{name}.mtec-tmp-{}", std::process::id()))
-}
-
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(x), Ok(y)) => x == y,
-        _ => false,
-    }
 }

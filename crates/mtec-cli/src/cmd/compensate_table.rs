@@ -1,10 +1,9 @@
 //! `mtec compensate table`: controller compensation tables from an error model.
 
-use super::map::write_output;
 use crate::error::CliError;
 use mtec_comp::map::{GridMap, MAP_FORMAT};
 use mtec_comp::table::{self, axis_profile, Axis, TableError};
-use mtec_io::{InputError, OutputGuard};
+use mtec_io::{Destination, InputError, OutputGuard};
 use std::path::{Path, PathBuf};
 
 pub const HELP: &str = "\
@@ -26,6 +25,11 @@ Formats:
                   error, and its .CMA assignment table beside it (--cma-name)
   beckhoff        Beckhoff TwinCAT CNC volumetric compensation, ISG CSV: X Y Z EXX EYY EZZ (mm)
                   on the map's grid (or --x-range/--y-range/--z-range)
+
+Size bound: a table whose correction exceeds --max-correction-um (default 500 um, the same rule
+as `compensate gcode`) is refused with exit code 2, naming the axis, the table position and the
+value: for 1-D tables each value |c|, for beckhoff the length of the vector (ex, ey, ez). A
+value that is not a finite number is always refused.
 
 Sampling: 1-D tables run along --axis over --range FROM:TO:STEP (default: the map's grid along
 that axis), the other coordinates at --at X,Y,Z (default: the centre of the map's grid box, or
@@ -112,7 +116,12 @@ pub struct Args {
     /// Beckhoff grid along Z: FROM:TO:STEP.
     #[arg(long)]
     z_range: Option<String>,
-    /// Output file (default: stdout; required for heidenhain).
+    /// Refuse the table if a correction exceeds this, in um (1-D tables: each value; beckhoff:
+    /// the length of the correction vector). The same rule and default as `compensate gcode`.
+    #[arg(long, default_value_t = table::DEFAULT_MAX_CORRECTION_UM)]
+    max_correction_um: f64,
+    /// Output file (default and `-`: stdout; required for heidenhain). A file is replaced
+    /// atomically, a device or FIFO written in place, a symlink's target written.
     #[arg(short = 'o', long = "out")]
     out: Option<PathBuf>,
 }
@@ -126,8 +135,24 @@ pub fn run(a: Args) -> Result<(), CliError> {
         Some(s) => parse_axis("--output-axis", s)?,
         None => axis,
     };
+    if !(a.max_correction_um.is_finite() && a.max_correction_um > 0.0) {
+        return Err(CliError::usage(format!(
+            "--max-correction-um must be a positive number, not {}",
+            a.max_correction_um
+        )));
+    }
     let provenance = model.describe();
     let guard = OutputGuard::new(&[&a.model]);
+    // where the table goes is settled before any work (an input, a directory: exit 2)
+    let dest = match &a.out {
+        Some(p) if a.format == Format::Heidenhain && p.as_os_str() == "-" => {
+            return Err(CliError::usage(
+                "heidenhain writes two files: give -o NAME.COM, not - (the .CMA goes beside it)",
+            ))
+        }
+        Some(p) => guard.check(p)?,
+        None => Destination::Stdout,
+    };
 
     if a.format == Format::Beckhoff {
         let mut axes: [Vec<f64>; 3] = match &map {
@@ -144,9 +169,10 @@ pub fn run(a: Args) -> Result<(), CliError> {
                 ));
             }
         }
-        let text = table::beckhoff::write(model.as_ref(), &axes, &provenance)
+        let text = table::beckhoff::write(model.as_ref(), &axes, &provenance, a.max_correction_um)
             .map_err(|e| table_error(&a.model, e))?;
-        return emit(&guard, a.out.as_deref(), &text);
+        dest.write(text.as_bytes())?;
+        return Ok(());
     }
 
     // 1-D tables
@@ -180,7 +206,8 @@ pub fn run(a: Args) -> Result<(), CliError> {
         },
     };
     let profile = axis_profile(model.as_ref(), axis, output_axis, from, to, step, at)
-        .map_err(|e| table_error(&a.model, e))?;
+        .map_err(|e| table_error(&a.model, e))?
+        .with_max_correction_um(a.max_correction_um);
     let text = match a.format {
         Format::Linuxcnc => table::linuxcnc::write(&profile, a.comp_type),
         Format::SinumerikCec => table::sinumerik::write_cec(
@@ -224,8 +251,9 @@ pub fn run(a: Args) -> Result<(), CliError> {
             let t = table::heidenhain::write(&profile, &com_name, &a.cma_name)
                 .map_err(|e| table_error(&a.model, e))?;
             let cma_path = out.with_file_name(&a.cma_name);
-            write_output(&guard, out, t.com.as_bytes())?;
-            write_output(&guard, &cma_path, t.cma.as_bytes())?;
+            let cma_dest = guard.check(&cma_path)?;
+            dest.write(t.com.as_bytes())?;
+            cma_dest.write(t.cma.as_bytes())?;
             eprintln!(
                 "heidenhain: {} and {} from {provenance}",
                 out.display(),
@@ -236,7 +264,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         Format::Beckhoff => unreachable!("handled above"),
     }
     .map_err(|e| table_error(&a.model, e))?;
-    emit(&guard, a.out.as_deref(), &text)?;
+    dest.write(text.as_bytes())?;
     if a.out.is_some() {
         use clap::ValueEnum;
         let name = a
@@ -249,20 +277,11 @@ pub fn run(a: Args) -> Result<(), CliError> {
     Ok(())
 }
 
-fn emit(guard: &OutputGuard, out: Option<&Path>, text: &str) -> Result<(), CliError> {
-    match out {
-        Some(p) => write_output(guard, p, text.as_bytes())?,
-        None => {
-            use std::io::Write;
-            std::io::stdout().lock().write_all(text.as_bytes())?;
-        }
-    }
-    Ok(())
-}
-
 fn table_error(model: &Path, e: TableError) -> CliError {
     match e {
-        TableError::Undefined { .. } => InputError::file(model, e.to_string()).into(),
+        TableError::Undefined { .. } | TableError::TooLarge { .. } => {
+            InputError::file(model, e.to_string()).into()
+        }
         other => CliError::usage(other.to_string()),
     }
 }

@@ -50,7 +50,7 @@ M30
 ";
 
 fn write(dir: &Path, name: &str, text: &str) -> Result<(), CliError> {
-    mtec_io::write_atomic(&dir.join(name), text.as_bytes())?;
+    mtec_io::write_output(&dir.join(name), text.as_bytes())?;
     Ok(())
 }
 
@@ -167,7 +167,7 @@ fn compensation_rate_section(
         format!("{:.1} %", 100.0 * (1.0 - af / b)),
     ]);
     let _ = writeln!(csv, "volumetric,{b:.4},{af:.4},{:.4}", 1.0 - af / b);
-    mtec_io::write_atomic(&p.out.join("compensation-rate.csv"), csv.as_bytes())?;
+    mtec_io::write_output(&p.out.join("compensation-rate.csv"), csv.as_bytes())?;
     let sec = p.report.section("Compensation rate on the virtual machine");
     sec.text(format!("The machine commanded to 1000 random points with and without the map's correction; errors measured against the simulation's truth ({}). Rate = 1 − RMS after / RMS before.", model.describe()));
     sec.table(&["axis", "RMS before (µm)", "RMS after (µm)", "rate"], rows);

@@ -61,6 +61,20 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    // where the error set goes is settled before any work (an input, a directory: exit 2)
+    let dest = match &args.output {
+        Some(_) if args.data.is_none() => {
+            return Err(CliError::usage(
+                "-o needs measurements (--data): a design alone identifies no values",
+            ))
+        }
+        Some(out) => {
+            let mut inputs = vec![args.machine.clone()];
+            inputs.extend(args.data.clone());
+            Some(OutputGuard::new(&inputs).check(out)?)
+        }
+        None => None,
+    };
     let machine = read_machine(&args.machine)?;
     let preset = match &args.design {
         Some(name) => Some(
@@ -100,8 +114,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
             other.to_string(),
         )),
     })?;
-    // a closed pipe (`| head`) is not an error worth a panic: ignore write failures to stdout
-    let mut stdout = std::io::stdout().lock();
+    // a closed pipe (`| head`) is not an error worth a panic: ignore write failures to stdout;
+    // with `-o -` the error set has stdout and the report goes to stderr
+    let mut stdout = match &dest {
+        Some(d) => super::messages(d),
+        None => Box::new(std::io::stdout()),
+    };
     if args.json {
         let text =
             serde_json::to_string_pretty(&id.report).map_err(|e| CliError::Internal(e.into()))?;
@@ -109,19 +127,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
     } else {
         let _ = write!(stdout, "{}", id.report.to_text());
     }
-    if let Some(out) = &args.output {
-        if args.data.is_none() {
-            return Err(CliError::usage(
-                "-o needs measurements (--data): a design alone identifies no values",
-            ));
-        }
-        let mut inputs = vec![args.machine.clone()];
-        inputs.extend(args.data.clone());
+    if let (Some(out), Some(dest)) = (&args.output, &dest) {
         let bytes =
             serde_json::to_vec_pretty(&id.errors).map_err(|e| CliError::Internal(e.into()))?;
-        OutputGuard::new(&inputs)
-            .write(out, &bytes)
-            .map_err(|e| CliError::Internal(anyhow::anyhow!("writing {}: {e}", out.display())))?;
+        let _ = stdout.flush();
+        dest.write(&bytes)?;
         if !args.json {
             let _ = writeln!(stdout, "Wrote {}", out.display());
         }

@@ -116,14 +116,18 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
         }
         limits.max_points_per_axis = Some(n);
     }
+    // where the map goes is settled before any work (an input, a directory: exit 2)
+    let dest = OutputGuard::new(&[&a.grid]).check(&a.out)?;
     let map = match a.model {
         MapModel::Trilinear => GridMap::read_csv(&a.grid, &limits, outside)?,
-        MapModel::Bpnn => return super::map_bpnn::fit_bpnn(&a.grid, a.hidden, &a.out),
+        MapModel::Bpnn => {
+            return super::map_bpnn::fit_bpnn(&a.grid, a.hidden, &a.out, &dest);
+        }
     };
     let mut json =
         serde_json::to_string_pretty(&map.to_file()).map_err(|e| CliError::Internal(e.into()))?;
     json.push('\n');
-    write_output(&OutputGuard::new(&[&a.grid]), &a.out, json.as_bytes())?;
+    dest.write(json.as_bytes())?;
     let n = map.axes_mm();
     eprintln!(
         "map: {}×{}×{} nodes, outside = {} -> {}",
@@ -137,6 +141,10 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
 }
 
 fn eval(a: EvalArgs) -> Result<(), CliError> {
+    let dest = match &a.out {
+        Some(path) => OutputGuard::new(&[&a.map, &a.points]).check(path)?,
+        None => mtec_io::Destination::Stdout,
+    };
     let model = super::model_loader::load_error_model(&a.map)?;
     let table = Table::read(&a.points)?;
     let cols = [
@@ -170,33 +178,6 @@ fn eval(a: EvalArgs) -> Result<(), CliError> {
             row.fields[cols[0]], row.fields[cols[1]], row.fields[cols[2]], e[0], e[1], e[2]
         );
     }
-    match &a.out {
-        Some(path) => write_output(
-            &OutputGuard::new(&[&a.map, &a.points]),
-            path,
-            out.as_bytes(),
-        )?,
-        None => {
-            use std::io::Write;
-            std::io::stdout().lock().write_all(out.as_bytes())?;
-        }
-    }
+    dest.write(out.as_bytes())?;
     Ok(())
-}
-
-/// Writes an output atomically; an attempt to overwrite an input is the user's mistake (exit 2).
-pub(crate) fn write_output(
-    guard: &OutputGuard,
-    path: &std::path::Path,
-    bytes: &[u8],
-) -> Result<(), CliError> {
-    guard.write(path, bytes).map_err(|e| {
-        if e.kind() == std::io::ErrorKind::AlreadyExists {
-            CliError::usage(e.to_string())
-        } else {
-            CliError::Internal(
-                anyhow::Error::new(e).context(format!("cannot write {}", path.display())),
-            )
-        }
-    })
 }

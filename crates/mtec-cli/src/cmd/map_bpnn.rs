@@ -12,12 +12,19 @@
 //! Wiring (in `map.rs`): `map_bpnn::fit_bpnn(&args.grid, args.hidden, &args.out)`.
 
 use crate::error::CliError;
-use mtec_io::{InputError, OutputGuard, Table};
+use mtec_io::{Destination, InputError, Table};
 use mtec_nn::{fit_grid, GridFitConfig};
+use std::io::Write;
 use std::path::Path;
 
-/// Reads the grid, fits the BPNN, prints the report and writes the model to `out`.
-pub fn fit_bpnn(grid_path: &Path, hidden: usize, out: &Path) -> Result<(), CliError> {
+/// Reads the grid, fits the BPNN, prints the report and writes the model to `dest` (`out` as the
+/// user gave it, checked by the caller before any work).
+pub fn fit_bpnn(
+    grid_path: &Path,
+    hidden: usize,
+    out: &Path,
+    dest: &Destination,
+) -> Result<(), CliError> {
     if hidden == 0 || hidden > 1000 {
         return Err(CliError::usage(format!(
             "--hidden must be between 1 and 1000, got {hidden}"
@@ -54,26 +61,33 @@ pub fn fit_bpnn(grid_path: &Path, hidden: usize, out: &Path) -> Result<(), CliEr
         "fit": &report,
         "training": net.provenance,
     });
-    println!(
+    let mut say = super::messages(dest);
+    let _ = writeln!(
+        say,
         "BPNN 3-{hidden}-3 ({:?}) fitted to {} grid points: {} parameters instead of {} grid values",
         net.activation, report.points, report.parameters, report.grid_values
     );
-    println!("fit error (model - grid), um:   min      max     mean      std");
+    let _ = writeln!(
+        say,
+        "fit error (model - grid), um:   min      max     mean      std"
+    );
     for (axis, s) in [
         ("x", report.fit_error_x),
         ("y", report.fit_error_y),
         ("z", report.fit_error_z),
     ] {
-        println!(
+        let _ = writeln!(
+            say,
             "  e{axis}                       {:8.3} {:8.3} {:8.3} {:8.3}",
             s.min_um, s.max_um, s.mean_um, s.std_um
         );
     }
-    println!(
+    let _ = writeln!(
+        say,
         "training: {} Levenberg-Marquardt iterations, best {}, {}",
         report.training.epochs, report.training.best_epoch, report.training.stop_reason
     );
-    OutputGuard::new(&[grid_path]).write(out, net.to_json().as_bytes())?;
-    println!("wrote {}", out.display());
+    dest.write(net.to_json().as_bytes())?;
+    let _ = writeln!(say, "wrote {}", out.display());
     Ok(())
 }

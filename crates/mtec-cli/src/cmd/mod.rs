@@ -20,3 +20,13 @@ pub mod pipeline;
 pub mod run;
 
 pub mod map_bpnn;
+
+/// Where a command's report lines go: stdout, or stderr when the output file itself streams to
+/// stdout (`-o -`), so the two never mix. Write errors (a closed pipe) are the caller's to ignore.
+pub(crate) fn messages(dest: &mtec_io::Destination) -> Box<dyn std::io::Write> {
+    if dest.is_stdout() {
+        Box::new(std::io::stderr())
+    } else {
+        Box::new(std::io::stdout())
+    }
+}

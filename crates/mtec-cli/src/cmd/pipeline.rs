@@ -266,7 +266,7 @@ fn stats_from_errors(machine: &Path, errors: &Path, out: &Path) -> Result<(), Cl
             el.unit()
         ));
     }
-    mtec_io::write_atomic(out, csv.as_bytes())?;
+    mtec_io::write_output(out, csv.as_bytes())?;
     Ok(())
 }
 
@@ -315,7 +315,7 @@ pub fn sensitivity(
         );
     }
     let points = p.out.join("sensitivity-points.csv");
-    mtec_io::write_atomic(&points, pts.as_bytes())?;
+    mtec_io::write_output(&points, pts.as_bytes())?;
     let mut args = vec![
         "sensitivity".into(),
         "--machine".into(),
@@ -680,7 +680,7 @@ pub fn compensation(
             let set = crate::inputs::read_errors(errors)?;
             let f = p.out.join("kinematic-model.json");
             let doc = serde_json::json!({ "format": mtec_comp::kinematic::KINEMATIC_FORMAT, "machine": spec, "errors": set });
-            mtec_io::write_atomic(
+            mtec_io::write_output(
                 &f,
                 serde_json::to_string_pretty(&doc)
                     .unwrap_or_default()

@@ -1,7 +1,7 @@
 //! `mtec simulate SCENARIO --out DIR [--seed N]`: write a scenario's measurement files and truth.
 
 use crate::error::CliError;
-use mtec_io::write_atomic;
+use mtec_io::write_output;
 use std::path::PathBuf;
 
 /// Simulate measurements on the virtual machine (known ground truth).
@@ -40,11 +40,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .out
         .unwrap_or_else(|| PathBuf::from(format!("{}-seed{}", args.scenario, args.seed)));
     for f in &output.files {
-        write_atomic(&dir.join(&f.name), f.contents.as_bytes())?;
+        write_output(&dir.join(&f.name), f.contents.as_bytes())?;
     }
     let truth =
         serde_json::to_string_pretty(&output.truth).map_err(|e| CliError::Internal(e.into()))?;
-    write_atomic(&dir.join("truth.json"), truth.as_bytes())?;
+    write_output(&dir.join("truth.json"), truth.as_bytes())?;
     println!(
         "{}: wrote {} files and truth.json to {}",
         args.scenario,

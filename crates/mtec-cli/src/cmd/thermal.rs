@@ -11,6 +11,7 @@ use mtec_thermal::{
     ExpAmbient, Fit, HeatInput, LagSelect, Metrics, Mlr, Predict, Ridge, RidgeSelect, ThermalData,
     ThermalError, MODEL_FORMAT,
 };
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 const FORMAT_HELP: &str = "\
@@ -558,6 +559,10 @@ fn metrics_on(
 
 fn fit(a: FitArgs) -> Result<(), CliError> {
     check_common(&a.common)?;
+    // where the model goes is settled before any work (an input, a directory: exit 2)
+    let dest = OutputGuard::new(&[&a.common.data]).check(&a.output)?;
+    // the report goes to stderr when the model itself streams to stdout (`-o -`)
+    let mut say = super::messages(&dest);
     let data = load_with_input(
         &a.common.data,
         Some(&a.common.target),
@@ -625,9 +630,10 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
         test_metrics,
     };
     let text = serde_json::to_string_pretty(&file).map_err(|e| CliError::Internal(e.into()))?;
-    OutputGuard::new(&[&a.common.data]).write(&a.output, text.as_bytes())?;
-    let show = |name: &str, m: &Metrics| {
-        println!(
+    dest.write(text.as_bytes())?;
+    let show = |say: &mut dyn std::io::Write, name: &str, m: &Metrics| {
+        let _ = writeln!(
+            say,
             "{name:<6} n={:<6} RMSE {:.3} um  MAE {:.3} um  max|res| {:.3} um  R² {}  compensation {}",
             m.n,
             m.rmse_um,
@@ -635,10 +641,10 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
             m.max_abs_residual_um,
             fmt_opt(m.r2, 4),
             m.compensation_rate.map(|c| format!("{:.1} %", 100.0 * c)).unwrap_or_else(|| "-".into())
-        )
+        );
     };
     if let ThermalModel::ExpAmbient(m) = &file.model {
-        println!(
+        let _ = writeln!(say,
             "exp-ambient: δ = k·x + b, b = b_a(1 − exp(−ΔT_up/b_b)), k = k_a(1 − exp(−ΔT_nut/k_b)); b_a, ln b_b, k_a, ln k_b polynomials of degree {} in u = (T_a − 20 °C)/10 °C (coefficient ± standard uncertainty, ascending powers)",
             m.degree
         );
@@ -648,7 +654,8 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
                     .iter()
                     .map(|g| format!("{:.4}·Δ{}", g.weight, g.sensor))
                     .collect();
-                println!(
+                let _ = writeln!(
+                    say,
                     "  {name} = {} (first principal component)",
                     terms.join(" + ")
                 );
@@ -665,16 +672,16 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
                 .zip(sd)
                 .map(|(c, s)| format!("{c:.5} ± {s:.5}"))
                 .collect();
-            println!("  {name:<12} {}", terms.join(", "));
+            let _ = writeln!(say, "  {name:<12} {}", terms.join(", "));
         }
         if !m.held_at_cap.is_empty() {
-            println!(
+            let _ = writeln!(say,
                 "  held at the linear-limit cap (100 × the largest training rise, not fitted; ± 0 means held): {}",
                 m.held_at_cap.join(", ")
             );
         }
         for l in &m.identifiability {
-            println!(
+            let _ = writeln!(say,
                 "  at {} °C: b_b = {:.4} °C (max ΔT_up {:.2} °C), k_b = {:.4} °C (max ΔT_nut {:.2} °C)",
                 l.ambient_c, l.b_b_c, l.max_dt_up_c, l.k_b_c, l.max_dt_nut_c
             );
@@ -683,15 +690,20 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
             eprintln!("warning: {w}");
         }
     }
-    show("train", &file.train_metrics);
+    show(&mut say, "train", &file.train_metrics);
     if let Some(m) = &file.test_metrics {
-        show("test", m);
+        show(&mut say, "test", m);
     }
-    println!("wrote {}", a.output.display());
+    let _ = writeln!(say, "wrote {}", a.output.display());
     Ok(())
 }
 
 fn predict(a: PredictArgs) -> Result<(), CliError> {
+    // where the predictions go is settled before any work (an input, a directory: exit 2)
+    let dest = match &a.output {
+        Some(p) => Some(OutputGuard::new(&[&a.data, &a.model]).check(p)?),
+        None => None,
+    };
     let file: ModelFile = mtec_io::read_json(&a.model)?;
     file.check_format()
         .map_err(|e| CliError::Input(InputError::file(&a.model, e.to_string())))?;
@@ -721,7 +733,13 @@ fn predict(a: PredictArgs) -> Result<(), CliError> {
             doc["max_abs_residual_um"] = m.max_abs_residual_um.into();
             doc["metrics"] = serde_json::to_value(m).map_err(|e| CliError::Internal(e.into()))?;
         }
-        println!(
+        // with `-o -` the CSV has stdout and the JSON summary goes to stderr
+        let mut say = match &dest {
+            Some(d) => super::messages(d),
+            None => Box::new(std::io::stdout()),
+        };
+        let _ = writeln!(
+            say,
             "{}",
             serde_json::to_string(&doc).map_err(|e| CliError::Internal(e.into()))?
         );
@@ -743,8 +761,8 @@ fn predict(a: PredictArgs) -> Result<(), CliError> {
             }
             csv.push('\n');
         }
-        match &a.output {
-            Some(p) => OutputGuard::new(&[&a.data, &a.model]).write(p, csv.as_bytes())?,
+        match &dest {
+            Some(d) => d.write(csv.as_bytes())?,
             None => print!("{csv}"),
         }
     }

@@ -32,6 +32,7 @@ use mtec_nn::{
     Experiment, NnError, Optimizer, Sequence, ThermalDataset,
 };
 use std::collections::BTreeMap;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -331,14 +332,18 @@ fn metrics_table(what: &str, m: &[ChannelMetrics]) -> String {
     s
 }
 
-fn print_metrics(what: &str, m: &[ChannelMetrics]) {
-    print!("{}", metrics_table(what, m));
+fn print_metrics(say: &mut dyn std::io::Write, what: &str, m: &[ChannelMetrics]) {
+    let _ = write!(say, "{}", metrics_table(what, m));
 }
 
 /// `thermal fit --model cnn-lstm|bpnn`.
 pub fn fit(r: FitRequest) -> Result<(), CliError> {
     // the CLI has no other thread yet: one candle thread is ~8x faster for these nets
     mtec_nn::threads::prefer_single_thread();
+    // where the model goes is settled before any work (an input, a directory: exit 2); the
+    // report goes to stderr when the model itself streams to stdout (`-o -`)
+    let dest = OutputGuard::new(&[r.data]).check(r.output)?;
+    let mut say = super::messages(&dest);
     let nn = r.nn;
     let table = Table::read(r.data)?;
     let mut targets = Vec::new();
@@ -519,7 +524,7 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
                 )
             })
             .map_err(|e| nn_error(r.data, e))?;
-            println!(
+            let _ = writeln!(say,
                 "CNN-LSTM ({} parameters, window {}, {} filters, LSTM {}) on experiments {:?}: {} epochs, best {}, {:.1} s; {}",
                 report.parameters,
                 model.architecture.window,
@@ -536,9 +541,9 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
                 Some(t) => Some(model.evaluate(t).map_err(|e| nn_error(r.data, e))?),
                 None => None,
             };
-            print_metrics("train", &train_m);
+            print_metrics(&mut *say, "train", &train_m);
             if let Some(m) = &test_m {
-                print_metrics("test", m);
+                print_metrics(&mut *say, "test", m);
             }
             let training = serde_json::json!({"model": model.provenance, "report": report});
             model.provenance = provenance(training, &train_m, test_m.as_ref());
@@ -566,7 +571,7 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
                 )
             })
             .map_err(|e| nn_error(r.data, e))?;
-            println!(
+            let _ = writeln!(say,
                 "BPNN {}-{}-{} ({} parameters) on experiments {:?}: {} Levenberg-Marquardt iterations, best {}; {}",
                 net.n_in(),
                 net.n_hidden(),
@@ -585,17 +590,17 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
                 Some(t) => Some(eval(t)?),
                 None => None,
             };
-            print_metrics("train", &train_m);
+            print_metrics(&mut *say, "train", &train_m);
             if let Some(m) = &test_m {
-                print_metrics("test", m);
+                print_metrics(&mut *say, "test", m);
             }
             let training = serde_json::json!({"model": net.provenance, "report": report});
             net.provenance = provenance(training, &train_m, test_m.as_ref());
             net.to_json()
         }
     };
-    OutputGuard::new(&[r.data]).write(r.output, text.as_bytes())?;
-    println!("wrote {}", r.output.display());
+    dest.write(text.as_bytes())?;
+    let _ = writeln!(say, "wrote {}", r.output.display());
     Ok(())
 }
 
@@ -632,6 +637,16 @@ pub fn predict(
     output: Option<&PathBuf>,
 ) -> Result<(), CliError> {
     mtec_nn::threads::prefer_single_thread();
+    // where the predictions go is settled before any work (an input, a directory: exit 2)
+    let dest = match output {
+        Some(p) => Some(OutputGuard::new(&[data, model_path]).check(p)?),
+        None => None,
+    };
+    // with `-o -` the CSV has stdout: the JSON and the metrics go to stderr
+    let mut say = match &dest {
+        Some(d) => super::messages(d),
+        None => Box::new(std::io::stdout()),
+    };
     let (features, targets, provenance) = match &model {
         NnModel::CnnLstm(m) => (&m.feature_names, &m.target_names, &m.provenance),
         NnModel::Bpnn(m) => (&m.input_names, &m.output_names, &m.provenance),
@@ -671,7 +686,8 @@ pub fn predict(
             "predictions": pred,
             "metrics": metrics,
         });
-        println!(
+        let _ = writeln!(
+            say,
             "{}",
             serde_json::to_string(&doc).map_err(|e| CliError::Internal(e.into()))?
         );
@@ -679,7 +695,9 @@ pub fn predict(
         // the CSV may go to stdout: the metrics then go to stderr
         let table = metrics_table("metrics", m);
         match output {
-            Some(_) => print!("{table}"),
+            Some(_) => {
+                let _ = write!(say, "{table}");
+            }
             None => eprint!("{table}"),
         }
     }
@@ -713,8 +731,8 @@ pub fn predict(
             }
             csv.push('\n');
         }
-        match output {
-            Some(p) => OutputGuard::new(&[data, model_path]).write(p, csv.as_bytes())?,
+        match &dest {
+            Some(d) => d.write(csv.as_bytes())?,
             None => print!("{csv}"),
         }
     }

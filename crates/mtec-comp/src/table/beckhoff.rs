@@ -16,16 +16,19 @@
 //! its error parameters (its `negate` parameter exists to flip data given the other way round).
 //! Rows run with X slowest and Z fastest; the grid must be complete.
 
-use super::TableError;
+use super::{check_correction, Axis, TableError};
 use crate::ErrorModel;
 
 const FORMAT: &str = "Beckhoff ISG CSV";
 
-/// Writes the error field of `model` on the grid `axes_mm` (each strictly increasing).
+/// Writes the error field of `model` on the grid `axes_mm` (each strictly increasing); the
+/// length of the correction vector at every node must pass [`check_correction`] with
+/// `max_correction_um` (µm).
 pub fn write(
     model: &dyn ErrorModel,
     axes_mm: &[Vec<f64>; 3],
     provenance: &str,
+    max_correction_um: f64,
 ) -> Result<String, TableError> {
     let mut out = String::new();
     out.push_str("// volumetric error map written by mtec (TF5280 ISG CSV format)\n");
@@ -40,9 +43,17 @@ pub fn write(
         for &y in &axes_mm[1] {
             for &z in &axes_mm[2] {
                 let e = model.error_um([x, y, z]);
-                if !e.iter().all(|v| v.is_finite()) {
+                if e.iter().any(|v| v.is_nan()) {
                     return Err(TableError::Undefined { p_mm: [x, y, z] });
                 }
+                // the same bound as `compensate gcode`: the length of the correction vector;
+                // the error names the largest component (or the one that is not finite)
+                let k = (0..3).find(|&k| !e[k].is_finite()).unwrap_or_else(|| {
+                    (0..3).fold(0, |b, k| if e[k].abs() > e[b].abs() { k } else { b })
+                });
+                let axis = [Axis::X, Axis::Y, Axis::Z][k];
+                let size = e[0].hypot(e[1]).hypot(e[2]); // no overflow for 1e297
+                check_correction(axis, None, [x, y, z], -e[k], size, max_correction_um)?;
                 out.push_str(&format!(
                     "{} {} {} {:.6} {:.6} {:.6}\n",
                     super::decimal_number(x, 6),

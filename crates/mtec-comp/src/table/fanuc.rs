@@ -90,7 +90,9 @@ pub fn write(profile: &AxisProfile, opts: &FanucOptions) -> Result<String, Table
             "the detection unit must be positive",
         ));
     }
-    let n = profile.comp_um.len();
+    // the size bound first: a huge constant offset has increments of 0 and would pass 3620…
+    let comp_um = profile.checked_values()?;
+    let n = comp_um.len();
     let m_f = (opts.reference_mm - profile.start_mm) / profile.step_mm;
     let m = m_f.round();
     if (m_f - m).abs() > 1e-6 || m < 0.0 || m as usize >= n {
@@ -146,9 +148,8 @@ pub fn write(profile: &AxisProfile, opts: &FanucOptions) -> Result<String, Table
     }
     // absolute compensation relative to the reference, rounded per point (no accumulation)
     let unit_um = opts.detection_unit_um * opts.magnification as f64;
-    let c_ref = profile.comp_um[m];
-    let abs_units: Vec<i64> = profile
-        .comp_um
+    let c_ref = comp_um[m];
+    let abs_units: Vec<i64> = comp_um
         .iter()
         .map(|c| ((c - c_ref) / unit_um).round() as i64)
         .collect();

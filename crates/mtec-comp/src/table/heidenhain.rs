@@ -43,7 +43,7 @@ pub fn write(
     let out_axis = profile.output_axis.letter();
     let mut com = format!("BEGIN {com_name} MM\n");
     com.push_str(&format!("{:<5} {:>13} {:>10}\n", "NR", "AXISPOS", out_axis));
-    for (n, &c_um) in profile.comp_um.iter().enumerate() {
+    for (n, &c_um) in profile.checked_values()?.iter().enumerate() {
         let e_mm = -c_um * 1e-3; // the axis error
         let c_txt = format!("{:+.4}", if e_mm.abs() < 5e-5 { 0.0 } else { e_mm });
         com.push_str(&format!(

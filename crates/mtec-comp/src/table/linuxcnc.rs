@@ -34,7 +34,7 @@ pub fn write(profile: &AxisProfile, comp_type: u8) -> Result<String, TableError>
         ));
     }
     let mut out = String::new();
-    for (n, &c_um) in profile.comp_um.iter().enumerate() {
+    for (n, &c_um) in profile.checked_values()?.iter().enumerate() {
         let nominal = profile.position(n);
         let value = match comp_type {
             0 => nominal - c_um * 1e-3, // actual position = nominal + e

@@ -17,6 +17,15 @@
 //!   compensates them.
 //!
 //! Units: positions mm, values mm (µm in Fanuc detection units), as each format demands.
+//!
+//! Size bound (issue 15, defect 7): no writer formats a value before it has passed
+//! [`check_correction`], the same rule as `compensate gcode --max-correction-um`
+//! ([`DEFAULT_MAX_CORRECTION_UM`] unless told): a 1-D table is refused when a value |c| exceeds
+//! the limit, a Beckhoff volumetric table when the length of the correction vector (ex, ey, ez)
+//! does, and every table when a value is not finite. A 10 mm "trim" is a model in the wrong units
+//! or a broken fit, never a correction a machine should be given. The 1-D writers check the
+//! [`AxisProfile`] they are handed (its `max_correction_um`), so a profile built by hand is held
+//! to the same bound as a sampled one.
 
 pub mod beckhoff;
 pub mod fanuc;
@@ -25,6 +34,10 @@ pub mod linuxcnc;
 pub mod sinumerik;
 
 use crate::ErrorModel;
+
+/// Default largest correction a table may hold (µm), the default of `compensate gcode
+/// --max-correction-um` too.
+pub const DEFAULT_MAX_CORRECTION_UM: f64 = 500.0;
 
 /// A machine axis of the Cartesian error models.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -73,6 +86,11 @@ pub struct AxisProfile {
     pub comp_um: Vec<f64>,
     /// The input axis is rotary (positions in degrees, one turn = the table's range).
     pub rotary: bool,
+    /// Largest |value| (µm) a writer accepts ([`DEFAULT_MAX_CORRECTION_UM`] from
+    /// [`axis_profile`]); see [`check_correction`].
+    pub max_correction_um: f64,
+    /// The coordinates of the other axes (mm) the values were sampled at (for error messages).
+    pub at_mm: [f64; 3],
 }
 
 impl AxisProfile {
@@ -83,6 +101,98 @@ impl AxisProfile {
     /// Position of the last point.
     pub fn end_mm(&self) -> f64 {
         self.position(self.comp_um.len().saturating_sub(1))
+    }
+    /// Machine point of table point `n`: `at_mm` with the input axis at [`Self::position`].
+    pub fn point_mm(&self, n: usize) -> [f64; 3] {
+        let mut p = self.at_mm;
+        p[self.input_axis.index()] = self.position(n);
+        p
+    }
+    /// The same profile with another size bound (µm).
+    pub fn with_max_correction_um(mut self, max_um: f64) -> Self {
+        self.max_correction_um = max_um;
+        self
+    }
+    /// The values, once each has passed [`check_correction`]; every 1-D writer starts here.
+    pub fn checked_values(&self) -> Result<&[f64], TableError> {
+        for (n, &c) in self.comp_um.iter().enumerate() {
+            check_correction(
+                self.output_axis,
+                Some((self.input_axis, self.position(n))),
+                self.point_mm(n),
+                c,
+                c.abs(),
+                self.max_correction_um,
+            )?;
+        }
+        Ok(&self.comp_um)
+    }
+}
+
+/// The one size rule of every table writer: `value_um` (the value of `axis` at `p_mm`) must be
+/// finite, and `size_um` (|value| for a 1-D table, the vector length for a volumetric one) at
+/// most `max_um`. `table_position` is the input axis and position of a 1-D table point.
+/// A limit that is not a positive finite number is refused as such.
+pub fn check_correction(
+    axis: Axis,
+    table_position: Option<(Axis, f64)>,
+    p_mm: [f64; 3],
+    value_um: f64,
+    size_um: f64,
+    max_um: f64,
+) -> Result<(), TableError> {
+    if !(max_um.is_finite() && max_um > 0.0) {
+        return Err(TableError::Sampling(format!(
+            "--max-correction-um must be a positive number, not {max_um}"
+        )));
+    }
+    if value_um.is_finite() && size_um.is_finite() && size_um <= max_um {
+        return Ok(());
+    }
+    Err(TableError::TooLarge {
+        axis,
+        table_position,
+        p_mm,
+        value_um,
+        size_um,
+        max_um,
+    })
+}
+
+fn too_large_message(
+    axis: Axis,
+    table_position: &Option<(Axis, f64)>,
+    p_mm: &[f64; 3],
+    value_um: f64,
+    size_um: f64,
+    max_um: f64,
+) -> String {
+    let at = match table_position {
+        Some((a, pos)) => format!(
+            "table position {} = {pos} mm (machine point {}, {}, {} mm)",
+            a.letter(),
+            p_mm[0],
+            p_mm[1],
+            p_mm[2]
+        ),
+        None => format!("machine point {}, {}, {} mm", p_mm[0], p_mm[1], p_mm[2]),
+    };
+    let what = format!(
+        "the {} correction at {at} is {} um",
+        axis.letter(),
+        readable(value_um)
+    );
+    if !value_um.is_finite() || !size_um.is_finite() {
+        format!("{what}: not a finite number, no table can hold it")
+    } else if table_position.is_none() && size_um != value_um.abs() {
+        format!(
+            "{what}, the correction vector {} um long: more than --max-correction-um {max_um} um (a model in the wrong units or a broken fit?)",
+            readable(size_um)
+        )
+    } else {
+        format!(
+            "{what}: more than --max-correction-um {max_um} um (a model in the wrong units or a broken fit?)"
+        )
     }
 }
 
@@ -95,6 +205,19 @@ pub enum TableError {
     /// The model has no value where the table needs one.
     #[error("the model has no value at ({:.6}, {:.6}, {:.6}) mm (outside a map that refuses points beyond its grid)", p_mm[0], p_mm[1], p_mm[2])]
     Undefined { p_mm: [f64; 3] },
+    /// A value is not finite, or larger than the bound (see [`check_correction`]).
+    #[error("{}", too_large_message(*axis, table_position, p_mm, *value_um, *size_um, *max_um))]
+    TooLarge {
+        /// The axis whose value is refused (the largest component of a volumetric table).
+        axis: Axis,
+        /// Input axis and position of a 1-D table point.
+        table_position: Option<(Axis, f64)>,
+        p_mm: [f64; 3],
+        value_um: f64,
+        /// What was compared with the bound: |value|, or the vector length.
+        size_um: f64,
+        max_um: f64,
+    },
     /// A rule of the target format is broken; `line` is 1-based in the written text when known.
     #[error("{format} table rule broken{}: {message}", line.map(|l| format!(" at line {l}")).unwrap_or_default())]
     Constraint {
@@ -149,7 +272,9 @@ pub fn axis_profile(
         p[input_axis.index()] = start_mm + step_mm * i as f64;
         let e = model.error_um(p);
         let v = e[output_axis.index()];
-        if !v.is_finite() {
+        // NaN: no value here (a map beyond its grid); an infinite value is refused by the size
+        // rule, which names the axis and the value
+        if v.is_nan() {
             return Err(TableError::Undefined { p_mm: p });
         }
         comp_um.push(-v);
@@ -161,7 +286,18 @@ pub fn axis_profile(
         step_mm,
         comp_um,
         rotary: false,
+        max_correction_um: DEFAULT_MAX_CORRECTION_UM,
+        at_mm,
     })
+}
+
+/// A value for a message: 3 decimals, or scientific notation when huge (`1e297`, not 298 digits).
+fn readable(v: f64) -> String {
+    if v.is_finite() && v.abs() < 1e9 {
+        format!("{v:.3}")
+    } else {
+        format!("{v:e}")
+    }
 }
 
 /// A number with at most `decimals` decimals, trailing zeros (and a lone point) removed, and no

@@ -57,7 +57,7 @@ pub fn write_cec(profile: &AxisProfile, opts: &CecOptions) -> Result<String, Tab
     }
     let t = opts.table_index;
     let mut out = String::from("%_N_NC_CEC_INI\nCHANDATA(1)\n");
-    for (n, &c_um) in profile.comp_um.iter().enumerate() {
+    for (n, &c_um) in profile.checked_values()?.iter().enumerate() {
         out.push_str(&format!(
             "$AN_CEC[{t},{n}]={}\n",
             trim_number(c_um * 1e-3, 6)
@@ -113,7 +113,7 @@ pub fn write_lec(profile: &AxisProfile, opts: &LecOptions) -> Result<String, Tab
     }
     let ax = &opts.machine_axes[profile.input_axis.index()];
     let mut out = String::from("%_N_AX_EEC_INI\nCHANDATA(1)\n");
-    for (n, &c_um) in profile.comp_um.iter().enumerate() {
+    for (n, &c_um) in profile.checked_values()?.iter().enumerate() {
         // a positive value moves the axis negative: write −c = e
         out.push_str(&format!(
             "$AA_ENC_COMP[0,{n},{ax}]={}\n",
