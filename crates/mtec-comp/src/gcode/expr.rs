@@ -622,7 +622,6 @@ impl<'a> Cursor<'a> {
         if depth > MAX_DEPTH {
             return Err(err(self.pos, "expression nested too deeply"));
         }
-        let pos = self.pos;
         match self.peek() {
             None | Some(b']') => Err(err(self.pos.min(self.end), "a value is missing here")),
             Some(b'[') => {

@@ -59,6 +59,7 @@ pub mod block;
 pub mod expr;
 pub mod format;
 pub mod lexer;
+pub mod modal;
 pub mod offsets;
 pub mod rewrite;
 pub mod solve;
