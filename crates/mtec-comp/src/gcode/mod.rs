@@ -63,6 +63,7 @@ pub mod modal;
 pub mod offsets;
 pub mod rewrite;
 pub mod solve;
+pub mod tooltable;
 
 pub use offsets::{Offsets, OffsetsFile};
 pub use rewrite::{

@@ -171,7 +171,7 @@ pub fn m_group(code: u32) -> Option<MGroup> {
 pub const MAX_M_WORDS: usize = 4;
 
 fn g_name(code10: u32) -> String {
-    if code10 % 10 == 0 {
+    if code10.is_multiple_of(10) {
         format!("G{}", code10 / 10)
     } else {
         format!("G{}.{}", code10 / 10, code10 % 10)
@@ -279,7 +279,9 @@ mod tests {
 
     /// A one-line program as the rewriter's block sees it: G codes ×10 and M codes with token
     /// indices (each word is one token, in order), and whether it has axis words.
-    fn block(line: &str) -> (Vec<(u32, usize)>, Vec<(u32, usize)>, bool) {
+    type Codes = Vec<(u32, usize)>;
+
+    fn block(line: &str) -> (Codes, Codes, bool) {
         let (mut g, mut m, mut axis) = (vec![], vec![], false);
         for (i, w) in line.split_whitespace().enumerate() {
             let (l, v) = w.split_at(1);
@@ -297,7 +299,8 @@ mod tests {
     /// linuxcnc-uspace); `None` = rs274 accepted it (or stopped only for a reason outside this
     /// module, noted), `Some((word index, fragment))` = rs274 refused it with the message
     /// quoted in the comment.
-    const GOLDEN: &[(&str, Option<(usize, &str)>)] = &[
+    type Expected = Option<(usize, &'static str)>;
+    const GOLDEN: &[(&str, Expected)] = &[
         // "Two g codes used from same modal group"
         ("G0 G1 X50", Some((1, "group 1"))),
         ("G90 G91 X10", Some((1, "group 3"))),
