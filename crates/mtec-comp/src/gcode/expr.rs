@@ -1165,6 +1165,9 @@ mod tests {
         assert_eq!(eval_value(line, 4..24, &p), Ok(335.25));
         assert!(eval_value(line, 4..26, &p).is_err()); // trailing text
         assert!(eval_value(line, 4..8, &p).is_err()); // cut off
+                                                      // signed functions lex as one value (rs274: G0 X-sin[30] goes to)
+        assert!((x("-sin[30]").unwrap() + 0.5).abs() < 1e-12);
+        assert_eq!(x("+COS[0]").unwrap(), 1.0);
         let e = eval_value(b"[1 + 2", 0..6, &p).unwrap_err();
         assert_eq!(
             (e.column, e.message.contains("']' expected")),
