@@ -23,8 +23,14 @@
 //!   but `[1 EQ 1.00009]` is 1 in rs274); `LT LE GT GE` compare exactly.
 //!   `AND OR XOR` treat 0 as false and anything else as true and give 1 or 0.
 //! - `MOD` is `fmod` made non-negative by adding `|b|` (`-7 MOD 3` is 2). `a ** b` with `a < 0`
-//!   and a non-integer `b` is an error, as is `/` by zero; a result that is not finite is an
-//!   error ("Calculation resulted in 'infinity'" / "'not a number'").
+//!   and a non-integer `b` is an error, as is `/` by zero. A *value* that is not finite (a
+//!   bracket, a function result, a parameter, the word's value) is an error ("Calculation
+//!   resulted in 'infinity'" / "'not a number'"), but the result of one operator inside an
+//!   expression is not checked: `[5 MOD 0 LE 2]` is 0 in rs274 and here.
+//!
+//! Besides the hand-picked golden values, `tests/data/expr_random_rs274.csv` holds ~800 random
+//! expressions with rs274's value or refusal; the tests require the same value (to 5e-5) or a
+//! refusal for each.
 //! - Functions take `[arg]`; angles in degrees: `ABS ACOS ASIN COS EXP FIX (floor) FUP (ceil)
 //!   ROUND (half away from zero) LN SIN SQRT TAN`, `ATAN[y]/[x]` (four-quadrant), and
 //!   `EXISTS[#<name>]`. ACOS/ASIN outside [-1, 1], LN of a value ≤ 0 and SQRT of a negative
@@ -567,7 +573,9 @@ impl Op {
             Op::Or => t(a != 0.0 || b != 0.0),
             Op::Xor => t((a != 0.0) != (b != 0.0)),
         };
-        finite(r, pos)
+        // not checked for NaN or infinity here: rs274 lets them flow through the operators of
+        // an expression (`[5 MOD 0 LE 2]` is 0) and only refuses a value that is not finite
+        Ok(r)
     }
 }
 
@@ -617,11 +625,19 @@ impl<'a> Cursor<'a> {
         }
     }
 
-    /// One value: number, parameter, `[expression]`, function, or a signed value.
+    /// One value: number, parameter, `[expression]`, function, or a signed value. As in
+    /// rs274, a value (not an intermediate result of an operator) must be finite.
     fn value(&mut self, ctx: &Ctx, depth: usize) -> Result<f64, ExprError> {
         if depth > MAX_DEPTH {
             return Err(err(self.pos, "expression nested too deeply"));
         }
+        self.skip();
+        let at = self.pos;
+        let v = self.value_inner(ctx, depth)?;
+        finite(v, at)
+    }
+
+    fn value_inner(&mut self, ctx: &Ctx, depth: usize) -> Result<f64, ExprError> {
         match self.peek() {
             None | Some(b']') => Err(err(self.pos.min(self.end), "a value is missing here")),
             Some(b'[') => {
@@ -1061,6 +1077,44 @@ mod tests {
     }
 
     #[test]
+    fn random_expressions_agree_with_rs274() {
+        let text = include_str!("../../tests/data/expr_random_rs274.csv");
+        let (mut values, mut errors) = (0, 0);
+        for row in text.lines().filter(|l| !l.starts_with("%%")).skip(1) {
+            let mut f = row.splitn(3, ',');
+            let (setup, line, want) = (f.next().unwrap(), f.next().unwrap(), f.next().unwrap());
+            let got = run(&mut Params::new(), &[setup, line]);
+            match (want.strip_prefix("ERR "), got) {
+                // rs274 refused it: so must we (lexer or evaluator; messages may differ)
+                (Some(_), Err(_)) => errors += 1,
+                (None, Ok(Some(v))) => {
+                    let w: f64 = want.parse().unwrap();
+                    assert!(
+                        (v - w).abs() <= 5e-5 + 1e-12 * w.abs(),
+                        "{line}: mtec {v}, rs274 {w}"
+                    );
+                    values += 1;
+                }
+                (_, got) => panic!("{line}: rs274 {want}, mtec {got:?}"),
+            }
+        }
+        assert!(
+            values >= 500 && errors >= 100,
+            "{values} values, {errors} errors"
+        );
+    }
+
+    #[test]
+    fn not_finite_intermediate_results_flow_as_in_rs274() {
+        // rs274 checks values, not the results of single operators
+        assert_eq!(x("[5 MOD 0 LE 2]").unwrap(), 0.0);
+        assert_eq!(x("[0 ** -1 NE 3]").unwrap(), 1.0);
+        assert!(x("[[0 ** -1] NE 3]").is_err()); // a bracket is a value
+        assert!(x("[EXP[1000]]").is_err());
+        assert!(x("[[5 MOD 0]]").is_err());
+    }
+
+    #[test]
     fn errors_are_linuxcnc_s_and_located() {
         // (expression, message fragment as rs274 prints it, 1-based column in "G0 X…")
         for (e, msg, col) in [
@@ -1074,8 +1128,8 @@ mod tests {
                 "Attempt to raise negative to non integer power",
                 10,
             ),
-            ("[5 MOD 0]", "not a number", 8),
-            ("[0**-1]", "infinity", 7),
+            ("[5 MOD 0]", "not a number", 5),
+            ("[0**-1]", "infinity", 5),
             ("[atan[1]]", "Slash missing after first atan argument", 13),
             ("[1e3]", "Unknown operation name starting with e", 7),
             ("[1.2.3]", "second decimal point", 9),
