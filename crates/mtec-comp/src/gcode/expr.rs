@@ -1078,12 +1078,31 @@ mod tests {
 
     #[test]
     fn random_expressions_agree_with_rs274() {
-        let text = include_str!("../../tests/data/expr_random_rs274.csv");
+        agree_with_rs274(
+            include_str!("../../tests/data/expr_random_rs274.csv"),
+            500,
+            100,
+        );
+    }
+
+    #[test]
+    fn random_assignment_programs_agree_with_rs274() {
+        agree_with_rs274(
+            include_str!("../../tests/data/expr_assign_random_rs274.csv"),
+            400,
+            200,
+        );
+    }
+
+    /// Every row: rs274's value (to 5e-5) or, where rs274 refused the program, a refusal.
+    fn agree_with_rs274(text: &str, min_values: usize, min_errors: usize) {
         let (mut values, mut errors) = (0, 0);
         for row in text.lines().filter(|l| !l.starts_with("%%")).skip(1) {
             let mut f = row.splitn(3, ',');
             let (setup, line, want) = (f.next().unwrap(), f.next().unwrap(), f.next().unwrap());
-            let got = run(&mut Params::new(), &[setup, line]);
+            let mut lines: Vec<&str> = setup.split(" | ").collect();
+            lines.push(line);
+            let got = run(&mut Params::new(), &lines);
             match (want.strip_prefix("ERR "), got) {
                 // rs274 refused it: so must we (lexer or evaluator; messages may differ)
                 (Some(_), Err(_)) => errors += 1,
@@ -1099,7 +1118,7 @@ mod tests {
             }
         }
         assert!(
-            values >= 500 && errors >= 100,
+            values >= min_values && errors >= min_errors,
             "{values} values, {errors} errors"
         );
     }
