@@ -345,6 +345,30 @@ mod tests {
     }
 
     #[test]
+    fn random_tables_agree_with_rs274() {
+        let text = include_str!("../../tests/data/tooltable_random_rs274.tsv");
+        let mut n = 0;
+        for row in text.lines().filter(|l| !l.starts_with("%%")) {
+            let f: Vec<&str> = row.split('\t').collect();
+            assert!(f[3].is_empty(), "{row}");
+            let table = f[0].replace("\\n", "\n");
+            let t = parse_tool_table(table.as_bytes(), MachineUnits::Inch)
+                .unwrap_or_else(|e| panic!("{table:?}: {e}"));
+            let tools = f[1].split_whitespace().map(|t| t.parse::<u32>().unwrap());
+            let zs = f[2].split_whitespace().map(|z| z.parse::<f64>().unwrap());
+            for (tool, z) in tools.zip(zs) {
+                let got = t.tools[&tool].z_length_mm();
+                assert!(
+                    (got - z).abs() <= 5e-5,
+                    "{table:?} T{tool}: mtec {got}, rs274 {z}"
+                );
+                n += 1;
+            }
+        }
+        assert!(n >= 150, "{n} tools");
+    }
+
+    #[test]
     fn bad_lines_are_located() {
         // (table, line, column, message fragment); rs274's reading noted where it is lenient
         for (text, line, col, frag) in [
