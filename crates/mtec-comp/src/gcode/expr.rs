@@ -61,6 +61,11 @@
 //!   names (`#<_x>`, `#<_metric>`, `#<_ini[..]..>`, `#<_hal[..]>`, …) a refusal saying they
 //!   depend on the machine. Assigning to a predefined name is LinuxCNC's error.
 //!
+//! Parameters above 5000 mirror state that G codes change (G92 rewrites #5211…, G10 L2 the
+//! work offsets, a move the positions). This store does not see G codes: after each block the
+//! caller forgets what the block rewrote ([`system_parameters_written_by`],
+//! [`Params::forget_numbered`]) and re-seeds what it tracks exactly, so no stale value is read.
+//!
 //! Errors carry a 1-based byte `column` in the line, as [`super::lexer::LexError`] does.
 
 use super::lexer::{Token, TokenKind};
@@ -149,9 +154,50 @@ pub fn system_parameter_meaning(n: u32) -> Option<&'static str> {
 }
 
 /// Numbered parameters LinuxCNC refuses to assign ("Parameter is readonly"): the current tool,
-/// its offsets and geometry, and the current position (checked with rs274 for #5400, #5420).
+/// its offsets and geometry, and the current position (checked with rs274 for each number
+/// 5400-5429: 5414-5419 and 5429 are writable).
 fn numbered_read_only(n: u32) -> bool {
-    matches!(n, 5400..=5428)
+    matches!(n, 5400..=5413 | 5420..=5428)
+}
+
+/// The system parameters the interpreter itself rewrites when a block has these G codes
+/// (times ten), M codes, or moves the machine: G10 (tool table and work offsets), G28.1/G30.1
+/// (homes), G52/G92/G92.x (#5210-#5219), G54-G59.3 (#5220), G43/G49 (#5081-#5089), G38.x
+/// (probe results), M6/M61 (tool), M66 (#5399), any motion (positions #5021-#5029, #5420-#5428).
+/// Checked with rs274: `#5211=3` then `G92 X10` leaves 10 in #5211.
+pub fn system_parameters_written_by(
+    g_codes: &[(u32, usize)],
+    m_codes: &[(u32, usize)],
+    moves: bool,
+) -> Vec<std::ops::RangeInclusive<u32>> {
+    let mut out = Vec::new();
+    for &(g, _) in g_codes {
+        match g {
+            100 => {
+                out.push(5221..=5390);
+                out.push(5400..=5413);
+            }
+            281 => out.push(5161..=5169),
+            301 => out.push(5181..=5189),
+            520 | 920..=923 => out.push(5210..=5219),
+            540 | 550 | 560 | 570 | 580 | 590 | 591..=593 => out.push(5220..=5220),
+            430..=432 | 490 => out.push(5081..=5089),
+            382..=385 => out.push(5061..=5070),
+            _ => {}
+        }
+    }
+    for &(m, _) in m_codes {
+        match m {
+            6 | 61 => out.push(5400..=5413),
+            66 => out.push(5399..=5399),
+            _ => {}
+        }
+    }
+    if moves {
+        out.push(5021..=5029);
+        out.push(5420..=5428);
+    }
+    out
 }
 
 /// LinuxCNC 2.9's predefined (read-only) named parameters, without the leading `_`.
@@ -290,6 +336,18 @@ impl Params {
         }
         self.numbered[n as usize] = Some(value);
         Ok(())
+    }
+
+    /// Forgets numbered parameters (reading one above 5000 is then refused until it is set
+    /// again). Call it with [`system_parameters_written_by`] after each block, so a value the
+    /// interpreter rewrote (a G92, a G10, a move) is never read stale; re-seed with
+    /// [`Params::set_numbered`] what the caller tracks exactly.
+    pub fn forget_numbered(&mut self, range: std::ops::RangeInclusive<u32>) {
+        for n in range {
+            if let Some(slot) = self.numbered.get_mut(n as usize) {
+                *slot = None;
+            }
+        }
     }
 
     /// Sets a named parameter (the name is normalised: lower case, blanks removed, no `<>`).
@@ -1219,6 +1277,41 @@ mod tests {
             (ParamRef::Numbered(1), 3.0)
         );
         assert!(ParamRef::Numbered(5221).is_system() && !ParamRef::Numbered(5000).is_system());
+        // rs274: "#5414=1" and "#5429=1" are accepted, "#5413=1" and "#5428=1" are not
+        assert!(run(&mut Params::new(), &["#5414=1 #5429=1 #5021=1"]).is_ok());
+        assert!(run(&mut Params::new(), &["#5413=1"]).is_err());
+        assert!(run(&mut Params::new(), &["#5428=1"]).is_err());
+    }
+
+    #[test]
+    fn state_rewritten_by_a_block_is_forgotten() {
+        let mut p = Params::new();
+        run(&mut p, &["#5211=3 #5221=4 #5161=5 #5021=6 #100=7"]).unwrap();
+        assert_eq!(run(&mut p, &["G0 X#5211"]).unwrap(), Some(3.0));
+        // after "G92 X10" rs274 holds 10 in #5211: the store must not answer 3
+        for r in system_parameters_written_by(&[(920, 0)], &[], false) {
+            p.forget_numbered(r);
+        }
+        let e = run(&mut p, &["G0 X#5211"]).unwrap_err();
+        assert!(e.message.contains("G52/G92 offset"), "{e:?}");
+        assert_eq!(run(&mut p, &["G0 X#5221"]).unwrap(), Some(4.0)); // G92 leaves G54 alone
+        let w = system_parameters_written_by(&[(100, 0), (281, 1)], &[(6, 2)], true);
+        for (n, hit) in [
+            (5221, true),
+            (5390, true),
+            (5161, true),
+            (5181, false),
+            (5021, true),
+        ] {
+            assert_eq!(w.iter().any(|r| r.contains(&n)), hit, "#{n}");
+        }
+        for r in w {
+            p.forget_numbered(r);
+        }
+        assert!(run(&mut p, &["G0 X#5221"]).is_err());
+        assert!(run(&mut p, &["G0 X#5021"]).is_err());
+        assert_eq!(run(&mut p, &["G0 X#100"]).unwrap(), Some(7.0)); // user parameters stay
+        assert!(system_parameters_written_by(&[(10, 0), (900, 1)], &[(3, 2)], false).is_empty());
     }
 
     fn lexed(l: &str) -> Vec<Token> {
