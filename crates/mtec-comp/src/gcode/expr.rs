@@ -27,10 +27,6 @@
 //!   bracket, a function result, a parameter, the word's value) is an error ("Calculation
 //!   resulted in 'infinity'" / "'not a number'"), but the result of one operator inside an
 //!   expression is not checked: `[5 MOD 0 LE 2]` is 0 in rs274 and here.
-//!
-//! Besides the hand-picked golden values, `tests/data/expr_random_rs274.csv` holds ~800 random
-//! expressions with rs274's value or refusal; the tests require the same value (to 5e-5) or a
-//! refusal for each.
 //! - Functions take `[arg]`; angles in degrees: `ABS ACOS ASIN COS EXP FIX (floor) FUP (ceil)
 //!   ROUND (half away from zero) LN SIN SQRT TAN`, `ATAN[y]/[x]` (four-quadrant), and
 //!   `EXISTS[#<name>]`. ACOS/ASIN outside [-1, 1], LN of a value ≤ 0 and SQRT of a negative
@@ -66,7 +62,14 @@
 //! caller forgets what the block rewrote ([`system_parameters_written_by`],
 //! [`Params::forget_numbered`]) and re-seeds what it tracks exactly, so no stale value is read.
 //!
-//! Errors carry a 1-based byte `column` in the line, as [`super::lexer::LexError`] does.
+//! Errors carry a 1-based byte `column` in the line, as [`super::lexer::LexError`] does. Words
+//! reach this module through [`super::lexer`], which refuses a few spellings rs274 accepts
+//! (blanks inside a number outside brackets `X1 0`, `#1.0`, `#-1`): refused, never misread.
+//!
+//! Checked against rs274 beyond the hand-picked golden values (`tests/data/expr_golden.csv`,
+//! 103 rows): `expr_random_rs274.csv` (~800 random expressions) and
+//! `expr_assign_random_rs274.csv` (700 random programs of assignments); the tests require
+//! rs274's value (to 5e-5) or a refusal where rs274 refused, for every row.
 
 use super::lexer::{Token, TokenKind};
 use std::collections::HashMap;
