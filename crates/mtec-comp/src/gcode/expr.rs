@@ -53,7 +53,7 @@
 //!   …): **refused**, naming what the parameter holds, unless the program set it earlier or the
 //!   caller seeded it ([`Params::set_numbered`], e.g. G54 from the offsets file). Their values
 //!   live in the machine's `.var` file or its state, which mtec cannot see.
-//! - Named: LinuxCNC's error "Named parameter #<x> not defined"; for LinuxCNC's predefined
+//! - Named: LinuxCNC's error `Named parameter #<x> not defined`; for LinuxCNC's predefined
 //!   names (`#<_x>`, `#<_metric>`, `#<_ini[..]..>`, `#<_hal[..]>`, …) a refusal saying they
 //!   depend on the machine. Assigning to a predefined name is LinuxCNC's error.
 //!
