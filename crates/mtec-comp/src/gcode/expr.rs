@@ -330,6 +330,10 @@ impl Params {
     }
 
     /// Seeds a numbered parameter the caller knows (e.g. #5221–#5223 from the offsets file).
+    /// LinuxCNC keeps the offsets in these parameters in **machine units** (rs274, whose
+    /// stand-alone machine is in inches: `G21 #5221=10` makes a G54 X offset of 254 mm), so
+    /// convert before seeding. (An assignment to #5221 while G54 is active does not move the
+    /// current offset in rs274: `#5221=10 G0 X0` and a later `G0 X1` still use the old one.)
     pub fn set_numbered(&mut self, n: u32, value: f64) -> Result<(), String> {
         if n == 0 || n > MAX_PARAMETER {
             return Err(format!("parameter #{n} is not 1..{MAX_PARAMETER}"));
