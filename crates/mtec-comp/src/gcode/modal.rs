@@ -483,6 +483,24 @@ mod tests {
         );
     }
 
+    proptest::proptest! {
+        /// Any codes, in any order and number: an answer, never a panic, and a refusal always
+        /// names one of the block's own tokens.
+        #[test]
+        fn never_panics(
+            g in proptest::collection::vec(0u32..1000, 0..6),
+            m in proptest::collection::vec(0u32..200, 0..7),
+            axis in proptest::bool::ANY,
+        ) {
+            let g: Vec<(u32, usize)> = g.into_iter().enumerate().map(|(i, c)| (c, 2 * i)).collect();
+            let m: Vec<(u32, usize)> = m.into_iter().enumerate().map(|(i, c)| (c, 2 * i + 1)).collect();
+            if let Err((tok, msg)) = check_block(&g, &m, axis) {
+                proptest::prop_assert!(g.iter().chain(&m).any(|(_, t)| *t == tok));
+                proptest::prop_assert!(msg.contains("(LinuxCNC: \""));
+            }
+        }
+    }
+
     #[test]
     fn tables() {
         assert_eq!(g_group(591), Some(GGroup::CoordSystem));
