@@ -290,7 +290,11 @@ fn lex_value(line: &[u8], i: usize) -> Result<(Value, usize), LexError> {
             }
             Ok((Value::Computed, end))
         }
-        b'-' | b'+' if i + 1 < n && matches!(line[i + 1], b'#' | b'[') => {
+        // a signed parameter, expression or function: `X-#1`, `Z-[#2*2]`, `X-sin[30]`
+        b'-' | b'+'
+            if i + 1 < n
+                && (matches!(line[i + 1], b'#' | b'[') || line[i + 1].is_ascii_alphabetic()) =>
+        {
             let (_, end) = lex_value(line, i + 1)?;
             Ok((Value::Computed, end))
         }
@@ -427,6 +431,18 @@ mod tests {
             vec![TokenKind::OWord { keyword: true }]
         );
         assert_eq!(kinds("O1234"), vec![TokenKind::OWord { keyword: false }]);
+        for signed in ["X-sin[30]", "x+COS[0]", "X-#1", "X-[1]"] {
+            assert_eq!(
+                kinds(signed)[0],
+                TokenKind::Word {
+                    letter: b'X',
+                    value: Value::Computed
+                },
+                "{signed}"
+            );
+        }
+        let mut v = Vec::new();
+        assert!(lex_line(b"G1 X-e", 0, &mut v).is_err()); // a letter that starts no function
         assert_eq!(kinds("/G1 X1")[0], TokenKind::BlockDelete);
         assert_eq!(kinds(" % ")[0], TokenKind::Percent);
     }

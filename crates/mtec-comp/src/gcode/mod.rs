@@ -57,11 +57,14 @@
 pub mod arc;
 pub mod block;
 pub mod bound;
+pub mod expr;
 pub mod format;
 pub mod lexer;
+pub mod modal;
 pub mod offsets;
 pub mod rewrite;
 pub mod solve;
+pub mod tooltable;
 
 pub use offsets::{Offsets, OffsetsFile};
 pub use rewrite::{
