@@ -5,7 +5,7 @@
 
 mod gcode_support;
 use gcode_support::*;
-use mtec_comp::gcode::{rewrite, GcodeError, Offsets, ProblemKind, RewriteOptions};
+use mtec_comp::gcode::{rewrite, BlockDelete, GcodeError, Offsets, ProblemKind, RewriteOptions};
 use mtec_comp::{ErrorModel, GridMap, Outside};
 
 fn run(input: &str, model: &dyn ErrorModel, opts: &RewriteOptions) -> String {
@@ -227,4 +227,85 @@ fn every_written_line_fits_linuxcncs_255_characters() {
         }
         other => panic!("{other:?}"),
     }
+}
+
+#[test]
+fn two_codes_of_one_modal_group_are_refused_as_linuxcnc_refuses_them() {
+    let o = RewriteOptions::default();
+    // rs274: "Two g codes used from same modal group"
+    for (input, col) in [
+        ("G21\nG0 X0 Y0 Z0\nG0 G1 X50\n", 4),
+        ("G21\nG0 X0 Y0 Z0\nG90 G91 X10\n", 5),
+        ("G21\nG0 X0 Y0 Z0\nG17 G18 G2 X10 I5\n", 5),
+    ] {
+        let (line, c, msg) = refused(input, &PolyModel, &o);
+        assert_eq!((line, c), (3, col), "{input:?}: {msg}");
+        assert!(msg.contains("same modal group"), "{msg}");
+    }
+}
+
+#[test]
+fn parameters_and_expressions_with_literal_values_are_evaluated_as_linuxcnc_does() {
+    let o = RewriteOptions::default();
+    // every read on a line sees the values from before the line's assignments
+    let input = "G21 G90 G17\n#1=10 #<depth>=-2\nG0 X0 Y0 Z0\nG1 X[#1*5] Y#1 Z#<depth> F100\n#1=[#1+10] G1 X#1\nG1 Y[SIN[30]*40]\n";
+    let out = run(input, &PolyModel, &o);
+    let plain = "G21 G90 G17\nG0 X0 Y0 Z0\nG1 X50 Y10 Z-2 F100\nG1 X10\nG1 Y20\n";
+    // the computed words became literal corrected numbers; the path is the plain program's
+    assert!(
+        !out.contains("X[#1*5]") && out.contains("#1=[#1+10]"),
+        "{out}"
+    );
+    let w = check_path_dense(
+        plain,
+        &out.replace("#1=10 #<depth>=-2\n", "")
+            .replace("#1=[#1+10] ", ""),
+        &PolyModel,
+        &[[0.0; 3]; 6],
+        None,
+        0.05,
+        o.tolerance_um * 1e-3,
+    );
+    assert!(w < o.tolerance_um * 1e-3);
+}
+
+#[test]
+fn block_delete_follows_the_operators_switch() {
+    let input = "G21 G90\nG0 X0 Y0 Z0\n/G1 X30 F100\nG1 Y30 F100\n";
+    // not given: refused
+    let (line, _, msg) = refused(input, &PolyModel, &RewriteOptions::default());
+    assert_eq!(line, 3);
+    assert!(msg.contains("--block-delete"), "{msg}");
+    // on: the block is skipped by the controller, so it is copied and the next move starts at X0
+    let on = RewriteOptions {
+        block_delete: BlockDelete::On,
+        ..RewriteOptions::default()
+    };
+    let out = run(input, &PolyModel, &on);
+    assert!(out.contains("\n/G1 X30 F100\n"), "{out}");
+    check_path_dense(
+        "G21 G90\nG0 X0 Y0 Z0\nG1 Y30 F100\n",
+        &out.replace("/G1 X30 F100\n", ""),
+        &PolyModel,
+        &[[0.0; 3]; 6],
+        None,
+        0.05,
+        0.5e-3,
+    );
+    // off: it runs, and is compensated like any other block
+    let off = RewriteOptions {
+        block_delete: BlockDelete::Off,
+        ..RewriteOptions::default()
+    };
+    let out = run(input, &PolyModel, &off);
+    assert!(!out.contains("/G1 X30 F100\n"), "{out}");
+    check_path_dense(
+        "G21 G90\nG0 X0 Y0 Z0\nG1 X30 F100\nG1 Y30 F100\n",
+        &out.replace('/', ""),
+        &PolyModel,
+        &[[0.0; 3]; 6],
+        None,
+        0.05,
+        0.5e-3,
+    );
 }

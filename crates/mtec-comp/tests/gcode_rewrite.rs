@@ -238,12 +238,7 @@ fn restores_modal_arc_after_linearisation() {
 #[test]
 fn unsupported_constructs_are_refused_with_line_and_column_or_passed_through() {
     let cases: &[(&str, usize, usize, &str)] = &[
-        (
-            "G21\nG0 X0 Y0 Z0\nG1 X[1+2]\n",
-            3,
-            4,
-            "parameter or expression",
-        ),
+        ("G21\nG0 X0 Y0 Z0\nG1 X#<depth>\n", 3, 5, "depth"),
         ("G21\n#5221 = 3\n", 2, 1, "#5221"),
         ("G21\no100 sub\n", 2, 1, "O-word"),
         ("G21 G0 X0 Y0 Z0\nG81 X1 Y1 Z-1 R1\n", 2, 1, "G81"),

@@ -68,7 +68,7 @@ pub mod tooltable;
 
 pub use offsets::{Offsets, OffsetsFile};
 pub use rewrite::{
-    header_comment, rewrite, Diagnostic, GcodeError, OnUnsupported, ProblemKind, RewriteOptions,
-    RewriteReport, Units,
+    header_comment, rewrite, BlockDelete, Diagnostic, GcodeError, OnUnsupported, ProblemKind,
+    RewriteOptions, RewriteReport, Units,
 };
 pub use solve::{correction_mm, SolveError};

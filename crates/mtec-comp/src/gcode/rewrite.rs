@@ -7,8 +7,10 @@
 use super::arc::{self, Arc, Plane};
 use super::block::{Block, Issue};
 use super::bound::{norm, PathBound};
+use super::expr::{system_parameters_written_by, LineValues, Params};
 use super::format::{apply_edits, decimal_value, format_number, to_decimal, write_decimal, Edit};
 use super::lexer::{lex_line, Token, TokenKind, Value};
+use super::modal;
 use super::offsets::{work_system_index, Offsets};
 use super::solve::{correction_mm, SolveError};
 use crate::ErrorModel;
@@ -23,6 +25,19 @@ pub enum OnUnsupported {
     /// Copy the line unchanged, record a warning, and stop compensating whatever the construct
     /// may have changed (positions, modes) until the program sets it again explicitly.
     PassThroughWithWarning,
+}
+
+/// The operator's block-delete switch (`--block-delete`): what a block starting with `/` does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BlockDelete {
+    /// Not given: a `/` block that moves or changes a mode is unsupported (whether it runs
+    /// depends on the switch).
+    #[default]
+    Unknown,
+    /// Switch on: the controller skips `/` blocks; they are copied and not interpreted.
+    On,
+    /// Switch off: `/` blocks run like any other block.
+    Off,
 }
 
 /// Length units of the program.
@@ -70,6 +85,8 @@ pub struct RewriteOptions {
     /// Longest line the target controller reads (`--max-line-chars`; LinuxCNC: 255). A
     /// rewritten or added line longer than this is refused; the header comment is shortened.
     pub max_line_chars: usize,
+    /// The operator's block-delete switch (`--block-delete on|off`).
+    pub block_delete: BlockDelete,
 }
 
 impl Default for RewriteOptions {
@@ -88,6 +105,7 @@ impl Default for RewriteOptions {
             start_position_mm: None,
             check_step_mm: 0.5,
             max_line_chars: LINUXCNC_MAX_LINE_CHARS,
+            block_delete: BlockDelete::Unknown,
         }
     }
 }
@@ -296,6 +314,13 @@ struct Rewriter<'a> {
     bound: PathBound<'a>,
     /// The current block moves in machine coordinates (G53).
     g53: bool,
+    /// Numbered and named parameters as LinuxCNC sets them (literal values only).
+    params: Params,
+    /// The current line's evaluated words and assignments.
+    line_values: LineValues,
+    /// A line's parameters could not be evaluated (pass-through mode): from then on parameter
+    /// values are not known and computed words are unsupported.
+    params_lost: bool,
 }
 
 /// A target point with the correction to apply there.
@@ -342,6 +367,9 @@ impl<'a> Rewriter<'a> {
             split_stack: Vec::new(),
             bound: PathBound::new(model, opt.check_step_mm),
             g53: false,
+            params: Params::new(),
+            line_values: LineValues::default(),
+            params_lost: false,
             block: Block::default(),
             pieces: Vec::new(),
         }
@@ -450,9 +478,71 @@ impl<'a> Rewriter<'a> {
             self.poison_all();
             return self.write_verbatim(body, ending, output);
         }
+        // a `/` block with the switch on is skipped by the controller: copied, not interpreted
+        if self.opt.block_delete == BlockDelete::On
+            && self
+                .tokens
+                .first()
+                .is_some_and(|t| t.kind == TokenKind::BlockDelete)
+        {
+            return self.write_verbatim(body, ending, output);
+        }
+        // parameters and expressions: every word is read with the values from before the line
+        // (LinuxCNC's rule); a computed word becomes its number, assignments apply after it
+        let computes = self.tokens.iter().any(|t| {
+            matches!(
+                t.kind,
+                TokenKind::Assignment { .. }
+                    | TokenKind::Word {
+                        value: Value::Computed,
+                        ..
+                    }
+            )
+        });
+        let mut evaluated = false;
+        if computes && !self.params_lost {
+            let mut lv = std::mem::take(&mut self.line_values);
+            match self.params.eval_line(body, &self.tokens, &mut lv) {
+                Ok(()) => {
+                    for (i, t) in self.tokens.iter_mut().enumerate() {
+                        if let TokenKind::Word { value, .. } = &mut t.kind {
+                            if *value == Value::Computed {
+                                if let Some(v) = lv.word(i) {
+                                    *value = Value::Number(v);
+                                }
+                            }
+                        }
+                    }
+                    evaluated = true;
+                }
+                Err(e) => {
+                    let d = self.diag(e.column, ProblemKind::Unsupported, e.message);
+                    self.line_values = lv;
+                    self.unsupported(d)?;
+                    // the parameters this line sets are not known from here on
+                    self.params_lost = true;
+                    self.poison_all();
+                    return self.write_verbatim(body, ending, output);
+                }
+            }
+            self.line_values = lv;
+        }
         let mut block = std::mem::take(&mut self.block);
         block.read_into(&self.tokens, body);
         let r = self.line_block(&block, body, ending, output);
+        if r.is_ok() && evaluated {
+            let lv = std::mem::take(&mut self.line_values);
+            self.params.commit(&lv);
+            self.line_values = lv;
+        }
+        if r.is_ok() && !self.params_lost {
+            let moved = [b'X', b'Y', b'Z', b'A', b'B', b'C', b'U', b'V', b'W']
+                .iter()
+                .any(|&l| block.word(l).is_some());
+            for range in system_parameters_written_by(&block.g, &block.m, moved) {
+                self.params.forget_numbered(range);
+            }
+        }
         self.block = block;
         r
     }
@@ -545,7 +635,14 @@ impl<'a> Rewriter<'a> {
             .find(|&l| b.word(l).is_some());
         let has_axis = has_xyz || other_axis.is_some() || b.polar.is_some();
 
-        if b.block_delete {
+        if let Err((tok, message)) = modal::check_block(&b.g, &b.m, has_axis) {
+            issues.push(Issue {
+                token: Some(tok),
+                message,
+                poisons_all: true,
+            });
+        }
+        if b.block_delete && self.opt.block_delete == BlockDelete::Unknown {
             let meaningful = !b.g.is_empty()
                 || b.m.iter().any(|(m, _)| matches!(m, 2 | 6 | 30 | 98 | 99))
                 || has_axis
@@ -555,7 +652,7 @@ impl<'a> Rewriter<'a> {
             if meaningful {
                 issues.push(Issue {
                     token: Some(0),
-                    message: "block delete '/' on a block with motion or modal codes: whether it runs depends on the operator's switch".into(),
+                    message: "block delete '/' on a block with motion or modal codes: whether it runs depends on the operator's switch (give --block-delete on or off)".into(),
                     poisons_all: true,
                 });
             }
