@@ -56,6 +56,7 @@
 
 pub mod arc;
 pub mod block;
+pub mod flatten;
 pub mod format;
 pub mod lexer;
 pub mod offsets;
