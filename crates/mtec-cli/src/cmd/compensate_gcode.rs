@@ -1,10 +1,11 @@
 //! `mtec compensate gcode`: rewrites an NC program so the machine reaches the programmed points.
 
+use crate::cmd::flatten::{extra_inputs, flatten_input, FlattenArgs};
 use crate::cmd::model_loader::load_error_model;
 use crate::error::CliError;
 use mtec_comp::gcode::{rewrite, GcodeError, OffsetsFile, OnUnsupported, RewriteOptions, Units};
 use mtec_io::InputError;
-use std::io::{BufReader, BufWriter, Write};
+use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 const LONG_ABOUT: &str = "\
@@ -37,8 +38,24 @@ Offsets (--offsets, TOML) map program to machine coordinates (machine = program 
   [tool_lengths_mm]
   1 = 85.25
 
-Example:
-  mtec compensate gcode --model model.json part.ngc -o part-comp.ngc --offsets offsets.toml";
+Flattening (--flatten-with rs274): for programs the rewriter refuses (O-word subroutines and
+loops, canned cycles, cutter compensation, polar coordinates, parameters, G92/G52, G10), LinuxCNC's
+interpreter (rs274, package linuxcnc-uspace) runs the program first and its moves are written as a
+plain program (G0/G1, G2/G3 with I J K, F, S, M3/M4/M5, M7/M8/M9, G4, T M6), which is then
+compensated. The output is a LinuxCNC-only program for one setup: cutter radius compensation and
+tool lengths are baked in for the tool table given (--tool-table), G92/G52 offsets and work offsets
+changed by the program are folded into the coordinates (the output runs with G49 and no G92), and
+it keeps the original's G54-G59.3 selection, so it reaches the same machine positions when run
+with the same work-offset table (--var-file; mention the same offsets in --offsets). Refused, with
+rs274's line: spindle-synchronised motion (G33, G76), probing (G38.x), rigid tapping (G33.1),
+splines (G5.x), A/B/C/U/V/W motion, a rotated work system (G10 L2 R), and anything rs274 itself
+refuses (its message is passed on). Note that stand-alone rs274 reads tool-table and parameter
+file lengths as inches.
+
+Examples:
+  mtec compensate gcode --model model.json part.ngc -o part-comp.ngc --offsets offsets.toml
+  mtec compensate gcode --model model.json --flatten-with rs274 --tool-table tool.tbl \
+      pocket.ngc -o pocket-comp.ngc";
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum OnUnsupportedArg {
@@ -97,6 +114,8 @@ pub struct Args {
     /// Machine position at program start, "x,y,z" in mm (e.g. home; on a lathe the fixed Y).
     #[arg(long, value_name = "X,Y,Z")]
     pub start_position_mm: Option<String>,
+    #[command(flatten)]
+    pub flatten: FlattenArgs,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
@@ -139,9 +158,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     options.validate().map_err(CliError::Usage)?;
 
-    for inp in [&args.input, &args.model]
+    for inp in [args.input.as_path(), args.model.as_path()]
         .into_iter()
-        .chain(args.offsets.as_ref())
+        .chain(args.offsets.as_deref())
+        .chain(extra_inputs(&args.flatten))
     {
         if same_file(inp, &args.output) {
             return Err(CliError::usage(format!(
@@ -150,9 +170,33 @@ pub fn run(args: Args) -> Result<(), CliError> {
             )));
         }
     }
-    let input = std::fs::File::open(&args.input)
-        .map_err(|e| InputError::file(&args.input, format!("cannot read: {e}")))?;
-    let reader = BufReader::with_capacity(1 << 16, input);
+    // with --flatten-with, the rewriter reads the flattened program; its errors name that
+    let (reader, source): (Box<dyn BufRead>, PathBuf) = if args.flatten.flatten_with.is_some() {
+        let (text, report) = flatten_input(&args.input, &args.flatten)?;
+        println!(
+            "{}: flattened by rs274: {} canonical lines -> {} lines ({} straight moves, {} arcs{})",
+            args.input.display(),
+            report.canonical_lines,
+            report.lines_written,
+            report.straight_moves,
+            report.arcs,
+            if report.offsets_folded {
+                "; offsets folded into the coordinates"
+            } else {
+                ""
+            }
+        );
+        let mut name = args.input.clone().into_os_string();
+        name.push(" [flattened by rs274]");
+        (Box::new(std::io::Cursor::new(text)), PathBuf::from(name))
+    } else {
+        let input = std::fs::File::open(&args.input)
+            .map_err(|e| InputError::file(&args.input, format!("cannot read: {e}")))?;
+        (
+            Box::new(BufReader::with_capacity(1 << 16, input)),
+            args.input.clone(),
+        )
+    };
 
     let tmp = temp_path(&args.output);
     if let Some(parent) = tmp.parent() {
@@ -164,7 +208,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         let report =
             rewrite(reader, &mut writer, model.as_ref(), &options).map_err(|e| match e {
                 GcodeError::At(d) => {
-                    CliError::Input(InputError::at(&args.input, d.line, d.column, d.message))
+                    CliError::Input(InputError::at(&source, d.line, d.column, d.message))
                 }
                 GcodeError::Io(e) => {
                     CliError::Internal(anyhow::anyhow!("{}: {e}", args.input.display()))
@@ -188,7 +232,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         let _ = writeln!(
             err,
             "warning: {}:{}:{}: {} (line copied unchanged)",
-            args.input.display(),
+            source.display(),
             w.line,
             w.column,
             w.message
