@@ -367,6 +367,26 @@ fn hand_written_programs_with_control_flow_cycles_and_compensation_flatten_exact
 }
 
 #[test]
+fn recorded_flattening_of_the_unit_test_reproduces_rs274s_motion() {
+    // mtec-comp's unit test flattens a recorded rs274 listing into a recorded program; check
+    // here, with rs274, that this program moves as the original does
+    let Some(bin) = rs274() else { return };
+    let comp = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../mtec-comp/tests/data/flatten");
+    let data = data_dir();
+    let mill = data.join("mill.tbl");
+    let original = run_rs274(&bin, &data.join("offsets.ngc"), Some(&mill), None).unwrap();
+    let recorded = std::fs::read_to_string(comp.join("offsets.canon")).unwrap();
+    assert_eq!(
+        motions(&original).len(),
+        motions(&recorded).len(),
+        "offsets.canon is not rs274's output for offsets.ngc any more"
+    );
+    same_motion(&original, &recorded, "offsets.canon");
+    let flat = run_rs274(&bin, &comp.join("offsets.flat.ngc"), None, None).unwrap();
+    same_motion(&original, &flat, "offsets.flat.ngc");
+}
+
+#[test]
 fn constructs_without_a_plain_equivalent_are_refused_naming_the_canonical_line() {
     let Some(bin) = rs274() else { return };
     let dir = tempfile::tempdir().unwrap();

@@ -126,8 +126,11 @@ pub fn work_offsets_from_probe(canon: &str) -> Result<[[f64; 3]; 9], FlattenErro
                 let v = c.numbers(7)?;
                 let idx = c.index(v[0], 9)?;
                 let s = if inch { 25.4 } else { 1.0 };
-                table[idx] = [v[1] * s, v[2] * s, v[3] * s];
-                seen[idx] = true;
+                // the first print is the table (the program end prints G54 again)
+                if !seen[idx] {
+                    table[idx] = [v[1] * s, v[2] * s, v[3] * s];
+                    seen[idx] = true;
+                }
             }
             _ => {}
         }
@@ -933,4 +936,309 @@ pub fn flatten(canon: &str, opt: &FlattenOptions) -> Result<(String, FlattenRepo
         f.line("M2");
     }
     Ok((f.out, f.report))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// rs274 output for `crates/mtec-cli/tests/data/flatten/offsets.ngc` (see the README there).
+    const OFFSETS_CANON: &str = include_str!("../../tests/data/flatten/offsets.canon");
+    const OFFSETS_FLAT: &str = include_str!("../../tests/data/flatten/offsets.flat.ngc");
+    const PROBE_CANON: &str = include_str!("../../tests/data/flatten/probe.canon");
+
+    fn zero_table() -> FlattenOptions {
+        FlattenOptions {
+            work_offsets_mm: Some([[0.0; 3]; 9]),
+            ..FlattenOptions::default()
+        }
+    }
+
+    fn flat(canon: &str) -> Result<String, FlattenError> {
+        flatten(canon, &zero_table()).map(|(t, _)| t)
+    }
+
+    /// A canonical listing of the given calls, numbered as rs274 numbers them.
+    fn canon(calls: &[&str]) -> String {
+        let mut s = String::from(
+            "    1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n    2 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n",
+        );
+        for (i, c) in calls.iter().enumerate() {
+            s.push_str(&format!("{:5} N..... {c}\n", i + 3));
+        }
+        s
+    }
+
+    #[test]
+    fn recorded_rs274_output_flattens_to_the_recorded_program() {
+        let (text, report) = flatten(OFFSETS_CANON, &zero_table()).unwrap();
+        if std::env::var_os("MTEC_BLESS").is_some() {
+            let p = concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/tests/data/flatten/offsets.flat.ngc"
+            );
+            std::fs::write(p, &text).unwrap();
+        }
+        assert_eq!(text, OFFSETS_FLAT);
+        assert_eq!(report.canonical_lines, 60);
+        assert_eq!((report.straight_moves, report.arcs), (9, 3));
+        assert!(report.offsets_folded);
+        assert!(text.lines().all(|l| l.len() <= 255));
+    }
+
+    #[test]
+    fn offsets_are_folded_into_machine_positions() {
+        // G54 (10, 20, 30), then G92 -15 in X, then a tool length of 5 on Z
+        let t = flat(&canon(&[
+            "SET_G5X_OFFSET(1, 10.0000, 20.0000, 30.0000, 0.0000, 0.0000, 0.0000)",
+            "SET_G92_OFFSET(-15.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+            "STRAIGHT_TRAVERSE(0.0000, 0.0000, 5.0000, 0.0000, 0.0000, 0.0000)",
+            "USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 5.0000, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)",
+            "STRAIGHT_TRAVERSE(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+            "USE_LENGTH_UNITS(CANON_UNITS_INCHES)",
+            "STRAIGHT_TRAVERSE(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+            "PROGRAM_END()",
+        ]))
+        .unwrap();
+        let lines: Vec<&str> = t.lines().collect();
+        assert!(lines.contains(&"G0 X-5.0 Y20.0 Z35.0"), "{t}");
+        assert!(lines.contains(&"G0 X-4.0 Y20.0 Z35.0"), "{t}");
+        // inch: (25.4 - 5 mm) / 25.4, (20 / 25.4), (35 / 25.4) with 6 decimals
+        assert!(lines.contains(&"G0 X0.80315 Y0.787402 Z1.377953"), "{t}");
+        assert_eq!(lines.last(), Some(&"M2"));
+        // with the table G54 = (10, 20, 30) the work offset is not folded
+        let opt = FlattenOptions {
+            work_offsets_mm: Some([[10.0, 20.0, 30.0]; 9]),
+            ..FlattenOptions::default()
+        };
+        let (t, _) = flatten(
+            &canon(&[
+                "SET_G5X_OFFSET(1, 10.0000, 20.0000, 30.0000, 0.0000, 0.0000, 0.0000)",
+                "STRAIGHT_TRAVERSE(1.2345, -0.0001, 5.0000, 0.0000, 0.0000, 0.0000)",
+            ]),
+            &opt,
+        )
+        .unwrap();
+        assert!(t.contains("\nG0 X1.2345 Y-0.0001 Z5.0\n"), "{t}");
+        // without a table, the first value printed for a system is its table entry
+        let (t, r) = flatten(
+            &canon(&[
+                "SET_G5X_OFFSET(2, 1.0000, 2.0000, 3.0000, 0.0000, 0.0000, 0.0000)",
+                "STRAIGHT_TRAVERSE(1.0000, 1.0000, 1.0000, 0.0000, 0.0000, 0.0000)",
+            ]),
+            &FlattenOptions::default(),
+        )
+        .unwrap();
+        assert!(
+            t.contains("\nG55\n") && t.contains("\nG0 X1.0 Y1.0 Z1.0\n"),
+            "{t}"
+        );
+        assert!(!r.offsets_folded);
+    }
+
+    #[test]
+    fn arcs_in_three_planes_turns_and_helices() {
+        // recorded from rs274 (LinuxCNC 2.9): G2 X11 Y2 I5 J0 from (1, 2, 3); G3 back with
+        // Z-1 and P3; G18 G2 X3 Z-1 I1 K0; G19 G3 Y4 Z-1 J1 K0
+        let t = flat(&canon(&[
+            "STRAIGHT_FEED(1.0000, 2.0000, 3.0000, 0.0000, 0.0000, 0.0000)",
+            "ARC_FEED(11.0000, 2.0000, 6.0000, 2.0000, -1, 3.0000, 0.0000, 0.0000, 0.0000)",
+            "ARC_FEED(1.0000, 2.0000, 6.0000, 2.0000, 3, -1.0000, 0.0000, 0.0000, 0.0000)",
+            "SELECT_PLANE(CANON_PLANE_XZ)",
+            "ARC_FEED(-1.0000, 3.0000, -1.0000, 2.0000, -1, 2.0000, 0.0000, 0.0000, 0.0000)",
+            "SELECT_PLANE(CANON_PLANE_YZ)",
+            "ARC_FEED(4.0000, -1.0000, 3.0000, -1.0000, 1, 3.0000, 0.0000, 0.0000, 0.0000)",
+        ]))
+        .unwrap();
+        for want in [
+            "G2 X11.0 Y2.0 Z3.0 I5.0 J0.0",
+            "G3 X1.0 Y2.0 Z-1.0 I-5.0 J0.0 P3.0",
+            "G18",
+            "G2 X3.0 Y2.0 Z-1.0 I1.0 K0.0",
+            "G19",
+            "G3 X3.0 Y4.0 Z-1.0 J1.0 K0.0",
+        ] {
+            assert!(t.lines().any(|l| l == want), "{want} missing in\n{t}");
+        }
+        assert!(t.starts_with("G90 G91.1 "), "{t}");
+    }
+
+    #[test]
+    fn refusals_name_the_canonical_line_and_the_reason() {
+        let cases: [(&str, &str); 12] = [
+            (
+                "STRAIGHT_PROBE(10.0000, 0.0000, -5.0000, 0.0000, 0.0000, 0.0000)",
+                "probing",
+            ),
+            ("START_SPEED_FEED_SYNC(1.000000,0)", "spindle-synchronised"),
+            ("RIGID_TAP(10.0000, 0.0000, -5.0000)", "rigid tapping"),
+            ("NURBS_FEED(4, ...)", "splines"),
+            (
+                "STRAIGHT_FEED(5.0000, 0.0000, 0.0000, 10.0000, 0.0000, 0.0000)",
+                "axis A",
+            ),
+            ("SET_XY_ROTATION(30.0000)", "rotated"),
+            (
+                "ARC_FEED(1.0000, 2.0000, 6.0000, 2.0000, 0, 3.0000, 0.0000, 0.0000, 0.0000)",
+                "rotation",
+            ),
+            (
+                "STRAIGHT_FEED(NaN, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                "finite",
+            ),
+            ("STRAIGHT_FEED(1.0, 2.0)", "needs 6 arguments"),
+            ("SET_SPINDLE_SPEED(1, 100.0000)", "spindle 1"),
+            ("ORIENT_SPINDLE(0, 0.0000, 0)", "does not know"),
+            ("this is not a call", "not a canonical call"),
+        ];
+        for (call, words) in cases {
+            let e = flat(&canon(&[call])).unwrap_err();
+            assert_eq!(e.line, 3, "{call}: {e}");
+            assert!(e.message.contains(words), "{call}: {e}");
+            assert!(e.to_string().contains("canonical line 3"), "{e}");
+        }
+        let e = flat(&canon(&[
+            "PROGRAM_END()",
+            "STRAIGHT_TRAVERSE(1, 0, 0, 0, 0, 0)",
+        ]))
+        .unwrap_err();
+        assert_eq!(e.line, 4);
+        let e = flat(&canon(&[
+            "SET_G5X_OFFSET(3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)",
+            "CHANGE_TOOL(1)",
+        ]))
+        .unwrap_err();
+        assert!(e.message.contains("no tool selected"), "{e}");
+        // CSS with a folded X offset would change the spindle speed
+        let e = flat(&canon(&[
+            "SET_G92_OFFSET(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+            "SET_SPINDLE_MODE(0 2000.0000)",
+            "STRAIGHT_FEED(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+        ]))
+        .unwrap_err();
+        assert!(e.message.contains("G96"), "{e}");
+    }
+
+    #[test]
+    fn non_motion_calls_become_their_codes() {
+        let t = flat(&canon(&[
+            "SET_SPINDLE_SPEED(0, 1000.0000)",
+            "START_SPINDLE_CLOCKWISE(0)",
+            "FLOOD_ON()",
+            "MIST_ON()",
+            "SET_MOTION_CONTROL_MODE(CANON_CONTINUOUS, 0.010000)",
+            "SET_NAIVECAM_TOLERANCE(0.0200)",
+            "COMMENT(\"interpreter: cutter radius compensation on left\")",
+            "COMMENT(\"keep (me)\")",
+            "MESSAGE(\" hi\")",
+            "SET_FEED_RATE(120.0000)",
+            "STRAIGHT_FEED(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+            "MIST_OFF()",
+            "DWELL(1.5000)",
+            "SELECT_TOOL(2)",
+            "START_CHANGE()",
+            "CHANGE_TOOL(2)",
+            "SET_FEED_MODE(0, 1)",
+            "SET_FEED_RATE(0.1000)",
+            "STRAIGHT_FEED(2.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+            "STOP_SPINDLE_TURNING(0)",
+            "PALLET_SHUTTLE()",
+            "PROGRAM_END()",
+            "ON_RESET()",
+        ]))
+        .unwrap();
+        let body: Vec<&str> = t.lines().skip(1).collect();
+        assert_eq!(
+            body,
+            [
+                "G21",
+                "G54",
+                "G17",
+                "S1000.0",
+                "M3",
+                "(keep [me])",
+                "(MSG, hi)",
+                "G64 P0.01 Q0.02",
+                "M7",
+                "M8",
+                "G1 X1.0 Y0.0 Z0.0 F120.0",
+                "M9",
+                "M8",
+                "G4 P1.5",
+                "T2",
+                "M6",
+                "G95",
+                "G1 X2.0 Y0.0 Z0.0 F0.1",
+                "M5",
+                "M30",
+            ],
+            "{t}"
+        );
+    }
+
+    #[test]
+    fn axes_the_program_never_names_are_not_written() {
+        let named =
+            axes_named(b"G18 G0 X1 Z2 (Y is not here)\n; nor Y1 here\no<max> call\nG1 x-1 z#1\n");
+        assert_eq!(named, [true, false, true]);
+        let opt = FlattenOptions {
+            work_offsets_mm: Some([[0.0; 3]; 9]),
+            axes_named: named,
+            header: Some("(flattened)".into()),
+        };
+        let (t, _) = flatten(
+            &canon(&[
+                "STRAIGHT_TRAVERSE(1.0000, 0.0000, 2.0000, 0.0000, 0.0000, 0.0000)",
+                "STRAIGHT_TRAVERSE(1.0000, 3.0000, 2.0000, 0.0000, 0.0000, 0.0000)",
+            ]),
+            &opt,
+        )
+        .unwrap();
+        assert!(t.starts_with("(flattened)\n"));
+        assert!(t.contains("\nG0 X1.0 Z2.0\n"), "{t}");
+        // once Y moves it is written
+        assert!(t.contains("\nG0 X1.0 Y3.0 Z2.0\n"), "{t}");
+    }
+
+    #[test]
+    fn probe_output_gives_the_table_in_mm() {
+        let t = work_offsets_from_probe(PROBE_CANON).unwrap();
+        assert_eq!(t[0], [76.2, -50.8, -114.3]);
+        assert_eq!(t[1], [31.75, 19.05, -25.4]);
+        assert_eq!(t[8], [0.0; 3]);
+        let e =
+            work_offsets_from_probe("    1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n").unwrap_err();
+        assert!(e.message.contains("G54"), "{e}");
+    }
+
+    #[test]
+    fn arbitrary_and_damaged_input_never_panics() {
+        // every prefix of every recorded line, and byte-level damage, through the flattener
+        let mut seed = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        for line in OFFSETS_CANON.lines() {
+            for cut in 0..=line.len() {
+                if line.is_char_boundary(cut) {
+                    let _ = flat(&format!("{}\n", &line[..cut]));
+                    let _ = flatten(&line[..cut], &FlattenOptions::default());
+                }
+            }
+        }
+        let bytes = OFFSETS_CANON.as_bytes();
+        for _ in 0..300 {
+            let mut b = bytes.to_vec();
+            for _ in 0..(next() % 8 + 1) {
+                let i = (next() % b.len() as u64) as usize;
+                b[i] = b"(),.- 0123456789eEnNaAX\n\""[(next() % 25) as usize];
+            }
+            let _ = flat(&String::from_utf8_lossy(&b));
+        }
+        let _ = work_offsets_from_probe("1 N SET_G5X_OFFSET(99, 1, 2, 3, 4, 5, 6)\n");
+        let _ = axes_named(b"X(((Y)))\n;Z\xff");
+    }
 }
