@@ -728,10 +728,12 @@ impl Flattener {
             "SET_FEED_MODE" => {
                 let v = c.numbers(2)?;
                 self.spindle(c, v[0])?;
-                self.feed_per_rev = match v[1] {
-                    m if m == 0.0 => false,
-                    m if m == 1.0 => true,
-                    m => return Err(c.err(format!("feed mode {m} is not 0 or 1"))),
+                self.feed_per_rev = if v[1] == 0.0 {
+                    false
+                } else if v[1] == 1.0 {
+                    true
+                } else {
+                    return Err(c.err(format!("feed mode {} is not 0 or 1", v[1])));
                 };
             }
             "SET_MOTION_CONTROL_MODE" => {
