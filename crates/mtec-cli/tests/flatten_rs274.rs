@@ -488,3 +488,48 @@ fn missing_rs274_is_a_usage_error_that_says_what_to_install() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
 }
+
+#[test]
+fn help_says_what_flattening_writes_and_refuses() {
+    let o = mtec()
+        .args(["compensate", "gcode", "--help"])
+        .output()
+        .unwrap();
+    let h = text(&o);
+    for words in [
+        "--flatten-with",
+        "LinuxCNC-only",
+        "cutter radius compensation and\ntool lengths are baked in",
+        "probing (G38.x)",
+        "spindle-synchronised motion",
+        "linuxcnc-uspace",
+    ] {
+        assert!(h.contains(words), "'{words}' missing from --help:\n{h}");
+    }
+}
+
+#[test]
+fn block_delete_switch_reaches_rs274() {
+    let Some(bin) = rs274() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("bd.ngc");
+    std::fs::write(&p, "G21 G90\nG0 X0 Y0 Z1\n/G0 X5\nG0 Y5\nM2\n").unwrap();
+    let model = dir.path().join("zero.json");
+    std::fs::write(&model, ZERO_MODEL).unwrap();
+    let mut counts = Vec::new();
+    for bd in ["off", "on"] {
+        let out = dir.path().join(format!("bd-{bd}.ngc"));
+        let o = mtec()
+            .args(["compensate", "gcode", "--model"])
+            .arg(&model)
+            .args(["--flatten-with", "rs274", "--block-delete", bd])
+            .arg(&p)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+        counts.push(motions(&run_rs274(&bin, &out, None, None).unwrap()).len());
+    }
+    assert_eq!(counts, [3, 2], "block delete on skips the '/' line");
+}

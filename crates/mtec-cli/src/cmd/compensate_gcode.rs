@@ -8,7 +8,7 @@ use mtec_io::InputError;
 use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-const LONG_ABOUT: &str = "\
+pub const LONG_ABOUT: &str = "\
 Rewrites an NC program (RS274/NGC as LinuxCNC reads it, or common Fanuc style) so that every
 commanded point is corrected for the machine's volumetric error: the command p that makes the
 machine reach the target t solves p + e(p) = t. Feed moves are split where the correction
@@ -46,7 +46,7 @@ compensated. The output is a LinuxCNC-only program for one setup: cutter radius 
 tool lengths are baked in for the tool table given (--tool-table), G92/G52 offsets and work offsets
 changed by the program are folded into the coordinates (the output runs with G49 and no G92), and
 it keeps the original's G54-G59.3 selection, so it reaches the same machine positions when run
-with the same work-offset table (--var-file; mention the same offsets in --offsets). Refused, with
+with the same work-offset table (--var-file; give the same offsets to --offsets). Refused, with
 rs274's line: spindle-synchronised motion (G33, G76), probing (G38.x), rigid tapping (G33.1),
 splines (G5.x), A/B/C/U/V/W motion, a rotated work system (G10 L2 R), and anything rs274 itself
 refuses (its message is passed on). Note that stand-alone rs274 reads tool-table and parameter
@@ -54,8 +54,7 @@ file lengths as inches.
 
 Examples:
   mtec compensate gcode --model model.json part.ngc -o part-comp.ngc --offsets offsets.toml
-  mtec compensate gcode --model model.json --flatten-with rs274 --tool-table tool.tbl \
-      pocket.ngc -o pocket-comp.ngc";
+  mtec compensate gcode --model m.json --flatten-with rs274 --tool-table t.tbl in.ngc -o out.ngc";
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum OnUnsupportedArg {
