@@ -533,3 +533,39 @@ fn block_delete_switch_reaches_rs274() {
     }
     assert_eq!(counts, [3, 2], "block delete on skips the '/' line");
 }
+
+#[test]
+fn model_is_evaluated_at_machine_positions_with_the_var_files_work_offsets() {
+    let Some(bin) = rs274() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("poly.json");
+    // e_x = 1 um per mm of machine X
+    std::fs::write(
+        &model,
+        r#"{"format": "mtec.poly-model/1", "terms": [{"powers": [1,0,0], "coef_um": [1.0, 0.0, 0.0]}]}"#,
+    )
+    .unwrap();
+    let prog = dir.path().join("p.ngc");
+    std::fs::write(&prog, "G21 G90 G54\nG0 X0 Y0 Z5\nM2\n").unwrap();
+    // offsets.var: G54 X = 3 (inch, as rs274 reads it) = 76.2 mm
+    let var = data_dir().join("offsets.var");
+    let mut first_x = Vec::new();
+    for with_var in [false, true] {
+        let out = dir.path().join(format!("o-{with_var}.ngc"));
+        let mut c = mtec();
+        c.args(["compensate", "gcode", "--model"])
+            .arg(&model)
+            .args(["--flatten-with", "rs274"]);
+        if with_var {
+            c.arg("--var-file").arg(&var);
+        }
+        let o = c.arg(&prog).arg("-o").arg(&out).output().unwrap();
+        assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+        let v = if with_var { Some(var.as_path()) } else { None };
+        let m = motions(&run_rs274(&bin, &out, None, v).unwrap());
+        first_x.push(m[0].end[0]);
+    }
+    // machine X 0: no correction; machine X 76.2: p + 0.001 p = 76.2, p = 76.1239
+    assert!(first_x[0].abs() < 1e-9, "{first_x:?}");
+    assert!((first_x[1] - 76.2 / 1.001).abs() < 2e-4, "{first_x:?}");
+}

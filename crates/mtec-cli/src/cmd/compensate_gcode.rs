@@ -1,8 +1,9 @@
 //! `mtec compensate gcode`: rewrites an NC program so the machine reaches the programmed points.
 
-use crate::cmd::flatten::{extra_inputs, flatten_input, FlattenArgs};
+use crate::cmd::flatten::{extra_inputs, flatten_input, FlattenArgs, Flattened};
 use crate::cmd::model_loader::load_error_model;
 use crate::error::CliError;
+use mtec_comp::gcode::offsets::WORK_SYSTEMS;
 use mtec_comp::gcode::{rewrite, GcodeError, OffsetsFile, OnUnsupported, RewriteOptions, Units};
 use mtec_io::InputError;
 use std::io::{BufRead, BufReader, BufWriter, Write};
@@ -46,7 +47,8 @@ compensated. The output is a LinuxCNC-only program for one setup: cutter radius 
 tool lengths are baked in for the tool table given (--tool-table), G92/G52 offsets and work offsets
 changed by the program are folded into the coordinates (the output runs with G49 and no G92), and
 it keeps the original's G54-G59.3 selection, so it reaches the same machine positions when run
-with the same work-offset table (--var-file; give the same offsets to --offsets). Refused, with
+with the same work-offset table (--var-file; without --offsets the model is evaluated with the
+work offsets rs274 read from it). Refused, with
 rs274's line: spindle-synchronised motion (G33, G76), probing (G38.x), rigid tapping (G33.1),
 splines (G5.x), A/B/C/U/V/W motion, a rotated work system (G10 L2 R), and anything rs274 itself
 refuses (its message is passed on). Note that stand-alone rs274 reads tool-table and parameter
@@ -171,7 +173,23 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     // with --flatten-with, the rewriter reads the flattened program; its errors name that
     let (reader, source): (Box<dyn BufRead>, PathBuf) = if args.flatten.flatten_with.is_some() {
-        let (text, report) = flatten_input(&args.input, &args.flatten)?;
+        let Flattened {
+            text,
+            report,
+            work_offsets_mm,
+        } = flatten_input(&args.input, &args.flatten)?;
+        // the model is evaluated at machine positions: without --offsets, take the work
+        // offsets rs274 read from --var-file; with it, say when the two disagree
+        if args.offsets.is_none() {
+            options.offsets.work_mm = work_offsets_mm;
+        } else if let Some(i) = (0..9).find(|&i| {
+            (0..3).any(|a| (options.offsets.work_mm[i][a] - work_offsets_mm[i][a]).abs() > 1e-6)
+        }) {
+            eprintln!(
+                "warning: {} in --offsets is {:?} mm but rs274 read {:?} mm (--var-file): the model is evaluated with --offsets",
+                WORK_SYSTEMS[i], options.offsets.work_mm[i], work_offsets_mm[i]
+            );
+        }
         println!(
             "{}: flattened by rs274: {} canonical lines -> {} lines ({} straight moves, {} arcs{})",
             args.input.display(),

@@ -194,11 +194,17 @@ fn rs274_message(stderr: &str) -> String {
     }
 }
 
+/// A flattened program.
+pub struct Flattened {
+    pub text: Vec<u8>,
+    pub report: FlattenReport,
+    /// The work-offset table at program start (G54…G59.3, mm) as rs274 read it: the flattened
+    /// program's coordinates are machine positions minus these.
+    pub work_offsets_mm: [[f64; 3]; 9],
+}
+
 /// Flattens `input` with rs274; returns the plain program and what flattening did.
-pub fn flatten_input(
-    input: &Path,
-    args: &FlattenArgs,
-) -> Result<(Vec<u8>, FlattenReport), CliError> {
+pub fn flatten_input(input: &Path, args: &FlattenArgs) -> Result<Flattened, CliError> {
     if !(args.rs274_timeout_s.is_finite() && args.rs274_timeout_s > 0.0) {
         return Err(CliError::usage(
             "--rs274-timeout-s must be a positive number",
@@ -302,5 +308,9 @@ pub fn flatten_input(
     };
     let (text, report) = flatten(&run.stdout, &options)
         .map_err(|e| InputError::file(input, format!("cannot flatten: {e}")))?;
-    Ok((text.into_bytes(), report))
+    Ok(Flattened {
+        text: text.into_bytes(),
+        report,
+        work_offsets_mm: table,
+    })
 }
