@@ -14,6 +14,8 @@ use mtec_io::InputError;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// The interpreters a program can be flattened with.
@@ -105,6 +107,9 @@ fn find_on_path(name: &str) -> Option<PathBuf> {
 
 const INSTALL_HINT: &str = "install LinuxCNC's interpreter (Debian/Ubuntu package linuxcnc-uspace: apt install linuxcnc-uspace) or give its path with --rs274";
 
+/// rs274's output is read into memory up to this size (about 6 M canonical calls).
+const MAX_OUTPUT_BYTES: u64 = 512 << 20;
+
 struct Run {
     status: Option<i32>,
     stdout: String,
@@ -140,10 +145,15 @@ fn run_rs274(
         })?;
     let mut out = child.stdout.take();
     let mut err = child.stderr.take();
+    let too_long = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&too_long);
     let t_out = std::thread::spawn(move || {
         let mut v = Vec::new();
         if let Some(o) = out.as_mut() {
-            let _ = o.read_to_end(&mut v);
+            let _ = o.take(MAX_OUTPUT_BYTES + 1).read_to_end(&mut v);
+            if v.len() as u64 > MAX_OUTPUT_BYTES {
+                flag.store(true, Ordering::Relaxed);
+            }
         }
         v
     });
@@ -158,6 +168,16 @@ fn run_rs274(
     let status = loop {
         if let Some(s) = child.try_wait()? {
             break s;
+        }
+        if too_long.load(Ordering::Relaxed) {
+            let _ = child.kill();
+            let _ = child.wait();
+            let _ = t_out.join();
+            let _ = t_err.join();
+            return Err(CliError::usage(format!(
+                "rs274 printed more than {} MB of canonical calls (a program that loops forever?)",
+                MAX_OUTPUT_BYTES >> 20
+            )));
         }
         if start.elapsed() > timeout {
             let _ = child.kill();

@@ -59,7 +59,7 @@ pub struct FlattenOptions {
     pub work_offsets_mm: Option<[[f64; 3]; 9]>,
     /// X, Y, Z named by the original program (written from the first move on).
     pub axes_named: [bool; 3],
-    /// First line of the output (a comment), without newline; `None` for none.
+    /// First line of the output (a comment), without newline, cut to 254 characters.
     pub header: Option<String>,
 }
 
@@ -913,7 +913,7 @@ fn comment_text(t: &str) -> String {
 pub fn flatten(canon: &str, opt: &FlattenOptions) -> Result<(String, FlattenReport), FlattenError> {
     let mut f = Flattener::new(opt);
     if let Some(h) = &opt.header {
-        let h = h.replace(['\n', '\r'], " ");
+        let h: String = h.replace(['\n', '\r'], " ").chars().take(254).collect();
         f.line(&h);
     }
     f.line("G90 G91.1 G40 G49 G94 G80");
