@@ -916,7 +916,8 @@ pub fn flatten(canon: &str, opt: &FlattenOptions) -> Result<(String, FlattenRepo
         let h: String = h.replace(['\n', '\r'], " ").chars().take(254).collect();
         f.line(&h);
     }
-    f.line("G90 G91.1 G40 G49 G94 G80");
+    // G8: rs274 prints lathe X as a radius (G7 diameter mode is already undone)
+    f.line("G90 G91.1 G40 G49 G94 G80 G8");
     f.out_feed_per_rev = Some(false);
     for (i, raw) in canon.lines().enumerate() {
         f.report.canonical_lines += 1;
