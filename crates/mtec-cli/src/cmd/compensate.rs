@@ -3,6 +3,7 @@
 #[derive(clap::Subcommand)]
 pub enum Command {
     /// Rewrite an NC program (G-code) so the machine reaches the programmed points.
+    #[command(long_about = super::compensate_gcode::LONG_ABOUT)]
     Gcode(super::compensate_gcode::Args),
     /// Controller compensation tables (LinuxCNC, Siemens CEC/LEC, Fanuc, Heidenhain, Beckhoff).
     #[command(long_about = super::compensate_table::HELP)]

@@ -1,13 +1,20 @@
 //! `mtec compensate gcode`: rewrites an NC program so the machine reaches the programmed points.
 
+use crate::cmd::flatten::{
+    extra_inputs, flatten_input, FlattenArgs, Flattened, OnOff, ToolTableUnits,
+};
 use crate::cmd::model_loader::load_error_model;
 use crate::error::CliError;
-use mtec_comp::gcode::{rewrite, GcodeError, OffsetsFile, OnUnsupported, RewriteOptions, Units};
+use mtec_comp::gcode::offsets::WORK_SYSTEMS;
+use mtec_comp::gcode::tooltable::{load_tool_table, MachineUnits};
+use mtec_comp::gcode::{
+    rewrite, BlockDelete, GcodeError, OffsetsFile, OnUnsupported, RewriteOptions, Units,
+};
 use mtec_io::{InputError, OutputGuard};
-use std::io::{BufReader, BufWriter, Write};
+use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::PathBuf;
 
-const LONG_ABOUT: &str = "\
+pub const LONG_ABOUT: &str = "\
 Rewrites an NC program (RS274/NGC as LinuxCNC reads it, or common Fanuc style) so that every
 commanded point is corrected for the machine's volumetric error: the command p that makes the
 machine reach the target t solves p + e(p) = t. Every feed move (G1, G2/G3 including full
@@ -48,8 +55,24 @@ Without --offsets only G54 is known (as zero: program coordinates are machine co
 program that selects another work system is refused at that word. Every written line is at
 most --max-line-chars long (255: LinuxCNC's limit); the header comment is shortened to fit.
 
-Example:
-  mtec compensate gcode --model model.json part.ngc -o part-comp.ngc --offsets offsets.toml";
+Flattening (--flatten-with rs274): for programs the rewriter refuses (O-word subroutines and
+loops, canned cycles, cutter compensation, polar coordinates, parameters, G92/G52, G10), LinuxCNC's
+interpreter (rs274, package linuxcnc-uspace) runs the program first and its moves are written as a
+plain program (G0/G1, G2/G3 with I J K, F, S, M3/M4/M5, M7/M8/M9, G4, T M6), which is then
+compensated. The output is a LinuxCNC-only program for one setup: cutter radius compensation and
+tool lengths are baked in for the tool table given (--tool-table), G92/G52 offsets and work offsets
+changed by the program are folded into the coordinates (the output runs with G49 and no G92), and
+it keeps the original's G54-G59.3 selection, so it reaches the same machine positions when run
+with the same work-offset table (--var-file; without --offsets the model is evaluated with the
+work offsets rs274 read from it). Refused, with
+rs274's line: spindle-synchronised motion (G33, G76), probing (G38.x), rigid tapping (G33.1),
+splines (G5.x), A/B/C/U/V/W motion, a rotated work system (G10 L2 R), and anything rs274 itself
+refuses (its message is passed on). Note that stand-alone rs274 reads tool-table and parameter
+file lengths as inches.
+
+Examples:
+  mtec compensate gcode --model model.json part.ngc -o part-comp.ngc --offsets offsets.toml
+  mtec compensate gcode --model m.json --flatten-with rs274 --tool-table t.tbl in.ngc -o out.ngc";
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum OnUnsupportedArg {
@@ -116,6 +139,8 @@ pub struct Args {
     /// Longest line the controller reads (LinuxCNC: 255); longer rewritten lines are refused.
     #[arg(long, default_value_t = 255)]
     pub max_line_chars: usize,
+    #[command(flatten)]
+    pub flatten: FlattenArgs,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
@@ -158,6 +183,29 @@ pub fn run(args: Args) -> Result<(), CliError> {
         let file: OffsetsFile = mtec_io::read_toml(p)?;
         options.offsets = file.validate().map_err(|m| InputError::file(p, m))?;
     }
+    if let Some(b) = args.flatten.block_delete {
+        options.block_delete = match b {
+            OnOff::On => BlockDelete::On,
+            OnOff::Off => BlockDelete::Off,
+        };
+    }
+    if let (Some(t), None) = (&args.flatten.tool_table, &args.flatten.flatten_with) {
+        // G43 lengths from the controller's own tool table (rs274 reads it itself when flattening)
+        let units = match args.flatten.tool_table_units {
+            ToolTableUnits::Mm => MachineUnits::Mm,
+            ToolTableUnits::Inch => MachineUnits::Inch,
+        };
+        let table = load_tool_table(t, units).map_err(CliError::Usage)?;
+        let (offsets, notes) = options
+            .offsets
+            .clone()
+            .with_tool_table(&table)
+            .map_err(|m| InputError::file(t, m))?;
+        for n in notes {
+            eprintln!("warning: {}: {n}", t.display());
+        }
+        options.offsets = offsets;
+    }
     options.validate().map_err(CliError::Usage)?;
 
     // the one output routine of mtec-io: a file atomically, a device, FIFO or `-` straight
@@ -166,17 +214,59 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if let Some(p) = &args.offsets {
         guard.add_input(p);
     }
+    for p in extra_inputs(&args.flatten) {
+        guard.add_input(p);
+    }
     let dest = guard.check(&args.output)?;
-    let input = std::fs::File::open(&args.input)
-        .map_err(|e| InputError::file(&args.input, format!("cannot read: {e}")))?;
-    let reader = BufReader::with_capacity(1 << 16, input);
+    // with --flatten-with, the rewriter reads the flattened program; its errors name that
+    let (reader, source): (Box<dyn BufRead>, PathBuf) = if args.flatten.flatten_with.is_some() {
+        let Flattened {
+            text,
+            report,
+            work_offsets_mm,
+        } = flatten_input(&args.input, &args.flatten)?;
+        // the model is evaluated at machine positions: without --offsets, take the work
+        // offsets rs274 read from --var-file; with it, say when the two disagree
+        if args.offsets.is_none() {
+            options.offsets.work_mm = work_offsets_mm;
+            options.offsets.known = [true; 9];
+        } else if let Some(i) = (0..9).find(|&i| {
+            (0..3).any(|a| (options.offsets.work_mm[i][a] - work_offsets_mm[i][a]).abs() > 1e-6)
+        }) {
+            eprintln!(
+                "warning: {} in --offsets is {:?} mm but rs274 read {:?} mm (--var-file): the model is evaluated with --offsets",
+                WORK_SYSTEMS[i], options.offsets.work_mm[i], work_offsets_mm[i]
+            );
+        }
+        eprintln!(
+            "{}: flattened by rs274: {} canonical lines -> {} lines ({} straight moves, {} arcs{})",
+            args.input.display(),
+            report.canonical_lines,
+            report.lines_written,
+            report.straight_moves,
+            report.arcs,
+            if report.offsets_folded {
+                "; offsets folded into the coordinates"
+            } else {
+                ""
+            }
+        );
+        let mut name = args.input.clone().into_os_string();
+        name.push(" [flattened by rs274]");
+        (Box::new(std::io::Cursor::new(text)), PathBuf::from(name))
+    } else {
+        let input = std::fs::File::open(&args.input)
+            .map_err(|e| InputError::file(&args.input, format!("cannot read: {e}")))?;
+        (
+            Box::new(BufReader::with_capacity(1 << 16, input)),
+            args.input.clone(),
+        )
+    };
 
     // dropped on error, an unfinished output leaves the target untouched
     let mut writer = BufWriter::with_capacity(1 << 16, dest.open()?);
     let report = rewrite(reader, &mut writer, model.as_ref(), &options).map_err(|e| match e {
-        GcodeError::At(d) => {
-            CliError::Input(InputError::at(&args.input, d.line, d.column, d.message))
-        }
+        GcodeError::At(d) => CliError::Input(InputError::at(&source, d.line, d.column, d.message)),
         GcodeError::Io(e) => CliError::Internal(anyhow::anyhow!("{}: {e}", args.input.display())),
     })?;
     writer.into_inner().map_err(|e| e.into_error())?.commit()?;
@@ -186,7 +276,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         let _ = writeln!(
             err,
             "warning: {}:{}:{}: {} (line copied unchanged)",
-            args.input.display(),
+            source.display(),
             w.line,
             w.column,
             w.message

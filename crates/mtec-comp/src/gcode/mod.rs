@@ -34,6 +34,8 @@
 //!   block delete on motion) are refused naming `line:column`, or with
 //!   [`OnUnsupported::PassThroughWithWarning`] copied unchanged with a warning; everything the
 //!   construct may have changed is then treated as unknown until the program sets it again.
+//!   Most of them can go through [`flatten`] first: LinuxCNC's interpreter runs the program and
+//!   its moves are written as a plain program (`compensate gcode --flatten-with rs274`).
 //! - **Positions not yet known** (the first moves of a program, after G28/G30): rapids are
 //!   copied uncorrected; feed moves to a known end point from an unknown start are corrected at
 //!   their end point only; arcs from an unknown start are unsupported.
@@ -58,6 +60,7 @@ pub mod arc;
 pub mod block;
 pub mod bound;
 pub mod expr;
+pub mod flatten;
 pub mod format;
 pub mod lexer;
 pub mod modal;

@@ -1,0 +1,350 @@
+//! `compensate gcode --flatten-with rs274`: runs LinuxCNC's interpreter on the program and turns
+//! its canonical moves into a plain program ([`mtec_comp::gcode::flatten`]) for the rewriter.
+//!
+//! All process spawning lives here. rs274 runs in a fresh temporary folder (it rewrites its
+//! parameter file on exit, so the `--var-file` and `--tool-table` given are copied there first
+//! and the user's files are never touched), with the program's absolute path, and with HOME set
+//! to that folder (rs274 writes its tool data to `$HOME/.tool.mmap`).
+
+use crate::error::CliError;
+use mtec_comp::gcode::flatten::{
+    axes_named, flatten, work_offsets_from_probe, FlattenOptions, FlattenReport, WORK_OFFSET_PROBE,
+};
+use mtec_io::InputError;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// The interpreters a program can be flattened with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum FlattenWith {
+    /// LinuxCNC's stand-alone interpreter (`rs274 -g`, Debian package linuxcnc-uspace).
+    Rs274,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum OnOff {
+    On,
+    Off,
+}
+
+/// Units of a tool table's lengths.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ToolTableUnits {
+    Mm,
+    Inch,
+}
+
+/// The flattening options of `compensate gcode`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct FlattenArgs {
+    /// Run the program through LinuxCNC's interpreter first and compensate the moves it makes
+    /// (for O-word subroutines/loops, canned cycles, cutter compensation, parameters, G92...).
+    /// The output is then a LinuxCNC-only plain program.
+    #[arg(long, value_enum, value_name = "rs274")]
+    pub flatten_with: Option<FlattenWith>,
+    /// The rs274 binary to use (default: `rs274` on PATH).
+    #[arg(long, value_name = "PATH", requires = "flatten_with")]
+    pub rs274: Option<PathBuf>,
+    /// LinuxCNC tool table (.tbl): tool lengths for G43 (Z offsets, in --tool-table-units);
+    /// with --flatten-with, passed to rs274 (`-t`), which bakes lengths and cutter radii in.
+    #[arg(long, value_name = "FILE.tbl")]
+    pub tool_table: Option<PathBuf>,
+    /// Units of the tool table's lengths: the machine's (LinuxCNC's INI LINEAR_UNITS), not the
+    /// program's G20/G21.
+    #[arg(long, value_enum, default_value = "mm", value_name = "mm|inch")]
+    pub tool_table_units: ToolTableUnits,
+    /// Parameter file for rs274 (`-v`): work offsets and other parameters (copied, never written).
+    #[arg(long, value_name = "FILE.var", requires = "flatten_with")]
+    pub var_file: Option<PathBuf>,
+    /// The operator's block delete switch: `on` skips `/` blocks (copied, not interpreted),
+    /// `off` runs them; not given, a `/` block that moves or sets a mode is refused. With
+    /// --flatten-with, `on` is passed to rs274 as `-b`.
+    #[arg(long, value_enum, value_name = "on|off")]
+    pub block_delete: Option<OnOff>,
+    /// Stop rs274 after this many seconds (a program that loops forever).
+    #[arg(
+        long,
+        default_value_t = 300.0,
+        value_name = "S",
+        requires = "flatten_with"
+    )]
+    pub rs274_timeout_s: f64,
+}
+
+/// The files flattening reads besides the program (for the never-overwrite-an-input check).
+pub fn extra_inputs(args: &FlattenArgs) -> Vec<&Path> {
+    [&args.tool_table, &args.var_file]
+        .into_iter()
+        .flatten()
+        .map(|p| p.as_path())
+        .collect()
+}
+
+/// A temporary folder removed when dropped.
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new() -> std::io::Result<Self> {
+        let base = std::env::temp_dir();
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.subsec_nanos())
+            .unwrap_or(0);
+        for k in 0..100u32 {
+            let p = base.join(format!("mtec-flatten-{}-{nanos}-{k}", std::process::id()));
+            match std::fs::create_dir(&p) {
+                Ok(()) => return Ok(TempDir(p)),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+                Err(e) => return Err(e),
+            }
+        }
+        Err(std::io::Error::other("cannot create a temporary folder"))
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn find_on_path(name: &str) -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .map(|d| d.join(name))
+        .find(|p| p.is_file())
+}
+
+const INSTALL_HINT: &str = "install LinuxCNC's interpreter (Debian/Ubuntu package linuxcnc-uspace: apt install linuxcnc-uspace) or give its path with --rs274";
+
+/// rs274's output is read into memory up to this size (about 6 M canonical calls).
+const MAX_OUTPUT_BYTES: u64 = 512 << 20;
+
+struct Run {
+    status: Option<i32>,
+    stdout: String,
+    stderr: String,
+}
+
+/// Runs `rs274 -g [flags] file` in `dir`, with a time limit.
+fn run_rs274(
+    bin: &Path,
+    dir: &Path,
+    flags: &[String],
+    file: &Path,
+    timeout: Duration,
+) -> Result<Run, CliError> {
+    let mut child = Command::new(bin)
+        .current_dir(dir)
+        // rs274 keeps its tool data in $HOME/.tool.mmap, truncated at start: concurrent runs
+        // with one HOME read each other's tool tables. Each run gets its own.
+        .env("HOME", dir)
+        .arg("-g")
+        .args(flags)
+        .arg(file)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| {
+            if e.kind() == std::io::ErrorKind::NotFound {
+                CliError::usage(format!("{} not found: {INSTALL_HINT}", bin.display()))
+            } else {
+                CliError::usage(format!("cannot run {}: {e}", bin.display()))
+            }
+        })?;
+    let mut out = child.stdout.take();
+    let mut err = child.stderr.take();
+    let too_long = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&too_long);
+    let t_out = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        if let Some(o) = out.as_mut() {
+            let _ = o.take(MAX_OUTPUT_BYTES + 1).read_to_end(&mut v);
+            if v.len() as u64 > MAX_OUTPUT_BYTES {
+                flag.store(true, Ordering::Relaxed);
+            }
+        }
+        v
+    });
+    let t_err = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        if let Some(e) = err.as_mut() {
+            let _ = e.take(1 << 20).read_to_end(&mut v);
+        }
+        v
+    });
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait()? {
+            break s;
+        }
+        if too_long.load(Ordering::Relaxed) {
+            let _ = child.kill();
+            let _ = child.wait();
+            let _ = t_out.join();
+            let _ = t_err.join();
+            return Err(CliError::usage(format!(
+                "rs274 printed more than {} MB of canonical calls (a program that loops forever?)",
+                MAX_OUTPUT_BYTES >> 20
+            )));
+        }
+        if start.elapsed() > timeout {
+            let _ = child.kill();
+            let _ = child.wait();
+            let _ = t_out.join();
+            let _ = t_err.join();
+            return Err(CliError::usage(format!(
+                "rs274 did not finish within {} s (a program that loops forever?); raise --rs274-timeout-s",
+                timeout.as_secs_f64()
+            )));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let stdout = t_out.join().unwrap_or_default();
+    let stderr = t_err.join().unwrap_or_default();
+    Ok(Run {
+        status: status.code(),
+        stdout: String::from_utf8_lossy(&stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&stderr).into_owned(),
+    })
+}
+
+/// rs274's error message: its standard error without the `executing` banner.
+fn rs274_message(stderr: &str) -> String {
+    let lines: Vec<&str> = stderr
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && *l != "executing")
+        .collect();
+    if lines.is_empty() {
+        "no message".into()
+    } else {
+        lines.join(" | ")
+    }
+}
+
+/// A flattened program.
+pub struct Flattened {
+    pub text: Vec<u8>,
+    pub report: FlattenReport,
+    /// The work-offset table at program start (G54…G59.3, mm) as rs274 read it: the flattened
+    /// program's coordinates are machine positions minus these.
+    pub work_offsets_mm: [[f64; 3]; 9],
+}
+
+/// Flattens `input` with rs274; returns the plain program and what flattening did.
+pub fn flatten_input(input: &Path, args: &FlattenArgs) -> Result<Flattened, CliError> {
+    if !(args.rs274_timeout_s.is_finite() && args.rs274_timeout_s > 0.0) {
+        return Err(CliError::usage(
+            "--rs274-timeout-s must be a positive number",
+        ));
+    }
+    let bin = match &args.rs274 {
+        Some(p) => {
+            if !p.exists() {
+                return Err(CliError::usage(format!(
+                    "--rs274 {}: no such file; {INSTALL_HINT}",
+                    p.display()
+                )));
+            }
+            p.clone()
+        }
+        None => find_on_path("rs274").ok_or_else(|| {
+            CliError::usage(format!(
+                "--flatten-with rs274: rs274 was not found on PATH; {INSTALL_HINT}"
+            ))
+        })?,
+    };
+    let program =
+        std::fs::read(input).map_err(|e| InputError::file(input, format!("cannot read: {e}")))?;
+    let abs_input = std::path::absolute(input)?;
+    let tmp = TempDir::new()?;
+    let copy = |src: &Path, name: &str| -> Result<PathBuf, CliError> {
+        let dst = tmp.0.join(name);
+        std::fs::copy(src, &dst).map_err(|e| InputError::file(src, format!("cannot read: {e}")))?;
+        Ok(dst)
+    };
+    let timeout = Duration::from_secs_f64(args.rs274_timeout_s.min(1e6));
+
+    // 1. the work-offset table at program start, read by rs274 itself from the same var file
+    let mut probe_flags = Vec::new();
+    if let Some(v) = &args.var_file {
+        probe_flags.push("-v".to_string());
+        probe_flags.push(copy(v, "probe.var")?.display().to_string());
+    }
+    let probe = tmp.0.join("work-offsets.ngc");
+    std::fs::write(&probe, WORK_OFFSET_PROBE)?;
+    let run = run_rs274(&bin, &tmp.0, &probe_flags, &probe, timeout)?;
+    if run.status != Some(0) {
+        return Err(CliError::usage(format!(
+            "rs274 could not read the work offsets{}: {}",
+            args.var_file
+                .as_ref()
+                .map(|v| format!(" from {}", v.display()))
+                .unwrap_or_default(),
+            rs274_message(&run.stderr)
+        )));
+    }
+    let table = work_offsets_from_probe(&run.stdout)
+        .map_err(|e| CliError::usage(format!("rs274 work-offset probe: {e}")))?;
+
+    // 2. the program itself
+    let mut flags = Vec::new();
+    if let Some(t) = &args.tool_table {
+        flags.push("-t".to_string());
+        flags.push(copy(t, "tool.tbl")?.display().to_string());
+    }
+    if let Some(v) = &args.var_file {
+        flags.push("-v".to_string());
+        flags.push(copy(v, "program.var")?.display().to_string());
+    }
+    if args.block_delete == Some(OnOff::On) {
+        flags.push("-b".to_string());
+    }
+    let run = run_rs274(&bin, &tmp.0, &flags, &abs_input, timeout)?;
+    if run.status != Some(0) {
+        return Err(InputError::file(
+            input,
+            format!(
+                "rs274 stopped with an error (exit {}): {}",
+                run.status.map_or("by a signal".into(), |c| c.to_string()),
+                rs274_message(&run.stderr)
+            ),
+        )
+        .into());
+    }
+    let name = input
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let name: String = name
+        .chars()
+        .map(|c| {
+            if c == '(' || c == ')' || c.is_control() {
+                '_'
+            } else {
+                c
+            }
+        })
+        .take(80)
+        .collect();
+    let options = FlattenOptions {
+        work_offsets_mm: Some(table),
+        axes_named: axes_named(&program),
+        header: Some(format!(
+            "(mtec: {name} flattened by rs274 -g: LinuxCNC-only plain program; cutter comp, tool lengths and G92 baked in for the tool table given)"
+        )),
+    };
+    let (text, report) = flatten(&run.stdout, &options)
+        .map_err(|e| InputError::file(input, format!("cannot flatten: {e}")))?;
+    Ok(Flattened {
+        text: text.into_bytes(),
+        report,
+        work_offsets_mm: table,
+    })
+}

@@ -1,0 +1,571 @@
+//! `compensate gcode --flatten-with rs274` checked against LinuxCNC's interpreter itself.
+//!
+//! For each program (the real LinuxCNC programs in `../shared/data/gcode/linuxcnc` beside the
+//! repository root or `$MTEC_SHARED_DIR`, and the hand-written ones in `tests/data/flatten`):
+//! flatten and compensate it with a zero model, run `rs274 -g` on the original and on the
+//! output, and check that the motion calls (STRAIGHT_TRAVERSE, STRAIGHT_FEED, ARC_FEED) are the
+//! same sequence with the same end points, arc centres, turns and feeds in *machine*
+//! coordinates (canonical + G5x + G92 + tool length offset, as rs274 prints them) to 1e-4 in
+//! the program's units — or that flattening refused with the expected reason.
+//!
+//! Without rs274 the tests print a note and pass, unless `CI` is set: then they fail.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn mtec() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mtec"))
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// rs274 on PATH; `None` (with a note) when absent and not in CI.
+fn rs274() -> Option<PathBuf> {
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    let found = std::env::split_paths(&path)
+        .map(|d| d.join("rs274"))
+        .find(|p| p.is_file());
+    if found.is_none() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "rs274 (LinuxCNC, package linuxcnc-uspace) is required in CI"
+        );
+        eprintln!("note: rs274 not installed (package linuxcnc-uspace): flattening not checked");
+    }
+    found
+}
+
+fn data_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/flatten")
+}
+
+/// `../shared/data/gcode/linuxcnc` beside the repository root (or a git worktree's main
+/// checkout), or `$MTEC_SHARED_DIR/data/gcode/linuxcnc`.
+fn real_programs_dir() -> Option<PathBuf> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    [
+        std::env::var_os("MTEC_SHARED_DIR").map(PathBuf::from),
+        Some(root.join("../shared")),
+        Some(root.join("../../shared")),
+    ]
+    .into_iter()
+    .flatten()
+    .map(|p| p.join("data/gcode/linuxcnc"))
+    .find(|p| p.is_dir())
+}
+
+/// `rs274 -g [-t table] [-v var] file` in its own folder (and HOME: rs274 writes
+/// `$HOME/.tool.mmap`); returns standard output, or the error text.
+fn run_rs274(
+    bin: &Path,
+    file: &Path,
+    table: Option<&Path>,
+    var: Option<&Path>,
+) -> Result<String, String> {
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = Command::new(bin);
+    c.current_dir(dir.path()).env("HOME", dir.path()).arg("-g");
+    if let Some(t) = table {
+        let copy = dir.path().join("tool.tbl");
+        std::fs::copy(t, &copy).unwrap();
+        c.arg("-t").arg(copy);
+    }
+    if let Some(v) = var {
+        let copy = dir.path().join("params.var");
+        std::fs::copy(v, &copy).unwrap();
+        c.arg("-v").arg(copy);
+    }
+    let o = c.arg(file).output().unwrap();
+    if o.status.success() {
+        Ok(String::from_utf8_lossy(&o.stdout).into_owned())
+    } else {
+        Err(text(&o))
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Kind {
+    Traverse,
+    Feed,
+    Arc { plane: usize, turns: i64 },
+}
+
+/// A motion call in machine coordinates (mm), with the feed in force (mm/min or mm/rev).
+#[derive(Debug, Clone)]
+struct Motion {
+    line: usize,
+    kind: Kind,
+    end: [f64; 3],
+    /// Arc centre, in-plane coordinates (machine, mm), in X, Y, Z order of the plane's axes.
+    centre: [f64; 2],
+    feed: f64,
+    per_rev: bool,
+    /// mm per program unit when the call was printed (the comparison tolerance scales with it).
+    scale: f64,
+}
+
+fn numbers(args: &str) -> Vec<f64> {
+    args.split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|s| !s.is_empty())
+        .filter_map(|s| s.parse().ok())
+        .collect()
+}
+
+/// The motion calls of a canonical listing, in machine coordinates. Written separately from
+/// the flattener (same conventions, verified by experiment: see flatten.rs).
+fn motions(canon: &str) -> Vec<Motion> {
+    let mut scale = 1.0;
+    let (mut g5x, mut g92, mut tool) = ([0.0; 3], [0.0; 3], [0.0; 3]);
+    let (mut plane, mut feed, mut per_rev) = (0usize, 0.0, false);
+    let mut out = Vec::new();
+    for (i, line) in canon.lines().enumerate() {
+        let Some(open) = line.find('(') else { continue };
+        let name = line[..open].split_whitespace().last().unwrap_or("");
+        let args = &line[open + 1..line.rfind(')').unwrap_or(line.len())];
+        let v = numbers(args);
+        let off = |a: usize| g5x[a] + g92[a] + tool[a];
+        match name {
+            "USE_LENGTH_UNITS" => scale = if args.contains("INCHES") { 25.4 } else { 1.0 },
+            "SET_G5X_OFFSET" => g5x = [v[1] * scale, v[2] * scale, v[3] * scale],
+            "SET_G92_OFFSET" => g92 = [v[0] * scale, v[1] * scale, v[2] * scale],
+            "USE_TOOL_LENGTH_OFFSET" => tool = [v[0] * scale, v[1] * scale, v[2] * scale],
+            "SELECT_PLANE" => {
+                plane = if args.contains("XY") {
+                    0
+                } else if args.contains("XZ") {
+                    1
+                } else {
+                    2
+                }
+            }
+            "SET_FEED_RATE" => feed = v[0] * scale,
+            "SET_FEED_MODE" => per_rev = v[1] == 1.0,
+            "STRAIGHT_TRAVERSE" | "STRAIGHT_FEED" => out.push(Motion {
+                line: i + 1,
+                kind: if name == "STRAIGHT_FEED" {
+                    Kind::Feed
+                } else {
+                    Kind::Traverse
+                },
+                end: std::array::from_fn(|a| v[a] * scale + off(a)),
+                centre: [0.0; 2],
+                feed,
+                per_rev,
+                scale,
+            }),
+            "ARC_FEED" => {
+                let (f, s, n) = [(0, 1, 2), (2, 0, 1), (1, 2, 0)][plane];
+                let mut end = [0.0; 3];
+                end[f] = v[0] * scale + off(f);
+                end[s] = v[1] * scale + off(s);
+                end[n] = v[5] * scale + off(n);
+                out.push(Motion {
+                    line: i + 1,
+                    kind: Kind::Arc {
+                        plane,
+                        turns: v[4] as i64,
+                    },
+                    end,
+                    centre: [v[2] * scale + off(f), v[3] * scale + off(s)],
+                    feed,
+                    per_rev,
+                    scale,
+                });
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Compares two listings' motion; returns the number of calls compared.
+fn same_motion(original: &str, flattened: &str, what: &str) -> usize {
+    let a = motions(original);
+    let b = motions(flattened);
+    assert_eq!(
+        a.len(),
+        b.len(),
+        "{what}: {} motion calls in the original, {} after flattening",
+        a.len(),
+        b.len()
+    );
+    assert!(!a.is_empty(), "{what}: no motion at all");
+    for (x, y) in a.iter().zip(&b) {
+        let tol = 1e-4 * x.scale.max(y.scale) + 1e-9;
+        let ctx = || {
+            format!(
+                "{what}: original canonical line {} vs flattened line {}: {x:?} / {y:?}",
+                x.line, y.line
+            )
+        };
+        assert_eq!(x.kind, y.kind, "{}", ctx());
+        for k in 0..3 {
+            assert!((x.end[k] - y.end[k]).abs() <= tol, "end: {}", ctx());
+        }
+        if matches!(x.kind, Kind::Arc { .. }) {
+            for k in 0..2 {
+                assert!(
+                    (x.centre[k] - y.centre[k]).abs() <= tol,
+                    "centre: {}",
+                    ctx()
+                );
+            }
+        }
+        if x.kind != Kind::Traverse {
+            assert_eq!(x.per_rev, y.per_rev, "feed mode: {}", ctx());
+            assert!(
+                (x.feed - y.feed).abs() <= tol + 1e-9 * x.feed.abs(),
+                "feed: {}",
+                ctx()
+            );
+        }
+    }
+    a.len()
+}
+
+const ZERO_MODEL: &str = r#"{"format": "mtec.zero-model/1"}"#;
+
+enum Expect {
+    /// Flattens; the output reproduces the original's motion.
+    Same,
+    /// Refused (exit 2) with these words in the message.
+    Refused(&'static str),
+}
+
+/// Flattens `program` with the CLI and checks the outcome; returns a one-line summary.
+fn check(
+    bin: &Path,
+    program: &Path,
+    table: Option<&Path>,
+    var: Option<&Path>,
+    extra: &[&str],
+    expect: &Expect,
+) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("zero.json");
+    std::fs::write(&model, ZERO_MODEL).unwrap();
+    let out = dir.path().join("flat.ngc");
+    let mut c = mtec();
+    c.args(["compensate", "gcode", "--model"])
+        .arg(&model)
+        .args(["--flatten-with", "rs274", "--rs274"])
+        .arg(bin)
+        .args(extra);
+    if let Some(t) = table {
+        c.arg("--tool-table").arg(t);
+    }
+    if let Some(v) = var {
+        c.arg("--var-file").arg(v);
+    }
+    let o = c.arg(program).arg("-o").arg(&out).output().unwrap();
+    let name = program.file_name().unwrap().to_string_lossy().into_owned();
+    match expect {
+        Expect::Same => {
+            assert_eq!(o.status.code(), Some(0), "{name}: {}", text(&o));
+            let flat = std::fs::read_to_string(&out).unwrap();
+            assert!(
+                flat.lines().all(|l| l.len() <= 255),
+                "{name}: a line over 255 characters"
+            );
+            assert!(
+                flat.starts_with("(mtec: ")
+                    && flat.lines().next().unwrap().contains("flattened by rs274")
+            );
+            let original = run_rs274(bin, program, table, var)
+                .unwrap_or_else(|e| panic!("{name}: rs274 on the original: {e}"));
+            // the flattened program is plain: no tool table needed for it to move the same
+            let again = run_rs274(bin, &out, None, var)
+                .unwrap_or_else(|e| panic!("{name}: rs274 on the flattened program: {e}"));
+            let n = same_motion(&original, &again, &name);
+            format!("{name}: flattened, {n} motion calls identical")
+        }
+        Expect::Refused(words) => {
+            assert_eq!(o.status.code(), Some(2), "{name}: {}", text(&o));
+            let msg = text(&o);
+            assert!(msg.contains(words), "{name}: expected '{words}' in: {msg}");
+            assert!(!out.exists(), "{name}: output written despite the refusal");
+            format!(
+                "{name}: refused: {}",
+                msg.lines().last().unwrap_or("").trim()
+            )
+        }
+    }
+}
+
+#[test]
+fn real_linuxcnc_programs_flatten_to_the_same_motion_or_are_refused_with_the_reason() {
+    let Some(bin) = rs274() else { return };
+    let Some(dir) = real_programs_dir() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "the shared LinuxCNC programs are required in CI (set MTEC_SHARED_DIR)"
+        );
+        eprintln!("note: ../shared/data/gcode/linuxcnc not found (set MTEC_SHARED_DIR)");
+        return;
+    };
+    let data = data_dir();
+    let mill = data.join("mill.tbl");
+    let lathe = data.join("lathe.tbl");
+    use Expect::*;
+    let cases: [(&str, Option<&Path>, &[&str], Expect); 14] = [
+        ("3D_Chips", None, &[], Same),
+        ("arcspiral", None, &[], Same),
+        ("cds", Some(&mill), &[], Same),
+        ("comp", Some(&mill), &[], Same),
+        ("cone", None, &[], Refused("Bad character 'w'")),
+        ("contour", None, &[], Same),
+        ("daisy", None, &[], Refused("axis A")),
+        ("flowsnake", None, &[], Same),
+        ("g76", Some(&lathe), &[], Refused("spindle-synchronised")),
+        ("gridprobe", None, &[], Refused("probing")),
+        ("hole-circle", None, &[], Same),
+        (
+            "increment",
+            None,
+            &[],
+            Refused("File ended with no percent sign or program end"),
+        ),
+        // a lathe program never states Y: the rewriter needs it for its feed moves
+        ("lathe_pawn", None, &["--start-position-mm", "0,0,0"], Same),
+        ("spiral_tangent_test", None, &[], Same),
+    ];
+    let mut summary = Vec::new();
+    for (name, table, extra, expect) in &cases {
+        let p = dir.join(format!("{name}.ngc"));
+        summary.push(check(&bin, &p, *table, None, extra, expect));
+    }
+    eprintln!("{}", summary.join("\n"));
+}
+
+#[test]
+fn hand_written_programs_with_control_flow_cycles_and_compensation_flatten_exactly() {
+    let Some(bin) = rs274() else { return };
+    let data = data_dir();
+    let mill = data.join("mill.tbl");
+    let var = data.join("offsets.var");
+    let mut summary = Vec::new();
+    for name in [
+        "subs_loops",
+        "canned",
+        "cutter_comp",
+        "polar",
+        "offsets",
+        "coverage",
+    ] {
+        let p = data.join(format!("{name}.ngc"));
+        summary.push(check(&bin, &p, Some(&mill), None, &[], &Expect::Same));
+        // the same with non-zero work offsets read from a parameter file (G54, G55 set)
+        summary.push(check(&bin, &p, Some(&mill), Some(&var), &[], &Expect::Same));
+    }
+    eprintln!("{}", summary.join("\n"));
+}
+
+#[test]
+fn recorded_flattening_of_the_unit_test_reproduces_rs274s_motion() {
+    // mtec-comp's unit test flattens a recorded rs274 listing into a recorded program; check
+    // here, with rs274, that this program moves as the original does
+    let Some(bin) = rs274() else { return };
+    let comp = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../mtec-comp/tests/data/flatten");
+    let data = data_dir();
+    let mill = data.join("mill.tbl");
+    let original = run_rs274(&bin, &data.join("offsets.ngc"), Some(&mill), None).unwrap();
+    let recorded = std::fs::read_to_string(comp.join("offsets.canon")).unwrap();
+    assert_eq!(
+        motions(&original).len(),
+        motions(&recorded).len(),
+        "offsets.canon is not rs274's output for offsets.ngc any more"
+    );
+    same_motion(&original, &recorded, "offsets.canon");
+    let flat = run_rs274(&bin, &comp.join("offsets.flat.ngc"), None, None).unwrap();
+    same_motion(&original, &flat, "offsets.flat.ngc");
+}
+
+#[test]
+fn constructs_without_a_plain_equivalent_are_refused_naming_the_canonical_line() {
+    let Some(bin) = rs274() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    for (body, words) in [
+        ("G0 X0 Y0 Z5\nG38.2 Z-10 F50\n", "probing"),
+        ("M3 S500\nG0 X1 Z1\nG33 Z-5 K1\n", "spindle-synchronised"),
+        ("M3 S500\nG0 X1 Z1\nG33.1 Z-5 K1\n", "rigid tapping"),
+        ("G0 X0 Y0\nG5 X10 Y10 I5 J0 P5 Q0 F100\n", "splines"),
+        ("G0 X0 Y0\nG1 X1 A10 F100\n", "axis A"),
+        ("G10 L2 P1 R30\nG0 X1 Y1\n", "rotated"),
+        ("G0 X1\nM100\n", "Unknown m code used: M100"),
+        ("o1 while [1]\nG0 X1\no1 endwhile\n", "did not finish"),
+    ] {
+        let p = dir.path().join("bad.ngc");
+        std::fs::write(&p, format!("G21 G90 G17\n{body}M2\n")).unwrap();
+        let extra: &[&str] = if words == "did not finish" {
+            &["--rs274-timeout-s", "2"]
+        } else {
+            &[]
+        };
+        let msg = check(&bin, &p, None, None, extra, &Expect::Refused(words));
+        if words != "did not finish" && !words.starts_with("Unknown") {
+            assert!(msg.contains("canonical line"), "{msg}");
+        }
+    }
+}
+
+#[test]
+fn compensated_flat_program_is_accepted_by_rs274_and_moves_by_the_correction() {
+    let Some(bin) = rs274() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("poly.json");
+    // e_x = 20 um everywhere: every X command moves by -0.02 mm
+    std::fs::write(
+        &model,
+        r#"{"format": "mtec.poly-model/1", "terms": [{"powers": [0,0,0], "coef_um": [20.0, 0.0, 0.0]}]}"#,
+    )
+    .unwrap();
+    let prog = data_dir().join("subs_loops.ngc");
+    let out = dir.path().join("comp.ngc");
+    let o = mtec()
+        .args(["compensate", "gcode", "--model"])
+        .arg(&model)
+        .args(["--flatten-with", "rs274", "--max-segment-mm", "1000"])
+        .arg(&prog)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let original = motions(&run_rs274(&bin, &prog, None, None).unwrap());
+    let comp = motions(&run_rs274(&bin, &out, None, None).unwrap());
+    // a constant correction splits nothing (with no segment limit): same calls, X shifted
+    assert_eq!(original.len(), comp.len());
+    for (a, b) in original.iter().zip(&comp).skip(1) {
+        assert!(((b.end[0] - a.end[0]) + 0.02).abs() < 2e-4, "{a:?} / {b:?}");
+        assert!((b.end[1] - a.end[1]).abs() < 2e-4 && (b.end[2] - a.end[2]).abs() < 2e-4);
+    }
+}
+
+#[test]
+fn missing_rs274_is_a_usage_error_that_says_what_to_install() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("zero.json");
+    std::fs::write(&model, ZERO_MODEL).unwrap();
+    let prog = dir.path().join("p.ngc");
+    std::fs::write(&prog, "G0 X1\nM2\n").unwrap();
+    let out = dir.path().join("o.ngc");
+    let run = |extra: &[&str], path: &str| {
+        mtec()
+            .env("PATH", path)
+            .args(["compensate", "gcode", "--model"])
+            .arg(&model)
+            .args(["--flatten-with", "rs274"])
+            .args(extra)
+            .arg(&prog)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    let o = run(&[], dir.path().to_str().unwrap());
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("linuxcnc-uspace"), "{}", text(&o));
+    let missing = dir.path().join("no-rs274");
+    let o = run(&["--rs274", missing.to_str().unwrap()], "/usr/bin:/bin");
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("linuxcnc-uspace"), "{}", text(&o));
+    assert!(!out.exists());
+    // the flattening options need --flatten-with
+    let o = mtec()
+        .args(["compensate", "gcode", "--model"])
+        .arg(&model)
+        .args(["--tool-table", "t.tbl"])
+        .arg(&prog)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+}
+
+#[test]
+fn help_says_what_flattening_writes_and_refuses() {
+    let o = mtec()
+        .args(["compensate", "gcode", "--help"])
+        .output()
+        .unwrap();
+    let h = text(&o);
+    for words in [
+        "--flatten-with",
+        "LinuxCNC-only",
+        "cutter radius compensation and\ntool lengths are baked in",
+        "probing (G38.x)",
+        "spindle-synchronised motion",
+        "linuxcnc-uspace",
+    ] {
+        assert!(h.contains(words), "'{words}' missing from --help:\n{h}");
+    }
+}
+
+#[test]
+fn block_delete_switch_reaches_rs274() {
+    let Some(bin) = rs274() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("bd.ngc");
+    std::fs::write(&p, "G21 G90\nG0 X0 Y0 Z1\n/G0 X5\nG0 Y5\nM2\n").unwrap();
+    let model = dir.path().join("zero.json");
+    std::fs::write(&model, ZERO_MODEL).unwrap();
+    let mut counts = Vec::new();
+    for bd in ["off", "on"] {
+        let out = dir.path().join(format!("bd-{bd}.ngc"));
+        let o = mtec()
+            .args(["compensate", "gcode", "--model"])
+            .arg(&model)
+            .args(["--flatten-with", "rs274", "--block-delete", bd])
+            .arg(&p)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+        counts.push(motions(&run_rs274(&bin, &out, None, None).unwrap()).len());
+    }
+    assert_eq!(counts, [3, 2], "block delete on skips the '/' line");
+}
+
+#[test]
+fn model_is_evaluated_at_machine_positions_with_the_var_files_work_offsets() {
+    let Some(bin) = rs274() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("poly.json");
+    // e_x = 1 um per mm of machine X
+    std::fs::write(
+        &model,
+        r#"{"format": "mtec.poly-model/1", "terms": [{"powers": [1,0,0], "coef_um": [1.0, 0.0, 0.0]}]}"#,
+    )
+    .unwrap();
+    let prog = dir.path().join("p.ngc");
+    std::fs::write(&prog, "G21 G90 G54\nG0 X0 Y0 Z5\nM2\n").unwrap();
+    // offsets.var: G54 X = 3 (inch, as rs274 reads it) = 76.2 mm
+    let var = data_dir().join("offsets.var");
+    let mut first_x = Vec::new();
+    for with_var in [false, true] {
+        let out = dir.path().join(format!("o-{with_var}.ngc"));
+        let mut c = mtec();
+        c.args(["compensate", "gcode", "--model"])
+            .arg(&model)
+            .args(["--flatten-with", "rs274"]);
+        if with_var {
+            c.arg("--var-file").arg(&var);
+        }
+        let o = c.arg(&prog).arg("-o").arg(&out).output().unwrap();
+        assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+        let v = if with_var { Some(var.as_path()) } else { None };
+        let m = motions(&run_rs274(&bin, &out, None, v).unwrap());
+        first_x.push(m[0].end[0]);
+    }
+    // machine X 0: no correction; machine X 76.2: p + 0.001 p = 76.2, p = 76.1239
+    assert!(first_x[0].abs() < 1e-9, "{first_x:?}");
+    assert!((first_x[1] - 76.2 / 1.001).abs() < 2e-4, "{first_x:?}");
+}
