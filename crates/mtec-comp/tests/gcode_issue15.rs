@@ -97,12 +97,14 @@ fn full_circles_without_axis_words_are_compensated() {
 
 #[test]
 fn g53_feed_moves_are_split_like_every_feed_move() {
-    let mut o = RewriteOptions::default();
-    o.offsets = Offsets::all_known({
-        let mut w = [[0.0; 3]; 9];
-        w[0] = [100.0, 50.0, -20.0];
-        w
-    });
+    let o = RewriteOptions {
+        offsets: Offsets::all_known({
+            let mut w = [[0.0; 3]; 9];
+            w[0] = [100.0, 50.0, -20.0];
+            w
+        }),
+        ..RewriteOptions::default()
+    };
     let input = "G21 G90 G54\nG0 X0 Y0 Z0\nG53 G1 X300 Y300 Z0 F100\nG1 X10\n";
     let out = run(input, &PolyModel, &o);
     let g53_lines = out.lines().filter(|l| l.starts_with("G53 G1 X")).count();
@@ -174,8 +176,11 @@ fn decimals_that_lose_the_correction_are_refused() {
 
 #[test]
 fn a_work_offset_missing_from_the_offsets_is_refused() {
-    let mut o = RewriteOptions::default();
-    o.offsets = Offsets::default(); // no file: G54 only, as zero
+    // no file: G54 only, as zero
+    let mut o = RewriteOptions {
+        offsets: Offsets::default(),
+        ..RewriteOptions::default()
+    };
     let (line, col, msg) = refused("G21 G90\nG0 X0 Y0 Z0\nG56 G1 X10 F100\n", &PolyModel, &o);
     assert_eq!((line, col), (3, 1));
     assert!(

@@ -147,7 +147,7 @@ impl<'a> PathBound<'a> {
                 let mut s_prev = 0.0;
                 for k in 1..self.breaks.len() {
                     let s1 = self.breaks[k];
-                    if !(s1 > s_prev) {
+                    if s1 <= s_prev || s1.is_nan() {
                         continue;
                     }
                     let h = (s1 - s_prev) / 3.0;
