@@ -8,6 +8,7 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use mtec_comp::gcode::{rewrite, RewriteOptions};
 use mtec_comp::ErrorModel;
+use mtec_comp::{GridMap, Outside};
 use std::hint::black_box;
 
 struct Zero;
@@ -70,6 +71,29 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             out.clear();
             rewrite(black_box(&input[..]), &mut out, &Poly, &opts).unwrap();
+        })
+    });
+    // the controller-style case: a 25 × 25 × 3 trilinear map over the program (5 mm cells),
+    // where each piece's path bound is solved exactly per cell crossed
+    let xs: Vec<f64> = (0..25).map(|i| -60.0 + 5.0 * i as f64).collect();
+    let zs = vec![-5.0, 0.0, 5.0];
+    let mut values = Vec::new();
+    for &x in &xs {
+        for &y in &xs {
+            for &z in &zs {
+                values.push([
+                    8.0 + 0.03 * x - 0.01 * y + 2e-4 * x * y,
+                    -4.0 + 0.02 * y + 1e-4 * x * x,
+                    3.0 + 0.01 * z,
+                ]);
+            }
+        }
+    }
+    let map = GridMap::new([xs.clone(), xs, zs], values, Outside::Clamp, "bench").unwrap();
+    g.bench_function("compensate_trilinear_map", |b| {
+        b.iter(|| {
+            out.clear();
+            rewrite(black_box(&input[..]), &mut out, &map, &opts).unwrap();
         })
     });
     g.finish();
