@@ -53,7 +53,8 @@ Offsets (--offsets, TOML) map program to machine coordinates (machine = program 
 
 Without --offsets only G54 is known (as zero: program coordinates are machine coordinates); a
 program that selects another work system is refused at that word. Every written line is at
-most --max-line-chars long (255: LinuxCNC's limit); the header comment is shortened to fit.
+most --max-line-chars long (251: LinuxCNC's interpreter refuses 253 characters, a CR
+counting as one); the header comment is shortened to fit.
 
 Flattening (--flatten-with rs274): for programs the rewriter refuses (O-word subroutines and
 loops, canned cycles, cutter compensation, polar coordinates, parameters, G92/G52, G10), LinuxCNC's
@@ -136,8 +137,9 @@ pub struct Args {
     /// Sample spacing of the path check for models that are not grid maps, in mm.
     #[arg(long, default_value_t = 0.5)]
     pub check_step_mm: f64,
-    /// Longest line the controller reads (LinuxCNC: 255); longer rewritten lines are refused.
-    #[arg(long, default_value_t = 255)]
+    /// Longest line the controller reads (LinuxCNC: 251 with either line ending); longer
+    /// rewritten lines are refused.
+    #[arg(long, default_value_t = 251)]
     pub max_line_chars: usize,
     #[command(flatten)]
     pub flatten: FlattenArgs,

@@ -82,7 +82,7 @@ pub struct RewriteOptions {
     /// Sample spacing (mm) of the dense path check for models that are not grid maps
     /// (`--check-step-mm`); grid maps are bounded exactly (see [`super::bound`]).
     pub check_step_mm: f64,
-    /// Longest line the target controller reads (`--max-line-chars`; LinuxCNC: 255). A
+    /// Longest line the target controller reads (`--max-line-chars`; LinuxCNC: 251). A
     /// rewritten or added line longer than this is refused; the header comment is shortened.
     pub max_line_chars: usize,
     /// The operator's block-delete switch (`--block-delete on|off`).
@@ -161,8 +161,10 @@ impl RewriteOptions {
     }
 }
 
-/// LinuxCNC's interpreter refuses longer lines ("Command too long"; LINELEN in rs274ngc).
-pub const LINUXCNC_MAX_LINE_CHARS: usize = 255;
+/// LinuxCNC's interpreter refuses longer lines ("Command too long"): rs274 of LinuxCNC 2.9
+/// accepts 252 characters and refuses 253, a CR counting as one, so 251 is safe with either
+/// line ending (measured; its LINELEN of 255 includes the terminators).
+pub const LINUXCNC_MAX_LINE_CHARS: usize = 251;
 
 /// Largest distance (µm) a written position moves when its words are rounded to `decimals`
 /// digits: half a unit of the last digit on each of three axes, √3·½·10⁻ᵈ program units.
