@@ -257,7 +257,10 @@ def run_rs274(program, workdir, var_file=None, tool_table=None):
     if tool_table:
         cmd += ["-t", tool_table]
     cmd.append(os.path.abspath(program))
-    r = subprocess.run(cmd, cwd=workdir, capture_output=True, text=True, timeout=120)
+    # rs274 keeps its tool table in a file mapped from $HOME/.tool.mmap: concurrent runs with
+    # one HOME crash with SIGBUS or read each other's tools, so every run gets its own HOME
+    env = dict(os.environ, HOME=workdir)
+    r = subprocess.run(cmd, cwd=workdir, capture_output=True, text=True, timeout=120, env=env)
     calls = []
     for line in r.stdout.splitlines():
         m = CANON_RE.match(line)
@@ -448,7 +451,33 @@ class Arc:
         return [(self.dist2(ql, p), p) for p in cands]
 
     def minima_helix(self, ql):
-        # helix/spiral: scan 96 points per turn, refine every local minimum by golden section
+        """Local minima of the distance to a helix/spiral, exact and cheap.
+
+        With any upper bound f_up of the minimum, a nearest point must satisfy
+        2 rho r_min (1 - cos(phi - theta)) <= f_up, since |q - P|^2 = (rho - r)^2
+        + 2 rho r (1 - cos(phi - theta)) + (h - w)^2: only small windows around theta + 2 pi j
+        remain, where the distance is convex; golden section finds the minimum in each."""
+        rho, theta, _ = ql
+        turns = range(int(math.floor(-theta / (2 * math.pi))) - 1,
+                      int(math.ceil((self.sweep - theta) / (2 * math.pi))) + 2)
+        ends = [(self.dist2(ql, 0.0), 0.0), (self.dist2(ql, self.sweep), self.sweep)]
+        inside = [theta + 2 * math.pi * j for j in turns if 0.0 <= theta + 2 * math.pi * j <= self.sweep]
+        f_up = min([v for v, _ in ends] + [self.dist2(ql, p) for p in inside])
+        c = 1.0 - f_up / (2.0 * rho * min(self.r0, self.r1)) if rho > 0 else -1.0
+        if c <= 0.5:  # the windows would be wider than 60 degrees: scan instead
+            return self.scan_helix(ql)
+        half = math.acos(c) + 1e-12
+        out = ends
+        for j in turns:
+            lo = max(0.0, theta + 2 * math.pi * j - half)
+            hi = min(self.sweep, theta + 2 * math.pi * j + half)
+            if lo < hi:
+                phi, val = self.golden(ql, lo, hi)
+                out.append((val, phi))
+        return out
+
+    def scan_helix(self, ql):
+        # far from the path (near the axis): scan 96 points per turn, refine each local minimum
         n = max(16, int(96 * self.sweep / (2 * math.pi)) + 1)
         step = self.sweep / n
         f = [self.dist2(ql, k * step) for k in range(n + 1)]

@@ -5,6 +5,7 @@ maps and checks every compensated program with check.py (LinuxCNC's rs274 as the
     python3 tests/rs274/run_all.py --mtec target/debug/mtec --shared ../shared/data/gcode/linuxcnc
 
 Maps (written here as mtec.map/1 JSON, never by mtec):
+  tilt       an almost constant error (20, -15, 10 um plus 1-2 um per metre): arcs stay arcs
   smooth     20-40 um of smooth variation over +-1000 mm (100 mm cells, outside = extrapolate)
   bump-line  zero everywhere but one node: 30 um across the program's longest straight feed
   bump-arc   the same on the program's longest arc (programs with arcs only)
@@ -76,6 +77,17 @@ def write_smooth_map(path):
     write_map(path, [axis, axis, axis], smooth_error, "extrapolate")
 
 
+def tilt_error(x, y, z):
+    # nearly constant: the correction hardly varies along an arc, so a rewriter keeps arcs
+    return (20 + 0.002 * x, -15 + 0.001 * y, 10 + 0.001 * z)
+
+
+def write_tilt_map(path):
+    # a linear function is reproduced exactly by trilinear interpolation on one cell
+    axis = [-5000.0, 5000.0]
+    write_map(path, [axis, axis, axis], tilt_error, "clamp")
+
+
 def perpendicular(d):
     """A unit vector across direction d."""
     ref = (0.0, 0.0, 1.0) if abs(d[2]) < 0.9 * check.norm(d) else (1.0, 0.0, 0.0)
@@ -139,8 +151,8 @@ def write_clamp_map(path, moves):
     write_map(path, axes, lambda x, y, z: [max(-40, min(40, v)) for v in values(x, y, z)], "clamp")
 
 
-def maps_for(program, nominal_moves, workdir, smooth_path):
-    out = [("smooth", smooth_path)]
+def maps_for(program, nominal_moves, workdir, shared_maps):
+    out = list(shared_maps)
     stem = os.path.splitext(os.path.basename(program))[0]
     for name, finder in (("bump-line", bump_on_line), ("bump-arc", bump_on_arc)):
         found = finder(nominal_moves)
@@ -222,12 +234,12 @@ def run_one(mtec, program, map_name, map_path, words, out_dir):
     return "ok", res.max_dev_um, res.bound_um, note
 
 
-def run_program(mtec, program, out_dir, smooth_path, only_maps):
+def run_program(mtec, program, out_dir, shared_maps, only_maps):
     words = program_options(program)
     kw = checker_args(words)
     try:
         moves = nominal_moves(program, kw)
-        maps = maps_for(program, moves, out_dir, smooth_path)
+        maps = maps_for(program, moves, out_dir, shared_maps)
     except Exception:
         return [(program, "-", "CRASH", None, None,
                  "checker: " + traceback.format_exc().strip().splitlines()[-1])]
@@ -258,7 +270,7 @@ def main(argv=None):
     ap.add_argument("--shared", help="folder of real programs (../shared/data/gcode/linuxcnc)")
     ap.add_argument("--cases", default=os.path.join(HERE, "cases"))
     ap.add_argument("--work", help="keep maps and compensated programs here")
-    ap.add_argument("--maps", help="comma-separated subset of smooth,bump-line,bump-arc,clamp")
+    ap.add_argument("--maps", help="comma-separated subset of tilt,smooth,bump-line,bump-arc,clamp")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--only", help="regular expression on program file names")
     a = ap.parse_args(argv)
@@ -271,10 +283,11 @@ def main(argv=None):
 
     work = a.work or tempfile.mkdtemp(prefix="mtec-rs274-run-")
     os.makedirs(work, exist_ok=True)
-    smooth = os.path.join(work, "smooth.json")
-    write_smooth_map(smooth)
+    shared_maps = [("tilt", os.path.join(work, "tilt.json")), ("smooth", os.path.join(work, "smooth.json"))]
+    write_tilt_map(shared_maps[0][1])
+    write_smooth_map(shared_maps[1][1])
     with concurrent.futures.ProcessPoolExecutor(max_workers=max(1, a.jobs)) as pool:
-        futures = [pool.submit(run_program, mtec, p, work, smooth, only_maps) for p in programs]
+        futures = [pool.submit(run_program, mtec, p, work, shared_maps, only_maps) for p in programs]
         rows = [row for f in futures for row in f.result()]
 
     def label(p):
