@@ -123,19 +123,21 @@ class GridModel:
         j, dj, ty = self.locate(1, p[1])
         k, dk, tz = self.locate(2, p[2])
         sx, sy, _ = self.strides
-        base = i * sx + j * sy + k
-        out = [0.0, 0.0, 0.0]
-        for ax_, wx in ((0, 1.0 - tx), (di, tx)):
-            for ay_, wy in ((0, 1.0 - ty), (dj, ty)):
-                for az_, wz in ((0, 1.0 - tz), (dk, tz)):
-                    w = wx * wy * wz
-                    if w == 0.0:
-                        continue
-                    v = self.values[base + ax_ * sx + ay_ * sy + az_]
-                    out[0] += w * v[0]
-                    out[1] += w * v[1]
-                    out[2] += w * v[2]
-        return out
+        v = self.values
+        b = i * sx + j * sy + k
+        dx, dy = di * sx, dj * sy
+        ux, uy, uz = 1.0 - tx, 1.0 - ty, 1.0 - tz
+        corners = ((b, ux * uy * uz), (b + dk, ux * uy * tz), (b + dy, ux * ty * uz),
+                   (b + dy + dk, ux * ty * tz), (b + dx, tx * uy * uz), (b + dx + dk, tx * uy * tz),
+                   (b + dx + dy, tx * ty * uz), (b + dx + dy + dk, tx * ty * tz))
+        ex = ey = ez = 0.0
+        for idx, w in corners:
+            if w != 0.0:
+                c = v[idx]
+                ex += w * c[0]
+                ey += w * c[1]
+                ez += w * c[2]
+        return [ex, ey, ez]
 
     def planes(self):
         """Grid values per axis: a trilinear map has kinks only on these planes."""

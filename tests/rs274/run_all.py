@@ -30,6 +30,7 @@ import math
 import os
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -302,7 +303,7 @@ def main(argv=None):
     print(f"programs: {n_cases} cases, {n_real} real; runs: {counts['ok']} ok, "
           f"{counts['refused']} refused, {counts['WRONG']} wrong, {counts['CRASH']} crash")
     if not a.work:
-        print(f"(maps and compensated programs in {work})")
+        shutil.rmtree(work, ignore_errors=True)  # --work keeps them for inspection
     print(f"{passed} passed, {failed} failed")
     return 1 if failed else 0
 
