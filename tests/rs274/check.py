@@ -560,11 +560,13 @@ def arc_from_canon(frame, start_machine, v):
 class Move:
     """One canonical motion in machine mm."""
 
-    def __init__(self, kind, geom, call, mm_per_unit, abc):
+    def __init__(self, kind, geom, call, mm_per_unit, abc, start_mm_per_unit=None):
         self.kind = kind  # "rapid", "feed", "probe"
         self.geom = geom
         self.call = call
-        self.mm_per_unit = mm_per_unit
+        # the start was printed with the previous move, maybe in other units (G20 -> G21):
+        # the coarser of the two print resolutions applies to the whole move
+        self.mm_per_unit = max(mm_per_unit, start_mm_per_unit or mm_per_unit)
         self.abc = abc
         self.start, self.end, self.length = geom.start, geom.end, geom.length
 
@@ -593,6 +595,7 @@ def interpret(path, calls, error):
     prog = Program(path, calls, error)
     frame = Frame()
     pos = (0.0, 0.0, 0.0)  # rs274 stand-alone starts at machine zero (found by experiment)
+    pos_units = None  # units in which the current position was printed
     for c in calls:
         if c.name in MOTION_CALLS:
             v = numbers(c.args)
@@ -604,8 +607,8 @@ def interpret(path, calls, error):
                 geom = Line(pos, frame.to_machine((v[0], v[1], v[2])))
                 abc = tuple(v[3:6])
                 kind = {"STRAIGHT_TRAVERSE": "rapid", "STRAIGHT_FEED": "feed"}.get(c.name, "probe")
-            prog.moves.append(Move(kind, geom, c, frame.mm_per_unit, abc))
-            pos = geom.end
+            prog.moves.append(Move(kind, geom, c, frame.mm_per_unit, abc, pos_units))
+            pos, pos_units = geom.end, frame.mm_per_unit
             continue
         frame.update(c)
         if c.name not in IGNORED_CALLS:
