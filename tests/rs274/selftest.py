@@ -1,0 +1,114 @@
+#!/usr/bin/env python3
+"""Self-test of check.py without mtec: the checker accepts right programs and rejects wrong ones.
+
+  1. a case checked against itself with a zero model passes;
+  2. a constant error e is compensated exactly by moving every absolute X/Y/Z word by -e
+     (centres I/J/K are relative, R is unchanged): those hand-made programs must pass, in every
+     plane, for helices, full circles and inch programs;
+  3. the same programs moved by -e + 3 um, or with one word moved by 10 um, must fail;
+  4. the G18 reading of ARC_FEED: G2 X50 Z0 I20 K0 from X10 Z0 passes through Z = -20.
+
+    python3 tests/rs274/selftest.py     # prints "selftest: N passed" or the failures, exit 1
+"""
+
+import json
+import os
+import re
+import sys
+import tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import check  # noqa: E402
+
+CASES = os.path.join(HERE, "cases")
+# programs whose axis words are all absolute literal mm (or inch) values
+TRANSLATABLE = ["arc-g17-cw-quarter", "arc-g18-cw", "arc-g18-ccw", "arc-g19-cw", "arc-g19-ccw",
+                "helix-g17", "helix-g18-g19", "helix-turns", "full-circle-no-axis-words",
+                "full-circle-p2", "r-semicircle", "r-negative-large", "mixed-planes",
+                "g20-inch-arcs", "events-spindle-coolant", "back-and-forth"]
+E_UM = (20.0, -15.0, 10.0)
+WORD = re.compile(r"([XYZxyz])(-?\d*\.?\d+)")
+
+
+def constant_map(path, e_um):
+    axis = [-5000.0, 5000.0]
+    doc = {"format": "mtec.map/1", "model": "trilinear", "outside": "clamp",
+           "x_mm": axis, "y_mm": axis, "z_mm": axis,
+           "ex_um": [e_um[0]] * 8, "ey_um": [e_um[1]] * 8, "ez_um": [e_um[2]] * 8}
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump(doc, f)
+
+
+def translated(text, shift_um):
+    """Every X/Y/Z word moved by shift (um), in the units of the line (G20 lines in inches)."""
+    out, inch = [], False
+    for line in text.splitlines():
+        code = line.split("(")[0].upper()
+        if "G20" in code:
+            inch = True
+        if "G21" in code:
+            inch = False
+        if line.lstrip().startswith("("):
+            out.append(line)
+            continue
+        per_unit = 25.4 if inch else 1.0
+
+        def move(m):
+            a = "xyz".index(m.group(1).lower())
+            v = float(m.group(2)) + shift_um[a] * 1e-3 / per_unit
+            return f"{m.group(1)}{v:.6f}"
+
+        out.append(WORD.sub(move, line))
+    return "\n".join(out) + "\n"
+
+
+def outcome(original, text, model, work, name):
+    path = os.path.join(work, name)
+    with open(path, "w", encoding="ascii") as f:
+        f.write(text)
+    return check.check(original, path, model).violations
+
+
+def g18_direction(work):
+    prog = os.path.join(work, "g18.ngc")
+    with open(prog, "w", encoding="ascii") as f:
+        f.write("G21 G90 G18\nG0 X10 Y0 Z0\nG2 X50 Z0 I20 K0 F100\nM2\n")
+    calls, err = check.run_rs274(prog, work)
+    arc = [m for m in check.interpret(prog, calls, err).moves if m.geom.kind == "arc"][0]
+    mid = arc.geom.point(arc.length / 2)
+    return abs(mid[0] - 30) < 1e-6 and abs(mid[2] + 20) < 1e-6, mid
+
+
+def main():
+    failures, passed = [], 0
+    with tempfile.TemporaryDirectory(prefix="mtec-rs274-self-") as work:
+        zero = os.path.join(work, "zero.json")
+        constant = os.path.join(work, "constant.json")
+        constant_map(zero, (0.0, 0.0, 0.0))
+        constant_map(constant, E_UM)
+        for stem in TRANSLATABLE:
+            prog = os.path.join(CASES, stem + ".ngc")
+            v = check.check(prog, prog, zero).violations
+            (failures.append(f"{stem} against itself: {v[0]}") if v else None)
+            passed += not v
+            text = open(prog, encoding="utf-8").read()
+            right = translated(text, tuple(-e for e in E_UM))
+            v = outcome(prog, right, constant, work, stem + ".right.ngc")
+            (failures.append(f"{stem} compensated exactly: {v[0]}") if v else None)
+            passed += not v
+            off = translated(text, tuple(-e + 3.0 for e in E_UM))
+            v = outcome(prog, off, constant, work, stem + ".off.ngc")
+            (failures.append(f"{stem} off by 3 um per axis was accepted") if not v else None)
+            passed += bool(v)
+        ok, mid = g18_direction(work)
+        (failures.append(f"G18 G2 midpoint {mid}, expected (30, 0, -20)") if not ok else None)
+        passed += ok
+    for f in failures:
+        print(f"FAIL: {f}")
+    print(f"selftest: {passed} passed, {len(failures)} failed")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
