@@ -75,7 +75,8 @@ fn zero_model_copies_the_program_and_poly_model_corrects_it() {
 #[test]
 fn unsupported_line_exits_2_with_file_line_column_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
-    let prog = write(dir.path(), "p.ngc", "G21\nG0 X0 Y0 Z0\nG1 X[#1*2] F100\n");
+    // a named parameter that was never set: LinuxCNC stops there too
+    let prog = write(dir.path(), "p.ngc", "G21\nG0 X0 Y0 Z0\nG1 X[#<depth>*2] F100\n");
     let zero = write(
         dir.path(),
         "zero.json",
@@ -85,7 +86,7 @@ fn unsupported_line_exits_2_with_file_line_column_and_writes_nothing() {
     let o = compensate(&zero, &prog, &out);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("p.ngc:3:4:"), "{err}");
+    assert!(err.contains("p.ngc:3:6:") && err.contains("depth"), "{err}");
     assert!(!out.exists(), "a refused run must leave no output");
     assert!(std::fs::read_dir(dir.path()).unwrap().all(|e| !e
         .unwrap()
