@@ -76,7 +76,11 @@ fn zero_model_copies_the_program_and_poly_model_corrects_it() {
 fn unsupported_line_exits_2_with_file_line_column_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     // a named parameter that was never set: LinuxCNC stops there too
-    let prog = write(dir.path(), "p.ngc", "G21\nG0 X0 Y0 Z0\nG1 X[#<depth>*2] F100\n");
+    let prog = write(
+        dir.path(),
+        "p.ngc",
+        "G21\nG0 X0 Y0 Z0\nG1 X[#<depth>*2] F100\n",
+    );
     let zero = write(
         dir.path(),
         "zero.json",

@@ -77,12 +77,20 @@ fn r_arcs_near_a_semicircle_keep_their_centre() {
 fn full_circles_without_axis_words_are_compensated() {
     let o = RewriteOptions::default();
     // explicit and modal, with P turns, in G17 and G18
-    let input = "G21 G90 G17\nG0 X10 Y0 Z0\nG1 X10 Y0 F100\nG3 I-5\nG2 X10 Y0 I-5\nI-5\nG3 I-5 P2\nG18 G2 K5\nG17 G1 X20\n";
+    let input = "G21 G90 G17\nG0 X10 Y0 Z0\nG1 X10 Y0 F100\nG3 I-5\nG2 X10 Y0 I-5\nI-5\nI-5 J0\nG3 I-5 P2\nG18 G2 K5\nG17 G1 X20\n";
     let out = run(input, &PolyModel, &o);
     assert!(
         !out.contains("\nI-5\n"),
         "a full circle copied unchanged:\n{out}"
     );
+    // every circle was linearised: no centre word may survive beside the G1 (rs274 refuses a
+    // J word with no G2/G3 to use it; found by tests/rs274 when two removed words shared a blank)
+    for l in out.lines().filter(|l| !l.starts_with('(')) {
+        assert!(
+            !l.contains('I') && !l.contains('J') && !l.contains('K'),
+            "centre word left on a linearised line: {l}\n{out}"
+        );
+    }
     let w = check_path_dense(
         input,
         &out,

@@ -69,7 +69,13 @@ pub fn apply_edits(line: &[u8], edits: &mut [Edit], out: &mut Vec<u8>) {
     let mut pos = 0;
     for e in edits.iter() {
         if e.span.start < pos {
-            continue; // overlapping edit: never produced by the rewriter
+            // overlapping deletions (two removed words sharing the blank between them) are
+            // merged; an overlapping replacement is never produced by the rewriter
+            debug_assert!(e.text.is_empty(), "overlapping edit {e:?}");
+            if e.text.is_empty() {
+                pos = pos.max(e.span.end);
+            }
+            continue;
         }
         out.extend_from_slice(&line[pos..e.span.start]);
         out.extend_from_slice(e.text.as_bytes());
