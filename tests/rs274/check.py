@@ -929,9 +929,37 @@ def prepare_rs274_inputs(workdir, offsets=None, tool_table=None):
     return var_file, tbl
 
 
-def check(original, compensated, model_path, offsets=None, tool_table=None, limits=None):
+# what a flattened program (mtec --flatten-with rs274) must still do in the same order: the
+# machine's actions. Its modes and offsets are restated or folded into the coordinates by
+# design, and (b)/(c) already compare every position in machine coordinates.
+# SET_FEED_RATE is left out: a flattened program states F just before the feed move that
+# uses it (and M2 resets it differently); the feed in effect at every move is compared by
+# crates/mtec-cli/tests/flatten_rs274.rs.
+ACTION_CALLS = {
+    "START_SPINDLE_CLOCKWISE", "START_SPINDLE_COUNTERCLOCKWISE",
+    "STOP_SPINDLE_TURNING", "SET_SPINDLE_SPEED", "FLOOD_ON", "FLOOD_OFF", "MIST_ON", "MIST_OFF",
+    "SELECT_TOOL", "CHANGE_TOOL", "DWELL", "PROGRAM_END", "PROGRAM_STOP", "OPTIONAL_PROGRAM_STOP",
+    "PALLET_SHUTTLE",
+}
+
+
+def actions_only(prog):
+    """The events of a program reduced to its actions, a repeated state (the same call with the
+    same arguments as the last of its kind) dropped."""
+    last, kept = {}, []
+    for ev in prog.events:
+        name, args = ev[0], ev[1]
+        if name in ACTION_CALLS and last.get(name) != args:
+            kept.append(ev)
+            last[name] = args
+    prog.events = kept
+
+
+def check(original, compensated, model_path, offsets=None, tool_table=None, limits=None,
+          flattened=False):
     """Runs (a)-(d); returns a Result whose `violations` lists the first violation of each
-    check (empty: the compensated program is right)."""
+    check (empty: the compensated program is right). `flattened`: the compensated program was
+    flattened by rs274, so (d) compares the machine's actions only."""
     limits = limits or Limits()
     model = load_model(model_path)
     violations = [f"{compensated}:{no}: line of {n} characters; LinuxCNC's limit is "
@@ -948,6 +976,14 @@ def check(original, compensated, model_path, offsets=None, tool_table=None, limi
                 c_calls, c_err = run_rs274(without_long_comments(compensated, work), work, var_file, tbl)
     nominal = interpret(original, n_calls, n_err)
     comp = interpret(compensated, c_calls, c_err)
+    if flattened:
+        actions_only(nominal)
+        actions_only(comp)
+        # a program that ends at its closing % gets an M2 when flattened (rs274 prints no
+        # PROGRAM_END for the %): the end of the program either way
+        if (comp.events and comp.events[-1][0] == "PROGRAM_END"
+                and not any(e[0] == "PROGRAM_END" for e in nominal.events)):
+            comp.events.pop()
     if c_err != n_err:
         return Result(nominal, comp, None, violations)
     walker = Walker(nominal, comp, model, limits)

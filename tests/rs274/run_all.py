@@ -215,6 +215,14 @@ def run_one(mtec, program, map_name, map_path, words, out_dir):
     if "--start-position-mm" not in words:
         cmd += ["--start-position-mm", "0,0,0"]
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=300, cwd=os.path.dirname(map_path))
+    flattened = False
+    if r.returncode == 2 and "--flatten-with" not in words:
+        # refused directly: the LinuxCNC route flattens the program with rs274 first; its
+        # output is checked against the ORIGINAL program like any other
+        r2 = subprocess.run(cmd + ["--flatten-with", "rs274"], capture_output=True, text=True,
+                            timeout=300, cwd=os.path.dirname(map_path))
+        if r2.returncode == 0:
+            r, flattened = r2, True
     if r.returncode == 2:
         msg = (r.stderr.strip().splitlines() or ["(no message)"])[0]
         located = re.search(r":\d+:\d+", msg) is not None
@@ -223,7 +231,7 @@ def run_one(mtec, program, map_name, map_path, words, out_dir):
         return "CRASH", None, None, f"mtec exit {r.returncode}: {r.stderr.strip()[:300]}"
     kw = checker_args(words)
     try:
-        res = check.check(program, out, map_path, **kw)
+        res = check.check(program, out, map_path, flattened=flattened, **kw)
     except check.CheckFailure as e:
         return "WRONG", None, None, str(e)
     except Exception:  # a checker crash is a failure too
@@ -232,11 +240,22 @@ def run_one(mtec, program, map_name, map_path, words, out_dir):
         more = f" [+{len(res.violations) - 1} more checks failed]" if len(res.violations) > 1 else ""
         return "WRONG", res.max_dev_um, res.bound_um, res.violations[0] + more
     note = f"both stop at: {res.stopped}" if res.stopped else ""
+    if flattened:
+        note = ("flattened by rs274; " + note).strip("; ")
     return "ok", res.max_dev_um, res.bound_um, note
 
 
+# the real programs' setups: tool 1 of cds.ngc and g76.ngc from a tool table, in the machine's
+# units (mm: mtec's default --machine-units; the checker hands rs274 an inch copy, as mtec does)
+REPO = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+SHARED_OPTIONS = {
+    name: ["--tool-table", os.path.join(REPO, "crates/mtec-cli/tests/data/flatten/mill.tbl")]
+    for name in ("cds.ngc", "g76.ngc")
+}
+
+
 def run_program(mtec, program, out_dir, shared_maps, only_maps):
-    words = program_options(program)
+    words = program_options(program) or list(SHARED_OPTIONS.get(os.path.basename(program), []))
     kw = checker_args(words)
     try:
         moves = nominal_moves(program, kw)

@@ -256,6 +256,8 @@ fn check(
         .arg(&model)
         .args(["--flatten-with", "rs274", "--rs274"])
         .arg(bin)
+        // the test tables and parameter files are written in inches, as rs274 reads them
+        .args(["--machine-units", "inch"])
         .args(extra);
     if let Some(t) = table {
         c.arg("--tool-table").arg(t);
@@ -476,7 +478,7 @@ fn missing_rs274_is_a_usage_error_that_says_what_to_install() {
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("linuxcnc-uspace"), "{}", text(&o));
     assert!(!out.exists());
-    // the flattening options need --flatten-with
+    // a tool table that cannot be read is a usage error (exit 2), with or without flattening
     let o = mtec()
         .args(["compensate", "gcode", "--model"])
         .arg(&model)
@@ -555,7 +557,7 @@ fn model_is_evaluated_at_machine_positions_with_the_var_files_work_offsets() {
         let mut c = mtec();
         c.args(["compensate", "gcode", "--model"])
             .arg(&model)
-            .args(["--flatten-with", "rs274"]);
+            .args(["--flatten-with", "rs274", "--machine-units", "inch"]);
         if with_var {
             c.arg("--var-file").arg(&var);
         }

@@ -1,7 +1,7 @@
 //! `mtec compensate gcode`: rewrites an NC program so the machine reaches the programmed points.
 
 use crate::cmd::flatten::{
-    extra_inputs, flatten_input, FlattenArgs, Flattened, OnOff, ToolTableUnits,
+    extra_inputs, flatten_input, FlattenArgs, Flattened, MachineUnitsArg, OnOff,
 };
 use crate::cmd::model_loader::load_error_model;
 use crate::error::CliError;
@@ -193,9 +193,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     if let (Some(t), None) = (&args.flatten.tool_table, &args.flatten.flatten_with) {
         // G43 lengths from the controller's own tool table (rs274 reads it itself when flattening)
-        let units = match args.flatten.tool_table_units {
-            ToolTableUnits::Mm => MachineUnits::Mm,
-            ToolTableUnits::Inch => MachineUnits::Inch,
+        let units = match args.flatten.machine_units {
+            MachineUnitsArg::Mm => MachineUnits::Mm,
+            MachineUnitsArg::Inch => MachineUnits::Inch,
         };
         let table = load_tool_table(t, units).map_err(CliError::Usage)?;
         let (offsets, notes) = options

@@ -33,7 +33,7 @@ pub enum OnOff {
 
 /// Units of a tool table's lengths.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum ToolTableUnits {
+pub enum MachineUnitsArg {
     Mm,
     Inch,
 }
@@ -49,14 +49,15 @@ pub struct FlattenArgs {
     /// The rs274 binary to use (default: `rs274` on PATH).
     #[arg(long, value_name = "PATH", requires = "flatten_with")]
     pub rs274: Option<PathBuf>,
-    /// LinuxCNC tool table (.tbl): tool lengths for G43 (Z offsets, in --tool-table-units);
+    /// LinuxCNC tool table (.tbl): tool lengths for G43 (Z offsets, in --machine-units);
     /// with --flatten-with, passed to rs274 (`-t`), which bakes lengths and cutter radii in.
     #[arg(long, value_name = "FILE.tbl")]
     pub tool_table: Option<PathBuf>,
-    /// Units of the tool table's lengths: the machine's (LinuxCNC's INI LINEAR_UNITS), not the
-    /// program's G20/G21.
+    /// The machine's units (LinuxCNC's INI LINEAR_UNITS), in which tool tables and parameter
+    /// files hold their lengths (not the program's G20/G21). Stand-alone rs274 reads both as
+    /// inches, so with `mm` they are handed to it converted.
     #[arg(long, value_enum, default_value = "mm", value_name = "mm|inch")]
-    pub tool_table_units: ToolTableUnits,
+    pub machine_units: MachineUnitsArg,
     /// Parameter file for rs274 (`-v`): work offsets and other parameters (copied, never written).
     #[arg(long, value_name = "FILE.var", requires = "flatten_with")]
     pub var_file: Option<PathBuf>,
@@ -264,9 +265,19 @@ pub fn flatten_input(input: &Path, args: &FlattenArgs) -> Result<Flattened, CliE
         std::fs::read(input).map_err(|e| InputError::file(input, format!("cannot read: {e}")))?;
     let abs_input = std::path::absolute(input)?;
     let tmp = TempDir::new()?;
+    // stand-alone rs274 reads tool tables and parameter files as inches: a metric machine's
+    // files are handed to it converted (lengths / 25.4), an inch machine's as they are
+    let metric = args.machine_units == MachineUnitsArg::Mm;
     let copy = |src: &Path, name: &str| -> Result<PathBuf, CliError> {
         let dst = tmp.0.join(name);
-        std::fs::copy(src, &dst).map_err(|e| InputError::file(src, format!("cannot read: {e}")))?;
+        let text = std::fs::read_to_string(src)
+            .map_err(|e| InputError::file(src, format!("cannot read: {e}")))?;
+        let text = match (metric, name.ends_with(".tbl")) {
+            (false, _) => text,
+            (true, true) => mtec_comp::gcode::tooltable::to_inch_text(&text),
+            (true, false) => mtec_comp::gcode::flatten::var_file_to_inch(&text),
+        };
+        std::fs::write(&dst, text)?;
         Ok(dst)
     };
     let timeout = Duration::from_secs_f64(args.rs274_timeout_s.min(1e6));

@@ -1245,3 +1245,73 @@ mod tests {
         let _ = axes_named(b"X(((Y)))\n;Z\xff");
     }
 }
+
+/// A LinuxCNC parameter (.var) file's text with its linear positions divided by 25.4: the
+/// X Y Z U V W members of G28 (#5161…), G30 (#5181…), G92 (#5211…) and the nine work offsets
+/// (#5221 + 20·k …); angles (A B C), rotations and every other parameter kept. Stand-alone
+/// `rs274` reads a parameter file as inches whatever the machine's units.
+pub fn var_file_to_inch(text: &str) -> String {
+    // member index within a block of X Y Z A B C U V W: the linear ones
+    let linear = |i: u32| matches!(i, 0 | 1 | 2 | 6 | 7 | 8);
+    let is_length = |n: u32| match n {
+        5161..=5169 => linear(n - 5161),
+        5181..=5189 => linear(n - 5181),
+        5211..=5219 => linear(n - 5211),
+        5221..=5400 => (n - 5221) % 20 < 9 && linear((n - 5221) % 20),
+        _ => false,
+    };
+    let mut out = String::with_capacity(text.len());
+    for line in text.split_inclusive('\n') {
+        let mut parts = line.split_whitespace();
+        let converted = match (
+            parts.next().and_then(|p| p.parse::<u32>().ok()),
+            parts.next().and_then(|v| v.parse::<f64>().ok()),
+        ) {
+            (Some(n), Some(v)) if is_length(n) => Some(format!("{n}\t{:.9}\n", v / 25.4)),
+            _ => None,
+        };
+        match converted {
+            Some(c) => out.push_str(&c),
+            None => out.push_str(line),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod units_tests {
+    use super::*;
+
+    #[test]
+    fn var_file_lengths_become_inches_and_angles_stay() {
+        let v = "5161\t25.4\n5164\t90\n5221\t254\n5223\t-50.8\n5224\t30\n5230\t45\n5241\t12.7\n5400\t3\n";
+        let t = var_file_to_inch(v);
+        let vals: Vec<(u32, f64)> = t
+            .lines()
+            .map(|l| {
+                let mut p = l.split_whitespace();
+                (
+                    p.next().unwrap().parse().unwrap(),
+                    p.next().unwrap().parse().unwrap(),
+                )
+            })
+            .collect();
+        let get = |n: u32| vals.iter().find(|(k, _)| *k == n).unwrap().1;
+        assert!((get(5161) - 1.0).abs() < 1e-12);
+        assert_eq!(get(5164), 90.0); // G28 A: an angle
+        assert!((get(5221) - 10.0).abs() < 1e-12);
+        assert!((get(5223) + 2.0).abs() < 1e-12);
+        assert_eq!(get(5224), 30.0); // G54 A
+        assert_eq!(get(5230), 45.0); // G54 R: rotation
+        assert!((get(5241) - 0.5).abs() < 1e-12); // G55 X
+        assert_eq!(get(5400), 3.0);
+    }
+
+    #[test]
+    fn tool_table_lengths_become_inches() {
+        let t = crate::gcode::tooltable::to_inch_text(
+            "T1 P1 Z25.4 D6.35 ;end mill 6.35\nT2 P2 X-2.54 Z50.8 A10\n",
+        );
+        assert_eq!(t, "T1 P1 Z1 D0.25 ;end mill 6.35\nT2 P2 X-0.1 Z2 A10\n");
+    }
+}
