@@ -76,9 +76,14 @@ fn rs274_machine_ends(canon: &str) -> Vec<[f64; 3]> {
     ends
 }
 
-/// e = 0.3 µm per mm of x (and more, see PolyModel): an offset taken wrong by 1 mm moves the
-/// correction by a third of a µm, one taken wrong by 100 mm by 30 µm.
-const PROGRAMS: [&str; 3] = ["g92_g52_mm", "g10_l2_l20_inch", "g10_l1_g43_units"];
+/// The recorded programs. They run on PolyModel, whose e_x grows by 0.3 µm per mm of x (and
+/// more): an offset taken wrong by 100 mm moves the correction by 30 µm.
+const PROGRAMS: [&str; 4] = [
+    "g92_g52_mm",
+    "g10_l2_l20_inch",
+    "g10_l1_g43_units",
+    "l20_tool_g92_systems_g53",
+];
 
 fn opts() -> RewriteOptions {
     RewriteOptions::default()
@@ -337,7 +342,7 @@ fn offset_codes_that_cannot_be_followed_are_refused_with_line_and_column() {
 #[test]
 fn g10_l1_takes_effect_at_the_next_g43() {
     let o = opts();
-    let p = "G21\nG10 L1 P7 Z50\nT7 M6 G43 H7\nG0 X0 Y0 Z0\nG10 L1 P7 Z60\nG1 X10 Z0 F100\nG43 H7\nG1 X20 Z0\nG20\nG10 L1 P8 Z2\nG43 H8\nG1 X1 Z0\n";
+    let p = "G21\nG10 L1 P2 Z50\nT2 M6 G43 H2\nG0 X0 Y0 Z0\nG10 L1 P2 Z60\nG1 X10 Z0 F100\nG43 H2\nG1 X20 Z0\nG20\nG10 L1 P3 Z2\nG43 H3\nG1 X1 Z0\n";
     let out = rewrite_str(p, &PolyModel, &o);
     check_lands_on_target(
         p,
