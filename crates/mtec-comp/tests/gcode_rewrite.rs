@@ -249,7 +249,9 @@ fn unsupported_constructs_are_refused_with_line_and_column_or_passed_through() {
         ("G21 G0 X0 Y0 Z0\nG1 X1 X2\n", 2, 7, "two X words"),
         ("G21\nG1 X10 Y0 Z0 F10\n", 2, 4, "position of"),
         ("G21 G0 X0 Y0 Z0\n/G1 X3\n", 2, 1, "block delete"),
-        ("G21 G0 X0 Y0 Z0\nG10 L2 P1 X3\n", 2, 1, "G10"),
+        // G10 L1/L2/L20 are followed (tests/gcode_offsets_state.rs); L10 sets the tool table
+        // from the current position
+        ("G21 G0 X0 Y0 Z0\nG10 L10 P1 Z3\n", 2, 5, "G10 L10"),
     ];
     for (input, line, col, words) in cases {
         // G1 X10 from an unknown start is accepted with end-point-only correction when the

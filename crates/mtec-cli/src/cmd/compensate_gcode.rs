@@ -34,8 +34,8 @@ endings are kept. With a zero model the output is byte-identical to the input. A
 the model is written just before the first corrected line.
 
 Constructs that cannot be compensated safely (parameters or expressions in motion words,
-O-word subroutines and loops, canned cycles, cutter compensation G41/G42, G10/G92, rotary axis
-words) stop the run with file:line:column (--on-unsupported refuse), or are copied unchanged
+O-word subroutines and loops, canned cycles, cutter compensation G41/G42, G92.3, G10 other than
+L1/L2/L20 or with a rotation, rotary axis words) stop the run with file:line:column (--on-unsupported refuse), or are copied unchanged
 with a warning (pass-through-with-warning).
 
 The model (--model) is JSON: {\"format\": \"mtec.zero-model/1\"}, or a polynomial
@@ -43,7 +43,8 @@ The model (--model) is JSON: {\"format\": \"mtec.zero-model/1\"}, or a polynomia
 giving [Ex, Ey, Ez] in um as a function of the machine position in mm.
 
 Offsets (--offsets, TOML) map program to machine coordinates (machine = program + work offset
-+ tool length along Z):
++ G92/G52 offset + tool length along Z); G10 L1/L2/L20, G92, G52, G92.1 and G92.2 with literal
+values in the program change them as LinuxCNC does:
   format = \"mtec.gcode-offsets/1\"
   active = \"G54\"
   [work_offsets_mm]

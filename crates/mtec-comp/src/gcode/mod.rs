@@ -30,12 +30,15 @@
 //!   positions are tracked as the rounded output commands, so incremental (G91) programs do
 //!   not drift.
 //! - **Unsupported constructs** (parameters/expressions in motion words, O-word subroutines and
-//!   control flow, canned cycles, G41/G42, G93, G10/G92, rotary or polar axis words, M98/M99,
-//!   block delete on motion) are refused naming `line:column`, or with
+//!   control flow, canned cycles, G41/G42, G93, G92.3, G10 other than L1/L2/L20 or with a
+//!   rotation, rotary or polar axis words, M98/M99, block delete on motion) are refused naming `line:column`, or with
 //!   [`OnUnsupported::PassThroughWithWarning`] copied unchanged with a warning; everything the
 //!   construct may have changed is then treated as unknown until the program sets it again.
 //!   Most of them can go through [`flatten`] first: LinuxCNC's interpreter runs the program and
 //!   its moves are written as a plain program (`compensate gcode --flatten-with rs274`).
+//! - **Offsets set by the program** (G10 L1/L2/L20, G92, G52, G92.1, G92.2 with literal values)
+//!   are modal state, with LinuxCNC's meaning (see `rewrite.rs`, `offset_change`, and
+//!   docs/formats.md, "Offsets the program sets").
 //! - **Positions not yet known** (the first moves of a program, after G28/G30): rapids are
 //!   copied uncorrected; feed moves to a known end point from an unknown start are corrected at
 //!   their end point only; arcs from an unknown start are unsupported.

@@ -3,7 +3,9 @@
 //! The error model is a function of the machine (axis) position, while a program commands the
 //! tool tip in a work coordinate system. With work offset `w` (G54–G59.3) and tool length `L`
 //! (G43, along Z), `machine = program + w + [0, 0, L]` (LinuxCNC's convention; G53 blocks use
-//! machine coordinates directly). The offsets come from a TOML file (`--offsets`):
+//! machine coordinates directly); a G92/G52 offset set by the program adds to it. The offsets
+//! at program start come from a TOML file (`--offsets`); G10 L1/L2/L20 in the program change
+//! them from there (the rewriter's modal state):
 //!
 //! ```toml
 //! format = "mtec.gcode-offsets/1"

@@ -14,6 +14,7 @@ use super::modal;
 use super::offsets::{work_system_index, Offsets};
 use super::solve::{correction_mm, SolveError};
 use crate::ErrorModel;
+use std::collections::BTreeMap;
 use std::io::{BufRead, Write};
 
 /// What to do with a construct that cannot be compensated safely.
@@ -255,6 +256,38 @@ impl Motion {
     }
 }
 
+/// The coordinate offsets the controller holds, mm, per axis (`None` = not known).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Frame {
+    /// G54 … G59.3 (set from `--offsets`, then by G10 L2 / L20).
+    work: [[Option<f64>; 3]; 9],
+    /// The G92 offset (G92, G52 set it; G92.1, G92.2 zero it). It applies in every work system,
+    /// in addition to the work offset; G53 moves ignore it (LinuxCNC's `rs274`).
+    g92: [Option<f64>; 3],
+}
+
+impl Frame {
+    fn work_of(&self, system: usize) -> Option<[f64; 3]> {
+        let w = self.work.get(system)?;
+        Some([w[0]?, w[1]?, w[2]?])
+    }
+}
+
+/// Index into [`State::frames`]: the offsets as the original program sets them.
+const PROG: usize = 0;
+/// Index into [`State::frames`]: the offsets as the rewritten program sets them.
+const OUT: usize = 1;
+
+/// Why a block is refused: the token to report (its column) and the message.
+type Refusal = (Option<usize>, String);
+
+/// What a G10 / G92 / G52 block does to the offsets, computed before it is applied.
+#[derive(Debug, Clone)]
+struct OffsetChange {
+    frames: [Frame; 2],
+    tool: Option<(u32, f64)>,
+}
+
 /// Modal state of the program as the controller would see it; `None` = not known.
 #[derive(Debug, Clone)]
 struct State {
@@ -274,6 +307,13 @@ struct State {
     out_motion: Motion,
     cutter_comp: bool,
     inverse_time: bool,
+    /// Coordinate offsets as the original program sets them ([`PROG`]) and as the rewritten
+    /// program does ([`OUT`]). They differ only where an offset is set from the current
+    /// position (G92, G10 L20): the rewritten program stands at the corrected position there,
+    /// so the controller derives a different offset from the same words.
+    frames: [Frame; 2],
+    /// The tool table's lengths, mm (from `--offsets` / `--tool-table`, then G10 L1).
+    tools: BTreeMap<u32, f64>,
 }
 
 /// Rewrites a program from `input` to `output`, line by line (memory does not grow with the
@@ -316,6 +356,9 @@ struct Rewriter<'a> {
     bound: PathBound<'a>,
     /// The current block moves in machine coordinates (G53).
     g53: bool,
+    /// The current move's original-program offsets less the rewritten program's, mm: a word
+    /// copied unchanged lands this much off in the rewritten program.
+    shift: [f64; 3],
     /// Numbered and named parameters as LinuxCNC sets them (literal values only).
     params: Params,
     /// The current line's evaluated words and assignments.
@@ -354,6 +397,20 @@ impl<'a> Rewriter<'a> {
                 out_motion: Motion::Cancelled,
                 cutter_comp: false,
                 inverse_time: false,
+                frames: {
+                    let mut f = Frame {
+                        work: [[None; 3]; 9],
+                        // the controller's persisted G92 offset is assumed zero at start
+                        g92: [Some(0.0); 3],
+                    };
+                    for i in 0..9 {
+                        if let Some(w) = opt.offsets.work(i) {
+                            f.work[i] = w.map(Some);
+                        }
+                    }
+                    [f, f]
+                },
+                tools: opt.offsets.tool_length_mm.clone(),
             },
             report: RewriteReport::default(),
             line_no: 0,
@@ -369,6 +426,7 @@ impl<'a> Rewriter<'a> {
             split_stack: Vec::new(),
             bound: PathBound::new(model, opt.check_step_mm),
             g53: false,
+            shift: [0.0; 3],
             params: Params::new(),
             line_values: LineValues::default(),
             params_lost: false,
@@ -443,6 +501,12 @@ impl<'a> Rewriter<'a> {
         st.tool_length_mm = None;
         st.motion = Motion::Unknown;
         st.out_motion = Motion::Unknown;
+        // the line may have set offsets or the tool table (G10, G92, G52, a subprogram…)
+        for f in st.frames.iter_mut() {
+            f.work = [[None; 3]; 9];
+            f.g92 = [None; 3];
+        }
+        st.tools.clear();
     }
 
     fn write_verbatim<W: Write>(
@@ -663,7 +727,8 @@ impl<'a> Rewriter<'a> {
         // --- classify G codes, in order; collect issues ---------------------------------
         let mut motion_word: Option<(Motion, usize)> = None;
         let mut g53 = false;
-        let mut axis_consumer: Option<u32> = None; // G10, G28, G30, G92 take the axis words
+        let mut axis_consumer: Option<u32> = None; // G10, G28, G30, G52, G92 take the axis words
+        let mut g92_reset = false;
         for &(code, tok) in &b.g {
             match code {
                 0 => motion_word = Some((Motion::Rapid, tok)),
@@ -689,17 +754,14 @@ impl<'a> Rewriter<'a> {
                     message: "G93 inverse-time feed: splitting a move would change its duration".into(),
                     poisons_all: false,
                 }),
-                100 | 920 | 921 | 922 | 923 | 520 => {
-                    axis_consumer = Some(code);
-                    issues.push(Issue {
-                        token: Some(tok),
-                        message: format!(
-                            "{} changes coordinate offsets or tables from the program; give offsets with --offsets instead",
-                            g_name(code)
-                        ),
-                        poisons_all: true,
-                    });
-                }
+                100 | 920 | 520 => axis_consumer = Some(code),
+                // G92.1 and G92.2 zero the G92 offset (they differ only in parameters 5211-5219)
+                921 | 922 => g92_reset = true,
+                923 => issues.push(Issue {
+                    token: Some(tok),
+                    message: "G92.3 restores the G92 offset from parameters 5211-5219, whose values are not known here; use G52 or G92 with literal values".into(),
+                    poisons_all: true,
+                }),
                 330 | 331 | 382 | 383 | 384 | 385 | 730 | 740 | 760 | 810 | 820 | 830 | 840
                 | 850 | 860 | 870 | 880 | 890 | 50 | 51 | 52 | 53 => {
                     motion_word = Some((Motion::Unknown, tok));
@@ -774,8 +836,7 @@ impl<'a> Rewriter<'a> {
                         },
                         None => st.current_tool,
                     };
-                    st.tool_length_mm =
-                        tool.and_then(|t| self.opt.offsets.tool_length_mm.get(&t).copied());
+                    st.tool_length_mm = tool.and_then(|t| st.tools.get(&t).copied());
                     if st.tool_length_mm.is_none() {
                         let what = match tool {
                             Some(t) => format!("tool {t} has no length in the offsets file (--offsets, [tool_lengths_mm])"),
@@ -791,12 +852,12 @@ impl<'a> Rewriter<'a> {
                 490 => st.tool_length_mm = Some(0.0),
                 540 | 550 | 560 | 570 | 580 | 590 | 591 | 592 | 593 => {
                     st.work = work_system_index(code);
-                    if let Some(i) = st.work.filter(|&i| !self.opt.offsets.known[i]) {
+                    if let Some(i) = st.work.filter(|&i| st.frames[PROG].work_of(i).is_none()) {
                         st.work = None;
                         issues.push(Issue {
                             token: Some(tok),
                             message: format!(
-                                "{} is selected but its offset is not known: give it in the offsets file (--offsets, [work_offsets_mm] {} = [x, y, z]); taking it as zero would compensate the wrong place",
+                                "{} is selected but its offset is not known: give it in the offsets file (--offsets, [work_offsets_mm] {} = [x, y, z]) or set all three axes with G10 L2 first; taking it as zero would compensate the wrong place",
                                 g_name(code),
                                 super::offsets::WORK_SYSTEMS[i]
                             ),
@@ -811,6 +872,38 @@ impl<'a> Rewriter<'a> {
                 _ => {}
             }
         }
+        if g92_reset {
+            for f in st.frames.iter_mut() {
+                f.g92 = [Some(0.0); 3];
+            }
+        }
+
+        // --- G10 / G92 / G52: the new offsets, from the state after this block's modes -------
+        let mut offset_change = None;
+        if let Some(code) = axis_consumer.filter(|&c| matches!(c, 100 | 520 | 920)) {
+            let reset = [921, 922].into_iter().find_map(|c| b.has_g(c));
+            if let Some(tok) = reset {
+                // LinuxCNC accepts both in one block, in an order of its own: not guessed
+                issues.push(Issue {
+                    token: Some(tok),
+                    message: format!(
+                        "{} with {} in one block: write them on separate lines",
+                        g_name(b.g.iter().find(|(_, t)| *t == tok).map_or(921, |g| g.0)),
+                        g_name(code)
+                    ),
+                    poisons_all: true,
+                });
+            }
+            match self.offset_change(b, code) {
+                Ok(c) => offset_change = Some(c),
+                Err((tok, message)) => issues.push(Issue {
+                    token: tok,
+                    message,
+                    poisons_all: true,
+                }),
+            }
+        }
+        let st = &mut self.st;
 
         // --- what the axis words mean ------------------------------------------------------
         let mut motion = None;
@@ -914,7 +1007,8 @@ impl<'a> Rewriter<'a> {
                 self.restore_motion_word(b, m, true);
                 edited = true;
             }
-            if issues.iter().any(|i| i.poisons_all) {
+            // a copied line that sets offsets leaves them unknown
+            if issues.iter().any(|i| i.poisons_all) || offset_change.is_some() {
                 self.poison_all();
             } else {
                 for (a, l) in axis_letters.iter().enumerate() {
@@ -931,6 +1025,16 @@ impl<'a> Rewriter<'a> {
             }
             self.after_block(b);
             return Ok(edited);
+        }
+
+        // --- G10 / G92 / G52: new offsets (the line is copied) --------------------------------
+        if let Some(c) = offset_change {
+            self.st.frames = c.frames;
+            if let Some((t, len)) = c.tool {
+                self.st.tools.insert(t, len);
+            }
+            self.after_block(b);
+            return Ok(true);
         }
 
         // --- G28 / G30: reference-point moves leave the axes at a position we do not know ----
@@ -979,16 +1083,170 @@ impl<'a> Rewriter<'a> {
         }
     }
 
-    fn offset_mm(&self, axis: usize, g53: bool) -> Option<f64> {
+    /// Machine = program coordinate + this, mm: work offset + G92 offset (+ tool length on Z),
+    /// as the original program ([`PROG`]) or the rewritten one ([`OUT`]) has set them.
+    fn offset_mm(&self, axis: usize, g53: bool, frame: usize) -> Option<f64> {
         if g53 {
             return Some(0.0);
         }
-        let w = self.opt.offsets.work(self.st.work?)?[axis];
+        let f = &self.st.frames[frame];
+        let w = f.work[self.st.work?][axis]? + f.g92[axis]?;
         Some(if axis == 2 {
             w + self.st.tool_length_mm?
         } else {
             w
         })
+    }
+
+    /// The offsets after a G10 (L1, L2, L20), G92 or G52 block, with LinuxCNC's meaning
+    /// (checked with its `rs274`): values in the block's units, absolute also in G91, axes not
+    /// given keep their offset; G92 and G10 L20 set an offset so that the current position
+    /// becomes the given value. Err: the token to report and why the block is refused.
+    fn offset_change(&self, b: &Block, code: u32) -> Result<OffsetChange, Refusal> {
+        let st = &self.st;
+        let name = g_name(code);
+        let code_tok = b.has_g(code);
+        let num = |l: u8| -> Result<Option<(f64, usize)>, Refusal> {
+            match b.word(l) {
+                None => Ok(None),
+                Some(w) => match w.value {
+                    Value::Number(v) if v.is_finite() => Ok(Some((v, w.token))),
+                    _ => Err((
+                        Some(w.token),
+                        format!("{name}: the {} word has no literal value here", l as char),
+                    )),
+                },
+            }
+        };
+        let int = |l: u8| -> Result<Option<(i64, usize)>, Refusal> {
+            match num(l)? {
+                None => Ok(None),
+                Some((v, t)) if v.fract() == 0.0 && v.abs() < 1e9 => Ok(Some((v as i64, t))),
+                Some((v, t)) => Err((
+                    Some(t),
+                    format!("{name}: {}{v} is not an integer", l as char),
+                )),
+            }
+        };
+        let Some(units) = st.units else {
+            return Err((
+                code_tok,
+                format!("{name}: the units (G20/G21) are not known here"),
+            ));
+        };
+        let scale = units.mm_per_unit();
+        let mut xyz = [None; 3];
+        for (a, l) in [b'X', b'Y', b'Z'].into_iter().enumerate() {
+            xyz[a] = num(l)?.map(|(v, _)| v * scale);
+        }
+        let mut frames = st.frames;
+        let pos = [st.prog, st.out];
+        // the current position of axis `a` in the frame of the program `f`, less the given
+        // value: the offset that makes the position read as the value
+        let from_position = |f: usize, a: usize, v: f64, g92: bool| -> Option<f64> {
+            let tool = if a == 2 { st.tool_length_mm? } else { 0.0 };
+            let other = if g92 {
+                st.frames[f].work[st.work?][a]?
+            } else {
+                st.frames[f].g92[a]?
+            };
+            Some(pos[f][a]? - other - tool - v)
+        };
+        let not_known = |a: usize| {
+            (
+                b.word([b'X', b'Y', b'Z'][a]).map(|w| w.token),
+                format!(
+                    "{name} sets an offset from the current position, which is not known here for {} (program an absolute move first; the work offset, G92 offset and tool length in effect must be known too)",
+                    ["X", "Y", "Z"][a]
+                ),
+            )
+        };
+        match code {
+            520 | 920 => {
+                let any_axis = [b'X', b'Y', b'Z', b'A', b'B', b'C', b'U', b'V', b'W']
+                    .iter()
+                    .any(|&l| b.word(l).is_some());
+                if !any_axis {
+                    return Err((code_tok, format!("{name} without axis words (LinuxCNC: \"All axes missing with g52 or g92\")")));
+                }
+                for (a, v) in xyz.iter().enumerate() {
+                    let Some(v) = *v else { continue };
+                    for f in [PROG, OUT] {
+                        frames[f].g92[a] = if code == 520 {
+                            Some(v)
+                        } else {
+                            Some(from_position(f, a, v, true).ok_or_else(|| not_known(a))?)
+                        };
+                    }
+                }
+                Ok(OffsetChange { frames, tool: None })
+            }
+            _ => {
+                let Some((l, l_tok)) = int(b'L')? else {
+                    return Err((code_tok, "G10 without an L word".into()));
+                };
+                match l {
+                    1 => {
+                        let Some((p, p_tok)) = int(b'P')? else {
+                            return Err((code_tok, "G10 L1 without a P word (the tool number)".into()));
+                        };
+                        if p < 1 {
+                            return Err((Some(p_tok), format!("G10 L1 P{p}: not a tool number")));
+                        }
+                        if let Some(l) = [b'X', b'Y', b'A', b'B', b'C', b'U', b'V', b'W']
+                            .into_iter()
+                            .find(|&l| b.word(l).is_some())
+                        {
+                            return Err((
+                                b.word(l).map(|w| w.token),
+                                format!("G10 L1 sets a tool offset along {}: only tool lengths (Z) are followed", l as char),
+                            ));
+                        }
+                        // the active tool length offset keeps its value until the next G43
+                        Ok(OffsetChange {
+                            frames,
+                            tool: xyz[2].map(|z| (p as u32, z)),
+                        })
+                    }
+                    2 | 20 => {
+                        let Some((p, p_tok)) = int(b'P')? else {
+                            return Err((code_tok, format!("G10 L{l} without a P word (the coordinate system)")));
+                        };
+                        if !(0..=9).contains(&p) {
+                            return Err((Some(p_tok), format!("G10 L{l} P{p}: P must be 0 (the active system) to 9 (G59.3)")));
+                        }
+                        if let Some((r, r_tok)) = num(b'R')? {
+                            if r != 0.0 {
+                                return Err((Some(r_tok), format!("G10 L{l} R{r} rotates the coordinate system: rotation is not supported")));
+                            }
+                        }
+                        let n = if p == 0 {
+                            st.work.ok_or((
+                                Some(p_tok),
+                                format!("G10 L{l} P0: the active coordinate system is not known here"),
+                            ))?
+                        } else {
+                            (p - 1) as usize
+                        };
+                        for (a, v) in xyz.iter().enumerate() {
+                            let Some(v) = *v else { continue };
+                            for f in [PROG, OUT] {
+                                frames[f].work[n][a] = if l == 2 {
+                                    Some(v)
+                                } else {
+                                    Some(from_position(f, a, v, false).ok_or_else(|| not_known(a))?)
+                                };
+                            }
+                        }
+                        Ok(OffsetChange { frames, tool: None })
+                    }
+                    _ => Err((
+                        Some(l_tok),
+                        format!("G10 L{l} (tool table or offsets from the current position or probe) is not supported; only G10 L1, L2 and L20 with literal values are followed"),
+                    )),
+                }
+            }
+        }
     }
 
     fn decimals(&self) -> usize {
@@ -1040,19 +1298,27 @@ impl<'a> Rewriter<'a> {
         }
         self.g53 = g53;
         let scale = units.mm_per_unit();
+        // program coordinates → machine: `offsets` as the original program has set them (its
+        // targets), `out_offsets` as the rewritten program has (its written words)
         let mut offsets = [0.0; 3];
-        for (a, off) in offsets.iter_mut().enumerate() {
-            match self.offset_mm(a, g53) {
-                Some(o) => *off = o,
-                None => {
+        let mut out_offsets = [0.0; 3];
+        for a in 0..3 {
+            match (self.offset_mm(a, g53, PROG), self.offset_mm(a, g53, OUT)) {
+                (Some(o), Some(oo)) => {
+                    offsets[a] = o;
+                    out_offsets[a] = oo;
+                }
+                _ => {
+                    let frame = &self.st.frames[PROG];
                     let d = self.diag(
                         col,
                         ProblemKind::Unsupported,
                         match self.st.work {
-                            Some(i) if !self.opt.offsets.known[i] => format!(
-                                "work offset {} (in effect) is not known: give it in the offsets file (--offsets, [work_offsets_mm])",
+                            Some(i) if frame.work_of(i).is_none() => format!(
+                                "work offset {} (in effect) is not known: give it in the offsets file (--offsets, [work_offsets_mm]) or set all three axes with G10 L2",
                                 super::offsets::WORK_SYSTEMS[i]
                             ),
+                            Some(_) if frame.g92.iter().any(|g| g.is_none()) => "the G92/G52 offset is not known here (after an unsupported line): set it with G52 or G92 with literal values, or zero it with G92.1".into(),
                             _ => "work offset or tool length not known here (after an unsupported line)".into(),
                         },
                     );
@@ -1063,6 +1329,7 @@ impl<'a> Rewriter<'a> {
                 }
             }
         }
+        self.shift = [0, 1, 2].map(|a| offsets[a] - out_offsets[a]);
         // target of the program, machine frame
         let start = self.st.prog;
         let mut target = start;
@@ -1100,7 +1367,7 @@ impl<'a> Rewriter<'a> {
                     if let Some((v, _)) = words[a] {
                         self.st.prog[a] = target[a];
                         self.st.out[a] = if absolute {
-                            Some(v * scale + offsets[a])
+                            Some(v * scale + out_offsets[a])
                         } else {
                             self.st.out[a].map(|o| o + v * scale)
                         };
@@ -1145,7 +1412,16 @@ impl<'a> Rewriter<'a> {
                 pieces.clear();
                 self.split_linear(start_p, target, c0, c_end, &mut pieces, col)?;
                 self.emit_pieces(
-                    b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false,
+                    b,
+                    body,
+                    m,
+                    uses_modal,
+                    &pieces,
+                    &words,
+                    out_offsets,
+                    absolute,
+                    scale,
+                    false,
                 )?;
                 self.pieces = pieces;
             }
@@ -1178,19 +1454,21 @@ impl<'a> Rewriter<'a> {
                     if let Some(rw) = b.word(b'R').filter(|_| moved) {
                         // R kept with a corrected end point moves the centre, badly so near
                         // 180°: the corrected arc is written in centre form instead
-                        self.r_to_center(&arc, rw.token, start_p, c0, offsets, scale);
+                        self.r_to_center(&arc, rw.token, start_p, c0, out_offsets, scale);
                     } else if self.st.arc_absolute == Some(true) {
                         // endpoints move with the correction; the centre moves with the start's
                         for (a, l) in [b'I', b'J', b'K'].iter().enumerate() {
                             if let Some(w) = b.word(*l) {
-                                if c0[a] != 0.0 {
+                                // and the written word is read with the rewritten program's offsets
+                                let shift = c0[a] + self.shift[a];
+                                if shift != 0.0 {
                                     let Value::Number(v) = w.value else { continue };
                                     let d = self.decimals();
-                                    let (r, n) = rounded(v + c0[a] / scale, d);
+                                    let (r, n) = rounded(v + shift / scale, d);
                                     let span = self.tokens[w.token].value_span.clone();
                                     if r != v {
                                         let mut s = String::new();
-                                        write_rounded(v + c0[a] / scale, d, n, &mut s);
+                                        write_rounded(v + shift / scale, d, n, &mut s);
                                         self.edits.push(Edit {
                                             span,
                                             text: s,
@@ -1203,7 +1481,16 @@ impl<'a> Rewriter<'a> {
                     }
                     let pieces = [(target, c_end)];
                     self.emit_pieces(
-                        b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false,
+                        b,
+                        body,
+                        m,
+                        uses_modal,
+                        &pieces,
+                        &words,
+                        out_offsets,
+                        absolute,
+                        scale,
+                        false,
                     )?;
                 } else {
                     let n = arc.chord_count(self.opt.chord_tolerance_um * 1e-3);
@@ -1222,7 +1509,16 @@ impl<'a> Rewriter<'a> {
                     }
                     self.report.arcs_linearised += 1;
                     self.emit_pieces(
-                        b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, true,
+                        b,
+                        body,
+                        m,
+                        uses_modal,
+                        &pieces,
+                        &words,
+                        out_offsets,
+                        absolute,
+                        scale,
+                        true,
                     )?;
                 }
             }
@@ -1233,7 +1529,16 @@ impl<'a> Rewriter<'a> {
                 }
                 let pieces = [(target, c_end)];
                 self.emit_pieces(
-                    b, body, m, uses_modal, &pieces, &words, offsets, absolute, scale, false,
+                    b,
+                    body,
+                    m,
+                    uses_modal,
+                    &pieces,
+                    &words,
+                    out_offsets,
+                    absolute,
+                    scale,
+                    false,
                 )?;
             }
         }
@@ -1640,7 +1945,7 @@ impl<'a> Rewriter<'a> {
                     let span = self.tokens[tok].value_span.clone();
                     // exact shortcut: the final piece with the same correction as before keeps its text
                     let delta = if absolute {
-                        c0[a]
+                        c0[a] + self.shift[a]
                     } else {
                         c0[a] - (out_prev.unwrap_or(0.0) - self.st.prog[a].unwrap_or(0.0))
                     };

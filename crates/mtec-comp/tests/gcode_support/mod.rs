@@ -145,7 +145,12 @@ pub fn dist_to_move(q: [f64; 3], m: &Move) -> f64 {
 }
 
 /// Interprets the subset: G0 G1 G2 G3 (I J K or R, P turns), G17/18/19, G20/21, G90/91,
-/// G90.1/91.1, G54–G59 with `work`, G43 H/G49 with `tools`, comments, N/F/S/T/M words.
+/// G90.1/91.1, G54–G59.3 with `work` (G59.1–G59.3 start at zero), G43 H/G49 with `tools`,
+/// comments, N/F/S/T/M words; and the offset codes as LinuxCNC's `rs274` runs them (checked
+/// against its recorded output in tests/gcode_offsets_state.rs): G92 and G10 L20 make the
+/// current position read as the given values, G52 and G10 L2 set the offset, G92.1/G92.2 zero
+/// the G92 offset, G10 L1 sets a tool length (used at the next G43), all in the block's units
+/// and absolute in G91; G53 ignores work and G92 offsets; M2/M30 select G54 and keep G92.
 /// Moves before X, Y and Z are all known are not returned (nor compensated by the rewriter).
 pub fn interpret(
     text: &str,
@@ -161,6 +166,11 @@ pub fn interpret(
     let mut mode = -1i32;
     let mut wcs = 0usize;
     let mut tool = 0.0;
+    let mut work9 = [[0.0; 3]; 9];
+    work9[..6].copy_from_slice(work);
+    let work = &mut work9;
+    let mut tools = tools.clone();
+    let mut g92 = [0.0f64; 3];
     let mut moves = Vec::new();
     let mut toks = Vec::new();
     for (ln, line) in text.lines().enumerate() {
@@ -193,6 +203,8 @@ pub fn interpret(
                 901 => arc_abs = true,
                 911 => arc_abs = false,
                 540 | 550 | 560 | 570 | 580 | 590 => wcs = ((g - 540) / 10) as usize,
+                591..=593 => wcs = (g - 591) as usize + 6,
+                921 | 922 => g92 = [0.0; 3],
                 430 => tool = tools[&(w[&b'H'] as u32)],
                 490 => tool = 0.0,
                 0 | 10 | 20 | 30 => mode = g / 10,
@@ -200,6 +212,57 @@ pub fn interpret(
             }
         }
         let letters = [b'X', b'Y', b'Z'];
+        let stop = toks.iter().any(|t| {
+            matches!(t.kind, TokenKind::Word { letter: b'M', value: Value::Number(v) } if v == 2.0 || v == 30.0)
+        });
+        if stop {
+            wcs = 0;
+        }
+        // G10 / G92 / G52 take the axis words (LinuxCNC's order: after units, G43, G54…)
+        let tool_of = |a: usize, tool: f64| if a == 2 { tool } else { 0.0 };
+        if gs.contains(&920) || gs.contains(&520) {
+            for a in 0..3 {
+                if let Some(v) = w.get(&letters[a]) {
+                    g92[a] = if gs.contains(&520) {
+                        v * scale
+                    } else {
+                        pos[a].expect("G92 at a known position")
+                            - work[wcs][a]
+                            - tool_of(a, tool)
+                            - v * scale
+                    };
+                }
+            }
+            continue;
+        }
+        if gs.contains(&100) {
+            let l = w[&b'L'] as i32;
+            let p = w[&b'P'] as usize;
+            match l {
+                1 => {
+                    if let Some(z) = w.get(&b'Z') {
+                        tools.insert(p as u32, z * scale);
+                    }
+                }
+                2 | 20 => {
+                    let n = if p == 0 { wcs } else { p - 1 };
+                    for a in 0..3 {
+                        if let Some(v) = w.get(&letters[a]) {
+                            work[n][a] = if l == 2 {
+                                v * scale
+                            } else {
+                                pos[a].expect("G10 L20 at a known position")
+                                    - g92[a]
+                                    - tool_of(a, tool)
+                                    - v * scale
+                            };
+                        }
+                    }
+                }
+                _ => panic!("reference interpreter: G10 L{l}"),
+            }
+            continue;
+        }
         // a G2/G3 block with centre words only is a full circle (LinuxCNC runs `G3 I-5`)
         let full_circle =
             (mode == 2 || mode == 3) && [b'I', b'J', b'K'].iter().any(|l| w.contains_key(l));
@@ -210,7 +273,11 @@ pub fn interpret(
         let off = if gs.contains(&530) {
             [0.0; 3]
         } else {
-            [work[wcs][0], work[wcs][1], work[wcs][2] + tool]
+            [
+                work[wcs][0] + g92[0],
+                work[wcs][1] + g92[1],
+                work[wcs][2] + g92[2] + tool,
+            ]
         };
         let mut end = pos;
         for a in 0..3 {
