@@ -2,9 +2,10 @@
 //!
 //! The method (SPEC §1 C, "the ideal NC program is reconstructed by adding the reversed error to
 //! each commanded position"): for every commanded point `t` the rewritten program commands
-//! `p = t + c` where `p + e(p) = t` ([`solve`]). Feed moves are split where the correction
-//! changes along them, arcs are linearised where it varies along the arc, rapids are corrected
-//! at their end points only.
+//! `p = t + c` where `p + e(p) = t` ([`solve`]). Feed moves are split until a bound of the
+//! tool's distance from the programmed path ([`bound`]: exact for grid maps) is within
+//! `--tolerance-um` on every piece, arcs are linearised when that bound does not hold for the
+//! arc kept whole, rapids are corrected at their end points only.
 //!
 //! Design decisions (the spec is silent on these):
 //! - **Our own lexer** ([`lexer`]): each line's text is kept; only the words that change are
@@ -19,17 +20,23 @@
 //!   still precedes every corrected line. (A `%` first line stays first.)
 //! - **Split pieces**: the original line becomes the first piece (so its other words — F, S,
 //!   M3, G91, its line number and comments — act first, as the controller orders a block), the
-//!   other pieces follow as new `G1` lines without line numbers. A piece is accepted when the
-//!   correction at its end and at its middle differ from the one at its start by less than
-//!   `--tolerance-um`; the last piece ends exactly at the original target plus its correction.
-//! - **Arcs**: kept as arcs (only the end point, and in G90.1 the centre, edited) when the
-//!   correction varies by less than half the tolerance along 16 samples; otherwise replaced by
-//!   chords of sagitta ≤ `--chord-tolerance-um`, each split like a feed move. A block relying
-//!   on the modal G2/G3 after a linearised arc gets its G2/G3 word back.
+//!   other pieces follow as new `G1` lines without line numbers (`G53 G1` for a G53 move). A
+//!   piece is accepted when its path bound (solve residuals at its ends + the model's
+//!   departure from its chord + the rounding of the written words) is within `--tolerance-um`;
+//!   otherwise it is halved. The last piece ends exactly at the original target plus its
+//!   correction. Full circles written without axis words (`G3 I-50`, a modal `I-50`) are moves
+//!   like any other.
+//! - **Arcs**: kept as arcs (the end point, the centre of G90.1 arcs, and an R arc rewritten
+//!   in centre form, since keeping R moves the centre) when twice the model's variation over
+//!   the arc plus residuals and rounding is within the tolerance; otherwise replaced by chords
+//!   of sagitta ≤ `--chord-tolerance-um`, each split like a feed move. A block relying on the
+//!   modal G2/G3 after a linearised arc gets its G2/G3 word back.
 //! - **Rounding**: changed words are written with 4 decimals in mm and 5 in inch (configurable);
 //!   positions are tracked as the rounded output commands, so incremental (G91) programs do
 //!   not drift.
-//! - **Unsupported constructs** (parameters/expressions in motion words, O-word subroutines and
+//! - **Parameters and expressions** with literal values are evaluated as LinuxCNC does
+//!   ([`expr`]); two codes of one modal group are refused as LinuxCNC refuses them ([`modal`]).
+//! - **Unsupported constructs** (parameters that cannot be evaluated, O-word subroutines and
 //!   control flow, canned cycles, G41/G42, G93, G92.3, G10 other than L1/L2/L20 or with a
 //!   rotation, rotary or polar axis words, M98/M99, block delete on motion) are refused naming `line:column`, or with
 //!   [`OnUnsupported::PassThroughWithWarning`] copied unchanged with a warning; everything the
@@ -55,9 +62,10 @@
 //! checks the same without a time bound:
 //! `cd fuzz && cargo +nightly fuzz run gcode_rewrite corpus/gcode_rewrite seeds/gcode_rewrite -- -max_total_time=600 -max_len=4096`.
 //!
-//! Speed (one core, `cargo bench -p mtec-comp --bench gcode`, and the release CLI on a
-//! 1 M-line program): pass-through ≈ 4 M lines/s and compensation ≈ 1.6 M lines/s of CPU time;
-//! memory stays at a few MB whatever the file size.
+//! Speed (one core, `cargo bench -p mtec-comp --bench gcode`, 200 k short moves, load 2.6–3.4):
+//! pass-through 1.76 M lines/s, compensation 1.06 M lines/s with a polynomial model and
+//! 0.72 M lines/s with a 25×25×3 trilinear map (the exact path bound included); memory stays at
+//! a few MB whatever the file size.
 
 pub mod arc;
 pub mod block;
