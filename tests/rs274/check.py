@@ -840,6 +840,19 @@ class Walker:
                                  f"from the nominal end of {self.nom.moves[self.i].where()}")
 
 
+# offsets set from the current position (G92, G10 L20) differ by the correction there in a
+# compensated program, by design: the rewritten program stands at the corrected point. Their
+# values are not compared here; (b) and (c) check every position they lead to in machine mm.
+OFFSET_CALLS = {"SET_G92_OFFSET": 0, "SET_G5X_OFFSET": 1}
+
+
+def event_key(name, args):
+    """What (d) compares of a call: everything, but only the system index of an offset."""
+    if name in OFFSET_CALLS:
+        return (name, tuple(a.strip() for a in args.split(",")[:OFFSET_CALLS[name]]))
+    return (name, args)
+
+
 def check_events(nominal, comp, match):
     """(d): the same non-motion calls, in the same order, between the same nominal moves.
 
@@ -852,7 +865,7 @@ def check_events(nominal, comp, match):
             return (f"{comp.path}: canonical line {extra[3].seq}: {extra[0]}({extra[1]}) "
                     f"appears only in the {side} program")
         (n_name, n_args, n_idx, n_call), (c_name, c_args, c_idx, c_call) = ne[k], ce[k]
-        if (n_name, n_args) != (c_name, c_args):
+        if event_key(n_name, n_args) != event_key(c_name, c_args):
             return (f"{comp.path}: canonical line {c_call.seq}: {c_name}({c_args}) where the "
                     f"original has {n_name}({n_args}) (canonical line {n_call.seq})")
         at = match[c_idx] if 0 <= c_idx < len(match) else -1
