@@ -941,6 +941,38 @@ pub fn flatten(canon: &str, opt: &FlattenOptions) -> Result<(String, FlattenRepo
     Ok((f.out, f.report))
 }
 
+/// A LinuxCNC parameter (.var) file's text with its linear positions divided by 25.4: the
+/// X Y Z U V W members of G28 (#5161…), G30 (#5181…), G92 (#5211…) and the nine work offsets
+/// (#5221 + 20·k …); angles (A B C), rotations and every other parameter kept. Stand-alone
+/// `rs274` reads a parameter file as inches whatever the machine's units.
+pub fn var_file_to_inch(text: &str) -> String {
+    // member index within a block of X Y Z A B C U V W: the linear ones
+    let linear = |i: u32| matches!(i, 0 | 1 | 2 | 6 | 7 | 8);
+    let is_length = |n: u32| match n {
+        5161..=5169 => linear(n - 5161),
+        5181..=5189 => linear(n - 5181),
+        5211..=5219 => linear(n - 5211),
+        5221..=5400 => (n - 5221) % 20 < 9 && linear((n - 5221) % 20),
+        _ => false,
+    };
+    let mut out = String::with_capacity(text.len());
+    for line in text.split_inclusive('\n') {
+        let mut parts = line.split_whitespace();
+        let converted = match (
+            parts.next().and_then(|p| p.parse::<u32>().ok()),
+            parts.next().and_then(|v| v.parse::<f64>().ok()),
+        ) {
+            (Some(n), Some(v)) if is_length(n) => Some(format!("{n}\t{:.9}\n", v / 25.4)),
+            _ => None,
+        };
+        match converted {
+            Some(c) => out.push_str(&c),
+            None => out.push_str(line),
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1244,38 +1276,6 @@ mod tests {
         let _ = work_offsets_from_probe("1 N SET_G5X_OFFSET(99, 1, 2, 3, 4, 5, 6)\n");
         let _ = axes_named(b"X(((Y)))\n;Z\xff");
     }
-}
-
-/// A LinuxCNC parameter (.var) file's text with its linear positions divided by 25.4: the
-/// X Y Z U V W members of G28 (#5161…), G30 (#5181…), G92 (#5211…) and the nine work offsets
-/// (#5221 + 20·k …); angles (A B C), rotations and every other parameter kept. Stand-alone
-/// `rs274` reads a parameter file as inches whatever the machine's units.
-pub fn var_file_to_inch(text: &str) -> String {
-    // member index within a block of X Y Z A B C U V W: the linear ones
-    let linear = |i: u32| matches!(i, 0 | 1 | 2 | 6 | 7 | 8);
-    let is_length = |n: u32| match n {
-        5161..=5169 => linear(n - 5161),
-        5181..=5189 => linear(n - 5181),
-        5211..=5219 => linear(n - 5211),
-        5221..=5400 => (n - 5221) % 20 < 9 && linear((n - 5221) % 20),
-        _ => false,
-    };
-    let mut out = String::with_capacity(text.len());
-    for line in text.split_inclusive('\n') {
-        let mut parts = line.split_whitespace();
-        let converted = match (
-            parts.next().and_then(|p| p.parse::<u32>().ok()),
-            parts.next().and_then(|v| v.parse::<f64>().ok()),
-        ) {
-            (Some(n), Some(v)) if is_length(n) => Some(format!("{n}\t{:.9}\n", v / 25.4)),
-            _ => None,
-        };
-        match converted {
-            Some(c) => out.push_str(&c),
-            None => out.push_str(line),
-        }
-    }
-    out
 }
 
 #[cfg(test)]

@@ -309,6 +309,45 @@ impl Offsets {
     }
 }
 
+/// A tool table's text with its lengths (X Y Z U V W offsets and the D diameter) divided by
+/// 25.4, everything else kept: stand-alone `rs274` (LinuxCNC 2.9) reads tool tables as inches
+/// whatever the machine's units, so a metric table is handed to it converted. Comments after
+/// `;` are kept as they are.
+pub fn to_inch_text(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 64);
+    for line in text.split_inclusive('\n') {
+        let (code, rest) = match line.find(';') {
+            Some(i) => line.split_at(i),
+            None => {
+                let body = line.trim_end_matches(['\n', '\r']);
+                (body, &line[body.len()..])
+            }
+        };
+        let mut first = true;
+        for word in code.split_whitespace() {
+            if !first {
+                out.push(' ');
+            }
+            first = false;
+            let mut chars = word.chars();
+            let letter = chars.next().map(|c| c.to_ascii_uppercase());
+            let value: Option<f64> = chars.as_str().parse().ok();
+            match (letter, value) {
+                (Some(l @ ('X' | 'Y' | 'Z' | 'U' | 'V' | 'W' | 'D')), Some(v)) => {
+                    out.push(l);
+                    out.push_str(&format!("{}", v / 25.4));
+                }
+                _ => out.push_str(word),
+            }
+        }
+        if !rest.is_empty() && !rest.starts_with(['\n', '\r']) && !first {
+            out.push(' ');
+        }
+        out.push_str(rest);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -471,43 +510,4 @@ mod tests {
             }
         }
     }
-}
-
-/// A tool table's text with its lengths (X Y Z U V W offsets and the D diameter) divided by
-/// 25.4, everything else kept: stand-alone `rs274` (LinuxCNC 2.9) reads tool tables as inches
-/// whatever the machine's units, so a metric table is handed to it converted. Comments after
-/// `;` are kept as they are.
-pub fn to_inch_text(text: &str) -> String {
-    let mut out = String::with_capacity(text.len() + 64);
-    for line in text.split_inclusive('\n') {
-        let (code, rest) = match line.find(';') {
-            Some(i) => line.split_at(i),
-            None => {
-                let body = line.trim_end_matches(['\n', '\r']);
-                (body, &line[body.len()..])
-            }
-        };
-        let mut first = true;
-        for word in code.split_whitespace() {
-            if !first {
-                out.push(' ');
-            }
-            first = false;
-            let mut chars = word.chars();
-            let letter = chars.next().map(|c| c.to_ascii_uppercase());
-            let value: Option<f64> = chars.as_str().parse().ok();
-            match (letter, value) {
-                (Some(l @ ('X' | 'Y' | 'Z' | 'U' | 'V' | 'W' | 'D')), Some(v)) => {
-                    out.push(l);
-                    out.push_str(&format!("{}", v / 25.4));
-                }
-                _ => out.push_str(word),
-            }
-        }
-        if !rest.is_empty() && !rest.starts_with(['\n', '\r']) && !first {
-            out.push(' ');
-        }
-        out.push_str(rest);
-    }
-    out
 }
