@@ -33,13 +33,16 @@ Only the words that change are edited: comments, line numbers, unknown words, sp
 endings are kept. With a zero model the output is byte-identical to the input. A comment naming
 the model is written just before the first corrected line.
 
-Constructs that cannot be compensated safely (parameters or expressions in motion words,
-O-word subroutines and loops, canned cycles, cutter compensation G41/G42, G92.3, G10 other than
-L1/L2/L20 or with a rotation, rotary axis words) stop the run with file:line:column (--on-unsupported refuse), or are copied unchanged
-with a warning (pass-through-with-warning).
+LinuxCNC parameters and [expressions] with literal values are evaluated as LinuxCNC does, and
+G10 L1/L2/L20, G92, G52, G92.1, G92.2 are followed as modal state. Constructs that cannot be
+compensated safely (parameters known only at run time, O-word subroutines and loops, canned
+cycles, cutter compensation G41/G42, G92.3, G10 other than L1/L2/L20 or with a rotation,
+rotary axis words, two codes of one modal group) stop the run with file:line:column
+(--on-unsupported refuse), or are copied unchanged with a warning (pass-through-with-warning).
 
-The model (--model) is JSON: {\"format\": \"mtec.zero-model/1\"}, or a polynomial
-{\"format\": \"mtec.poly-model/1\", \"terms\": [{\"powers\": [1,0,0], \"coef_um\": [0.012,0,0]}]}
+The model (--model) is any model file mtec writes: a map (mtec.map/1, from `map fit`), a BPNN
+map, a kinematic model, or {\"format\": \"mtec.zero-model/1\"} or a polynomial
+{\"format\": \"mtec.poly-model/1\", \"terms\": [{\"powers\": [1,0,0], \"coef_um\": [0.012,0,0]}]},
 giving [Ex, Ey, Ez] in um as a function of the machine position in mm.
 
 Offsets (--offsets, TOML) map program to machine coordinates (machine = program + work offset
