@@ -112,11 +112,20 @@ impl ArcGeom {
         let base = phi - self.a0;
         let m_lo = ((-base).min(self.sweep - base) / two_pi).floor() as i64 - 1;
         let m_hi = ((-base).max(self.sweep - base) / two_pi).ceil() as i64 + 1;
-        // near each point at q's own angle, the nearest point of the curve (on a steep helix
-        // it is at another angle): golden-section search over ±0.5 rad of sweep
+        // a planar arc: the point at q's own angle is the nearest (to within the spiral of a
+        // rounded end radius, which only makes the distance larger)
+        let planar = (self.end[self.n] - self.start[self.n]).abs() < 1e-9;
+        // on a helix the nearest point can be at another angle: golden-section search over
+        // ±0.5 rad of sweep around each point at q's own angle
         let half = (0.5 / self.sweep.abs()).min(0.25);
         for m in m_lo..=m_hi {
             let t = (base + two_pi * m as f64) / self.sweep;
+            if planar {
+                if (0.0..=1.0).contains(&t) {
+                    best = best.min(dist(q, self.point(t)));
+                }
+                continue;
+            }
             if (-half..=1.0 + half).contains(&t) {
                 let (mut a, mut b) = ((t - half).max(0.0), (t + half).min(1.0));
                 let g = (5f64.sqrt() - 1.0) / 2.0;
