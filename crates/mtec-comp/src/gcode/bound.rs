@@ -36,6 +36,17 @@ pub struct PathBound<'a> {
     breaks: Vec<f64>,
 }
 
+/// One end of an output move, see [`PathBound::end`].
+#[derive(Debug, Clone, Copy)]
+pub struct MoveEnd {
+    /// The command, mm.
+    pub p: [f64; 3],
+    /// The model's error at the command, µm.
+    pub e: [f64; 3],
+    /// |p + e(p) − target|, µm.
+    pub residual_um: f64,
+}
+
 /// Euclidean norm of a 3-vector.
 pub fn norm(v: [f64; 3]) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
@@ -246,9 +257,13 @@ impl<'a> PathBound<'a> {
         }
     }
 
-    /// The model's error at `p` (µm).
-    pub fn error_um(&self, p: [f64; 3]) -> [f64; 3] {
-        self.model.error_um(p)
+    /// One end of an output move: the command `p = t + c` (mm), the model's error `e(p)` (µm)
+    /// there, and the residual `|p + e(p) − t|` (µm) of the correction solve.
+    pub fn end(&self, target: [f64; 3], correction: [f64; 3]) -> MoveEnd {
+        let p = [0, 1, 2].map(|i| target[i] + correction[i]);
+        let e = self.model.error_um(p);
+        let residual_um = norm([0, 1, 2].map(|i| (p[i] - target[i]) * 1e3 + e[i]));
+        MoveEnd { p, e, residual_um }
     }
 }
 

@@ -1567,13 +1567,8 @@ impl<'a> Rewriter<'a> {
             [0, 1, 2].map(|i| p[i] + c0[i])
         });
         let v = self.bound.variation_um(lo, hi, &mut samples);
-        let pa = [0, 1, 2].map(|i| arc.start[i] + c0[i]);
-        let pb = [0, 1, 2].map(|i| arc.end[i] + c1[i]);
-        let ea = self.bound.error_um(pa);
-        let eb = self.bound.error_um(pb);
-        let ra = norm([0, 1, 2].map(|i| (pa[i] - arc.start[i]) * 1e3 + ea[i]));
-        let rb = norm([0, 1, 2].map(|i| (pb[i] - arc.end[i]) * 1e3 + eb[i]));
-        2.0 * v + ra + rb + 2.0 * self.rounding_now_um()
+        let (a, b) = (self.bound.end(arc.start, c0), self.bound.end(arc.end, c1));
+        2.0 * v + a.residual_um + b.residual_um + 2.0 * self.rounding_now_um()
     }
 
     /// Replaces the R word of an arc kept as an arc by its centre offsets (I, J, K of the
@@ -1653,13 +1648,10 @@ impl<'a> Rewriter<'a> {
     /// straight from ta + ca to tb + cb: the solve residuals at the ends, the model's departure
     /// from its chord between them ([`PathBound`]) and the rounding of the written words.
     fn piece_bound_um(&mut self, ta: [f64; 3], ca: [f64; 3], tb: [f64; 3], cb: [f64; 3]) -> f64 {
-        let pa = [0, 1, 2].map(|i| ta[i] + ca[i]);
-        let pb = [0, 1, 2].map(|i| tb[i] + cb[i]);
-        let ea = self.bound.error_um(pa);
-        let eb = self.bound.error_um(pb);
-        let ra = norm([0, 1, 2].map(|i| (pa[i] - ta[i]) * 1e3 + ea[i]));
-        let rb = norm([0, 1, 2].map(|i| (pb[i] - tb[i]) * 1e3 + eb[i]));
-        self.bound.chord_departure_um(pa, pb, ea, eb) + ra.max(rb) + self.rounding_now_um()
+        let (a, b) = (self.bound.end(ta, ca), self.bound.end(tb, cb));
+        self.bound.chord_departure_um(a.p, b.p, a.e, b.e)
+            + a.residual_um.max(b.residual_um)
+            + self.rounding_now_um()
     }
 
     fn no_model_value(&self, col: usize) -> GcodeError {
