@@ -767,7 +767,7 @@ impl ExpAmbientModel {
         }
     }
 
-    fn up_weights(&self) -> Vec<GroupWeight> {
+    pub(crate) fn up_weights(&self) -> Vec<GroupWeight> {
         if self.up_group.is_empty() {
             vec![GroupWeight {
                 sensor: self.up_sensor.clone(),
@@ -778,7 +778,7 @@ impl ExpAmbientModel {
         }
     }
 
-    fn nut_weights(&self) -> Vec<GroupWeight> {
+    pub(crate) fn nut_weights(&self) -> Vec<GroupWeight> {
         if self.nut_group.is_empty() {
             vec![GroupWeight {
                 sensor: self.nut_sensor.clone(),
@@ -794,14 +794,18 @@ impl ExpAmbientModel {
         let rows = rows_of(data, &self.up_weights(), &self.nut_weights(), false)?;
         Ok(rows
             .iter()
-            .map(|r| {
-                let (bb, kb) = self.betas(r.u);
-                // δ = k·x + b  (model equation)
-                let b = poly(&self.b_a, r.u) * sat(r.dt_up, bb).0;
-                let k = poly(&self.k_a, r.u) * sat(r.dt_nut, kb).0;
-                k * r.x + b
-            })
+            .map(|r| self.delta_um(r.u, r.dt_up, r.dt_nut, r.x))
             .collect())
+    }
+
+    /// δ (µm) at scaled ambient `u` = (T_amb − 20 °C)/10 °C, rises `dt_up`, `dt_nut` (°C) and
+    /// position `x_mm`.
+    pub fn delta_um(&self, u: f64, dt_up: f64, dt_nut: f64, x_mm: f64) -> f64 {
+        let (bb, kb) = self.betas(u);
+        // δ = k·x + b  (model equation)
+        let b = poly(&self.b_a, u) * sat(dt_up, bb).0;
+        let k = poly(&self.k_a, u) * sat(dt_nut, kb).0;
+        k * x_mm + b
     }
 
     /// Number of fitted coefficients.

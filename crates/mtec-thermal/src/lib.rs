@@ -35,6 +35,7 @@ pub mod metrics;
 pub mod model;
 pub mod plot;
 pub mod select;
+pub mod stream;
 pub mod validate;
 
 pub use data::ThermalData;
@@ -49,3 +50,4 @@ pub use model::{
     MODEL_FORMAT,
 };
 pub use select::{select_sensors, RidgeTrace, SelectOptions, Selection};
+pub use stream::ThermalStream;
