@@ -7,6 +7,8 @@
 //! `mtec-nn`); [`load`] reads any model file by its `"format"`; [`correction`]
 //! solves p + e(p) = target for the command p; [`table`] writes controller compensation tables
 //! (LinuxCNC, Siemens CEC/LEC, FANUC, HEIDENHAIN, Beckhoff) with a checker of each format's rules;
+//! [`machine`] sums a geometric model and thermal models that follow the machine's state
+//! (temperatures, spindle speed) into one stateful [`ErrorModel`];
 //! [`rt`] evaluates corrections each interpolation cycle without allocating (its C ABI lives in
 //! the `mtec-rt` crate).
 //!
@@ -17,6 +19,7 @@ pub mod correction;
 pub mod gcode;
 pub mod kinematic;
 pub mod load;
+pub mod machine;
 pub mod map;
 pub mod model;
 pub mod rt;
@@ -24,6 +27,7 @@ pub mod table;
 
 pub use correction::{command_for_target, CorrectionError, CorrectionOptions};
 pub use load::load_error_model;
+pub use machine::MachineErrorModel;
 pub use map::{GridLimits, GridMap, Outside};
-pub use model::ErrorModel;
+pub use model::{ErrorModel, StateError, StateStatus};
 pub use rt::Compensator;

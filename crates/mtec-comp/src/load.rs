@@ -2,7 +2,8 @@
 //!
 //! Known formats: `mtec.map/1` (a [`GridMap`]), `mtec.kinematic-model/1` (identified error
 //! functions on a machine) and `mtec.bpnn/1` (a network fitted to a volumetric grid by
-//! `mtec map fit --model bpnn`, 3 inputs and 3 outputs).
+//! `mtec map fit --model bpnn`, 3 inputs and 3 outputs) and `mtec.machine-error/1` (a geometric
+//! model plus thermal models with a state, [`crate::machine`]).
 
 use crate::map::{GridMap, MapFile, MAP_FORMAT};
 use crate::ErrorModel;
@@ -14,6 +15,7 @@ pub const KNOWN_FORMATS: &[&str] = &[
     MAP_FORMAT,
     crate::kinematic::KINEMATIC_FORMAT,
     crate::bpnn::FORMAT,
+    crate::machine::MACHINE_FORMAT,
 ];
 
 /// Loads an error model file, whatever its kind, as an [`ErrorModel`].
@@ -35,6 +37,9 @@ pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> 
             let net = crate::bpnn::Bpnn::load_volumetric(&text)
                 .map_err(|e| InputError::file(path, e.to_string()))?;
             Ok(Box::new(net))
+        }
+        crate::machine::MACHINE_FORMAT => {
+            Ok(Box::new(crate::machine::MachineErrorModel::load(path)?))
         }
         other => Err(located_format_error(
             path,

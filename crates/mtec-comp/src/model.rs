@@ -1,5 +1,50 @@
 //! The one interface every compensable error model offers.
 
+/// What an update of the machine state did to the model (see [`ErrorModel::update_state`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StateStatus {
+    /// Weight of the state-dependent (thermal) part now: 1 inside the training envelope, fading
+    /// linearly to 0 outside it (`crate::machine`).
+    pub thermal_weight: f64,
+    /// Index (in [`ErrorModel::state_inputs`]) of the input furthest outside the training
+    /// envelope, if any input is outside it.
+    pub outside: Option<usize>,
+}
+
+impl Default for StateStatus {
+    fn default() -> Self {
+        StateStatus {
+            thermal_weight: 1.0,
+            outside: None,
+        }
+    }
+}
+
+/// Why a state update was refused (the state is then unchanged).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StateError {
+    /// `given` readings for a model that takes `expected`.
+    Count { given: usize, expected: usize },
+    /// Reading `index` is NaN or infinite.
+    NotFinite { index: usize },
+    /// The time step is negative or not finite.
+    TimeStep,
+}
+
+impl std::fmt::Display for StateError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StateError::Count { given, expected } => {
+                write!(f, "{given} readings given, the model takes {expected}")
+            }
+            StateError::NotFinite { index } => write!(f, "reading {index} is not finite"),
+            StateError::TimeStep => write!(f, "the time step must be finite and ≥ 0"),
+        }
+    }
+}
+
+impl std::error::Error for StateError {}
+
 /// A model of the volumetric error of the tool tip relative to the workpiece, as a function of
 /// the commanded position. Grids, identified kinematic error models and fitted models (BPNN)
 /// implement it; compensation only ever sees this trait.
@@ -12,5 +57,26 @@ pub trait ErrorModel: Send + Sync {
     /// path error exactly from the grid's cells instead of sampling (see `gcode::bound`).
     fn as_grid(&self) -> Option<&crate::GridMap> {
         None
+    }
+    /// The machine-state inputs the model reads, in the order [`ErrorModel::update_state`] takes
+    /// them (temperature columns such as `t3_c`, `spindle_rpm`, `ambient_c`); empty for a static
+    /// model.
+    fn state_inputs(&self) -> &[String] {
+        &[]
+    }
+    /// Advances the model's state by `dt_s` seconds with new readings of
+    /// [`ErrorModel::state_inputs`]; [`ErrorModel::error_um`] then gives the error in the new
+    /// state. Must not allocate. A static model takes no readings.
+    fn update_state(&mut self, readings: &[f64], dt_s: f64) -> Result<StateStatus, StateError> {
+        if !readings.is_empty() {
+            return Err(StateError::Count {
+                given: readings.len(),
+                expected: 0,
+            });
+        }
+        if !(dt_s >= 0.0 && dt_s.is_finite()) {
+            return Err(StateError::TimeStep);
+        }
+        Ok(StateStatus::default())
     }
 }

@@ -46,6 +46,23 @@ impl Compensator {
         command_for_target(self.model.as_ref(), target_mm, &self.opts)
     }
 
+    /// The machine-state inputs the model reads (empty for a static model), in the order
+    /// [`Compensator::update_state`] takes them.
+    pub fn state_inputs(&self) -> &[String] {
+        self.model.state_inputs()
+    }
+
+    /// Advances the model's state by `dt_s` seconds with new readings (see
+    /// [`ErrorModel::update_state`]); corrections then use the new state. No allocation.
+    #[inline]
+    pub fn update_state(
+        &mut self,
+        readings: &[f64],
+        dt_s: f64,
+    ) -> Result<crate::StateStatus, crate::StateError> {
+        self.model.update_state(readings, dt_s)
+    }
+
     /// The model's provenance line.
     pub fn describe(&self) -> String {
         self.model.describe()
