@@ -9,6 +9,20 @@
 //! `include/mtec_rt.h` (hand-written, kept in step with this file; a test compiles a C program
 //! against it).
 //!
+//! Machine state: a `mtec.machine-error/1` model (a geometric map plus thermal models) has a
+//! state. `mtec_rt_update_state(handle, readings, n, dt_s)` advances it with the readings of this
+//! cycle (temperatures °C, spindle speed, … in the order `mtec_rt_state_input_name(handle, i)`
+//! gives, `mtec_rt_state_input_count(handle)` of them) and the seconds since the last update;
+//! `mtec_rt_correction` then uses the new state. The first update starts the thermal filters at
+//! its readings (the machine in equilibrium); before it the thermal part is zero. It returns
+//! `MTEC_RT_ENVELOPE` when a reading is outside the model's training range: the thermal part is
+//! then faded towards no correction (`mtec_rt_thermal_weight`), the safe value.
+//!
+//! Thread rules: a handle belongs to one thread at a time. `mtec_rt_update_state` changes the
+//! state, so it must not run while another thread calls `mtec_rt_correction` on the same handle;
+//! the usual servo thread calls update then correction in the same cycle. Different handles are
+//! independent. `mtec_rt_load` and `mtec_rt_free` allocate and belong outside the real-time loop.
+//!
 //! What it is not for: fitting models or writing tables (use the `mtec` command).
 //!
 //! Decisions: corrections use the default solver settings (tolerance 1e-7 mm, at most 500 µm,
@@ -30,10 +44,19 @@ pub const MTEC_RT_ERR_UNDEFINED: c_int = 1;
 pub const MTEC_RT_ERR_NOT_CONVERGED: c_int = 2;
 /// The correction exceeds the allowed maximum (500 µm).
 pub const MTEC_RT_ERR_TOO_LARGE: c_int = 3;
+/// The state was updated, but a reading is outside the training envelope: the thermal part is
+/// faded (see `mtec_rt_thermal_weight`).
+pub const MTEC_RT_ENVELOPE: c_int = 4;
+/// The state update was refused (wrong reading count, a NaN or infinite reading, a negative or
+/// non-finite time step); the state is unchanged.
+pub const MTEC_RT_ERR_STATE: c_int = 5;
 
 /// An opaque loaded model.
 pub struct MtecRt {
     comp: Compensator,
+    /// The state inputs' names as C strings (made at load, so lookups do not allocate).
+    input_names: Vec<CString>,
+    thermal_weight: f64,
 }
 
 thread_local! {
@@ -66,7 +89,18 @@ pub unsafe extern "C" fn mtec_rt_load(path: *const c_char) -> *mut MtecRt {
         Compensator::load(Path::new(&path), CorrectionOptions::default())
     });
     match loaded {
-        Ok(Ok(comp)) => Box::into_raw(Box::new(MtecRt { comp })),
+        Ok(Ok(comp)) => {
+            let input_names = comp
+                .state_inputs()
+                .iter()
+                .map(|n| CString::new(n.replace('\0', " ")).unwrap_or_default())
+                .collect();
+            Box::into_raw(Box::new(MtecRt {
+                comp,
+                input_names,
+                thermal_weight: 1.0,
+            }))
+        }
         Ok(Err(e)) => {
             set_last_error(&e.to_string());
             std::ptr::null_mut()
@@ -116,6 +150,87 @@ pub unsafe extern "C" fn mtec_rt_correction(
             }
         }
     }
+}
+
+/// Number of state readings `mtec_rt_update_state` takes (0 for a static model or NULL).
+///
+/// # Safety
+/// `handle` must be NULL or come from `mtec_rt_load` and not be freed.
+#[no_mangle]
+pub unsafe extern "C" fn mtec_rt_state_input_count(handle: *const MtecRt) -> usize {
+    if handle.is_null() {
+        return 0;
+    }
+    (*handle).input_names.len()
+}
+
+/// Name of state reading `i` (`t3_c`, `spindle_rpm`, …), or NULL when `i` is out of range. The
+/// pointer lives as long as the handle.
+///
+/// # Safety
+/// `handle` must be NULL or come from `mtec_rt_load` and not be freed.
+#[no_mangle]
+pub unsafe extern "C" fn mtec_rt_state_input_name(
+    handle: *const MtecRt,
+    i: usize,
+) -> *const c_char {
+    if handle.is_null() {
+        return std::ptr::null();
+    }
+    let h = &*handle;
+    match h.input_names.get(i) {
+        Some(n) => n.as_ptr(),
+        None => std::ptr::null(),
+    }
+}
+
+/// Advances the model's state by `dt_s` seconds with `n` readings (module docs). Real-time safe:
+/// no allocation, no locks. Returns `MTEC_RT_OK`, `MTEC_RT_ENVELOPE` (updated, thermal part
+/// faded), `MTEC_RT_ERR_STATE` (refused, state unchanged) or `MTEC_RT_ERR_NULL`.
+///
+/// # Safety
+/// `handle` must come from `mtec_rt_load` and not be freed, and no other thread may use it during
+/// the call; `readings` must point to `n` doubles (it may be NULL when `n` is 0).
+#[no_mangle]
+pub unsafe extern "C" fn mtec_rt_update_state(
+    handle: *mut MtecRt,
+    readings: *const f64,
+    n: usize,
+    dt_s: f64,
+) -> c_int {
+    if handle.is_null() || (readings.is_null() && n > 0) {
+        return MTEC_RT_ERR_NULL;
+    }
+    let values: &[f64] = if n == 0 {
+        &[]
+    } else {
+        std::slice::from_raw_parts(readings, n)
+    };
+    let h = &mut *handle;
+    match h.comp.update_state(values, dt_s) {
+        Ok(status) => {
+            h.thermal_weight = status.thermal_weight;
+            if status.outside.is_some() {
+                MTEC_RT_ENVELOPE
+            } else {
+                MTEC_RT_OK
+            }
+        }
+        Err(_) => MTEC_RT_ERR_STATE,
+    }
+}
+
+/// Weight of the thermal part after the last update: 1 inside the training envelope, down to 0
+/// (no thermal correction) outside it. 1 for a static model; 0 for NULL.
+///
+/// # Safety
+/// `handle` must be NULL or come from `mtec_rt_load` and not be freed.
+#[no_mangle]
+pub unsafe extern "C" fn mtec_rt_thermal_weight(handle: *const MtecRt) -> f64 {
+    if handle.is_null() {
+        return 0.0;
+    }
+    (*handle).thermal_weight
 }
 
 /// Releases a model loaded by `mtec_rt_load` (NULL is ignored).
