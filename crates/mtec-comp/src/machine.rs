@@ -198,9 +198,8 @@ impl MachineErrorModel {
         fade: Fade,
         source: String,
     ) -> Result<MachineErrorModel, String> {
-        if !(fade.temperature_c > 0.0 && fade.temperature_c.is_finite())
-            || !(fade.other_fraction > 0.0 && fade.other_fraction.is_finite())
-        {
+        let positive = |v: f64| v > 0.0 && v.is_finite();
+        if !positive(fade.temperature_c) || !positive(fade.other_fraction) {
             return Err("`fade` widths must be positive and finite".into());
         }
         let mut inputs: Vec<String> = Vec::new();
