@@ -238,6 +238,12 @@ fn stem_of(name: &str) -> &str {
 }
 
 fn split_fields(path: &Path, line_no: usize, line: &str) -> Result<Vec<String>, InputError> {
+    // Without quotes or a stray CR a CSV record is the text between commas (RFC 4180): split it
+    // directly. Building a csv reader (and its 8 KiB buffer) for every line cost ~20 µs a line,
+    // 90 % of `map eval`'s time (issue 22).
+    if !line.contains(['"', '\r']) {
+        return Ok(line.split(',').map(|f| f.trim().to_string()).collect());
+    }
     let mut rdr = csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
@@ -331,6 +337,35 @@ mod tests {
         let e = t.column("x_mm").unwrap_err();
         assert!(e.message.contains("x_in"), "{e}");
         assert_eq!(e.column, Some(1));
+    }
+
+    /// The direct split and the csv crate agree on lines without quotes; quoted fields still go
+    /// through the csv crate.
+    #[test]
+    fn direct_split_agrees_with_the_csv_crate() {
+        let lines = [
+            "1,2,3",
+            " a , b ,c ",
+            ",,",
+            "x",
+            "1.5e3,-0, 7 ",
+            "\"a,b\",c",
+            "\"q\"\"x\",1",
+        ];
+        for line in lines {
+            let mut rdr = csv::ReaderBuilder::new()
+                .has_headers(false)
+                .flexible(true)
+                .from_reader(line.as_bytes());
+            let mut rec = csv::StringRecord::new();
+            rdr.read_record(&mut rec).unwrap();
+            let want: Vec<String> = rec.iter().map(|f| f.trim().to_string()).collect();
+            assert_eq!(
+                split_fields(Path::new("t.csv"), 1, line).unwrap(),
+                want,
+                "{line}"
+            );
+        }
     }
 
     #[test]
