@@ -22,6 +22,7 @@ pub mod load;
 pub mod machine;
 pub mod map;
 pub mod model;
+pub mod pose;
 pub mod rt;
 pub mod table;
 
@@ -30,4 +31,5 @@ pub use load::load_error_model;
 pub use machine::MachineErrorModel;
 pub use map::{GridLimits, GridMap, Outside};
 pub use model::{ErrorModel, StateError, StateStatus};
+pub use pose::{command_for_pose, ChainKinematics, Pose, PoseError, PoseSolveOptions};
 pub use rt::Compensator;

@@ -23,9 +23,11 @@
 //! file is loaded.
 
 use crate::model::{StateError, StateStatus};
+use crate::pose::{ChainKinematics, Pose, PoseError};
 use crate::ErrorModel;
 use mtec_io::InputError;
 use mtec_thermal::{ModelFile, ThermalStream};
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -318,6 +320,35 @@ impl ErrorModel for MachineErrorModel {
             }
         }
         e
+    }
+
+    /// The geometric part's error at the pose plus the thermal drift, turned into the
+    /// workpiece frame: a drift d along the machine axes moves the tool like a command change
+    /// of d, so it reaches the workpiece frame through the chain's linear Jacobian J(θ)·d
+    /// ([`ChainKinematics::linear_jacobian`]; the identity without rotary axes).
+    fn pose_error(&self, pose: &Pose) -> PoseError {
+        let mut e = match &self.geometric {
+            Some(g) => g.pose_error(pose),
+            None => PoseError {
+                position_um: [0.0; 3],
+                orientation_urad: None,
+            },
+        };
+        if self.weight > 0.0 && !self.parts.is_empty() {
+            let t = self.thermal_um(pose.linear_mm);
+            let t = match self.kinematics().filter(|k| k.has_rotary()) {
+                Some(k) => (k.linear_jacobian(pose.rotary_deg) * Vector3::from(t)).into(),
+                None => t,
+            };
+            for k in 0..3 {
+                e.position_um[k] += self.weight * t[k];
+            }
+        }
+        e
+    }
+
+    fn kinematics(&self) -> Option<&ChainKinematics> {
+        self.geometric.as_ref().and_then(|g| g.kinematics())
     }
 
     fn describe(&self) -> String {

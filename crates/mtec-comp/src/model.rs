@@ -1,5 +1,7 @@
 //! The one interface every compensable error model offers.
 
+use crate::pose::{ChainKinematics, Pose, PoseError};
+
 /// What an update of the machine state did to the model (see [`ErrorModel::update_state`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StateStatus {
@@ -46,11 +48,35 @@ impl std::fmt::Display for StateError {
 impl std::error::Error for StateError {}
 
 /// A model of the volumetric error of the tool tip relative to the workpiece, as a function of
-/// the commanded position. Grids, identified kinematic error models and fitted models (BPNN)
-/// implement it; compensation only ever sees this trait.
+/// the commanded position of every axis and of the machine's state. Grids, identified kinematic
+/// error models (with or without rotary axes), fitted models (BPNN) and the stateful machine
+/// model implement it; compensation only ever sees this trait.
+///
+/// Two views of the same error: [`ErrorModel::pose_error`] takes every axis (a fixed-size
+/// [`Pose`]: X, Y, Z in mm and A, B, C in degrees) and gives the tool-tip error, and the
+/// orientation error where the model knows it, in the workpiece frame; [`ErrorModel::error_um`]
+/// is its special case with the rotary axes at 0°, the whole story for a machine without
+/// rotary axes (where the workpiece frame is the machine frame). A model whose
+/// [`ErrorModel::kinematics`] has rotary axes must implement `pose_error`; the others get it
+/// from `error_um`.
 pub trait ErrorModel: Send + Sync {
-    /// Volumetric error [Ex, Ey, Ez] in µm at the commanded position `p_mm` [x, y, z] in mm.
+    /// Volumetric error [Ex, Ey, Ez] in µm at the commanded position `p_mm` [x, y, z] in mm
+    /// (any rotary axes at 0°).
     fn error_um(&self, p_mm: [f64; 3]) -> [f64; 3];
+    /// The error at a pose of every axis, in the workpiece frame (see [`crate::pose`]). Must
+    /// not allocate.
+    fn pose_error(&self, pose: &Pose) -> PoseError {
+        PoseError {
+            position_um: self.error_um(pose.linear_mm),
+            orientation_urad: None,
+        }
+    }
+    /// The ideal kinematic chain the model is defined on, when it is a chain with rotary axes
+    /// (or any chain a kinematic model describes). `None`: a three-axis machine whose
+    /// workpiece frame is its machine frame; rotary axis words are then refused.
+    fn kinematics(&self) -> Option<&ChainKinematics> {
+        None
+    }
     /// One line saying what the model is and where it came from (written into outputs as provenance).
     fn describe(&self) -> String;
     /// The model as a trilinear grid map, when it is one: G-code rewriting then bounds the

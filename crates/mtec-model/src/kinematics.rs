@@ -230,6 +230,33 @@ impl VolumetricModel {
         }
     }
 
+    /// The exact tool frame relative to the workpiece reference point at pose `q` (pose order
+    /// `machine.axes`, mm and deg): the chain product P of the module docs, with the error
+    /// motions (`actual`) or without them (the ideal chain). Its translation is the tool tip
+    /// (mm), its rotation maps tool-frame directions into the workpiece frame (the tool axis is
+    /// `r·ẑ`). Allocates nothing.
+    pub fn tool_frame(&self, q: &[f64], actual: bool) -> Htm {
+        let mut buf = [Factor::Shift(Vector3::zeros()); MAX_FACTORS];
+        let n = self.factors_into(q, &mut buf);
+        let factors = &buf[..n];
+        if !actual {
+            return ideal_product(factors);
+        }
+        let mut values = [SlotValues::default(); MAX_SLOTS];
+        self.values_into(q, None, &mut values);
+        let values = &values[..self.slots.len()];
+        factors
+            .iter()
+            .fold(Htm::identity(), |acc, f| acc * local_exact(f, values))
+    }
+
+    /// True when some rotary axis of the chain sits on the tool side (a head).
+    pub fn has_tool_side_rotary(&self) -> bool {
+        self.slots
+            .iter()
+            .any(|s| s.axis.is_rotary() && !s.workpiece_side)
+    }
+
     /// The ideal (error-free) tool tip relative to the workpiece reference point, mm.
     pub fn ideal_tool_point(&self, q: &[f64]) -> [f64; 3] {
         let t = ideal_product(&self.factors(q));

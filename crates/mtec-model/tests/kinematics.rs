@@ -351,3 +351,31 @@ fn elements_reaching_each_direction_of_the_xyfz_machine() {
     );
     assert!((col("EXX")[0] + 1.0).abs() < 1e-12 && (col("EXZ")[0] - 1.0).abs() < 1e-12);
 }
+
+/// The tool frame with and without errors reproduces the exact volumetric error (its
+/// translation difference) and the ideal tool point, and its rotation the orientation error.
+#[test]
+fn tool_frame_gives_the_exact_error_and_the_ideal_point() {
+    let mut rng = StdRng::seed_from_u64(7);
+    for chain in CHAINS {
+        let m = machine(chain, ErrorFrame::Moving, [20.0, -10.0, 150.0]);
+        let errors = random_errors(&m, &mut rng).scaled(10.0);
+        let vm = VolumetricModel::new(&m, &errors);
+        for _ in 0..20 {
+            let q = random_pose(&m, &mut rng);
+            let ideal = vm.tool_frame(&q, false);
+            let actual = vm.tool_frame(&q, true);
+            let exact = vm.error(&q, Formalism::Htm, Order::Exact);
+            let p0 = vm.ideal_tool_point(&q);
+            for i in 0..3 {
+                assert!((ideal.p[i] - p0[i]).abs() < 1e-12, "{chain}");
+                let d_um = (actual.p[i] - ideal.p[i]) * 1e3;
+                assert!((d_um - exact.position_um[i]).abs() < 1e-9, "{chain}");
+            }
+            let w = mtec_model::htm::rotation_vector(&(actual.r * ideal.r.transpose())) * 1e6;
+            for i in 0..3 {
+                assert!((w[i] - exact.orientation_urad[i]).abs() < 1e-9, "{chain}");
+            }
+        }
+    }
+}
