@@ -26,12 +26,11 @@
 //! holding the arc: for a grid map the range of the node values of the cells the box touches
 //! (trilinear interpolation is a convex combination of its cell's nodes), otherwise samples.
 
-use crate::{map::Outside, ErrorModel, GridMap};
+use crate::{map::Outside, ErrorModel};
 
-/// Bounds the model's departure from its chord along moves; reuses its buffers.
-pub struct PathBound<'a> {
-    model: &'a dyn ErrorModel,
-    grid: Option<&'a GridMap>,
+/// Bounds the model's departure from its chord along moves; reuses its buffers. The model is
+/// given to each call (the rewriter's view of it changes with the rotary axes' angles).
+pub struct PathBound {
     check_step_mm: f64,
     breaks: Vec<f64>,
 }
@@ -99,26 +98,25 @@ fn cubic_max_abs(g: [f64; 4]) -> f64 {
     m
 }
 
-impl<'a> PathBound<'a> {
+impl PathBound {
     /// `check_step_mm`: sample spacing of the dense check for models without a grid structure.
-    pub fn new(model: &'a dyn ErrorModel, check_step_mm: f64) -> Self {
+    pub fn new(check_step_mm: f64) -> Self {
         PathBound {
-            model,
-            grid: model.as_grid(),
             check_step_mm,
             breaks: Vec::new(),
         }
     }
 
-    /// True when the bound is exact (a grid map), false when it comes from samples.
-    pub fn is_exact(&self) -> bool {
-        self.grid.is_some()
+    /// True when the bound of `model` is exact (a grid map), false when it comes from samples.
+    pub fn is_exact(model: &dyn ErrorModel) -> bool {
+        model.as_grid().is_some()
     }
 
     /// `max_s |g(s)|` in µm along the command segment p0 → p1 (mm), given the model's values
     /// `e0`, `e1` at the ends. NaN when the model has no value somewhere along it.
     pub fn chord_departure_um(
         &mut self,
+        model: &dyn ErrorModel,
         p0: [f64; 3],
         p1: [f64; 3],
         e0: [f64; 3],
@@ -128,7 +126,7 @@ impl<'a> PathBound<'a> {
             let e = model.error_um(lerp(p0, p1, s));
             [0, 1, 2].map(|i| e[i] - (e0[i] + (e1[i] - e0[i]) * s))
         };
-        match self.grid {
+        match model.as_grid() {
             Some(grid) => {
                 self.breaks.clear();
                 self.breaks.push(0.0);
@@ -154,7 +152,7 @@ impl<'a> PathBound<'a> {
                 self.breaks
                     .sort_unstable_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
                 let mut worst = [0.0f64; 3];
-                let mut g_prev = g(self.model, 0.0);
+                let mut g_prev = g(model, 0.0);
                 let mut s_prev = 0.0;
                 for k in 1..self.breaks.len() {
                     let s1 = self.breaks[k];
@@ -162,9 +160,9 @@ impl<'a> PathBound<'a> {
                         continue;
                     }
                     let h = (s1 - s_prev) / 3.0;
-                    let ga = g(self.model, s_prev + h);
-                    let gb = g(self.model, s_prev + 2.0 * h);
-                    let g1 = g(self.model, s1);
+                    let ga = g(model, s_prev + h);
+                    let gb = g(model, s_prev + 2.0 * h);
+                    let g1 = g(model, s1);
                     for i in 0..3 {
                         let m = cubic_max_abs([g_prev[i], ga[i], gb[i], g1[i]]);
                         worst[i] = if m.is_nan() {
@@ -183,7 +181,7 @@ impl<'a> PathBound<'a> {
                 let n = ((len / self.check_step_mm).ceil() as usize).clamp(4, 1_000_000);
                 let mut worst = 0.0f64;
                 for k in 1..n {
-                    let v = norm(g(self.model, k as f64 / n as f64));
+                    let v = norm(g(model, k as f64 / n as f64));
                     if v.is_nan() {
                         return f64::NAN;
                     }
@@ -199,11 +197,12 @@ impl<'a> PathBound<'a> {
     /// Infinity when a grid map extrapolates beyond its nodes inside the box.
     pub fn variation_um(
         &mut self,
+        model: &dyn ErrorModel,
         lo: [f64; 3],
         hi: [f64; 3],
         samples: &mut dyn Iterator<Item = [f64; 3]>,
     ) -> f64 {
-        match self.grid {
+        match model.as_grid() {
             Some(grid) => {
                 let axes = grid.axes_mm();
                 let mut range = [[0usize; 2]; 3];
@@ -242,10 +241,10 @@ impl<'a> PathBound<'a> {
                 let Some(first) = samples.next() else {
                     return 0.0;
                 };
-                let e0 = self.model.error_um(first);
+                let e0 = model.error_um(first);
                 let mut worst = 0.0f64;
                 for p in samples {
-                    let e = self.model.error_um(p);
+                    let e = model.error_um(p);
                     let v = norm([0, 1, 2].map(|i| e[i] - e0[i]));
                     if v.is_nan() {
                         return f64::NAN;
@@ -259,9 +258,9 @@ impl<'a> PathBound<'a> {
 
     /// One end of an output move: the command `p = t + c` (mm), the model's error `e(p)` (µm)
     /// there, and the residual `|p + e(p) − t|` (µm) of the correction solve.
-    pub fn end(&self, target: [f64; 3], correction: [f64; 3]) -> MoveEnd {
+    pub fn end(model: &dyn ErrorModel, target: [f64; 3], correction: [f64; 3]) -> MoveEnd {
         let p = [0, 1, 2].map(|i| target[i] + correction[i]);
-        let e = self.model.error_um(p);
+        let e = model.error_um(p);
         let residual_um = norm([0, 1, 2].map(|i| (p[i] - target[i]) * 1e3 + e[i]));
         MoveEnd { p, e, residual_um }
     }
@@ -271,6 +270,7 @@ impl<'a> PathBound<'a> {
 mod tests {
     use super::*;
     use crate::map::Outside;
+    use crate::GridMap;
 
     #[test]
     fn cubic_maximum_is_found_between_the_nodes() {
@@ -302,24 +302,41 @@ mod tests {
     #[test]
     fn a_single_node_bump_between_samples_is_seen_exactly() {
         let map = bump_map();
-        let mut b = PathBound::new(&map, 1.0);
+        let mut b = PathBound::new(1.0);
         // a line through the bump's node: the departure from the (zero) chord is the bump
         let p0 = [0.0, 50.0, 0.0];
         let p1 = [100.0, 50.0, 0.0];
-        let m = b.chord_departure_um(p0, p1, [0.0; 3], [0.0; 3]);
+        let m = b.chord_departure_um(&map, p0, p1, [0.0; 3], [0.0; 3]);
         assert!((m - 30.0).abs() < 1e-9, "{m}");
         // a line 2.5 mm off the node row: the tent function gives 30·(1 − 0.25) = 22.5 µm
-        let m = b.chord_departure_um([0.0, 52.5, 0.0], [100.0, 52.5, 0.0], [0.0; 3], [0.0; 3]);
+        let m = b.chord_departure_um(
+            &map,
+            [0.0, 52.5, 0.0],
+            [100.0, 52.5, 0.0],
+            [0.0; 3],
+            [0.0; 3],
+        );
         assert!((m - 22.5).abs() < 1e-9, "{m}");
         // a diagonal through the node: along it the bump is (1−|u|)² shaped, peak 30 at the node
-        let m = b.chord_departure_um([40.0, 40.0, 0.0], [60.0, 60.0, 0.0], [0.0; 3], [0.0; 3]);
+        let m = b.chord_departure_um(
+            &map,
+            [40.0, 40.0, 0.0],
+            [60.0, 60.0, 0.0],
+            [0.0; 3],
+            [0.0; 3],
+        );
         assert!((m - 30.0).abs() < 1e-9, "{m}");
         // dense sampling of the same function never exceeds the exact bound
         for k in 0..=1000 {
             let s = k as f64 / 1000.0;
             let e = map.error_um(lerp([40.0, 41.0, 0.0], [60.0, 58.0, 0.0], s));
-            let exact =
-                b.chord_departure_um([40.0, 41.0, 0.0], [60.0, 58.0, 0.0], [0.0; 3], [0.0; 3]);
+            let exact = b.chord_departure_um(
+                &map,
+                [40.0, 41.0, 0.0],
+                [60.0, 58.0, 0.0],
+                [0.0; 3],
+                [0.0; 3],
+            );
             assert!(norm(e) <= exact + 1e-9);
         }
     }
@@ -327,31 +344,31 @@ mod tests {
     #[test]
     fn variation_over_a_box_holds_the_node_range() {
         let map = bump_map();
-        let mut b = PathBound::new(&map, 1.0);
+        let mut b = PathBound::new(1.0);
         let none = &mut std::iter::empty();
         assert_eq!(
-            b.variation_um([0.0, 0.0, 0.0], [39.0, 39.0, 0.0], none),
+            b.variation_um(&map, [0.0, 0.0, 0.0], [39.0, 39.0, 0.0], none),
             0.0
         );
         assert_eq!(
-            b.variation_um([41.0, 41.0, 0.0], [45.0, 45.0, 0.0], none),
+            b.variation_um(&map, [41.0, 41.0, 0.0], [45.0, 45.0, 0.0], none),
             30.0
         );
         assert_eq!(
-            b.variation_um([61.0, 0.0, 0.0], [62.0, 100.0, 0.0], none),
+            b.variation_um(&map, [61.0, 0.0, 0.0], [62.0, 100.0, 0.0], none),
             0.0
         );
         assert_eq!(
-            b.variation_um([60.0, 0.0, 0.0], [62.0, 100.0, 0.0], none),
+            b.variation_um(&map, [60.0, 0.0, 0.0], [62.0, 100.0, 0.0], none),
             0.0
         );
         assert_eq!(
-            b.variation_um([59.9, 0.0, 0.0], [62.0, 100.0, 0.0], none),
+            b.variation_um(&map, [59.9, 0.0, 0.0], [62.0, 100.0, 0.0], none),
             30.0
         );
         // clamped outside the box: still the edge nodes
         assert_eq!(
-            b.variation_um([-20.0, -20.0, 0.0], [5.0, 5.0, 0.0], none),
+            b.variation_um(&map, [-20.0, -20.0, 0.0], [5.0, 5.0, 0.0], none),
             0.0
         );
     }

@@ -77,6 +77,7 @@ pub mod lexer;
 pub mod modal;
 pub mod offsets;
 pub mod rewrite;
+pub mod rotary;
 pub mod solve;
 pub mod tooltable;
 

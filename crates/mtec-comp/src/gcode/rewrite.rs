@@ -12,6 +12,7 @@ use super::format::{apply_edits, decimal_value, format_number, to_decimal, write
 use super::lexer::{lex_line, Token, TokenKind, Value};
 use super::modal;
 use super::offsets::{work_system_index, Offsets};
+use super::rotary::RotaryView;
 use super::solve::{correction_mm, SolveError};
 use crate::ErrorModel;
 use std::collections::BTreeMap;
@@ -330,7 +331,6 @@ pub fn rewrite<R: BufRead, W: Write>(
 }
 
 struct Rewriter<'a> {
-    model: &'a dyn ErrorModel,
     opt: &'a RewriteOptions,
     st: State,
     report: RewriteReport,
@@ -353,7 +353,10 @@ struct Rewriter<'a> {
     /// Work list of the move splitting, kept to avoid an allocation per move.
     split_stack: Vec<(f64, [f64; 3], f64, [f64; 3])>,
     /// Bounds the path error of each output piece (exact for grid maps).
-    bound: PathBound<'a>,
+    bound: PathBound,
+    /// The model seen at the rotary axes' current angles, in machine axes (identical to the
+    /// model when it has no rotary axes).
+    view: RotaryView<'a>,
     /// The current block moves in machine coordinates (G53).
     g53: bool,
     /// The current move's original-program offsets less the rewritten program's, mm: a word
@@ -368,13 +371,29 @@ struct Rewriter<'a> {
     params_lost: bool,
 }
 
-/// A target point with the correction to apply there.
-type Piece = ([f64; 3], [f64; 3]);
+/// The end of one output piece of a move.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Piece {
+    /// The target in machine axes (mm) at the piece's rotary angles.
+    t: [f64; 3],
+    /// The correction (mm): the axes are commanded to `t + c`.
+    c: [f64; 3],
+    /// The fraction of the original move's duration at the piece's end (1 for the last).
+    s: f64,
+    /// The rotary axes' machine angles (deg) written at the piece's end, for a move that turns
+    /// a rotary axis.
+    rot: Option<[f64; 3]>,
+}
+
+impl Piece {
+    fn new(t: [f64; 3], c: [f64; 3], s: f64) -> Piece {
+        Piece { t, c, s, rot: None }
+    }
+}
 
 impl<'a> Rewriter<'a> {
     fn new(model: &'a dyn ErrorModel, opt: &'a RewriteOptions) -> Self {
         Rewriter {
-            model,
             opt,
             st: State {
                 prog: opt
@@ -424,7 +443,8 @@ impl<'a> Rewriter<'a> {
             lower: false,
             emitted: false,
             split_stack: Vec::new(),
-            bound: PathBound::new(model, opt.check_step_mm),
+            bound: PathBound::new(opt.check_step_mm),
+            view: RotaryView::new(model),
             g53: false,
             shift: [0.0; 3],
             params: Params::new(),
@@ -651,7 +671,7 @@ impl<'a> Rewriter<'a> {
                 // the byte-order mark stays the first bytes of the file
                 output.write_all(b"\xEF\xBB\xBF")?;
             }
-            let header = header_comment(self.model, self.opt);
+            let header = header_comment(self.view.model(), self.opt);
             output.write_all(header.as_bytes())?;
             output.write_all(if ending.is_empty() { b"\n" } else { ending })?;
             self.report.lines_written += 1;
@@ -1410,7 +1430,7 @@ impl<'a> Rewriter<'a> {
             (Motion::Linear, Some(c0)) => {
                 let mut pieces = std::mem::take(&mut self.pieces);
                 pieces.clear();
-                self.split_linear(start_p, target, c0, c_end, &mut pieces, col)?;
+                self.split_linear(start_p, target, c0, c_end, (0.0, 1.0), &mut pieces, col)?;
                 self.emit_pieces(
                     b,
                     body,
@@ -1479,7 +1499,7 @@ impl<'a> Rewriter<'a> {
                             }
                         }
                     }
-                    let pieces = [(target, c_end)];
+                    let pieces = [Piece::new(target, c_end, 1.0)];
                     self.emit_pieces(
                         b,
                         body,
@@ -1503,7 +1523,8 @@ impl<'a> Rewriter<'a> {
                     for k in 1..=n {
                         let v = arc.point(k as f64 / n as f64);
                         let cv = if k == n { c_end } else { self.correct(v, col)? };
-                        self.split_linear(prev, v, c_prev, cv, &mut pieces, col)?;
+                        let s_range = ((k - 1) as f64 / n as f64, k as f64 / n as f64);
+                        self.split_linear(prev, v, c_prev, cv, s_range, &mut pieces, col)?;
                         prev = v;
                         c_prev = cv;
                     }
@@ -1527,7 +1548,7 @@ impl<'a> Rewriter<'a> {
                 if m != Motion::Rapid {
                     self.report.moves_end_point_only += 1;
                 }
-                let pieces = [(target, c_end)];
+                let pieces = [Piece::new(target, c_end, 1.0)];
                 self.emit_pieces(
                     b,
                     body,
@@ -1566,8 +1587,11 @@ impl<'a> Rewriter<'a> {
             let p = arc.point(k as f64 / n as f64);
             [0, 1, 2].map(|i| p[i] + c0[i])
         });
-        let v = self.bound.variation_um(lo, hi, &mut samples);
-        let (a, b) = (self.bound.end(arc.start, c0), self.bound.end(arc.end, c1));
+        let v = self.bound.variation_um(&self.view, lo, hi, &mut samples);
+        let (a, b) = (
+            PathBound::end(&self.view, arc.start, c0),
+            PathBound::end(&self.view, arc.end, c1),
+        );
         2.0 * v + a.residual_um + b.residual_um + 2.0 * self.rounding_now_um()
     }
 
@@ -1612,7 +1636,7 @@ impl<'a> Rewriter<'a> {
 
     /// The correction at a target (mm), with the error located at the block.
     fn correct(&mut self, target: [f64; 3], col: usize) -> Result<[f64; 3], GcodeError> {
-        match correction_mm(self.model, target, self.opt.max_correction_um) {
+        match correction_mm(&self.view, target, self.opt.max_correction_um) {
             Ok(c) => {
                 let n = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() * 1e3;
                 if n > self.report.max_correction_um {
@@ -1648,8 +1672,12 @@ impl<'a> Rewriter<'a> {
     /// straight from ta + ca to tb + cb: the solve residuals at the ends, the model's departure
     /// from its chord between them ([`PathBound`]) and the rounding of the written words.
     fn piece_bound_um(&mut self, ta: [f64; 3], ca: [f64; 3], tb: [f64; 3], cb: [f64; 3]) -> f64 {
-        let (a, b) = (self.bound.end(ta, ca), self.bound.end(tb, cb));
-        self.bound.chord_departure_um(a.p, b.p, a.e, b.e)
+        let (a, b) = (
+            PathBound::end(&self.view, ta, ca),
+            PathBound::end(&self.view, tb, cb),
+        );
+        self.bound
+            .chord_departure_um(&self.view, a.p, b.p, a.e, b.e)
             + a.residual_um.max(b.residual_um)
             + self.rounding_now_um()
     }
@@ -1672,6 +1700,7 @@ impl<'a> Rewriter<'a> {
         b: [f64; 3],
         c_a: [f64; 3],
         c_b: [f64; 3],
+        s_range: (f64, f64),
         pieces: &mut Vec<Piece>,
         col: usize,
     ) -> Result<(), GcodeError> {
@@ -1692,7 +1721,7 @@ impl<'a> Rewriter<'a> {
                 return Err(self.no_model_value(col));
             }
             if bound <= tol {
-                pieces.push((b, c_b));
+                pieces.push(Piece::new(b, c_b, s_range.1));
                 return Ok(());
             }
         }
@@ -1720,7 +1749,12 @@ impl<'a> Rewriter<'a> {
                     return Err(self.no_model_value(col));
                 }
                 if bound <= tol {
-                    pieces.push((lerp(t1), c1));
+                    let s = s_range.0 + (s_range.1 - s_range.0) * t1;
+                    pieces.push(Piece::new(
+                        lerp(t1),
+                        c1,
+                        if t1 >= 1.0 { s_range.1 } else { s },
+                    ));
                     if pieces.len() > self.opt.max_pieces_per_move {
                         self.split_stack = stack;
                         return Err(self.too_many(col));
@@ -1926,7 +1960,7 @@ impl<'a> Rewriter<'a> {
                     .map(|t| t.span.end)
             })
             .unwrap_or(0);
-        let (t0, c0) = pieces[0];
+        let Piece { t: t0, c: c0, .. } = pieces[0];
         let last = pieces.len() == 1;
         for a in 0..3 {
             let want = t0[a] + c0[a];
@@ -1987,7 +2021,7 @@ impl<'a> Rewriter<'a> {
             self.report.moves_compensated += 1;
         }
         // --- the other pieces as new lines -----------------------------------------------
-        for &(t, c) in &pieces[1..] {
+        for &Piece { t, c, .. } in &pieces[1..] {
             // G53 is not modal: every piece of a machine-coordinate move repeats it
             let mut line = case(if self.g53 { "G53 G1" } else { "G1" }, lower);
             let mut moved = false;
