@@ -141,6 +141,13 @@ pub struct Args {
     /// Sample spacing of the path check for models that are not grid maps, in mm.
     #[arg(long, default_value_t = 0.5)]
     pub check_step_mm: f64,
+    /// Rotary axes' machine angles at program start, "a,b,c" in degrees (those the machine has
+    /// are used); without it they are unknown until the program commands them.
+    #[arg(long, value_name = "A,B,C")]
+    pub start_rotary_deg: Option<String>,
+    /// Largest turn of a rotary axis between samples of the path check of a rotary move, deg.
+    #[arg(long, default_value_t = 0.5)]
+    pub check_step_deg: f64,
     /// Longest line the controller reads (LinuxCNC: 251 with either line ending); longer
     /// rewritten lines are refused.
     #[arg(long, default_value_t = 251)]
@@ -167,6 +174,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         decimals_mm: args.decimals_mm,
         decimals_inch: args.decimals_inch,
         check_step_mm: args.check_step_mm,
+        check_step_deg: args.check_step_deg,
         max_line_chars: args.max_line_chars,
         ..RewriteOptions::default()
     };
@@ -184,6 +192,23 @@ pub fn run(args: Args) -> Result<(), CliError> {
             )));
         }
         options.start_position_mm = Some([v[0], v[1], v[2]]);
+    }
+    if let Some(s) = &args.start_rotary_deg {
+        let v: Vec<f64> = s
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| {
+                CliError::usage(format!(
+                    "--start-rotary-deg '{s}': expected a,b,c in degrees"
+                ))
+            })?;
+        if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
+            return Err(CliError::usage(format!(
+                "--start-rotary-deg '{s}': expected three numbers a,b,c"
+            )));
+        }
+        options.start_rotary_deg = Some([v[0], v[1], v[2]]);
     }
     if let Some(p) = &args.offsets {
         let file: OffsetsFile = mtec_io::read_toml(p)?;

@@ -16,6 +16,8 @@
 //! [tool_lengths_mm]
 //! 1 = 85.25
 //! 4 = 102.0
+//! [rotary_offsets_deg]                # optional: A, B, C work offsets (degrees)
+//! G54 = [0.0, 0.0, 90.0]
 //! ```
 //!
 //! Decisions:
@@ -25,6 +27,10 @@
 //!   at that word: taking a missing offset as zero would compensate the wrong place.
 //! - With `[work_offsets_mm]`, exactly the systems it lists are known; selecting (or starting
 //!   in) any other is refused the same way.
+//! - Rotary work offsets (LinuxCNC's G5x A, B, C entries) are zero for every system the file
+//!   does not list under `[rotary_offsets_deg]`: LinuxCNC's tables hold zero there unless they
+//!   are set, and a program that sets them (G10 L2/L20 with A, B or C) is refused. The angle a
+//!   rotary axis stands at is machine = program + rotary offset.
 //! - No tool has a known length unless the file gives it, so `G43` for an unknown tool is an
 //!   unsupported construct — evaluating the model at a point off by a tool length would
 //!   compensate the wrong place.
@@ -44,6 +50,9 @@ pub struct OffsetsFile {
     pub work_offsets_mm: BTreeMap<String, [f64; 3]>,
     #[serde(default)]
     pub tool_lengths_mm: BTreeMap<String, f64>,
+    /// Rotary work offsets [A, B, C] in degrees per system; a system not listed has none.
+    #[serde(default)]
+    pub rotary_offsets_deg: BTreeMap<String, [f64; 3]>,
 }
 
 /// Work offsets (indexed by [`work_system_index`]) and tool lengths, validated.
@@ -57,6 +66,8 @@ pub struct Offsets {
     pub tool_length_mm: BTreeMap<u32, f64>,
     /// Which work systems have a known offset (see the module docs).
     pub known: [bool; 9],
+    /// Rotary work offsets [A, B, C] in degrees of each system (zero unless the file says).
+    pub rotary_deg: [[f64; 3]; 9],
 }
 
 impl Default for Offsets {
@@ -67,6 +78,7 @@ impl Default for Offsets {
             active: 0,
             tool_length_mm: BTreeMap::new(),
             known: [true, false, false, false, false, false, false, false, false],
+            rotary_deg: [[0.0; 3]; 9],
         }
     }
 }
@@ -149,6 +161,13 @@ impl OffsetsFile {
                 return Err(format!("tool {t} length is not finite"));
             }
             out.tool_length_mm.insert(t, *len);
+        }
+        for (name, v) in &self.rotary_offsets_deg {
+            let i = find(name)?;
+            if !v.iter().all(|x| x.is_finite()) {
+                return Err(format!("rotary offset {name} is not finite"));
+            }
+            out.rotary_deg[i] = *v;
         }
         Ok(out)
     }

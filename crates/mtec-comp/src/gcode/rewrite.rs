@@ -14,7 +14,11 @@ use super::modal;
 use super::offsets::{work_system_index, Offsets};
 use super::rotary::RotaryView;
 use super::solve::{correction_mm, SolveError};
+use rotary_move::{EmittedEnd, RotaryMove, ROTARY_DECIMALS};
+
+mod rotary_move;
 use crate::ErrorModel;
+pub use rotary_move::FEED_TOLERANCE;
 use std::collections::BTreeMap;
 use std::io::{BufRead, Write};
 
@@ -89,6 +93,12 @@ pub struct RewriteOptions {
     pub max_line_chars: usize,
     /// The operator's block-delete switch (`--block-delete on|off`).
     pub block_delete: BlockDelete,
+    /// Machine angles (deg) of the rotary axes A, B, C at program start, when known
+    /// (`--start-rotary-deg`). `None`: unknown until programmed.
+    pub start_rotary_deg: Option<[f64; 3]>,
+    /// Largest turn (deg) of any rotary axis between two samples of the dense path check of a
+    /// move that turns a rotary axis (`--check-step-deg`).
+    pub check_step_deg: f64,
 }
 
 impl Default for RewriteOptions {
@@ -108,6 +118,8 @@ impl Default for RewriteOptions {
             check_step_mm: 0.5,
             max_line_chars: LINUXCNC_MAX_LINE_CHARS,
             block_delete: BlockDelete::Unknown,
+            start_rotary_deg: None,
+            check_step_deg: 0.5,
         }
     }
 }
@@ -132,6 +144,12 @@ impl RewriteOptions {
             ));
         }
         pos(self.check_step_mm, "--check-step-mm")?;
+        pos(self.check_step_deg, "--check-step-deg")?;
+        if let Some(r) = self.start_rotary_deg {
+            if !r.iter().all(|v| v.is_finite()) {
+                return Err("--start-rotary-deg must be three finite angles".into());
+            }
+        }
         if self.decimals_mm > 9 || self.decimals_inch > 9 {
             return Err("--decimals must be at most 9".into());
         }
@@ -228,6 +246,10 @@ pub struct RewriteReport {
     pub warnings: Vec<Diagnostic>,
     pub warnings_total: usize,
     pub header_written: bool,
+    /// Moves that turn a rotary axis (compensated along the joint path).
+    pub rotary_moves: usize,
+    /// Moves whose F words were rewritten to keep their duration.
+    pub feeds_rewritten: usize,
 }
 
 /// Warnings kept in the report; the rest are only counted.
@@ -308,6 +330,14 @@ struct State {
     out_motion: Motion,
     cutter_comp: bool,
     inverse_time: bool,
+    /// G95 (units per revolution) in effect.
+    feed_per_rev: bool,
+    /// The last F value the program set (its units: per minute, per revolution or inverse
+    /// time, as the mode it was given in).
+    feed: Option<f64>,
+    /// Machine angles (deg) of A, B, C where the program's commands put them (`None`: not
+    /// known). The rewritten program puts them at the same angles at the end of every move.
+    rot: [Option<f64>; 3],
     /// Coordinate offsets as the original program sets them ([`PROG`]) and as the rewritten
     /// program does ([`OUT`]). They differ only where an offset is set from the current
     /// position (G92, G10 L20): the rewritten program stands at the corrected position there,
@@ -364,6 +394,10 @@ struct Rewriter<'a> {
     shift: [f64; 3],
     /// Numbered and named parameters as LinuxCNC sets them (literal values only).
     params: Params,
+    /// The rotary move being written, if the current move turns a rotary axis.
+    rot_move: Option<RotaryMove>,
+    /// The output lines of the current move (for its feed words).
+    ends: Vec<EmittedEnd>,
     /// The current line's evaluated words and assignments.
     line_values: LineValues,
     /// A line's parameters could not be evaluated (pass-through mode): from then on parameter
@@ -416,6 +450,12 @@ impl<'a> Rewriter<'a> {
                 out_motion: Motion::Cancelled,
                 cutter_comp: false,
                 inverse_time: false,
+                feed_per_rev: false,
+                feed: None,
+                rot: opt
+                    .start_rotary_deg
+                    .map(|r| r.map(Some))
+                    .unwrap_or([None; 3]),
                 frames: {
                     let mut f = Frame {
                         work: [[None; 3]; 9],
@@ -448,6 +488,8 @@ impl<'a> Rewriter<'a> {
             g53: false,
             shift: [0.0; 3],
             params: Params::new(),
+            rot_move: None,
+            ends: Vec::new(),
             line_values: LineValues::default(),
             params_lost: false,
             block: Block::default(),
@@ -521,6 +563,8 @@ impl<'a> Rewriter<'a> {
         st.tool_length_mm = None;
         st.motion = Motion::Unknown;
         st.out_motion = Motion::Unknown;
+        st.rot = [None; 3];
+        st.feed = None;
         // the line may have set offsets or the tool table (G10, G92, G52, a subprogram…)
         for f in st.frames.iter_mut() {
             f.work = [[None; 3]; 9];
@@ -769,11 +813,7 @@ impl<'a> Rewriter<'a> {
                     ),
                     poisons_all: false,
                 }),
-                930 => issues.push(Issue {
-                    token: Some(tok),
-                    message: "G93 inverse-time feed: splitting a move would change its duration".into(),
-                    poisons_all: false,
-                }),
+                930 => {}
                 100 | 920 | 520 => axis_consumer = Some(code),
                 // G92.1 and G92.2 zero the G92 offset (they differ only in parameters 5211-5219)
                 921 | 922 => g92_reset = true,
@@ -824,9 +864,17 @@ impl<'a> Rewriter<'a> {
         let st = &mut self.st;
         if b.has_g(930).is_some() {
             st.inverse_time = true;
+            st.feed_per_rev = false;
         }
         if b.has_g(940).is_some() || b.has_g(950).is_some() {
             st.inverse_time = false;
+            st.feed_per_rev = b.has_g(950).is_some();
+        }
+        if let Some(f) = b.word(b'F') {
+            st.feed = match f.value {
+                Value::Number(v) if v.is_finite() && v >= 0.0 => Some(v),
+                _ => None,
+            };
         }
         if let Some(t) = b.word(b'T') {
             st.selected_tool = match t.value {
@@ -952,24 +1000,55 @@ impl<'a> Rewriter<'a> {
             if why.is_none() && st.cutter_comp && m != Motion::Unknown {
                 why = Some("cutter radius compensation (G41/G42) is active: the controller offsets this path".into());
             }
-            if why.is_none() && st.inverse_time && m != Motion::Rapid {
-                why = Some(
-                    "inverse-time feed (G93) is active: a split move would change its duration"
-                        .into(),
-                );
+            if why.is_none()
+                && st.inverse_time
+                && matches!(m, Motion::Linear | Motion::Cw | Motion::Ccw)
+                && b.word(b'F').is_none()
+            {
+                why = Some("inverse-time feed (G93) without an F word on this feed move (LinuxCNC requires one on every G1, G2, G3 block)".into());
             }
             if why.is_none() {
-                if let Some(l) = other_axis {
+                let rotary = self.view.rotary_axes();
+                let moved_rotary = [b'A', b'B', b'C']
+                    .into_iter()
+                    .enumerate()
+                    .find(|&(_, l)| b.word(l).is_some());
+                if let Some(l) = [b'U', b'V', b'W']
+                    .into_iter()
+                    .find(|&l| b.word(l).is_some())
+                {
                     why = Some(format!(
-                        "axis {} moves: only X, Y and Z are compensated",
+                        "axis {} moves: U, V and W (linear axes parallel to X, Y, Z) are in no chain mtec models; only X, Y, Z and the model's rotary axes are compensated",
                         l as char
                     ));
+                } else if let Some((k, l)) = moved_rotary {
+                    if !rotary[k] {
+                        why = Some(match self.view.kinematics() {
+                            Some(kin) => format!(
+                                "axis {} moves but the model's machine (chain `{}`) has no {} axis",
+                                l as char,
+                                kin.chain(),
+                                l as char
+                            ),
+                            None => format!(
+                                "axis {} moves but the error model has no rotary axes (a kinematic model, `mtec.kinematic-model/1`, of a chain with {} compensates it)",
+                                l as char, l as char
+                            ),
+                        });
+                    } else if matches!(m, Motion::Cw | Motion::Ccw) {
+                        why = Some(format!(
+                            "an arc that also turns the rotary axis {} is not compensated (write it as straight moves)",
+                            l as char
+                        ));
+                    }
                 } else if b.polar.is_some() {
                     why = Some("polar coordinates (@ ^) are not supported".into());
                 }
             }
             if why.is_none() {
-                for l in [b'X', b'Y', b'Z', b'I', b'J', b'K', b'R', b'P'] {
+                for l in [
+                    b'X', b'Y', b'Z', b'A', b'B', b'C', b'I', b'J', b'K', b'R', b'P',
+                ] {
                     if l == b'P' && !matches!(m, Motion::Cw | Motion::Ccw) {
                         continue;
                     }
@@ -1039,6 +1118,11 @@ impl<'a> Rewriter<'a> {
                         self.st.out[a] = None;
                     }
                 }
+                for (k, l) in [b'A', b'B', b'C'].into_iter().enumerate() {
+                    if b.word(l).is_some() {
+                        self.st.rot[k] = None;
+                    }
+                }
                 if motion_word.is_some() {
                     self.st.out_motion = self.st.motion;
                 }
@@ -1060,6 +1144,8 @@ impl<'a> Rewriter<'a> {
         // --- G28 / G30: reference-point moves leave the axes at a position we do not know ----
         if let Some(code) = axis_consumer {
             debug_assert!(code == 280 || code == 300);
+            // the rotary axes may go to their reference positions too
+            self.st.rot = [None; 3];
             for (a, l) in axis_letters.iter().enumerate() {
                 if !has_axis || b.word(*l).is_some() {
                     self.st.prog[a] = None;
@@ -1154,6 +1240,14 @@ impl<'a> Rewriter<'a> {
                 format!("{name}: the units (G20/G21) are not known here"),
             ));
         };
+        if self.view.kinematics().is_some() {
+            if let Some(w) = [b'A', b'B', b'C'].into_iter().find_map(|l| b.word(l)) {
+                return Err((
+                    Some(w.token),
+                    format!("{name} with a rotary axis word: rotary offsets set by the program are not followed (give them in the offsets file, [rotary_offsets_deg])"),
+                ));
+            }
+        }
         let scale = units.mm_per_unit();
         let mut xyz = [None; 3];
         for (a, l) in [b'X', b'Y', b'Z'].into_iter().enumerate() {
@@ -1284,7 +1378,8 @@ impl<'a> Rewriter<'a> {
         motion_tok: Option<usize>,
         g53: bool,
     ) -> Result<(), GcodeError> {
-        let first_axis_tok = [b'X', b'Y', b'Z']
+        self.rot_move = None;
+        let first_axis_tok = [b'X', b'Y', b'Z', b'A', b'B', b'C']
             .iter()
             .find_map(|&l| b.word(l))
             .map(|w| w.token);
@@ -1373,13 +1468,52 @@ impl<'a> Rewriter<'a> {
                 };
             }
         }
+        // the rotary axes: degrees in every unit system, machine = program + rotary offset
+        let rot_axes = self.view.rotary_axes();
+        let rot_start = self.st.rot;
+        let mut rot_target = rot_start;
+        let mut rot_words: [Option<(f64, usize)>; 3] = [None; 3];
+        for (k, l) in [b'A', b'B', b'C'].into_iter().enumerate() {
+            if let Some(w) = b.word(l).filter(|_| rot_axes[k]) {
+                let Value::Number(v) = w.value else {
+                    let d = self.diag(
+                        col,
+                        ProblemKind::Unsupported,
+                        "parameter or expression in an axis word".into(),
+                    );
+                    return self.unsupported(d);
+                };
+                rot_words[k] = Some((v, w.token));
+                let off = if g53 {
+                    0.0
+                } else {
+                    self.st
+                        .work
+                        .map_or(0.0, |w| self.opt.offsets.rotary_deg[w][k])
+                };
+                rot_target[k] = if absolute {
+                    Some(v + off)
+                } else {
+                    rot_start[k].map(|s| s + v)
+                };
+            }
+        }
+        // the end pose is what a correction needs; the start, for splitting (as for X, Y, Z)
+        let rot_known = (0..3).all(|k| !rot_axes[k] || rot_target[k].is_some());
+        let rot_start_known = (0..3).all(|k| !rot_axes[k] || rot_start[k].is_some());
         let is_arc = matches!(m, Motion::Cw | Motion::Ccw);
         let uses_modal = motion_tok.is_none();
         let target_known = target.iter().all(|t| t.is_some());
         let start_known =
             start.iter().all(|t| t.is_some()) && self.st.out.iter().all(|t| t.is_some());
 
-        if !target_known || (is_arc && !start_known) {
+        let start_known = start_known && rot_start_known;
+        if !target_known || !rot_known || (is_arc && !start_known) {
+            for k in 0..3 {
+                if rot_words[k].is_some() {
+                    self.st.rot[k] = rot_target[k];
+                }
+            }
             if m == Motion::Rapid {
                 // positioning before every axis is known: copied, not compensated
                 self.report.rapids_not_compensated += 1;
@@ -1397,15 +1531,26 @@ impl<'a> Rewriter<'a> {
                 self.emitted = true;
                 return Ok(());
             }
-            let missing = (0..3)
+            let missing = match (0..3)
                 .find(|&a| target[a].is_none() || (is_arc && start[a].is_none()))
-                .unwrap_or(0);
+            {
+                Some(a) => ["X", "Y", "Z"][a],
+                None => {
+                    let k = (0..3)
+                        .find(|&k| {
+                            rot_axes[k]
+                                && (rot_target[k].is_none() || (is_arc && rot_start[k].is_none()))
+                        })
+                        .unwrap_or(0);
+                    ["A", "B", "C"][k]
+                }
+            };
             let d = self.diag(
                 col,
                 ProblemKind::Unsupported,
                 format!(
-                    "the position of {} is not known before this feed move (program it in an absolute move first)",
-                    ["X", "Y", "Z"][missing]
+                    "the position of {missing} is not known before this feed move (program it in an absolute move first{})",
+                    if target_known { ", or give --start-rotary-deg" } else { "" }
                 ),
             );
             self.unsupported(d)?;
@@ -1417,6 +1562,36 @@ impl<'a> Rewriter<'a> {
             }
             return Ok(());
         }
+        let rot_target = rot_target.map(|r| r.unwrap_or(0.0));
+        // an unknown start angle: the move is corrected at its end only (no c_start below)
+        let rot_start = [0, 1, 2].map(|k| rot_start[k].unwrap_or(rot_target[k]));
+        if let Some(kin) = self.view.kinematics() {
+            if kin.has_tool_side_rotary()
+                && !g53
+                && self.st.tool_length_mm.is_some_and(|l| l != 0.0)
+            {
+                let d = self.diag(
+                    col,
+                    ProblemKind::Unsupported,
+                    format!("a tool length offset (G43) on chain `{}`, whose rotary head turns the tool: the model's tool_offset_mm is the tool, so compensate with G49 and the tool in the machine file", kin.chain()),
+                );
+                self.unsupported(d)?;
+                self.st.prog = [None; 3];
+                self.st.out = [None; 3];
+                self.st.rot = [None; 3];
+                return Ok(());
+            }
+        }
+        let rot_moves = (0..3).any(|k| rot_axes[k] && rot_target[k] != rot_start[k]);
+        if let Err(msg) = self.view.set_rotary(rot_target) {
+            let d = self.diag(col, ProblemKind::Unsupported, msg);
+            self.unsupported(d)?;
+            self.st.prog = [None; 3];
+            self.st.out = [None; 3];
+            self.st.rot = [None; 3];
+            return Ok(());
+        }
+        self.st.rot = rot_target.map(Some);
         let target = target.map(|t| t.unwrap_or(0.0));
         let c_end = self.correct(target, col)?;
         let c_start = if start_known {
@@ -1425,9 +1600,43 @@ impl<'a> Rewriter<'a> {
             None
         };
         let start_p = start.map(|s| s.unwrap_or(0.0));
+        if rot_moves {
+            let mv = RotaryMove {
+                x0: start_p,
+                x1: target,
+                r0: rot_start,
+                r1: rot_target,
+                c0: c_start,
+                c1: c_end,
+                words: rot_words,
+                absolute,
+                offset: if g53 {
+                    [0.0; 3]
+                } else {
+                    self.st
+                        .work
+                        .map_or([0.0; 3], |w| self.opt.offsets.rotary_deg[w])
+                },
+            };
+            self.rotary_move(
+                b,
+                body,
+                m,
+                uses_modal,
+                &mv,
+                &words,
+                out_offsets,
+                absolute,
+                scale,
+                col,
+            )?;
+            self.st.prog = target.map(Some);
+            return Ok(());
+        }
 
         match (m, c_start) {
             (Motion::Linear, Some(c0)) => {
+                let start_xyz = self.st.out.map(|o| o.unwrap_or(0.0));
                 let mut pieces = std::mem::take(&mut self.pieces);
                 pieces.clear();
                 self.split_linear(start_p, target, c0, c_end, (0.0, 1.0), &mut pieces, col)?;
@@ -1444,6 +1653,7 @@ impl<'a> Rewriter<'a> {
                     false,
                 )?;
                 self.pieces = pieces;
+                self.apply_feed(b, body, start_xyz, None, (0.0, 0.0), scale, col)?;
             }
             (Motion::Cw | Motion::Ccw, Some(c0)) => {
                 let arc = match self.arc_of(
@@ -1529,6 +1739,7 @@ impl<'a> Rewriter<'a> {
                         c_prev = cv;
                     }
                     self.report.arcs_linearised += 1;
+                    let start_xyz = self.st.out.map(|o| o.unwrap_or(0.0));
                     self.emit_pieces(
                         b,
                         body,
@@ -1541,6 +1752,7 @@ impl<'a> Rewriter<'a> {
                         scale,
                         true,
                     )?;
+                    self.apply_feed(b, body, start_xyz, None, (0.0, 0.0), scale, col)?;
                 }
             }
             _ => {
@@ -2017,11 +2229,40 @@ impl<'a> Rewriter<'a> {
                 }
             }
         }
+        if let Some(mv) = self.rot_move.filter(|_| pieces.len() > 1) {
+            // a split rotary move: its first piece ends at the first piece's angles
+            for k in 0..3 {
+                let Some((v, tok)) = mv.words[k] else {
+                    continue;
+                };
+                if mv.r1[k] == mv.r0[k] {
+                    continue;
+                }
+                let n = mv.written_count(k, pieces[0].rot.unwrap_or(mv.r1)[k]);
+                if decimal_value(n, ROTARY_DECIMALS) != v {
+                    let mut text = String::new();
+                    write_decimal(n, ROTARY_DECIMALS, &mut text);
+                    let span = self.tokens[tok].value_span.clone();
+                    self.edits.push(Edit {
+                        span,
+                        text,
+                        order: 0,
+                    });
+                }
+            }
+        }
+        self.ends.clear();
+        self.ends.push(EmittedEnd {
+            line: None,
+            s: pieces[0].s,
+            xyz: self.st.out.map(|o| o.unwrap_or(0.0)),
+            rot: pieces[0].rot,
+        });
         if self.edits.len() > edits_before || pieces.len() > 1 || linearised {
             self.report.moves_compensated += 1;
         }
         // --- the other pieces as new lines -----------------------------------------------
-        for &Piece { t, c, .. } in &pieces[1..] {
+        for (i, &Piece { t, c, s, rot }) in pieces.iter().enumerate().skip(1) {
             // G53 is not modal: every piece of a machine-coordinate move repeats it
             let mut line = case(if self.g53 { "G53 G1" } else { "G1" }, lower);
             let mut moved = false;
@@ -2035,8 +2276,37 @@ impl<'a> Rewriter<'a> {
                     moved = true;
                 }
             }
+            if let (Some(mv), Some(w)) = (self.rot_move, rot) {
+                let prev = pieces[i - 1].rot.unwrap_or(mv.r0);
+                let last = i + 1 == pieces.len();
+                for k in 0..3 {
+                    if mv.r1[k] == mv.r0[k] || (w[k] == prev[k] && !last) {
+                        continue;
+                    }
+                    let text = if last {
+                        mv.last_word_text(k, &self.tokens, body, prev[k])
+                    } else {
+                        Some(mv.word_text(k, w[k], prev[k]))
+                    };
+                    if let Some(text) = text {
+                        line.push(' ');
+                        line.push(case_letter([b'A', b'B', b'C'][k], lower) as char);
+                        line.push_str(&text);
+                        moved = true;
+                    }
+                }
+            }
             if moved {
+                self.ends.push(EmittedEnd {
+                    line: Some(self.extra_lines.len()),
+                    s,
+                    xyz: self.st.out.map(|o| o.unwrap_or(0.0)),
+                    rot,
+                });
                 self.extra_lines.push(line);
+            } else if let Some(e) = self.ends.last_mut() {
+                // nothing written: the previous line's move takes this piece's time too
+                e.s = s;
             }
             self.st.out_motion = Motion::Linear;
         }
