@@ -47,6 +47,7 @@
 //!   plane are reported (`ecc_coefficient_max`) because an `ECC` motion then leaks into the five.
 
 pub mod conditioning;
+pub mod errors;
 pub mod harmonics;
 pub mod identify;
 pub mod model;
@@ -58,6 +59,7 @@ pub use conditioning::{
     search_preset, AngleConditioning, ConditioningReport, DesignResult, DesignScore, PresetRanges,
     RevolutionObservability,
 };
+pub use errors::motions_to_errors;
 pub use harmonics::remove_mean_and_first_harmonic;
 pub use identify::{identify, Identification, IdentifiedRow, Measurements};
 pub use model::{
