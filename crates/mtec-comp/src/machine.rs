@@ -340,8 +340,8 @@ impl ErrorModel for MachineErrorModel {
                 Some(k) => (k.linear_jacobian(pose.rotary_deg) * Vector3::from(t)).into(),
                 None => t,
             };
-            for k in 0..3 {
-                e.position_um[k] += self.weight * t[k];
+            for (e, t) in e.position_um.iter_mut().zip(t) {
+                *e += self.weight * t;
             }
         }
         e

@@ -243,7 +243,12 @@ fn unsupported_constructs_are_refused_with_line_and_column_or_passed_through() {
         ("G21\no100 sub\n", 2, 1, "O-word"),
         ("G21 G0 X0 Y0 Z0\nG81 X1 Y1 Z-1 R1\n", 2, 1, "G81"),
         ("G21\nG41 D1\n", 2, 1, "G41"),
-        ("G21 G0 X0 Y0 Z0\nG1 X1 A30\n", 2, 4, "axis A"),
+        (
+            "G21 G0 X0 Y0 Z0\nG1 X1 A30\n",
+            2,
+            7,
+            "axis A moves but the error model has no rotary axes",
+        ),
         ("G21\nM98 P100\n", 2, 1, "M98"),
         ("G21\nG1 X1 (open\n", 2, 7, "comment"),
         ("G21 G0 X0 Y0 Z0\nG1 X1 X2\n", 2, 7, "two X words"),

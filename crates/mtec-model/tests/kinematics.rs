@@ -367,8 +367,8 @@ fn tool_frame_gives_the_exact_error_and_the_ideal_point() {
             let actual = vm.tool_frame(&q, true);
             let exact = vm.error(&q, Formalism::Htm, Order::Exact);
             let p0 = vm.ideal_tool_point(&q);
-            for i in 0..3 {
-                assert!((ideal.p[i] - p0[i]).abs() < 1e-12, "{chain}");
+            for (i, p0) in p0.iter().enumerate() {
+                assert!((ideal.p[i] - p0).abs() < 1e-12, "{chain}");
                 let d_um = (actual.p[i] - ideal.p[i]) * 1e3;
                 assert!((d_um - exact.position_um[i]).abs() < 1e-9, "{chain}");
             }

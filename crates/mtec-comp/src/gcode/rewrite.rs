@@ -985,6 +985,8 @@ impl<'a> Rewriter<'a> {
                 .map(|w| w.token)
                 .or(b.polar);
             let mut why: Option<String> = None;
+            // the word a refusal points at, when it is not the first axis word
+            let mut why_tok: Option<usize> = None;
             match m {
                 Motion::Cancelled => {
                     why = Some(
@@ -1021,7 +1023,9 @@ impl<'a> Rewriter<'a> {
                         "axis {} moves: U, V and W (linear axes parallel to X, Y, Z) are in no chain mtec models; only X, Y, Z and the model's rotary axes are compensated",
                         l as char
                     ));
+                    why_tok = b.word(l).map(|w| w.token);
                 } else if let Some((k, l)) = moved_rotary {
+                    why_tok = b.word(l).map(|w| w.token);
                     if !rotary[k] {
                         why = Some(match self.view.kinematics() {
                             Some(kin) => format!(
@@ -1068,7 +1072,7 @@ impl<'a> Rewriter<'a> {
             }
             if let Some(w) = why {
                 issues.push(Issue {
-                    token: tok,
+                    token: why_tok.or(tok),
                     message: w,
                     poisons_all: false,
                 });
@@ -1653,7 +1657,15 @@ impl<'a> Rewriter<'a> {
                     false,
                 )?;
                 self.pieces = pieces;
-                self.apply_feed(b, body, start_xyz, None, (0.0, 0.0), scale, col)?;
+                self.apply_feed(
+                    b,
+                    body,
+                    start_xyz,
+                    None,
+                    (dist(start_p, target) / scale, 0.0),
+                    scale,
+                    col,
+                )?;
             }
             (Motion::Cw | Motion::Ccw, Some(c0)) => {
                 let arc = match self.arc_of(
@@ -1752,7 +1764,15 @@ impl<'a> Rewriter<'a> {
                         scale,
                         true,
                     )?;
-                    self.apply_feed(b, body, start_xyz, None, (0.0, 0.0), scale, col)?;
+                    self.apply_feed(
+                        b,
+                        body,
+                        start_xyz,
+                        None,
+                        (arc_length(&arc) / scale, 0.0),
+                        scale,
+                        col,
+                    )?;
                 }
             }
             _ => {
@@ -1902,6 +1922,7 @@ impl<'a> Rewriter<'a> {
         ))
     }
 
+    #[allow(clippy::too_many_arguments)]
     /// Splits the straight move a→b into pieces whose path error, bounded by
     /// [`Self::piece_bound_um`], is at most `--tolerance-um`; no piece of a compensated move is
     /// longer than `max_segment_mm`. Pushes (target, correction) of each piece's end; the last
@@ -2405,6 +2426,13 @@ fn arc_box(arc: &Arc) -> ([f64; 3], [f64; 3]) {
         }
     }
     (lo, hi)
+}
+
+/// Length (mm) of an arc as LinuxCNC's interpreter measures it for inverse-time feeds
+/// (`find_arc_length`): the helix over the start radius, √((r·|θ|)² + Δnormal²).
+fn arc_length(arc: &Arc) -> f64 {
+    let n = arc.plane.normal;
+    (arc.r_start * arc.sweep.abs()).hypot(arc.end[n] - arc.start[n])
 }
 
 /// `v` rounded to `decimals` digits: the value the written word stands for, and its count.

@@ -34,20 +34,19 @@ pub struct RotaryView<'a> {
 impl<'a> RotaryView<'a> {
     pub fn new(model: &'a dyn ErrorModel) -> Self {
         let kin = model.kinematics().filter(|k| k.has_rotary());
-        let mut v = RotaryView {
+        RotaryView {
             model,
             kin,
-            rotary_deg: [f64::NAN; 3],
+            // with rotary axes the angles are not known until the program (or the start
+            // pose) gives them
+            rotary_deg: if kin.is_some() {
+                [f64::NAN; 3]
+            } else {
+                [0.0; 3]
+            },
             jt: Matrix3::identity(),
             b: Vector3::zeros(),
-        };
-        if v.kin.is_some() {
-            // the angles are not known until the program (or the start pose) gives them
-            v.rotary_deg = [f64::NAN; 3];
-        } else {
-            v.rotary_deg = [0.0; 3];
         }
-        v
     }
 
     /// The model behind the view.
@@ -88,7 +87,7 @@ impl<'a> RotaryView<'a> {
         }
         let j = kin.linear_jacobian(r);
         let off = (j.transpose() * j - Matrix3::identity()).abs().max();
-        if !(off <= 1e-9) {
+        if off.is_nan() || off > 1e-9 {
             return Err(format!(
                 "at A{} B{} C{} the linear axes of chain `{}` do not move the tool tip along three perpendicular directions of the workpiece: not compensated",
                 r[0], r[1], r[2], kin.chain()

@@ -316,6 +316,24 @@ impl Rewriter<'_> {
         col: usize,
     ) -> Result<(), GcodeError> {
         let tol = self.opt.tolerance_um;
+        if c0 == [0.0; 3] && mv.c1 == [0.0; 3] {
+            // nothing to correct at the ends: the move stays whole when the model is flat along it
+            let whole = self.rotary_end(mv, 1.0, col)?;
+            let start = Piece {
+                t: mv.x0,
+                c: c0,
+                s: 0.0,
+                rot: Some(mv.r0),
+            };
+            let bound = self.rotary_piece_bound_um(mv, &start, &whole);
+            if bound.is_nan() {
+                return Err(self.no_model_value(col));
+            }
+            if bound <= tol {
+                pieces.push(whole);
+                return Ok(());
+            }
+        }
         let len = self.nominal_length(mv, 0.0, 1.0, 64);
         let n0 = ((len / self.opt.max_segment_mm).ceil() as usize).max(1);
         if n0 > self.opt.max_pieces_per_move {
@@ -390,7 +408,7 @@ impl Rewriter<'_> {
         // LinuxCNC's length of a move: XYZ if X, Y or Z moves, else the rotary one
         let (l_xyz, l_rot) = nominal;
         let l_nominal = if l_xyz > 0.0 { l_xyz } else { l_rot };
-        if !(l_nominal > 0.0) {
+        if l_nominal.is_nan() || l_nominal <= 0.0 {
             return Ok(());
         }
         let r0 = start_rot.unwrap_or([0.0; 3]);
