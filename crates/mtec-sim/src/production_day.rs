@@ -306,24 +306,47 @@ fn job(rng: &mut StdRng, start: f64, rpm: f64, minutes: (f64, f64)) -> Job {
     }
 }
 
+/// The heavy job of a training day (module docs): top speed, full load, the fastest feeds,
+/// as long as the longest job.
+fn heavy_job(start: f64) -> Job {
+    Job {
+        start_min: start,
+        duration_min: JOB_MINUTES.1,
+        rpm: SPINDLE_RATED_RPM,
+        feed_mm_min: [6000.0, 6000.0, 3000.0],
+        load: 0.9,
+    }
+}
+
+/// Shortest and longest job (min).
+const JOB_MINUTES: (f64, f64) = (40.0, 140.0);
+
 /// Jobs of one day starting at `day_start` (module docs): `speeds` in order, shift from
-/// `begin` to `end` (min after midnight), a lunch stop near 12:00, and `long_stop`
-/// (start after midnight, duration) when given.
+/// `begin` to `end` (min after midnight), a lunch stop near 12:00 (followed by the heavy job
+/// when `heavy`), and `long_stop` (start after midnight, duration) when given.
 fn day_jobs(
     rng: &mut StdRng,
     day_start: f64,
     speeds: &[f64],
     (begin, end): (f64, f64),
     long_stop: Option<(f64, f64)>,
+    heavy: bool,
 ) -> Vec<Job> {
     let mut jobs = Vec::new();
     let mut t = begin;
     let mut lunch = false;
-    for &rpm in speeds {
-        if t >= end {
-            break;
-        }
-        let mut j = job(rng, day_start + t, rpm, (40.0, 140.0));
+    let mut speeds = speeds.iter();
+    let mut heavy_due = heavy;
+    while t < end {
+        let mut j = if heavy_due && lunch {
+            heavy_due = false;
+            heavy_job(day_start + t)
+        } else {
+            match speeds.next() {
+                Some(&rpm) => job(rng, day_start + t, rpm, JOB_MINUTES),
+                None => break,
+            }
+        };
         j.duration_min = j.duration_min.min(end - t);
         if let Some((s, _)) = long_stop {
             if t < s {
@@ -417,7 +440,7 @@ pub fn timeline(seed: u64) -> Timeline {
         let speeds = training_speeds(&mut rng);
         let long_stop = if rng.random_bool(0.5) {
             Some((
-                grid(rng.random_range(780.0..1020.0)),
+                grid(rng.random_range(920.0..1100.0)),
                 grid(rng.random_range(60.0..150.0)),
             ))
         } else {
@@ -429,6 +452,7 @@ pub fn timeline(seed: u64) -> Timeline {
             &speeds,
             (360.0, 1320.0),
             long_stop,
+            true,
         ));
     }
     let speeds = unseen_speeds(&mut rng);
@@ -438,6 +462,7 @@ pub fn timeline(seed: u64) -> Timeline {
         &speeds,
         (420.0, 1260.0),
         Some((840.0, 120.0)),
+        false,
     ));
     let mut day_mean_c: Vec<f64> = (0..UNSEEN_DAY)
         .map(|_| 21.0 + rng.random_range(-1.2..1.2))

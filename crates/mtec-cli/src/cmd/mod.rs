@@ -8,6 +8,7 @@ pub mod identify_ballbar;
 pub mod identify_lines;
 pub mod iso230_2;
 pub mod machine;
+pub mod machine_stage;
 pub mod map;
 pub mod model_loader;
 pub mod sensitivity;
