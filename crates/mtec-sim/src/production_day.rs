@@ -32,10 +32,13 @@
 //!
 //! Days: 00:00–06:00 the machine is off, production runs from 06:00 to 22:00 as jobs (a
 //! spindle speed, feeds and a load each) with idle gaps, a lunch stop and sometimes a long stop
-//! (cooling), then off again. Training days draw their speeds from 2000…12 000 rpm in steps of
-//! 2000 (every speed at least once a day); the unseen day runs 3000…11 000 rpm in steps of 2000,
-//! in another order, starts an hour later, has a two-hour stop in the afternoon and ends at
-//! 21:00. Two days before the first training day warm the machine into its daily rhythm.
+//! (cooling), then off again. Training days draw their speeds from a shuffle of 2000…12 000 rpm
+//! in steps of 2000, then more, and run a heavy job after lunch (top speed, full load, fastest
+//! feeds, the longest job): the training campaign reaches the hottest state production reaches,
+//! because outside the training envelope the compensation fades. The unseen day runs
+//! 3000…11 000 rpm in steps of 2000 (speeds no training day ran), in another order, starts an
+//! hour later, has a two-hour stop in the afternoon and ends at 21:00. Two days before the
+//! first training day warm the machine into its daily rhythm.
 //!
 //! Files: `train.csv` (one experiment per training day, the drift at the table-centre probe),
 //! `day-state.csv` and `day-probes.csv` (the unseen day: the controller's state log and the
@@ -769,4 +772,152 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
             "day_hot_drift_um_noise_free": hot_truth,
         }),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_machine_at_the_reference_temperature_has_no_drift_and_a_uniform_rise_bends_nothing() {
+        let n = network().bodies.len();
+        for (_, p) in PROBES {
+            assert_eq!(drift_um(&vec![REFERENCE_C; n], p), [0.0; 3]);
+        }
+        // every body 3 K warmer: no wall gradient, table and saddle like their scales; what is
+        // left is the uniform growth of the loop: ey = α·3·(L_fwd,head + L_fwd,slide + D/2 − Y_col),
+        // ez = α·3·(h − L_slide − L_head − L_nose − H_saddle − H_table), the same at every probe
+        use geometry::*;
+        let a = ALPHA_UM_PER_MM_K * 3.0;
+        for (_, p) in PROBES {
+            let e = drift_um(&vec![REFERENCE_C + 3.0; n], p);
+            let h = H0 + p[2];
+            assert!(e[0].abs() < 1e-12, "{e:?}");
+            assert!((e[1] - a * (L_FWD_HEAD + L_FWD_SLIDE + 0.5 * D_COL - Y_COL)).abs() < 1e-12);
+            assert!(
+                (e[2] - a * (h - L_SLIDE - L_HEAD - L_NOSE - H_SADDLE - H_TABLE)).abs() < 1e-12
+            );
+        }
+    }
+
+    #[test]
+    fn column_bending_matches_a_beam_integrated_numerically() {
+        // front walls 2 K warmer than the back wall: curvature κ = α·2/D along the whole column.
+        // Integrate u'' = −κ from the clamped base (u = u' = 0) with small steps, carry the tool
+        // rigidly with the head (l_down below, l_tip in front of the column axis) and compare.
+        use geometry::*;
+        let n = network().bodies.len();
+        let mut t = vec![REFERENCE_C; n];
+        t[b::COL_LEFT] += 2.0;
+        t[b::COL_RIGHT] += 2.0;
+        let p = PROBES[0].1;
+        let h = H0 + p[2];
+        let kappa = ALPHA_UM_PER_MM_K * 2.0 / D_COL; // µm/mm²
+        let steps = 100_000;
+        let dh = h / steps as f64;
+        let (mut u, mut slope) = (0.0, 0.0);
+        for _ in 0..steps {
+            // exact for constant curvature: u += slope·dh − κ dh²/2
+            u += slope * dh - 0.5 * kappa * dh * dh;
+            slope -= kappa * dh;
+        }
+        let l_down = L_SLIDE + L_HEAD + L_NOSE;
+        let l_tip = 0.5 * D_COL + L_FWD_HEAD;
+        // tool below and in front of the attachment: Δy = u + slope·(−l_down), Δz = −slope·l_tip
+        let want_y = u - slope * l_down;
+        let want_z = -slope * l_tip;
+        // what the walls' own growth adds (no bending): forward growth of the front face and the
+        // column's height up to the head
+        let growth_y = ALPHA_UM_PER_MM_K * 0.5 * D_COL * 2.0;
+        let growth_z = ALPHA_UM_PER_MM_K * h * 2.0;
+        let e = drift_um(&t, p);
+        assert!((e[1] - growth_y - want_y).abs() < 1e-9, "{e:?} vs {want_y}");
+        assert!((e[2] - growth_z + want_z).abs() < 1e-9, "{e:?} vs {want_z}");
+        // the tilt carries the tool forward (+Y) although the column's top leans back
+        assert!(u < 0.0 && want_y > 0.0);
+    }
+
+    #[test]
+    fn the_days_follow_the_plan() {
+        for seed in 1..=8 {
+            let t = timeline(seed);
+            let day_of = |j: &Job| (j.start_min / DAY_MIN).floor() as usize;
+            let training: Vec<&Job> = t
+                .plan
+                .jobs
+                .iter()
+                .filter(|j| (FIRST_TRAINING_DAY..UNSEEN_DAY).contains(&day_of(j)))
+                .collect();
+            let unseen: Vec<&Job> = t
+                .plan
+                .jobs
+                .iter()
+                .filter(|j| day_of(j) == UNSEEN_DAY)
+                .collect();
+            // jobs on the log grid, inside the shift, never overlapping
+            for w in t.plan.jobs.windows(2) {
+                assert!(w[0].start_min + w[0].duration_min <= w[1].start_min);
+            }
+            for j in &t.plan.jobs {
+                let m = j.start_min % DAY_MIN;
+                assert!(m >= 360.0 && m + j.duration_min <= 1320.0, "{j:?}");
+                assert_eq!(j.start_min % SAMPLE_MIN, 0.0);
+                assert_eq!(j.duration_min % SAMPLE_MIN, 0.0);
+                assert!(j.duration_min > 0.0);
+            }
+            // every training speed runs on the training days; the unseen day's speeds never
+            // ran there, and it runs them in another order (not rising, not the training shuffle)
+            for s in [2000.0, 4000.0, 6000.0, 8000.0, 10000.0, 12000.0] {
+                assert!(
+                    training.iter().filter(|j| j.rpm == s).count() >= 2,
+                    "seed {seed}: {s}"
+                );
+            }
+            assert!(unseen.len() >= 5);
+            for j in &unseen {
+                assert!(training.iter().all(|k| k.rpm != j.rpm), "seed {seed}");
+                assert!(j.rpm >= 3000.0 && j.rpm <= 11000.0);
+            }
+            assert_eq!(unseen[0].rpm, 11000.0);
+            // the unseen day stops for two hours at 14:00 (cooling)
+            let day0 = UNSEEN_DAY as f64 * DAY_MIN;
+            assert!(unseen.iter().all(
+                |j| j.start_min + j.duration_min <= day0 + 840.0 || j.start_min >= day0 + 960.0
+            ));
+        }
+    }
+
+    #[test]
+    fn the_hot_day_stays_five_degrees_above_the_training_air_and_seeds_repeat() {
+        let out = run(3).unwrap();
+        let again = run(3).unwrap();
+        let col = |name: &str, c: &str| -> Vec<f64> {
+            let f = out.files.iter().find(|f| f.name == name).unwrap();
+            let mut lines = f.contents.lines().filter(|l| !l.starts_with('#'));
+            let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+            let i = header.iter().position(|h| *h == c).unwrap();
+            lines
+                .map(|l| l.split(',').nth(i).unwrap().parse().unwrap())
+                .collect()
+        };
+        let train_max = col("train.csv", "air_c")
+            .into_iter()
+            .fold(f64::MIN, f64::max);
+        let hot_min = col("day-hot-state.csv", "air_c")
+            .into_iter()
+            .fold(f64::MAX, f64::min);
+        assert!(
+            hot_min >= train_max + HOT_MARGIN_C,
+            "{hot_min} vs {train_max}"
+        );
+        // 4 training days and the unseen day at 2-min samples, 5 probes
+        assert_eq!(col("train.csv", "dz_um").len(), 4 * 720);
+        assert_eq!(col("day-state.csv", "air_c").len(), 720);
+        assert_eq!(col("day-probes.csv", "ez_um").len(), 5 * 720);
+        for (a, b) in out.files.iter().zip(&again.files) {
+            assert_eq!(a.contents, b.contents);
+        }
+        let other = run(4).unwrap();
+        assert_ne!(out.files[0].contents, other.files[0].contents);
+    }
 }
