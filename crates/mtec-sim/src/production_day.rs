@@ -557,15 +557,21 @@ fn push_inputs(csv: &mut String, sensors: &[f64], d: &Duty) {
     ));
 }
 
-/// The unseen day of a simulated history: state log, probe file and the noise-free drift
-/// (`[record][probe][axis]`).
+/// The unseen day's files: state log, probe readings, noise-free drift `[record][probe][axis]`.
+struct DayFiles {
+    state: String,
+    probes: String,
+    truth: Vec<Vec<[f64; 3]>>,
+}
+
+/// The unseen day of a simulated history (see [`DayFiles`]).
 fn unseen_day_files(
     t: &Timeline,
     h: &ThermalHistory,
     offsets: &[f64],
     rng: &mut StdRng,
     comment: &str,
-) -> Result<(String, String, Vec<Vec<[f64; 3]>>), SimError> {
+) -> Result<DayFiles, SimError> {
     let tn = Normal::new(0.0, TEMP_NOISE_C).map_err(|e| SimError::Invalid(e.to_string()))?;
     let pn = Normal::new(0.0, PROBE_NOISE_UM).map_err(|e| SimError::Invalid(e.to_string()))?;
     let mut state = format!(
@@ -600,7 +606,11 @@ fn unseen_day_files(
         }
         truth.push(at);
     }
-    Ok((state, probes, truth))
+    Ok(DayFiles {
+        state,
+        probes,
+        truth,
+    })
 }
 
 /// The `mtec run` project the scenario writes (see docs/formats.md, Project TOML).
@@ -688,7 +698,7 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
         }
         train_truth.push(rows);
     }
-    let (state, probes, day_truth) = unseen_day_files(
+    let day = unseen_day_files(
         &t,
         &h,
         &offsets,
@@ -706,7 +716,7 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
     let mut hot = t.clone();
     hot.ambient.shift_c = train_air.1 - unseen_min + HOT_MARGIN_C + TEMP_OFFSET_C + 0.1;
     let hh = simulate(&hot);
-    let (hot_state, hot_probes, hot_truth) = unseen_day_files(
+    let hot_day = unseen_day_files(
         &hot,
         &hh,
         &offsets,
@@ -727,10 +737,10 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
     Ok(ScenarioOutput {
         files: vec![
             file("train.csv", train),
-            file("day-state.csv", state),
-            file("day-probes.csv", probes),
-            file("day-hot-state.csv", hot_state),
-            file("day-hot-probes.csv", hot_probes),
+            file("day-state.csv", day.state),
+            file("day-probes.csv", day.probes),
+            file("day-hot-state.csv", hot_day.state),
+            file("day-hot-probes.csv", hot_day.probes),
             file("project.toml", PROJECT_TOML.to_string()),
         ],
         truth: serde_json::json!({
@@ -768,8 +778,8 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
             "hot_shift_c": hot.ambient.shift_c,
             "training_air_range_c": [train_air.0, train_air.1],
             "train_drift_um_noise_free": train_truth,
-            "day_drift_um_noise_free": day_truth,
-            "day_hot_drift_um_noise_free": hot_truth,
+            "day_drift_um_noise_free": day.truth,
+            "day_hot_drift_um_noise_free": hot_day.truth,
         }),
     })
 }

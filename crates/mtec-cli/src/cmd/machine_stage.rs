@@ -194,9 +194,6 @@ pub fn replay(p: &mut Pipeline, r: &ReplayStage, built: Option<&Path>) -> Result
         let probes = t.str_column("probe").unwrap_or_default();
         let first = probes.first().cloned().unwrap_or_default();
         // the worst probe at each moment: |e| before and after
-        let norm = |a: &[f64], b: &[f64], c: &[f64], i: usize| {
-            (a[i] * a[i] + b[i] * b[i] + c[i] * c[i]).sqrt()
-        };
         let (bx, by, bz) = (
             column(&t, "ex_um"),
             column(&t, "ey_um"),
@@ -207,20 +204,28 @@ pub fn replay(p: &mut Pipeline, r: &ReplayStage, built: Option<&Path>) -> Result
             column(&t, "ey_after_um"),
             column(&t, "ez_after_um"),
         );
+        let norm = |x: f64, y: f64, z: f64| (x * x + y * y + z * z).sqrt();
+        let before = bx
+            .iter()
+            .zip(&by)
+            .zip(&bz)
+            .map(|((x, y), z)| norm(*x, *y, *z));
+        let after = ax
+            .iter()
+            .zip(&ay)
+            .zip(&az)
+            .map(|((x, y), z)| norm(*x, *y, *z));
         let mut worst_b: Vec<(f64, f64)> = Vec::new();
         let mut worst_a: Vec<(f64, f64)> = Vec::new();
-        for i in 0..time_h.len().min(bx.len()).min(ax.len()) {
-            let (nb, na) = (norm(&bx, &by, &bz, i), norm(&ax, &ay, &az, i));
-            match worst_b.last_mut() {
-                Some(last) if last.0 == time_h[i] => {
-                    last.1 = last.1.max(nb);
-                    if let Some(a) = worst_a.last_mut() {
-                        a.1 = a.1.max(na);
-                    }
+        for ((&h, nb), na) in time_h.iter().zip(before).zip(after) {
+            match (worst_b.last_mut(), worst_a.last_mut()) {
+                (Some(b), Some(a)) if b.0 == h => {
+                    b.1 = b.1.max(nb);
+                    a.1 = a.1.max(na);
                 }
                 _ => {
-                    worst_b.push((time_h[i], nb));
-                    worst_a.push((time_h[i], na));
+                    worst_b.push((h, nb));
+                    worst_a.push((h, na));
                 }
             }
         }
