@@ -15,7 +15,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 const FORMAT_HELP: &str = "\
-Thermal log format (CSV, docs/formats.md "Thermal CSV"):
+Thermal log format (CSV, docs/formats.md, Thermal CSV):
   experiment,time_min,<sensor>_c...,[ambient_c],[position_mm],<target>_um
 Every `_c` column except `ambient_c` is a temperature sensor. `experiment` may be absent (one
 continuous record). Rows of one experiment are in time order. Other columns are ignored.";
