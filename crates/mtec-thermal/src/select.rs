@@ -196,6 +196,30 @@ pub struct Selection {
     pub coefficients: Vec<f64>,
     pub comparison: Vec<ComparisonRow>,
     pub options: SelectOptions,
+    /// The selection explains much less than all sensors did (see [`COLLAPSE_R2_DROP`]).
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub warnings: Vec<String>,
+}
+
+/// Fall of the training R² (full MLR → ridge-selected) above which the selection is reported as
+/// a collapse: the rules removed sensors that carried the drift.
+pub const COLLAPSE_R2_DROP: f64 = 0.1;
+
+/// The collapse warning of a comparison table (full MLR row first, ridge-selected second).
+fn collapse_warning(comparison: &[ComparisonRow]) -> Option<String> {
+    let full = comparison.iter().find(|r| r.model == "full MLR")?;
+    let sel = comparison
+        .iter()
+        .find(|r| r.model.starts_with("ridge-selected"))?;
+    let (a, b) = (full.metrics.r2?, sel.metrics.r2?);
+    (a - b > COLLAPSE_R2_DROP).then(|| {
+        format!(
+            "ridge-select collapsed: the {} selected sensors ({}) explain R² = {b:.2} of the training drift against {a:.2} with all {} sensors; the ridge-trace rules removed sensors that carry the drift (use lag-select, --model auto, or choose sensors yourself)",
+            sel.sensors.len(),
+            sel.sensors.join(", "),
+            full.sensors.len()
+        )
+    })
 }
 
 fn columns(x: &DMatrix<f64>, idx: &[usize]) -> DMatrix<f64> {
@@ -361,7 +385,9 @@ pub fn select_sensors(
             ),
         });
     }
+    let warnings = collapse_warning(&comparison).into_iter().collect();
     Ok(Selection {
+        warnings,
         vif: vif_rows,
         trace: full_trace,
         steps,
