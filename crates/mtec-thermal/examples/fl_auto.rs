@@ -50,12 +50,28 @@ fn main() {
                     f.mean_rmse_um(),
                     f.rmse_std_error_um,
                     f.pooled_rmse_um,
-                    f.folds.iter().map(|x| format!("{:.2}", x.metrics.rmse_um)).collect::<Vec<_>>().join(" "),
-                    f.folds.iter().map(|x| format!("{:.1}", x.uncompensated_rmse_um)).collect::<Vec<_>>().join(" "),
-                    if c.worse_than_uncompensated.is_empty() { "" } else { "  WORSE THAN NONE" },
+                    f.folds
+                        .iter()
+                        .map(|x| format!("{:.2}", x.metrics.rmse_um))
+                        .collect::<Vec<_>>()
+                        .join(" "),
+                    f.folds
+                        .iter()
+                        .map(|x| format!("{:.1}", x.uncompensated_rmse_um))
+                        .collect::<Vec<_>>()
+                        .join(" "),
+                    if c.worse_than_uncompensated.is_empty() {
+                        ""
+                    } else {
+                        "  WORSE THAN NONE"
+                    },
                     if c.chosen { "  <- chosen" } else { "" }
                 ),
-                None => println!("   {:<13} failed: {}", c.family, c.error.clone().unwrap_or_default()),
+                None => println!(
+                    "   {:<13} failed: {}",
+                    c.family,
+                    c.error.clone().unwrap_or_default()
+                ),
             }
         }
         if let mtec_thermal::ThermalModel::Linear(m) = &fit.model {

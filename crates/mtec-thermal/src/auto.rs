@@ -117,7 +117,11 @@ impl Auto {
         };
         let mut out = vec![
             ("mlr".to_string(), 0, Candidate::Stepwise(step(Family::Mlr))),
-            ("ridge".to_string(), 1, Candidate::Stepwise(step(Family::Ridge))),
+            (
+                "ridge".to_string(),
+                1,
+                Candidate::Stepwise(step(Family::Ridge)),
+            ),
         ];
         if has_input {
             out.push((
@@ -136,7 +140,11 @@ impl Auto {
             Candidate::Stepwise(step(Family::LaggedRidge)),
         ));
         if has_input {
-            out.push(("dynamic".into(), 4, Candidate::Stepwise(step(Family::Dynamic))));
+            out.push((
+                "dynamic".into(),
+                4,
+                Candidate::Stepwise(step(Family::Dynamic)),
+            ));
         }
         if let Some(e) = &self.exp_ambient {
             out.push(("exp-ambient".into(), 5, Candidate::ExpAmbient(e.clone())));
@@ -206,10 +214,19 @@ impl Auto {
 /// Index of the candidate the one-standard-error rule picks among the eligible ones (module
 /// docs), `None` when none is eligible.
 pub fn one_standard_error(scores: &[CandidateScore]) -> Option<usize> {
-    let eligible: Vec<usize> = (0..scores.len()).filter(|&i| scores[i].eligible()).collect();
+    let eligible: Vec<usize> = (0..scores.len())
+        .filter(|&i| scores[i].eligible())
+        .collect();
     let mean = |i: usize| scores[i].forward.as_ref().expect("eligible").mean_rmse_um();
-    let best = *eligible.iter().min_by(|&&a, &&b| mean(a).total_cmp(&mean(b)))?;
-    let limit = mean(best) + scores[best].forward.as_ref().expect("eligible").rmse_std_error_um;
+    let best = *eligible
+        .iter()
+        .min_by(|&&a, &&b| mean(a).total_cmp(&mean(b)))?;
+    let limit = mean(best)
+        + scores[best]
+            .forward
+            .as_ref()
+            .expect("eligible")
+            .rmse_std_error_um;
     eligible
         .into_iter()
         .filter(|&i| mean(i) <= limit)

@@ -93,9 +93,11 @@ pub fn envelope(model: &ThermalModel, data: &ThermalData, rows: &[usize]) -> Vec
         .into_iter()
         .filter_map(|c| {
             let v = column(data, &c)?;
-            let (lo, hi) = rows.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &i| {
-                (l.min(v[i]), h.max(v[i]))
-            });
+            let (lo, hi) = rows
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &i| {
+                    (l.min(v[i]), h.max(v[i]))
+                });
             lo.is_finite().then_some(InputRange {
                 column: c,
                 min: lo,

@@ -425,7 +425,10 @@ fn fit_config(
         .collect();
     names.extend(amb.iter().map(|&j| data.sensor_names[j].clone()));
     if let Some(tau) = cfg.ambient_lag_min {
-        names.extend(amb.iter().map(|&j| format!("lag({},{tau}min)", data.sensor_names[j])));
+        names.extend(
+            amb.iter()
+                .map(|&j| format!("lag({},{tau}min)", data.sensor_names[j])),
+        );
     }
     Ok(HeatInputModel {
         warnings: crate::model::cancellation_warning(&names, &beta)

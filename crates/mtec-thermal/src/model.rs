@@ -1,18 +1,16 @@
 //! The common fit/predict interface (linfa style: a fitter is a value with its options, `fit`
 //! returns a model, a model `predict`s), the linear thermal models, and the versioned JSON file.
 
+use crate::auto::CandidateScore;
 use crate::data::ThermalData;
 use crate::error::ThermalError;
 use crate::exp_ambient::ExpAmbientModel;
 use crate::features::{design, fit_time_constants, temp_features, Feature};
+use crate::guard::InputRange;
 use crate::linear::{ols, RidgeProblem};
 use crate::metrics::Metrics;
 use crate::select::{k_grid, select_sensors, RidgeTrace, SelectOptions};
-use crate::auto::CandidateScore;
-use crate::guard::InputRange;
-use crate::validate::{
-    forward_folds_of, ridge_forward_scores, thin_folds, BlockSpec, ForwardCv,
-};
+use crate::validate::{forward_folds_of, ridge_forward_scores, thin_folds, BlockSpec, ForwardCv};
 use serde::{Deserialize, Serialize};
 
 /// The format tag of a model file.

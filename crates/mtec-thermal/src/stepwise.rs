@@ -25,12 +25,14 @@
 use crate::data::ThermalData;
 use crate::error::ThermalError;
 use crate::features::{tau_grid, Feature};
+use crate::linear::RidgeProblem;
 use crate::model::{
     cancellation_warning, target_rows, Fit, LinearMethod, LinearModel, RidgeEquation,
     SELECTION_DT_MIN,
 };
-use crate::linear::RidgeProblem;
-use crate::validate::{forward_folds_of, input_column, ridge_forward_scores, thin_folds, BlockSpec};
+use crate::validate::{
+    forward_folds_of, input_column, ridge_forward_scores, thin_folds, BlockSpec,
+};
 use serde::{Deserialize, Serialize};
 
 /// Time constants (min) of the lag features in the pools.
@@ -158,7 +160,12 @@ fn with_tau(f: &Feature, tau: f64) -> Option<Feature> {
 }
 
 /// Best (pooled forward RMSE, k) of the columns over the grid.
-fn score(cols: &[&[f64]], y: &[f64], folds: &[crate::validate::ForwardFold], ks: &[f64]) -> (f64, f64) {
+fn score(
+    cols: &[&[f64]],
+    y: &[f64],
+    folds: &[crate::validate::ForwardFold],
+    ks: &[f64],
+) -> (f64, f64) {
     ridge_forward_scores(cols, y, folds, ks)
         .into_iter()
         .zip(ks)
@@ -170,7 +177,9 @@ impl Fit for Stepwise {
     type Model = LinearModel;
     fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<LinearModel, ThermalError> {
         if self.max_sensors == 0 {
-            return Err(ThermalError::Invalid("max_sensors must be at least 1".into()));
+            return Err(ThermalError::Invalid(
+                "max_sensors must be at least 1".into(),
+            ));
         }
         let y_rows = target_rows(data, rows)?;
         let yall = data.target_um()?;
@@ -195,7 +204,10 @@ impl Fit for Stepwise {
         let mut chosen: Vec<usize> = Vec::new();
         let (mut best, mut best_k) = (f64::INFINITY, ks[0]);
         while chosen.len() < max_features {
-            let sensors: Vec<&str> = chosen.iter().filter_map(|&i| temperature_of(&pool[i])).collect();
+            let sensors: Vec<&str> = chosen
+                .iter()
+                .filter_map(|&i| temperature_of(&pool[i]))
+                .collect();
             let mut step: Option<(f64, f64, usize)> = None;
             for c in 0..pool.len() {
                 if chosen.contains(&c) {

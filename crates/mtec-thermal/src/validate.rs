@@ -18,9 +18,9 @@
 use crate::data::ThermalData;
 use crate::error::ThermalError;
 use crate::linear::RidgeProblem;
-use nalgebra::DMatrix;
 use crate::metrics::Metrics;
 use crate::model::{Fit, Predict};
+use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 /// Rows of the listed experiments.
@@ -171,7 +171,12 @@ pub fn duty_cycle_blocks(data: &ThermalData, rows: &[usize], spec: &BlockSpec) -
     if exps.len() > 1 && spec.block_min.is_none() {
         return exps
             .iter()
-            .map(|e| rows.iter().copied().filter(|&i| data.experiment[i] == **e).collect())
+            .map(|e| {
+                rows.iter()
+                    .copied()
+                    .filter(|&i| data.experiment[i] == **e)
+                    .collect()
+            })
             .collect();
     }
     let t0 = data.time_min[rows[0]];
@@ -219,7 +224,11 @@ pub fn duty_cycle_blocks(data: &ThermalData, rows: &[usize], spec: &BlockSpec) -
 }
 
 /// Joins a last block spanning less than `min_len` minutes to the one before it.
-fn join_short_tail(data: &ThermalData, mut blocks: Vec<Vec<usize>>, min_len: f64) -> Vec<Vec<usize>> {
+fn join_short_tail(
+    data: &ThermalData,
+    mut blocks: Vec<Vec<usize>>,
+    min_len: f64,
+) -> Vec<Vec<usize>> {
     blocks.retain(|b| !b.is_empty());
     if blocks.len() >= 2 {
         let last = &blocks[blocks.len() - 1];
@@ -366,7 +375,11 @@ pub fn score_folds(
     let k = out.len() as f64;
     let mean = out.iter().map(|f| f.metrics.rmse_um).sum::<f64>() / k;
     let sd = if out.len() > 1 {
-        (out.iter().map(|f| (f.metrics.rmse_um - mean).powi(2)).sum::<f64>() / (k - 1.0)).sqrt()
+        (out.iter()
+            .map(|f| (f.metrics.rmse_um - mean).powi(2))
+            .sum::<f64>()
+            / (k - 1.0))
+            .sqrt()
     } else {
         0.0
     };
