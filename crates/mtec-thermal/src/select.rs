@@ -439,3 +439,36 @@ pub fn correlation_top_n(x: &DMatrix<f64>, y: &[f64], n: usize) -> Vec<usize> {
     idx.sort();
     idx
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(model: &str, sensors: usize, r2: f64) -> ComparisonRow {
+        // y = [1, -1], ŷ chosen so that R² = r2 (SST = 2, SSE = 2(1 − r2))
+        let e = (1.0 - r2).sqrt();
+        ComparisonRow {
+            model: model.into(),
+            sensors: (0..sensors).map(|j| format!("t{j}")).collect(),
+            metrics: Metrics::new(&[1.0, -1.0], &[1.0 - e, -1.0 + e], sensors),
+        }
+    }
+
+    #[test]
+    fn a_collapse_of_r2_warns_and_a_small_fall_does_not() {
+        let w = collapse_warning(&[
+            row("full MLR", 16, 0.94),
+            row("ridge-selected (k = 0.1)", 2, 0.37),
+        ])
+        .expect("0.94 → 0.37 is a collapse");
+        assert!(
+            w.contains("R² = 0.37") && w.contains("0.94") && w.contains("16 sensors"),
+            "{w}"
+        );
+        assert!(collapse_warning(&[
+            row("full MLR", 16, 0.94),
+            row("ridge-selected (k = 0.1)", 3, 0.90)
+        ])
+        .is_none());
+    }
+}

@@ -456,6 +456,19 @@ fn header_list(d: &ThermalData) -> String {
 }
 
 fn select(a: SelectArgs) -> Result<(), CliError> {
+    // where the files go is settled before any work: a folder, and none of them the input
+    if let Some(dir) = &a.out {
+        if dir.exists() && !dir.is_dir() {
+            return Err(CliError::usage(format!(
+                "--out {} is a file: it must be a folder (ridge_trace.csv, ridge_trace.svg and selection.json go into it)",
+                dir.display()
+            )));
+        }
+        let guard = OutputGuard::new(&[&a.data]);
+        for f in ["ridge_trace.csv", "ridge_trace.svg", "selection.json"] {
+            guard.check(&dir.join(f))?;
+        }
+    }
     let data = load(&a.data, Some(&a.target), true)?;
     let err = |e| located(&data, &a.data, e);
     let features = temp_features(&data, &a.sensors).map_err(err)?;
