@@ -107,5 +107,9 @@ fn main() -> ExitCode {
         Command::Run(a) => cmd::run::run(a),
         Command::Demo(a) => cmd::demo::run(a),
     };
+    // what the readers assumed about the input files (e.g. a spreadsheet export's dialect)
+    for note in mtec_io::notes::take() {
+        eprintln!("note: {note}");
+    }
     error::exit(result)
 }

@@ -24,6 +24,7 @@ fn thermal_file() -> String {
         coefficients: vec![3.0, -1.0],
         std_errors: None,
         ridge: None,
+        warnings: Vec::new(),
     });
     let f = ModelFile {
         format: MODEL_FORMAT.into(),
@@ -32,6 +33,10 @@ fn thermal_file() -> String {
         split: Split::default(),
         train_metrics: Metrics::new(&[0.0, 1.0, 2.0], &[0.0, 1.0, 2.0], 2),
         test_metrics: None,
+        validation: None,
+        envelope: Vec::new(),
+        candidates: Vec::new(),
+        warnings: Vec::new(),
     };
     serde_json::to_string_pretty(&f).unwrap()
 }

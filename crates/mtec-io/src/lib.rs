@@ -11,6 +11,7 @@
 //! `mtec-thermal`, ...), using the typed accessors of [`Table`].
 
 mod error;
+pub mod notes;
 mod table;
 mod write;
 
