@@ -24,6 +24,7 @@ pub mod map;
 pub mod model;
 pub mod rt;
 pub mod table;
+pub mod thermal_offset;
 
 pub use correction::{command_for_target, CorrectionError, CorrectionOptions};
 pub use load::load_error_model;
