@@ -125,14 +125,20 @@ pub struct TempCompSetting {
     pub position_dependent: bool,
 }
 
-fn check_limit(max_um: f64) -> Result<(), OffsetError> {
-    if max_um.is_finite() && max_um > 0.0 {
-        Ok(())
-    } else {
-        Err(OffsetError::Usage(format!(
-            "--max-correction-um must be a positive number, not {max_um}"
-        )))
+fn check_options(o: &UpdateOptions) -> Result<(), OffsetError> {
+    if !(o.max_correction_um.is_finite() && o.max_correction_um > 0.0) {
+        return Err(OffsetError::Usage(format!(
+            "--max-correction-um must be a positive number, not {}",
+            o.max_correction_um
+        )));
     }
+    if !o.origin_mm.is_finite() {
+        return Err(OffsetError::Usage(format!(
+            "--position-origin-mm {} is not a position",
+            o.origin_mm
+        )));
+    }
+    Ok(())
 }
 
 /// The located refusal of a reading outside the envelope (or `Ok` under the fade policy).
@@ -166,7 +172,7 @@ pub fn offset_update(
     at_mm: Option<f64>,
     opts: UpdateOptions,
 ) -> Result<OffsetUpdate, OffsetError> {
-    check_limit(opts.max_correction_um)?;
+    check_options(&opts)?;
     check_envelope(&run.now, log, opts.outside, "the state now")?;
     if let Some(z) = &run.zeroed {
         check_envelope(
@@ -234,7 +240,7 @@ pub fn temp_comp_setting(
     axis: Axis,
     opts: SettingOptions,
 ) -> Result<TempCompSetting, OffsetError> {
-    check_limit(opts.update.max_correction_um)?;
+    check_options(&opts.update)?;
     if run.zeroed.is_some() {
         return Err(OffsetError::Usage(
             "--zeroed-at-min goes with work-offset updates: the temperature compensation corrects the axis against the model's reference state itself (set work offsets with it active)".into(),
@@ -317,8 +323,16 @@ pub fn provenance(run: &LogRun, log: &Table, source: &str) -> Vec<String> {
     let mut out = vec![
         format!("mtec compensate thermal-offset, model {model}"),
         format!(
-            "state now: {file} line {} at {} min, run from line {} at {} min",
-            run.now.line, run.now.time_min, run.first_line, run.first_time_min
+            "state now: {file} line {} at {} min, run from line {} at {} min{}",
+            run.now.line,
+            run.now.time_min,
+            run.first_line,
+            run.first_time_min,
+            match (run.history, run.starts_at_rest) {
+                (History::None, _) => "",
+                (_, true) => ", state started there at rest",
+                (_, false) => ", over 5 slowest time constants",
+            }
         ),
     ];
     if let Some(o) = &run.now.outside {

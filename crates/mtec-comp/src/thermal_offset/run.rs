@@ -69,6 +69,8 @@ pub struct LogRun {
     pub history: History,
     /// Whether the drift depends on the axis position.
     pub position_dependent: bool,
+    /// The caller stated that the first row is the machine at rest.
+    pub starts_at_rest: bool,
 }
 
 /// Runs `model` over every row of `log` (columns `time_min` and the model's inputs; an
@@ -181,6 +183,7 @@ pub fn run_log(
         earlier_outside,
         history: model.history,
         position_dependent: model.position_dependent,
+        starts_at_rest: opts.starts_at_rest,
     })
 }
 
