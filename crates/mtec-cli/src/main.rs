@@ -21,7 +21,8 @@ The workflow, and the commands for each step:
   circular      circular test of two axes: ISO 230-4 G and H, ballbar diagnostics ranked
   map           volumetric error maps: fit a grid (trilinear) and evaluate it at points
   compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
-                (`compensate table`)
+                (`compensate table`), work-offset updates for the thermal state now
+                (`compensate thermal-offset`)
   thermal       thermal drift models from temperature logs: select sensors, fit, predict
                 (regression models, or neural: `thermal fit --model cnn-lstm|bpnn`)
   machine       the machine's error with a state: `machine build` sums a geometric model and
@@ -101,6 +102,9 @@ fn main() -> ExitCode {
         Command::Map(a) => cmd::map::run(a),
         Command::Compensate(cmd::compensate::Command::Gcode(a)) => cmd::compensate_gcode::run(a),
         Command::Compensate(cmd::compensate::Command::Table(a)) => cmd::compensate_table::run(a),
+        Command::Compensate(cmd::compensate::Command::ThermalOffset(a)) => {
+            cmd::compensate_thermal_offset::run(a)
+        }
         Command::Thermal(a) => cmd::thermal::run(a),
         Command::Machine(a) => cmd::machine::run(a),
         Command::Sensitivity(a) => cmd::sensitivity::run(a),

@@ -30,6 +30,7 @@ pub mod replay;
 pub mod rt;
 pub mod state_log;
 pub mod table;
+pub mod thermal_offset;
 
 pub use correction::{command_for_target, CorrectionError, CorrectionOptions};
 pub use load::load_error_model;
