@@ -13,7 +13,8 @@ it through \\fBaxis.L.eoffset-counts\\fR. The counts only change while \\fBmachi
 correction is zero, \\fBfault\\fR is set and \\fBstatus\\fR says why.
 
 Load with \\fBloadrt mtec_eoffset model=/path/model.json personality=N\\fR, N the number of state
-readings the model takes (0 for a static map). One instance only.
+readings the model takes (0 for a static map); with a wrong N loading stops and lists the
+model's readings in pin order. One instance only. Documentation: docs/linuxcnc.md in mtec.
 """;
 
 pin in float x_pos "Commanded X, machine units: net to axis.x.pos-cmd";
@@ -28,7 +29,7 @@ pin out s32 z_counts "Net to axis.z.eoffset-counts";
 pin out float scale "Machine units per count (= resolution): net to axis.L.eoffset-scale";
 pin in bit machine_on "Net to motion.motion-enabled";
 pin in bit all_homed "Net to motion.is-all-homed";
-pin in float temp_##[64 : personality] "State readings (degC, rpm) in the model's order (printed at load)";
+pin in float temp_##[64 : personality] "State readings (degC, rpm) in the model's order (listed at load with the debug level at INFO, or when personality does not match)";
 pin in bit temps_valid = 0 "True once the readings are real values: the thermal state starts at the first valid reading";
 pin out float x_um "Correction requested for X, um";
 pin out float y_um "Correction requested for Y, um";
