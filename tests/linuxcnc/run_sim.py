@@ -216,18 +216,34 @@ def main():
         fcntl.flock(lock, fcntl.LOCK_EX)
         t = time.monotonic()
         with open(os.path.join(work, "linuxcnc.log"), "w") as logf:
+            # no terminal and no X display: LinuxCNC then never asks anything (a leftover
+            # instance is cleaned up without the "Restart it? [Y/n]" prompt)
+            env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
             proc = subprocess.Popen(
-                cmd, cwd=sim, stdout=logf, stderr=subprocess.STDOUT, start_new_session=True
+                cmd,
+                cwd=sim,
+                env=env,
+                stdin=subprocess.DEVNULL,
+                stdout=logf,
+                stderr=subprocess.STDOUT,
+                start_new_session=True,
             )
             try:
                 proc.wait(timeout=args.timeout)
             except subprocess.TimeoutExpired:
+                # LinuxCNC's script cleans up on TERM; whatever of ours is left in the group
+                # (the UI) is killed. A leftover server or rtapi_app, which start their own
+                # sessions, is cleaned up by the next `linuxcnc` start.
                 os.killpg(proc.pid, signal.SIGTERM)
                 try:
                     proc.wait(timeout=10)
                 except subprocess.TimeoutExpired:
+                    pass
+                try:
                     os.killpg(proc.pid, signal.SIGKILL)
-                    proc.wait()
+                except ProcessLookupError:
+                    pass
+                proc.wait()
                 fail("LinuxCNC did not finish within %.0f s (see %s/linuxcnc.log)" % (args.timeout, work))
         print("run_sim: LinuxCNC ran %.1f s" % (time.monotonic() - t), flush=True)
 
