@@ -147,7 +147,10 @@ fn a_guard_column_fades_the_part_although_the_model_does_not_read_it() {
     assert_eq!(s.outside, Some(2));
     assert!((s.thermal_weight - 0.25).abs() < 1e-12);
     let faded = m.error_um([0.0; 3])[2] - 0.5;
-    assert!((faded - 0.25 * (2.0 + 75.0 - 20.0)).abs() < 1e-12, "{faded}");
+    assert!(
+        (faded - 0.25 * (2.0 + 75.0 - 20.0)).abs() < 1e-12,
+        "{faded}"
+    );
 }
 
 #[test]
