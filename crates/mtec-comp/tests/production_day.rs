@@ -73,6 +73,10 @@ fn fit(dir: &Path, target: &str) -> std::path::PathBuf {
             ..Default::default()
         },
         test_metrics: None,
+        validation: None,
+        envelope: vec![],
+        candidates: vec![],
+        warnings: vec![],
     };
     let p = dir.join(format!("model-{target}.json"));
     std::fs::write(&p, serde_json::to_string(&file).unwrap()).unwrap();

@@ -22,6 +22,10 @@ fn file(model: ThermalModel) -> String {
         split: Split::default(),
         train_metrics: Metrics::new(&[0.0, 1.0, 2.0], &[0.0, 1.0, 2.0], 1),
         test_metrics: None,
+        validation: None,
+        envelope: vec![],
+        candidates: vec![],
+        warnings: vec![],
     })
     .unwrap()
 }
@@ -47,6 +51,7 @@ fn lag_model() -> ThermalModel {
         coefficients: vec![4.0, -2.0, 0.5],
         std_errors: None,
         ridge: None,
+        warnings: vec![],
     })
 }
 
@@ -147,6 +152,7 @@ fn history_each_family_needs() {
         ambient_lag_min: Some(100.0),
         ambient_lag_coefficients_um_per_c: vec![0.1],
         inner_cv_rmse_um: None,
+        warnings: vec![],
     };
     // at rest the lags run 3× slower: 180 min
     assert_eq!(
@@ -164,8 +170,30 @@ fn history_each_family_needs() {
         coefficients: vec![1.0],
         std_errors: None,
         ridge: None,
+        warnings: vec![],
     });
     assert_eq!(History::of(&plain), History::None);
+    // a heat-lag feature needs the slower of its on and off time constants
+    let heat_lag = ThermalModel::Linear(LinearModel {
+        method: LinearMethod::Mlr,
+        features: vec![Feature::HeatLag {
+            input: "spindle_rpm".into(),
+            alpha: 1.0,
+            tau_min: 40.0,
+            rest_tau_min: 90.0,
+        }],
+        intercept_um: 0.0,
+        coefficients: vec![1.0],
+        std_errors: None,
+        ridge: None,
+        warnings: vec![],
+    });
+    assert_eq!(
+        History::of(&heat_lag),
+        History::Lags {
+            slowest_tau_min: 90.0
+        }
+    );
 }
 
 #[test]

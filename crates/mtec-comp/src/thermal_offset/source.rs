@@ -55,6 +55,13 @@ impl History {
                     .iter()
                     .filter_map(|f| match f {
                         Feature::Lag { tau_min, .. } => Some(*tau_min),
+                        // the heat-input filter runs at tau_min while the input is on and
+                        // rest_tau_min while it is off: the slower one bounds the history
+                        Feature::HeatLag {
+                            tau_min,
+                            rest_tau_min,
+                            ..
+                        } => Some(tau_min.max(*rest_tau_min)),
                         _ => None,
                     })
                     .collect(),
