@@ -351,3 +351,16 @@ fn what_cannot_be_compensated_is_refused_with_line_and_column() {
     let e = run("G0 X0 Y0 Z0\nG1 X10 F100\n", &m, &opt).unwrap_err();
     assert!(e.contains("2:4: the position of A is not known"), "{e}");
 }
+
+#[test]
+fn a_short_inverse_time_rotary_move_that_gains_xyz_motion_keeps_its_duration() {
+    // one piece: the correction adds ~1 um of X Y Z to a 10° turn of A; in G93 LinuxCNC would
+    // run it at the 0.1 floor of the rate over that micrometre (1/40 of the time) unless the
+    // move is written in G94 with its own feed (found by rs274 in the CLI test)
+    let (m, vm) = model();
+    let program = "G21 G90 G93\nG0 X40 Y-10 Z-120 A-20 C90\nG1 A-30 F4\nG94\nM2\n";
+    let out = run(program, &m, &options()).unwrap();
+    let (dev, time) = replay(program, &out, &vm, [0.0; 5]);
+    assert!(dev <= 0.55 && time <= 0.01, "{dev} {time}\n{out}");
+    assert!(out.contains("G94 G1"), "{out}");
+}

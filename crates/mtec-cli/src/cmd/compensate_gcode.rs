@@ -36,12 +36,32 @@ the model is written just before the first corrected line.
 LinuxCNC parameters and [expressions] with literal values are evaluated as LinuxCNC does, and
 G10 L1/L2/L20, G92, G52, G92.1, G92.2 are followed as modal state. Constructs that cannot be
 compensated safely (parameters known only at run time, O-word subroutines and loops, canned
-cycles, cutter compensation G41/G42, G92.3, G10 other than L1/L2/L20 or with a rotation,
-rotary axis words, two codes of one modal group) stop the run with file:line:column
+cycles, cutter compensation G41/G42, G92.3, G10 other than L1/L2/L20 or with a rotation or a
+rotary word, two codes of one modal group) stop the run with file:line:column
 (--on-unsupported refuse), or are copied unchanged with a warning (pass-through-with-warning).
 
+Rotary axes (A, B, C): with a kinematic model whose chain has them (mtec.kinematic-model/1,
+e.g. a table-tilting WCAYFXZT or a head WYXFZCBT), five-axis programs are compensated as
+LinuxCNC runs them without tool centre point control: in a G1 every joint moves linearly from
+its start to its end value, so the programmed tool tip is the ideal chain's tool tip along that
+joint path (a curve as soon as an axis turns). The rotary words are kept (rounded to 4 decimals
+where a move is split, the rounding absorbed by X Y Z) and X, Y, Z are corrected so that the
+tool tip with the model's errors lies on that curve; a move is split until every piece is
+within --tolerance-um, checked at samples every --check-step-mm of the tool tip's path and
+every --check-step-deg of any rotary axis. The tool orientation is not corrected (the rotary
+words stay as programmed). Split moves keep their duration under LinuxCNC's feed rules: in G94
+the length of a move is its XYZ length when X, Y or Z moves, else its rotary length in degrees;
+in G93 (inverse time) every piece gets F = 1/(its share of the time). The angles must be known
+before the first feed move: programmed, or given by --start-rotary-deg a,b,c (machine angles;
+only the axes of the model's chain are used). Refused with file:line:column: a rotary word for an
+axis the model's chain lacks or with a model that has no rotary axes (a three-axis map does not
+know where a turned table puts the tool), U/V/W words (no chain mtec models has them), an arc
+that turns a rotary axis, G93 without F, G95 moves that would need new feeds, and poses where
+the linear axes do not move the tool tip along three perpendicular directions.
+
 The model (--model) is any model file mtec writes: a map (mtec.map/1, from `map fit`), a BPNN
-map, a kinematic model, or {\"format\": \"mtec.zero-model/1\"} or a polynomial
+map, a kinematic model (mtec.kinematic-model/1; with rotary axes it is evaluated at the
+commanded angles), or {\"format\": \"mtec.zero-model/1\"} or a polynomial
 {\"format\": \"mtec.poly-model/1\", \"terms\": [{\"powers\": [1,0,0], \"coef_um\": [0.012,0,0]}]},
 giving [Ex, Ey, Ez] in um as a function of the machine position in mm. A machine error model
 (mtec.machine-error/1, from `machine build`) has a state: its thermal part depends on the
@@ -150,11 +170,14 @@ pub struct Args {
     /// Sample spacing of the path check for models that are not grid maps, in mm.
     #[arg(long, default_value_t = 0.5)]
     pub check_step_mm: f64,
-    /// Rotary axes' machine angles at program start, "a,b,c" in degrees (those the machine has
-    /// are used); without it they are unknown until the program commands them.
+    /// Machine angles of the rotary axes at program start, "a,b,c" in degrees (only the axes of
+    /// the model's chain are used, e.g. "0,0,90" for C at 90 on a WCAYFXZT). Without it an
+    /// angle is unknown until the program commands it, and a feed move before that is refused.
     #[arg(long, value_name = "A,B,C")]
     pub start_rotary_deg: Option<String>,
-    /// Largest turn of a rotary axis between samples of the path check of a rotary move, deg.
+    /// Largest turn of a rotary axis between samples of the path check of a move that turns
+    /// one, in degrees (0.5° moves a point 500 mm from the axis by 4.4 mm along its arc; the
+    /// check also samples every --check-step-mm of the tool tip's path).
     #[arg(long, default_value_t = 0.5)]
     pub check_step_deg: f64,
     /// Longest line the controller reads (LinuxCNC: 251 with either line ending); longer

@@ -52,3 +52,39 @@ pub fn identify_ballbar(dir: &Path) -> Output {
         &p("id"),
     ])
 }
+
+/// LinuxCNC's stand-alone interpreter `rs274` on PATH; `None` (with a note) when it is absent
+/// and `CI` is not set (in CI it is required: `.ci/run` installs `linuxcnc-uspace`).
+pub fn rs274() -> Option<std::path::PathBuf> {
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    let found = std::env::split_paths(&path)
+        .map(|d| d.join("rs274"))
+        .find(|p| p.is_file());
+    if found.is_none() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "rs274 (LinuxCNC, package linuxcnc-uspace) is required in CI"
+        );
+        eprintln!("note: rs274 not installed (package linuxcnc-uspace): check skipped");
+    }
+    found
+}
+
+/// `rs274 -g FILE` in a folder of its own that is also its HOME (rs274 maps
+/// `$HOME/.tool.mmap`; two runs sharing it crash or read each other's tools). Returns the
+/// canonical listing, or rs274's error text.
+pub fn run_rs274(bin: &Path, file: &Path) -> Result<String, String> {
+    let dir = tempfile::tempdir().unwrap();
+    let o = Command::new(bin)
+        .current_dir(dir.path())
+        .env("HOME", dir.path())
+        .arg("-g")
+        .arg(file)
+        .output()
+        .unwrap();
+    if o.status.success() {
+        Ok(String::from_utf8_lossy(&o.stdout).into_owned())
+    } else {
+        Err(text(&o))
+    }
+}

@@ -401,9 +401,6 @@ impl Rewriter<'_> {
             // G94/G95 straight moves and arcs without rotary motion keep their F
             return Ok(());
         }
-        if self.st.inverse_time && n <= 1 {
-            return Ok(());
-        }
         let lower = self.lower;
         // LinuxCNC's length of a move: XYZ if X, Y or Z moves, else the rotary one
         let (l_xyz, l_rot) = nominal;
@@ -439,6 +436,10 @@ impl Rewriter<'_> {
             // F_k = 1/t_k, unless the 0.1 floor of the rate would shorten a piece
             let fits =
                 (0..n).all(|i| within(lengths[i] / g93_rate(lengths[i], 1.0 / want[i]), want[i]));
+            if fits && n <= 1 {
+                // one piece in G93 takes 1/F whatever its length: the F word stays
+                return Ok(());
+            }
             if fits {
                 let texts: Vec<String> = want.iter().map(|t| feed_text(1.0 / t)).collect();
                 self.write_feeds(b, &texts, lower);
