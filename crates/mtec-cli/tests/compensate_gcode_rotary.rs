@@ -14,7 +14,7 @@
 //! pieces of a move take as long as the move (durations from rs274's own feed rates, G93 already
 //! turned into units per minute, and LinuxCNC's rule for a move's length: XYZ if X, Y or Z
 //! moves, else the rotary one). The bound: `--tolerance-um` plus rs274's 4-decimal printout of
-//! both programs' X Y Z (√3 · 0.05 µm each); rotary words are written with 4 decimals at most, so
+//! both programs' X Y Z (√3 · 0.05 µm each; √3 · 1.27 µm in inch programs); rotary words are written with 4 decimals at most, so
 //! rs274 prints them exactly. The same check on the uncompensated program must fail by far (the
 //! check can see an error).
 //!
@@ -30,6 +30,8 @@ const TOLERANCE_UM: f64 = 0.5;
 /// rs274 prints 4 decimals: half a unit on each of X, Y, Z, in both programs.
 const PRINT_UM: f64 = 2.0 * 1.732_050_807_568_877_2 * 0.05;
 const BOUND_UM: f64 = TOLERANCE_UM + PRINT_UM;
+/// The same for a G20 program, whose listing is in inches (half of 0.0001 in is 1.27 µm).
+const BOUND_INCH_UM: f64 = TOLERANCE_UM + 2.0 * 1.732_050_807_568_877_2 * 1.27;
 /// Sample spacing of the nominal path (mm of X Y Z, deg of the rotary axes): its chords are
 /// within ~0.003 µm of the curve the tool tip draws.
 const NOMINAL_STEP: (f64, f64) = (0.02, 0.01);
@@ -169,7 +171,13 @@ struct Walk {
 /// Walks the nominal moves in order, each followed by the actual moves up to the one that ends
 /// where it ends (same angles, tool tip within `reach_um`). Panics (naming rs274's listing
 /// lines) when the actual program skips, adds or misses a move; returns the distances otherwise.
-fn walk(vm: &VolumetricModel, nominal: &[Move], actual: &[Move], reach_um: f64) -> Walk {
+fn walk(
+    vm: &VolumetricModel,
+    nominal: &[Move],
+    actual: &[Move],
+    bound_um: f64,
+    reach_um: f64,
+) -> Walk {
     let mut w = Walk {
         worst_um: 0.0,
         worst_end_um: 0.0,
@@ -223,7 +231,7 @@ fn walk(vm: &VolumetricModel, nominal: &[Move], actual: &[Move], reach_um: f64) 
                 // the path ahead of the last nearest point first; all of it if that is far
                 let (mut d, mut at) =
                     nearest(p, cursor.saturating_sub(50), (cursor + 2000).min(ns));
-                if d * 1e3 > BOUND_UM {
+                if d * 1e3 > bound_um {
                     (d, at) = nearest(p, 0, ns);
                 }
                 cursor = at;
@@ -272,11 +280,17 @@ fn compensate(model: &Path, program: &Path, out: &Path, extra: &[&str]) -> std::
 /// uncompensated program against the nominal path. Returns (compensated, uncompensated).
 fn check(bin: &Path, model: &str, program: &str) -> (Walk, Walk) {
     let dir = tempfile::tempdir().unwrap();
-    let model = data().join(model);
     let src = dir.path().join("in.ngc");
     std::fs::write(&src, program).unwrap();
+    check_file(bin, model, &src, &[])
+}
+
+/// [`check`] of a program file, with more options for mtec.
+fn check_file(bin: &Path, model: &str, src: &Path, extra: &[&str]) -> (Walk, Walk) {
+    let dir = tempfile::tempdir().unwrap();
+    let model = data().join(model);
     let out = dir.path().join("out.ngc");
-    let o = compensate(&model, &src, &out, &[]);
+    let o = compensate(&model, src, &out, extra);
     assert!(o.status.success(), "{}", text(&o));
     let written = std::fs::read_to_string(&out).unwrap();
     // rotary words at most 4 decimals: rs274 prints them as written
@@ -291,15 +305,21 @@ fn check(bin: &Path, model: &str, program: &str) -> (Walk, Walk) {
             "rotary word {w} has more than 4 decimals"
         );
     }
-    let nominal = moves(&run_rs274(bin, &src).unwrap());
+    let listing = run_rs274(bin, src).unwrap();
+    let bound = if listing.contains("CANON_UNITS_INCHES") {
+        BOUND_INCH_UM
+    } else {
+        BOUND_UM
+    };
+    let nominal = moves(&listing);
     let compensated = moves(
         &run_rs274(bin, &out)
             .unwrap_or_else(|e| panic!("rs274 refuses the output: {e}\n{written}")),
     );
     let vm = true_machine(&model);
-    let comp = walk(&vm, &nominal, &compensated, BOUND_UM);
+    let comp = walk(&vm, &nominal, &compensated, bound, bound);
     // the original itself, on the machine with errors: one move per move
-    let none = walk(&vm, &nominal, &nominal, f64::INFINITY);
+    let none = walk(&vm, &nominal, &nominal, bound, f64::INFINITY);
     (comp, none)
 }
 
@@ -413,4 +433,56 @@ fn start_angles_and_check_step_are_options_with_their_reasons() {
     for want in ["--start-rotary-deg", "--check-step-deg", "G93", "WCAYFXZT"] {
         assert!(help.contains(want), "help lacks {want}");
     }
+}
+
+/// `../shared/data/gcode/linuxcnc` beside the repository (or a worktree's main checkout), or
+/// `$MTEC_SHARED_DIR/data/gcode/linuxcnc`.
+fn real_programs_dir() -> Option<PathBuf> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    [
+        std::env::var_os("MTEC_SHARED_DIR").map(PathBuf::from),
+        Some(root.join("../shared")),
+        Some(root.join("../../shared")),
+    ]
+    .into_iter()
+    .flatten()
+    .map(|p| p.join("data/gcode/linuxcnc"))
+    .find(|p| p.is_dir())
+}
+
+/// LinuxCNC's `daisy.ngc` (subroutines, parameters, G20, G93 moves of X Y Z A) flattened by
+/// rs274 and compensated with a fourth-axis model: the original as rs274 runs it is the nominal.
+#[test]
+fn real_fourth_axis_program_daisy_is_flattened_and_compensated() {
+    let Some(bin) = rs274() else { return };
+    let Some(dir) = real_programs_dir() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "the real programs (../shared/data/gcode/linuxcnc) are required in CI"
+        );
+        return;
+    };
+    // an inch program: rs274 prints 0.0001 in
+    let bound = BOUND_INCH_UM;
+    let (comp, none) = check_file(
+        &bin,
+        "fourth-axis.json",
+        &dir.join("daisy.ngc"),
+        &["--flatten-with", "rs274"],
+    );
+    eprintln!(
+        "daisy: {} feed moves in {} pieces; tool tip off the path by {:.3} um compensated \
+         (bound {bound:.3}), {:.1} um uncompensated; durations within {:.4} %",
+        comp.feed_moves,
+        comp.pieces,
+        comp.worst_um,
+        none.worst_um,
+        comp.worst_time * 100.0
+    );
+    assert!(
+        comp.worst_um <= bound && comp.worst_end_um <= bound,
+        "{comp:?}"
+    );
+    assert!(comp.worst_time <= 0.01, "{comp:?}");
+    assert!(none.worst_um > 2.0 * bound, "{none:?}");
 }

@@ -95,7 +95,8 @@ it keeps the original's G54-G59.3 selection, so it reaches the same machine posi
 with the same work-offset table (--var-file; without --offsets the model is evaluated with the
 work offsets rs274 read from it). Refused, with
 rs274's line: spindle-synchronised motion (G33, G76), probing (G38.x), rigid tapping (G33.1),
-splines (G5.x), A/B/C/U/V/W motion, a rotated work system (G10 L2 R), and anything rs274 itself
+splines (G5.x), U/V/W motion, A/B/C offsets, arcs that turn a rotary axis, a rotated work system
+(G10 L2 R), and anything rs274 itself
 refuses (its message is passed on). Note that stand-alone rs274 reads tool-table and parameter
 file lengths as inches.
 

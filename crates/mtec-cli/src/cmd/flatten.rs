@@ -8,7 +8,8 @@
 
 use crate::error::CliError;
 use mtec_comp::gcode::flatten::{
-    axes_named, flatten, work_offsets_from_probe, FlattenOptions, FlattenReport, WORK_OFFSET_PROBE,
+    axes_named, flatten, rotary_axes_named, work_offsets_from_probe, FlattenOptions, FlattenReport,
+    WORK_OFFSET_PROBE,
 };
 use mtec_io::InputError;
 use std::io::Read;
@@ -229,6 +230,34 @@ fn rs274_message(stderr: &str) -> String {
     }
 }
 
+/// Where in `program` rs274 stopped: rs274 prints the offending line last on stderr; when
+/// exactly one line of the program reads the same (blanks around it ignored), its 1-based line
+/// and the column of the first non-blank, or of the character a "Bad character 'c' used" names.
+fn rs274_error_at(program: &[u8], stderr: &str) -> Option<(usize, usize)> {
+    let last = stderr
+        .lines()
+        .rev()
+        .map(str::trim)
+        .find(|l| !l.is_empty())?;
+    let text = String::from_utf8_lossy(program);
+    let mut found = text.lines().enumerate().filter(|(_, l)| l.trim() == last);
+    let (i, line) = found.next()?;
+    if found.next().is_some() {
+        return None;
+    }
+    let mut column = line.len() - line.trim_start().len() + 1;
+    let bad = stderr
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("Bad character '"))
+        .and_then(|r| r.chars().next());
+    if let Some(c) = bad {
+        if let Some(k) = line.find(|x: char| x.eq_ignore_ascii_case(&c)) {
+            column = line[..k].chars().count() + 1;
+        }
+    }
+    Some((i + 1, column))
+}
+
 /// A flattened program.
 pub struct Flattened {
     pub text: Vec<u8>,
@@ -319,14 +348,15 @@ pub fn flatten_input(input: &Path, args: &FlattenArgs) -> Result<Flattened, CliE
     }
     let run = run_rs274(&bin, &tmp.0, &flags, &abs_input, timeout)?;
     if run.status != Some(0) {
-        return Err(InputError::file(
-            input,
-            format!(
-                "rs274 stopped with an error (exit {}): {}",
-                run.status.map_or("by a signal".into(), |c| c.to_string()),
-                rs274_message(&run.stderr)
-            ),
-        )
+        let message = format!(
+            "rs274 stopped with an error (exit {}): {}",
+            run.status.map_or("by a signal".into(), |c| c.to_string()),
+            rs274_message(&run.stderr)
+        );
+        return Err(match rs274_error_at(&program, &run.stderr) {
+            Some((line, column)) => InputError::at(input, line, column, message),
+            None => InputError::file(input, message),
+        }
         .into());
     }
     let name = input
@@ -347,6 +377,7 @@ pub fn flatten_input(input: &Path, args: &FlattenArgs) -> Result<Flattened, CliE
     let options = FlattenOptions {
         work_offsets_mm: Some(table),
         axes_named: axes_named(&program),
+        rotary_named: rotary_axes_named(&program),
         header: Some(format!(
             "(mtec: {name} flattened by rs274 -g: LinuxCNC-only plain program; cutter comp, tool lengths and G92 baked in for the tool table given)"
         )),

@@ -37,11 +37,20 @@
 //! - **Axes**: an axis is written in a move once the original program names it (see
 //!   [`axes_named`]) or its position leaves the interpreter's start position (machine 0), so a
 //!   lathe program still never commands Y. Every move line carries its motion code.
+//! - **Rotary axes** A, B, C of straight moves are written as rs274 prints them (degrees, its
+//!   4 decimals exactly) when the program turns that axis somewhere: from the first move if
+//!   the original names it ([`FlattenOptions::rotary_named`]), else from the move where it
+//!   leaves 0. A program that names A but never leaves A0 stays a three-axis program. The
+//!   rewriter then compensates them with a model whose chain has them. Inverse-time feeds need no
+//!   care: rs274 has already turned them into per-minute rates by LinuxCNC's own rule (XYZ
+//!   length when X, Y or Z moves, else the rotary length), which the G94 output keeps.
 //! - **Arcs** are written with incremental centres (G91.1 I J K) and their helical end point.
 //! - **Refused** (error naming the canonical line): spindle-synchronised motion (G33, G76:
 //!   `START_SPEED_FEED_SYNCH`), probing (`STRAIGHT_PROBE`: the result is only known at run
-//!   time), rigid tapping, NURBS/spline feeds, any non-zero A/B/C/U/V/W position or offset
-//!   (only X, Y, Z are compensated), a non-zero XY rotation (G10 L2 R), spindles other than 0,
+//!   time), rigid tapping, NURBS/spline feeds, any non-zero U/V/W position (no chain mtec
+//!   models has them), a non-zero A/B/C offset (G5x, G92, tool length: the angles are written
+//!   as machine angles), an arc that turns a rotary axis, a non-zero XY rotation (G10 L2 R),
+//!   spindles other than 0,
 //!   constant surface speed with an X origin that flattening moved, and any call it does not
 //!   know. rs274's own errors are the CLI's to pass on (rs274 stops and prints them).
 
@@ -59,6 +68,9 @@ pub struct FlattenOptions {
     pub work_offsets_mm: Option<[[f64; 3]; 9]>,
     /// X, Y, Z named by the original program (written from the first move on).
     pub axes_named: [bool; 3],
+    /// A, B, C named by the original program (written from the first move on when the
+    /// program turns them somewhere; see [`rotary_axes_named`]).
+    pub rotary_named: [bool; 3],
     /// First line of the output (a comment), without newline, cut to 254 characters.
     pub header: Option<String>,
 }
@@ -68,6 +80,7 @@ impl Default for FlattenOptions {
         FlattenOptions {
             work_offsets_mm: None,
             axes_named: [true; 3],
+            rotary_named: [true; 3],
             header: None,
         }
     }
@@ -152,6 +165,15 @@ pub fn work_offsets_from_probe(canon: &str) -> Result<[[f64; 3]; 9], FlattenErro
 /// followed by a number, `[`, `#` or `-`/`+`. Used only to decide which axes the flattened
 /// program writes from its first move.
 pub fn axes_named(program: &[u8]) -> [bool; 3] {
+    letters_named(program, *b"XYZ")
+}
+
+/// Which of A, B, C a program names as words, read as [`axes_named`] reads X, Y, Z.
+pub fn rotary_axes_named(program: &[u8]) -> [bool; 3] {
+    letters_named(program, *b"ABC")
+}
+
+fn letters_named(program: &[u8], letters: [u8; 3]) -> [bool; 3] {
     let mut named = [false; 3];
     let mut depth = 0usize;
     let mut i = 0;
@@ -168,12 +190,7 @@ pub fn axes_named(program: &[u8]) -> [bool; 3] {
             }
             b'\n' => depth = 0,
             _ if depth == 0 => {
-                let axis = match c.to_ascii_uppercase() {
-                    b'X' => Some(0),
-                    b'Y' => Some(1),
-                    b'Z' => Some(2),
-                    _ => None,
-                };
+                let axis = letters.iter().position(|l| *l == c.to_ascii_uppercase());
                 if let Some(a) = axis {
                     // the previous byte must not be a letter (o<xyz> names, words like "MAX")
                     let prev_letter = i > 0 && program[i - 1].is_ascii_alphabetic();
@@ -350,6 +367,12 @@ struct Flattener {
     /// Machine position (mm) after the last move; starts at machine 0 as rs274 does.
     machine_mm: [f64; 3],
     live: [bool; 3],
+    /// Machine angles A, B, C (deg) after the last move.
+    rotary_deg: [f64; 3],
+    /// Rotary axes written in moves from here on.
+    rotary_live: [bool; 3],
+    /// Rotary axes the program turns somewhere.
+    rotary_turned: [bool; 3],
     // --- what the output has set ---
     out_inch: Option<bool>,
     out_work: Option<usize>,
@@ -391,6 +414,9 @@ impl Flattener {
             ended: false,
             machine_mm: [0.0; 3],
             live: opt.axes_named,
+            rotary_deg: [0.0; 3],
+            rotary_live: [false; 3],
+            rotary_turned: [false; 3],
             out_inch: None,
             out_work: None,
             out_plane: None,
@@ -520,12 +546,26 @@ impl Flattener {
         Ok(f)
     }
 
+    /// Offsets (G5x, G92, tool length) of A B C U V W must be zero.
     fn check_rotary(&self, c: &Call, values: &[f64]) -> Result<(), FlattenError> {
         for (i, v) in values.iter().enumerate() {
             if v.abs() > 5e-5 {
                 let l = ["A", "B", "C", "U", "V", "W"][i.min(5)];
                 return Err(c.err(format!(
-                    "axis {l} at {v}: flattening writes X, Y, Z only (mtec compensates those)"
+                    "an offset of axis {l} ({v}): flattening writes machine angles and no U, V, W"
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// The U, V, W values of a move (after A, B, C) must be zero: no chain mtec models has them.
+    fn check_uvw(&self, c: &Call, values: &[f64]) -> Result<(), FlattenError> {
+        for (i, v) in values.iter().enumerate() {
+            if v.abs() > 5e-5 {
+                let l = ["U", "V", "W"][i.min(2)];
+                return Err(c.err(format!(
+                    "axis {l} at {v}: U, V and W are in no machine chain mtec models, so the tool tip cannot be compensated"
                 )));
             }
         }
@@ -582,8 +622,8 @@ impl Flattener {
 
     fn straight(&mut self, c: &Call, rapid: bool) -> Result<(), FlattenError> {
         let v = c.numbers(6)?;
-        let extra: Vec<f64> = c.numbers(c.args.len())?[3..].to_vec();
-        self.check_rotary(c, &extra)?;
+        let all = c.numbers(c.args.len())?;
+        self.check_uvw(c, &all[6..])?;
         self.sync_modes(true);
         if !rapid {
             self.sync_feed_mode();
@@ -591,6 +631,15 @@ impl Flattener {
         let out = self.target(c, [v[0], v[1], v[2]])?;
         let mut s = String::from(if rapid { "G0" } else { "G1" });
         self.axis_words(&out, &mut s);
+        self.rotary_deg = [v[3], v[4], v[5]];
+        for (k, l) in ["A", "B", "C"].iter().enumerate() {
+            self.rotary_live[k] |= self.rotary_turned[k] && self.rotary_deg[k] != 0.0;
+            if self.rotary_live[k] {
+                s.push(' ');
+                s.push_str(l);
+                num(self.rotary_deg[k], &mut s);
+            }
+        }
         if !rapid {
             self.feed_words(&mut s);
         }
@@ -601,8 +650,16 @@ impl Flattener {
 
     fn arc(&mut self, c: &Call) -> Result<(), FlattenError> {
         let v = c.numbers(9)?;
-        let extra: Vec<f64> = c.numbers(c.args.len())?[6..].to_vec();
-        self.check_rotary(c, &extra)?;
+        let all = c.numbers(c.args.len())?;
+        self.check_uvw(c, &all[9..])?;
+        if let Some(k) = (0..3).find(|&k| (v[6 + k] - self.rotary_deg[k]).abs() > 5e-5) {
+            return Err(c.err(format!(
+                "an arc that turns the rotary axis {} (from {} to {}): its tool tip path is neither an arc nor a joint line the rewriter follows",
+                ["A", "B", "C"][k],
+                self.rotary_deg[k],
+                v[6 + k]
+            )));
+        }
         let rot = v[4];
         if rot == 0.0 || rot.fract() != 0.0 || rot.abs() > 1e6 {
             return Err(c.err(format!(
@@ -912,6 +969,9 @@ fn comment_text(t: &str) -> String {
 /// Flattens rs274's canonical output into a plain program (text ending in a newline).
 pub fn flatten(canon: &str, opt: &FlattenOptions) -> Result<(String, FlattenReport), FlattenError> {
     let mut f = Flattener::new(opt);
+    let turned = rotary_axes_turned(canon);
+    f.rotary_live = std::array::from_fn(|k| turned[k] && opt.rotary_named[k]);
+    f.rotary_turned = turned;
     if let Some(h) = &opt.header {
         let h: String = h.replace(['\n', '\r'], " ").chars().take(254).collect();
         f.line(&h);
@@ -939,6 +999,27 @@ pub fn flatten(canon: &str, opt: &FlattenOptions) -> Result<(String, FlattenRepo
         f.line("M2");
     }
     Ok((f.out, f.report))
+}
+
+/// Which of A, B, C some straight move or arc of rs274's output leaves at a non-zero angle.
+fn rotary_axes_turned(canon: &str) -> [bool; 3] {
+    let mut turned = [false; 3];
+    for (i, raw) in canon.lines().enumerate() {
+        let Ok(Some(c)) = parse_line(raw, i + 1) else {
+            continue;
+        };
+        let first = match c.name {
+            "STRAIGHT_TRAVERSE" | "STRAIGHT_FEED" => 3,
+            "ARC_FEED" => 6,
+            _ => continue,
+        };
+        if let Ok(v) = c.numbers(first + 3) {
+            for k in 0..3 {
+                turned[k] |= v[first + k].abs() > 5e-5;
+            }
+        }
+    }
+    turned
 }
 
 /// A LinuxCNC parameter (.var) file's text with its linear positions divided by 25.4: the
@@ -1109,8 +1190,8 @@ mod tests {
             ("RIGID_TAP(10.0000, 0.0000, -5.0000)", "rigid tapping"),
             ("NURBS_FEED(4, ...)", "splines"),
             (
-                "STRAIGHT_FEED(5.0000, 0.0000, 0.0000, 10.0000, 0.0000, 0.0000)",
-                "axis A",
+                "STRAIGHT_FEED(5.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 10.0000)",
+                "axis W",
             ),
             ("SET_XY_ROTATION(30.0000)", "rotated"),
             (
@@ -1212,6 +1293,58 @@ mod tests {
     }
 
     #[test]
+    fn rotary_axes_the_program_turns_are_written_as_printed() {
+        assert_eq!(
+            rotary_axes_named(b"G0 X0 A0 (B1)\nG1 c-5 F10\no<abc> call\n"),
+            [true, false, true]
+        );
+        let listing = canon(&[
+            "STRAIGHT_TRAVERSE(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+            "SET_FEED_RATE(183.5756)",
+            "STRAIGHT_FEED(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, -12.3456)",
+            "STRAIGHT_FEED(1.0000, 0.0000, 0.0000, 30.0000, 0.0000, -12.3456)",
+        ]);
+        // A named and turned: from the first move; C not named: from where it leaves 0;
+        // B never turned: never written
+        let opt = FlattenOptions {
+            rotary_named: [true, true, false],
+            ..zero_table()
+        };
+        let (t, _) = flatten(&listing, &opt).unwrap();
+        let moves: Vec<&str> = t
+            .lines()
+            .filter(|l| l.starts_with("G0 ") || l.starts_with("G1 "))
+            .collect();
+        assert_eq!(
+            moves,
+            [
+                "G0 X0.0 Y0.0 Z0.0 A0.0",
+                "G1 X1.0 Y0.0 Z0.0 A0.0 C-12.3456 F183.5756",
+                "G1 X1.0 Y0.0 Z0.0 A30.0 C-12.3456"
+            ],
+            "{t}"
+        );
+        // an arc that turns A, a U move, a B offset: refused naming the line
+        for (call, want) in [
+            (
+                "ARC_FEED(1.0000, 1.0000, 0.0000, 1.0000, 1, 0.0000, 10.0000, 0.0000, 0.0000)",
+                "turns the rotary axis A",
+            ),
+            (
+                "STRAIGHT_FEED(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 5.0000, 0.0000, 0.0000)",
+                "axis U at 5",
+            ),
+            (
+                "SET_G92_OFFSET(0.0000, 0.0000, 0.0000, 0.0000, 2.0000, 0.0000)",
+                "offset of axis B",
+            ),
+        ] {
+            let e = flatten(&canon(&[call]), &zero_table()).unwrap_err();
+            assert!(e.message.contains(want), "{call}: {e}");
+        }
+    }
+
+    #[test]
     fn axes_the_program_never_names_are_not_written() {
         let named =
             axes_named(b"G18 G0 X1 Z2 (Y is not here)\n; nor Y1 here\no<max> call\nG1 x-1 z#1\n");
@@ -1219,6 +1352,7 @@ mod tests {
         let opt = FlattenOptions {
             work_offsets_mm: Some([[0.0; 3]; 9]),
             axes_named: named,
+            rotary_named: [false; 3],
             header: Some("(flattened)".into()),
         };
         let (t, _) = flatten(
