@@ -131,6 +131,29 @@ fn outside_the_envelope_the_thermal_part_fades_to_nothing() {
 }
 
 #[test]
+fn a_guard_column_fades_the_part_although_the_model_does_not_read_it() {
+    // the envelope names `air_c`, which the model does not read: it becomes a state input
+    let (_d, p) = setup(&machine_json(
+        "",
+        r#"{"t1_c": [19, 31], "t2_c": [18, 22], "air_c": [18, 24]}"#,
+    ));
+    let mut m = load(&p);
+    assert_eq!(m.state_inputs(), ["t1_c", "t2_c", "air_c"]);
+    m.update_state(&[25.0, 20.0, 21.0], 0.0).unwrap();
+    let inside = m.error_um([0.0; 3])[2] - 0.5;
+    assert!((inside - (2.0 + 75.0 - 20.0)).abs() < 1e-12);
+    // the air 1.5 °C above its range: weight 1 − 1.5/2, the model's own inputs inside theirs
+    let s = m.update_state(&[25.0, 20.0, 25.5], 0.0).unwrap();
+    assert_eq!(s.outside, Some(2));
+    assert!((s.thermal_weight - 0.25).abs() < 1e-12);
+    let faded = m.error_um([0.0; 3])[2] - 0.5;
+    assert!(
+        (faded - 0.25 * (2.0 + 75.0 - 20.0)).abs() < 1e-12,
+        "{faded}"
+    );
+}
+
+#[test]
 fn bad_readings_are_refused_and_leave_the_state_alone() {
     let (_d, p) = setup(&machine_json("", ENVELOPE));
     let mut m = load(&p);
