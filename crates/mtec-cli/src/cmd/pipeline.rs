@@ -871,7 +871,10 @@ mod tests {
     #[test]
     fn a_constant_element_is_spread_by_its_magnitude() {
         let (m, sd) = element_statistics(&[19.88; 101]);
-        assert!((m - 19.88).abs() < 1e-12 && (sd - 19.88).abs() < 1e-12, "{m} {sd}");
+        assert!(
+            (m - 19.88).abs() < 1e-12 && (sd - 19.88).abs() < 1e-12,
+            "{m} {sd}"
+        );
         let (m, sd) = element_statistics(&[1.0, 2.0, 3.0]);
         assert_eq!((m, sd), (2.0, 1.0));
     }
