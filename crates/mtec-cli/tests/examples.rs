@@ -7,7 +7,7 @@ use std::process::Command;
 /// Runs `mtec run` on an example project and checks exit 0, report.html, and that the report
 /// has a section with at least one `<figure>` for each expected analysis stage (by the start of
 /// its section title; `[compensation]` writes files and a table, no plot).
-fn run_example(project: &str, stages: &[&str]) {
+fn run_example(project: &str, stages: &[&str]) -> String {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let project = root.join(project);
     let tmp = tempfile::tempdir().unwrap();
@@ -51,11 +51,12 @@ fn run_example(project: &str, stages: &[&str]) {
         "{}: no compensation section",
         project.display()
     );
+    html
 }
 
 #[test]
 fn vmc_example_runs() {
-    run_example(
+    let html = run_example(
         "examples/vmc/project.toml",
         &[
             "Positioning (ISO 230-2)",
@@ -66,14 +67,105 @@ fn vmc_example_runs() {
             "Volumetric error map",
         ],
     );
+    // the thermal model is a ridge-trace selection: its trace is shown, and only then
+    assert!(html.contains("<h2>Sensor selection for radial_um"));
+    // the circular test: the CLI's own numbers and its polar plot (not a Cartesian chart)
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let out = Command::new(env!("CARGO_BIN_EXE_mtec"))
+        .arg("circular")
+        .arg(root.join("examples/vmc/circular.csv"))
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let cli = String::from_utf8_lossy(&out.stdout);
+    let value_before = |line_key: &str, unit_key: &str| -> String {
+        let line = cli.lines().find(|l| l.contains(line_key)).unwrap();
+        let w: Vec<&str> = line.split_whitespace().collect();
+        let at = w.iter().rposition(|x| *x == unit_key).unwrap();
+        w[at - 1].to_string()
+    };
+    let section = &html[html.find("<h2>Circular test").unwrap()..];
+    let section = &section[..section.find("</section>").unwrap()];
+    for (key, label) in [
+        ("G(ccw)", "circular deviation G(ccw)"),
+        ("G(cw)", "circular deviation G(cw)"),
+        ("G(b)", "bidirectional circular deviation G(b)"),
+        ("hysteresis H", "circular hysteresis H"),
+        (
+            "radius deviation",
+            "radius deviation (least-squares circle)",
+        ),
+    ] {
+        let v = value_before(key, "um");
+        assert!(
+            section.contains(&format!("<td>{label}</td><td>{v} µm</td>")),
+            "{label} {v} not in the report"
+        );
+    }
+    assert!(
+        section.contains("Circular test XY R100 mm"),
+        "no polar plot"
+    );
+}
+
+/// The numbers `thermal fit` prints for one set of rows (`train` or `test`): RMSE, max |res|
+/// and compensation, formatted as the report formats them.
+fn cli_numbers(stdout: &str, rows: &str) -> [String; 3] {
+    let line = stdout
+        .lines()
+        .find(|l| l.split_whitespace().next() == Some(rows))
+        .unwrap_or_else(|| panic!("no `{rows}` line in:\n{stdout}"));
+    let w: Vec<&str> = line.split_whitespace().collect();
+    let after = |key: &str| w[w.iter().position(|x| *x == key).unwrap() + 1].to_string();
+    let comp = w[w.iter().position(|x| *x == "compensation").unwrap() + 1..].join(" ");
+    [after("RMSE"), after("max|res|"), comp]
 }
 
 #[test]
 fn fl_thermal_split_example_runs() {
-    run_example(
+    let html = run_example(
         "examples/fl-thermal/project-split.toml",
         &["Thermal model: ch1_um"],
     );
+    // the section describes the fitted model (heat-input, its input) and not a ridge trace
+    assert!(html.contains("Heat-input model"));
+    assert!(html.contains("`spindle_rpm`"));
+    assert!(!html.contains("Ridge trace"));
+    // train and test apart, with the CLI's own numbers, and the warning (worse on the test rows)
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_mtec"))
+        .args(["thermal", "fit", "--data"])
+        .arg(root.join("examples/fl-thermal/train_1min.csv"))
+        .args([
+            "--target",
+            "ch1_um",
+            "--model",
+            "heat-input",
+            "--train-until",
+            "960",
+            "-o",
+        ])
+        .arg(tmp.path().join("m.json"))
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let stdout =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    for (rows, label) in [("train", "training rows"), ("test", "test rows")] {
+        let [rmse, max, comp] = cli_numbers(&stdout, rows);
+        let row = format!("<td>{label}</td>");
+        let at = html
+            .find(&row)
+            .unwrap_or_else(|| panic!("no row `{label}`"));
+        let tr = &html[at..at + html[at..].find("</tr>").unwrap()];
+        for v in [&rmse, &max, &comp] {
+            assert!(tr.contains(&format!("<td>{v}</td>")), "{v} not in {tr}");
+        }
+    }
+    let [_, _, test_comp] = cli_numbers(&stdout, "test");
+    assert!(test_comp.starts_with('-'), "{test_comp}");
+    assert!(html.contains("makes the drift worse than no compensation"));
 }
 
 #[test]

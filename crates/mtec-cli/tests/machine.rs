@@ -163,6 +163,71 @@ fn build_takes_the_envelope_from_the_training_rows_and_writes_relative_paths() {
     );
 }
 
+/// Without --data the envelope is the one `thermal fit` recorded in the model file: the same
+/// range as from the training rows; a model file without it is refused, and so is --guard.
+#[test]
+fn build_without_data_uses_the_envelope_recorded_by_the_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let data = log(d, "log.csv", 6);
+    let model = d.join("m.json");
+    fit(&data, &model, &["--train", "e1,e2", "--test", "e3"]);
+    let machine = d.join("machine.json");
+    let o = mtec(&[
+        "machine",
+        "build",
+        "--thermal",
+        &format!("z={}", s(&model)),
+        "-o",
+        s(&machine),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&machine).unwrap()).unwrap();
+    assert_eq!(
+        m["thermal"][0]["envelope"]["t1_c"],
+        serde_json::json!([20.0, 25.5])
+    );
+    let refused = d.join("refused.json");
+    let o = mtec(&[
+        "machine",
+        "build",
+        "--thermal",
+        &format!("z={}", s(&model)),
+        "--guard",
+        "t2_c",
+        "-o",
+        s(&refused),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        stderr(&o).contains("needs the training data"),
+        "{}",
+        stderr(&o)
+    );
+    // a model file from before the fit recorded envelopes
+    let mut old: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    old.as_object_mut().unwrap().remove("envelope");
+    let old_model = d.join("old.json");
+    std::fs::write(&old_model, old.to_string()).unwrap();
+    let o = mtec(&[
+        "machine",
+        "build",
+        "--thermal",
+        &format!("z={}", s(&old_model)),
+        "-o",
+        s(&refused),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        stderr(&o).contains("records no training range of `t1_c`"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!refused.exists());
+}
+
 /// A machine model over a linear thermal model δ = b0 + b1·t1 (µm), and its coefficients.
 fn machine_model(d: &Path) -> (PathBuf, f64, f64) {
     let data = log(d, "log.csv", 6);

@@ -91,6 +91,43 @@ fn cnn_lstm_and_bpnn_fit_and_predict_rotary_motions() {
     let rmse = p["metrics"][0]["rmse"].as_f64().unwrap();
     assert!(rmse.is_finite() && rmse > 0.0);
 
+    // the window is rows of the interval the model was trained on (every 20 min here): a log
+    // sampled every 40 min is refused at its first 40-min step, not predicted with a window
+    // that spans twice the minutes
+    assert_eq!(m["provenance"]["sample_interval_min"], 20.0);
+    let csv = std::fs::read_to_string(&data).unwrap();
+    let mut header_seen = false;
+    let thinned: String = csv
+        .lines()
+        .filter(|l| {
+            if l.starts_with('#') || !header_seen {
+                header_seen |= !l.starts_with('#');
+                return true;
+            }
+            let t: f64 = l.split(',').nth(1).unwrap().parse().unwrap();
+            (t / 20.0).round() as i64 % 2 == 0
+        })
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let slow = dir.path().join("every40.csv");
+    std::fs::write(&slow, thinned).unwrap();
+    let o = mtec(&[
+        "thermal",
+        "predict",
+        "--model",
+        model.to_str().unwrap(),
+        "--data",
+        slow.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let err = text(&o);
+    assert!(
+        err.contains("every40.csv:")
+            && err.contains("a time step of 40 min")
+            && err.contains("trained on data sampled every 20 min"),
+        "{err}"
+    );
+
     // BPNN on the same split, predictions as CSV
     let bp = dir.path().join("bpnn.json");
     let o = mtec(&[

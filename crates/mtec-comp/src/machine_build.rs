@@ -182,12 +182,6 @@ pub fn build(req: &BuildRequest) -> Result<MachineFile, InputError> {
     let mut specs = Vec::new();
     let mut streams = Vec::new();
     for part in req.parts {
-        let Some(data) = req.data else {
-            return Err(InputError::file(
-                &part.model,
-                "the training data of the thermal models is needed for their envelopes",
-            ));
-        };
         let file: ModelFile = mtec_io::read_json(&part.model)?;
         file.check_format()
             .map_err(|e| InputError::file(&part.model, e.to_string()))?;
@@ -195,11 +189,17 @@ pub fn build(req: &BuildRequest) -> Result<MachineFile, InputError> {
             .model
             .stream()
             .map_err(|e| InputError::file(&part.model, e.to_string()))?;
-        let rows = training_rows(data, &file, &part.model)?;
-        let mut envelope = BTreeMap::new();
-        for name in stream.inputs().iter().chain(&part.guards) {
-            envelope.insert(name.clone(), column_range(data, name, &rows)?);
-        }
+        let envelope = match req.data {
+            Some(data) => {
+                let rows = training_rows(data, &file, &part.model)?;
+                let mut envelope = BTreeMap::new();
+                for name in stream.inputs().iter().chain(&part.guards) {
+                    envelope.insert(name.clone(), column_range(data, name, &rows)?);
+                }
+                envelope
+            }
+            None => recorded_envelope(&file, stream.inputs(), part)?,
+        };
         specs.push(ThermalPartSpec {
             axis: part.axis.to_lowercase(),
             model: file_path(&part.model, out_dir),
@@ -225,6 +225,36 @@ pub fn build(req: &BuildRequest) -> Result<MachineFile, InputError> {
     MachineErrorModel::new(geometric, parts, file.fade, String::new())
         .map_err(|m| InputError::file(req.output, m))?;
     Ok(file)
+}
+
+/// Without the training data: the envelope `thermal fit` recorded in the model file (the range
+/// of every column it reads over its training rows), which must cover every input; guard
+/// columns need the data.
+fn recorded_envelope(
+    file: &ModelFile,
+    inputs: &[String],
+    part: &PartRequest,
+) -> Result<BTreeMap<String, [f64; 2]>, InputError> {
+    if let Some(g) = part.guards.first() {
+        return Err(InputError::file(
+            &part.model,
+            format!("the guard column `{g}` needs the training data (--data) for its range"),
+        ));
+    }
+    let mut envelope = BTreeMap::new();
+    for name in inputs {
+        let Some(r) = file.envelope.iter().find(|r| &r.column == name) else {
+            return Err(InputError::file(
+                &part.model,
+                format!(
+                    "the model file records no training range of `{name}` (written by an \
+                     older mtec): give the training data (--data) so the envelope can be computed"
+                ),
+            ));
+        };
+        envelope.insert(name.clone(), [r.min, r.max]);
+    }
+    Ok(envelope)
 }
 
 /// The file as JSON text.

@@ -59,6 +59,7 @@ fn fit(dir: &Path, target: &str) -> std::path::PathBuf {
     let model = Mlr {
         sensors: vec![],
         lag: true,
+        ..Default::default()
     }
     .fit(&data)
     .unwrap();

@@ -12,11 +12,14 @@
 //!
 //! Both are causal: they use only past temperatures, so a controller can compute them on line.
 //! The time constants are fitted (see [`fit_time_constants`]): coordinate descent over a log
-//! grid of τ minimising the training SSE of the linear model that uses the features.
+//! grid of τ minimising the pooled forward-fold RMSE of the linear model that uses the features
+//! (fit on the blocks before, score the next: [`crate::validate::forward_folds`]); only when the
+//! training rows hold fewer than two blocks, its training SSE.
 
 use crate::data::ThermalData;
 use crate::error::ThermalError;
 use crate::linear::ols;
+use crate::validate::{ridge_forward_scores, ForwardFold};
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
@@ -173,21 +176,33 @@ pub fn tau_grid() -> Vec<f64> {
 }
 
 /// Fits the time constants of the `Lag` features in `features` (in place) by coordinate descent
-/// over [`tau_grid`] on the training rows `rows`: each sweep sets each τ in turn to the grid value that minimises the
-/// training SSE of the OLS model on all features; two sweeps. Returns the final SSE.
+/// over [`tau_grid`]: each sweep sets each τ in turn to the grid value that minimises the score
+/// of the OLS model on all features; two sweeps. The score is the pooled RMSE over the forward
+/// `folds` of the training rows (coefficients refitted on each fold's training blocks for every τ
+/// tried: τ chosen by how the model predicts blocks it has not seen, not by how it fits them);
+/// with no fold, the training SSE on `rows`. Returns the final score.
 pub fn fit_time_constants(
     data: &ThermalData,
     rows: &[usize],
     features: &mut [Feature],
+    folds: &[ForwardFold],
 ) -> Result<f64, ThermalError> {
     let grid = tau_grid();
     let names: Vec<String> = features.iter().map(|f| f.name()).collect();
     let yall = data.target_um()?;
     let y: Vec<f64> = rows.iter().map(|&i| yall[i]).collect();
-    let y = y.as_slice();
-    let mut x = design(data, features)?.select_rows(rows.iter());
-    let sse_of = |x: &DMatrix<f64>| -> f64 {
-        match ols(x, y, &names) {
+    let mut cols: Vec<Vec<f64>> = features
+        .iter()
+        .map(|f| f.values(data))
+        .collect::<Result<_, _>>()?;
+    let score = |cols: &[Vec<f64>]| -> f64 {
+        if !folds.is_empty() {
+            let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+            // k = 0: ordinary least squares on each fold
+            return ridge_forward_scores(&refs, yall, folds, &[0.0])[0].0;
+        }
+        let x = DMatrix::from_fn(rows.len(), cols.len(), |r, j| cols[j][rows[r]]);
+        match ols(&x, &y, &names) {
             Ok(fit) => (0..x.nrows())
                 .map(|i| {
                     let f = fit.intercept
@@ -200,7 +215,7 @@ pub fn fit_time_constants(
             Err(_) => f64::INFINITY,
         }
     };
-    let mut best = sse_of(&x);
+    let mut best = score(&cols);
     for _sweep in 0..2 {
         for j in 0..features.len() {
             let Feature::Lag { sensor, tau_min } = features[j].clone() else {
@@ -209,20 +224,14 @@ pub fn fit_time_constants(
             let t = data.sensor(data.sensor_index(&sensor)?);
             let mut best_tau = tau_min;
             for &tau in &grid {
-                let col = lag_filter(data, &t, tau);
-                for (r, &i) in rows.iter().enumerate() {
-                    x[(r, j)] = col[i];
-                }
-                let sse = sse_of(&x);
-                if sse < best {
-                    best = sse;
+                cols[j] = lag_filter(data, &t, tau);
+                let s = score(&cols);
+                if s < best {
+                    best = s;
                     best_tau = tau;
                 }
             }
-            let col = lag_filter(data, &t, best_tau);
-            for (r, &i) in rows.iter().enumerate() {
-                x[(r, j)] = col[i];
-            }
+            cols[j] = lag_filter(data, &t, best_tau);
             features[j] = Feature::Lag {
                 sensor,
                 tau_min: best_tau,

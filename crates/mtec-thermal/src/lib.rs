@@ -39,6 +39,7 @@ pub mod plot;
 pub mod select;
 pub mod stepwise;
 pub mod stream;
+pub mod summary;
 pub mod validate;
 
 pub use data::ThermalData;
@@ -54,3 +55,4 @@ pub use model::{
 };
 pub use select::{select_sensors, RidgeTrace, SelectOptions, Selection};
 pub use stream::ThermalStream;
+pub use summary::{ModelSummary, Term};

@@ -144,11 +144,13 @@ impl Predict for LinearModel {
     }
 }
 
-/// Adds a first-order lag feature per sensor and fits the time constants (see `features`).
+/// Adds a first-order lag feature per sensor and fits the time constants by the forward folds of
+/// the training rows (see `features`).
 fn with_lags(
     data: &ThermalData,
     rows: &[usize],
     base: Vec<Feature>,
+    spec: &BlockSpec,
 ) -> Result<Vec<Feature>, ThermalError> {
     let mut f = base.clone();
     for b in &base {
@@ -159,20 +161,23 @@ fn with_lags(
             });
         }
     }
-    fit_time_constants(data, rows, &mut f)?;
+    let folds = thin_folds(data, &forward_folds_of(data, rows, spec), SELECTION_DT_MIN);
+    fit_time_constants(data, rows, &mut f, &folds)?;
     Ok(f)
 }
 
-/// The temperature features of `sensors` (all when empty), with their fitted lags when `lag`.
+/// The temperature features of `sensors` (all when empty), with their lags when `lag` (time
+/// constants by the forward folds of `rows`, blocks by `spec`).
 fn sensor_features(
     data: &ThermalData,
     rows: &[usize],
     sensors: &[String],
     lag: bool,
+    spec: &BlockSpec,
 ) -> Result<Vec<Feature>, ThermalError> {
     let features = temp_features(data, sensors)?;
     if lag {
-        with_lags(data, rows, features)
+        with_lags(data, rows, features, spec)
     } else {
         Ok(features)
     }
@@ -188,15 +193,17 @@ pub fn target_rows(data: &ThermalData, rows: &[usize]) -> Result<Vec<f64>, Therm
 #[derive(Debug, Clone, Default)]
 pub struct Mlr {
     pub sensors: Vec<String>,
-    /// Add a fitted first-order lag of each sensor.
+    /// Add a first-order lag of each sensor (τ chosen by forward folds).
     pub lag: bool,
+    /// Validation blocks of the τ choice.
+    pub blocks: BlockSpec,
 }
 
 impl Fit for Mlr {
     type Model = LinearModel;
     fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<LinearModel, ThermalError> {
         let y = &target_rows(data, rows)?;
-        let features = sensor_features(data, rows, &self.sensors, self.lag)?;
+        let features = sensor_features(data, rows, &self.sensors, self.lag, &self.blocks)?;
         let x = design(data, &features)?.select_rows(rows.iter());
         let names: Vec<String> = features.iter().map(|f| f.name()).collect();
         let fit = ols(&x, y, &names)?;
@@ -333,7 +340,7 @@ impl Fit for Ridge {
     type Model = LinearModel;
     fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<LinearModel, ThermalError> {
         let y = &target_rows(data, rows)?;
-        let features = sensor_features(data, rows, &self.sensors, self.lag)?;
+        let features = sensor_features(data, rows, &self.sensors, self.lag, &self.blocks)?;
         ridge_model(
             LinearMethod::Ridge,
             data,
@@ -369,7 +376,8 @@ impl Fit for RidgeSelect {
             &names,
             self.options,
         )?;
-        let features = sensor_features(data, rows, &sel.selected, self.lag)?;
+        // blocks: experiments, or eight equal time blocks (ridge-select has no input column)
+        let features = sensor_features(data, rows, &sel.selected, self.lag, &BlockSpec::default())?;
         // with lags the selection's k (read without them) no longer applies: the lagged design
         // gets its own k where its ridge trace stabilises
         let k = if self.lag {

@@ -318,6 +318,7 @@ fn cancelling_large_coefficients_warn() {
     let m = Mlr {
         sensors: vec!["a_c".into(), "a2_c".into(), "b_c".into()],
         lag: false,
+        ..Default::default()
     }
     .fit(&d)
     .unwrap();
@@ -351,4 +352,105 @@ fn ridge_warns_when_the_forward_k_is_the_end_of_the_grid() {
         "{:?}",
         m.warnings
     );
+}
+
+/// Pooled forward RMSE of OLS of y on [1, x columns] over the folds, solved by nalgebra's SVD
+/// (independent of mtec's least squares).
+fn svd_forward_rmse(
+    cols: &[Vec<f64>],
+    y: &[f64],
+    folds: &[mtec_thermal::validate::ForwardFold],
+) -> f64 {
+    let (mut sse, mut n) = (0.0, 0usize);
+    for f in folds {
+        let x = DMatrix::from_fn(f.train.len(), cols.len() + 1, |r, j| {
+            if j == 0 {
+                1.0
+            } else {
+                cols[j - 1][f.train[r]]
+            }
+        });
+        let yt = nalgebra::DVector::from_iterator(f.train.len(), f.train.iter().map(|&i| y[i]));
+        let b = x.svd(true, true).solve(&yt, 1e-12).unwrap();
+        for &i in &f.test {
+            let p = b[0] + (0..cols.len()).map(|j| b[j + 1] * cols[j][i]).sum::<f64>();
+            sse += (y[i] - p).powi(2);
+            n += 1;
+        }
+    }
+    (sse / n as f64).sqrt()
+}
+
+/// Training SSE of the same OLS on `rows`.
+fn svd_training_sse(cols: &[Vec<f64>], y: &[f64], rows: &[usize]) -> f64 {
+    let x = DMatrix::from_fn(rows.len(), cols.len() + 1, |r, j| {
+        if j == 0 {
+            1.0
+        } else {
+            cols[j - 1][rows[r]]
+        }
+    });
+    let yt = nalgebra::DVector::from_iterator(rows.len(), rows.iter().map(|&i| y[i]));
+    let b = x.svd(true, true).solve(&yt, 1e-12).unwrap();
+    rows.iter()
+        .map(|&i| {
+            let p = b[0] + (0..cols.len()).map(|j| b[j + 1] * cols[j][i]).sum::<f64>();
+            (y[i] - p).powi(2)
+        })
+        .sum()
+}
+
+#[test]
+fn mlr_lag_time_constant_is_the_forward_choice_not_the_training_fit() {
+    let d = cycle();
+    let rows: Vec<usize> = (0..d.len()).collect();
+    // b_c and room_c: the τ that fits the training rows best is not the one that predicts the
+    // next blocks best (10.1 vs 7.7 min, 1000 vs 7.7 min)
+    for sensor in ["b_c", "room_c"] {
+        let fit = Mlr {
+            sensors: vec![sensor.into()],
+            lag: true,
+            blocks: spec(),
+        }
+        .fit_rows(&d, &rows)
+        .unwrap();
+        let tau = match &fit.features[1] {
+            mtec_thermal::Feature::Lag { tau_min, .. } => *tau_min,
+            f => panic!("{f:?}"),
+        };
+        // the same folds (thinned to one row a minute: the record is already 1-min)
+        let folds = forward_folds_of(&d, &rows, &spec());
+        let y = d.target_um().unwrap();
+        let rpm = mtec_thermal::validate::input_column(&d, "spindle_rpm").unwrap();
+        let t = d.sensor(d.sensor_index(sensor).unwrap());
+        // first-order lag with equal running and rest τ: heat_input's switched lag, not lag_filter
+        let cols = |tau: f64| vec![t.clone(), switched_lag(&d, &t, &rpm, tau, tau)];
+        let grid = mtec_thermal::features::tau_grid();
+        let argmin = |score: &dyn Fn(f64) -> f64| {
+            grid.iter()
+                .copied()
+                .min_by(|a, b| score(*a).total_cmp(&score(*b)))
+                .unwrap()
+        };
+        let by_forward = argmin(&|tau| svd_forward_rmse(&cols(tau), y, &folds));
+        let by_training = argmin(&|tau| svd_training_sse(&cols(tau), y, &rows));
+        assert!(
+            (by_forward - by_training).abs() > 1.0,
+            "{sensor}: the data must tell the two choices apart"
+        );
+        assert!(
+            (tau - by_forward).abs() < 1e-9,
+            "{sensor}: fitted τ {tau}, forward choice {by_forward}, training fit {by_training}"
+        );
+        // ridge --lag takes its τ the same way (before its k)
+        let ridge = Ridge {
+            sensors: vec![sensor.into()],
+            k: None,
+            lag: true,
+            blocks: spec(),
+        }
+        .fit_rows(&d, &rows)
+        .unwrap();
+        assert_eq!(ridge.features, fit.features, "{sensor}");
+    }
 }

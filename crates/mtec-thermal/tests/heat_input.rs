@@ -163,6 +163,7 @@ fn transfer(room_amplitude_c: f64) -> (f64, f64, f64) {
     let mlr = Mlr {
         sensors,
         lag: false,
+        ..Default::default()
     }
     .fit(&train)
     .unwrap();

@@ -208,6 +208,7 @@ fn lag_feature_follows_an_unseen_duty_cycle() {
         Mlr {
             sensors: sensors.clone(),
             lag,
+            ..Default::default()
         }
         .fit_rows(&data, &train)
         .unwrap()

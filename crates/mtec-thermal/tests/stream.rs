@@ -94,6 +94,7 @@ fn lagged_mlr_on_line_equals_batch_on_the_real_record() {
     let m = Mlr {
         sensors: vec!["t1_c".into(), "t5_c".into(), "t9_c".into()],
         lag: true,
+        ..Default::default()
     }
     .fit(&d)
     .unwrap();

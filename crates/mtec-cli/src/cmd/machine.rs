@@ -15,7 +15,9 @@ on line. Each thermal model gets its training envelope, the range [min, max] of 
 inputs over the rows of --data it was fitted on (its file's split: --train-until, --train
 experiments, or all rows); outside it the thermal part fades to no correction over --fade-c
 (temperatures) or --fade-other of the range (other inputs). --data must be the file the models
-were fitted on: a different number of training rows is refused.
+were fitted on: a different number of training rows is refused. Without --data the envelope is
+the training range `thermal fit` recorded in the model file (a file without one, written by an
+older mtec, is refused); --guard needs --data.
 
 --thermal AXIS=MODEL[,sign=-1]: the model's drift acts along AXIS (x, y or z); sign=-1 when its
 target is the workpiece's displacement relative to the tool (mtec's convention, sign=1, is the
@@ -158,11 +160,6 @@ fn build(a: BuildArgs) -> Result<(), CliError> {
     if parts.is_empty() && a.geometric.is_none() {
         return Err(CliError::usage(
             "give --geometric, --thermal or both: the machine model sums them",
-        ));
-    }
-    if !parts.is_empty() && a.data.is_none() {
-        return Err(CliError::usage(
-            "--data TRAIN.csv is needed with --thermal: the envelopes come from the rows the models were fitted on",
         ));
     }
     if !a.guard.is_empty() && parts.is_empty() {

@@ -22,6 +22,7 @@ pub mod volumetric;
 pub mod compensate;
 pub mod demo;
 pub mod pipeline;
+pub mod pipeline_thermal;
 pub mod run;
 
 pub mod map_bpnn;

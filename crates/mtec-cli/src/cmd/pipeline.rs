@@ -255,24 +255,33 @@ pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> Result<PathBuf
 fn stats_from_errors(machine: &Path, errors: &Path, out: &Path) -> Result<(), CliError> {
     let mach = crate::inputs::read_machine(machine)?;
     let set = crate::inputs::read_errors(errors)?;
-    let mut csv = String::from("# statistics of each identified error function over its axis travel (mean, std of 101 samples)\nelement,mean,std,unit\n");
+    let mut csv = String::from("# statistics of each identified error function over its axis travel (mean, std of 101 samples); a constant element (squareness, location) has no spread over the travel, so its std is its magnitude |value|\nelement,mean,std,unit\n");
     for el in mtec_model::three_axis_elements() {
         let Some(f) = set.get(&el) else { continue };
         let [lo, hi] = mach.travel(el.axis);
         let v: Vec<f64> = (0..=100)
             .map(|k| f.value(lo + (hi - lo) * k as f64 / 100.0))
             .collect();
-        let m = v.iter().sum::<f64>() / v.len() as f64;
-        let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt();
-        csv.push_str(&format!(
-            "{},{m:.6},{:.6},{}\n",
-            el.name(),
-            sd.max(1e-6),
-            el.unit()
-        ));
+        let (m, sd) = element_statistics(&v);
+        csv.push_str(&format!("{},{m:.6},{sd:.6},{}\n", el.name(), el.unit()));
     }
     mtec_io::write_output(out, csv.as_bytes())?;
     Ok(())
+}
+
+/// Mean and standard deviation of an error element's values over its travel. A constant element
+/// (a squareness, a location error) has none over the travel; taking that as its spread would
+/// rank it last and "allow" it a vanishing tolerance (issue 24). Its spread is its magnitude
+/// instead: the element is as large as it is, and the sensitivity asks how much that matters.
+fn element_statistics(v: &[f64]) -> (f64, f64) {
+    let m = v.iter().sum::<f64>() / v.len() as f64;
+    let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len().max(2) - 1) as f64).sqrt();
+    let scale = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    if sd <= 1e-9 * scale.max(1e-12) {
+        (m, m.abs().max(1e-6))
+    } else {
+        (m, sd)
+    }
 }
 
 /// Global sensitivity of the volumetric error.
@@ -377,40 +386,117 @@ pub fn sensitivity(
 pub fn circular(p: &mut Pipeline, data: &Path) -> Result<(), CliError> {
     let f = p.path_of(data);
     p.progress_of(&format!("circular test {}", f.display()));
+    // `circular --out` draws the polar plot the CLI gives; the report shows that same figure
+    let dir = p.out.join(format!("circular-{}", stem(&f)));
     let v = p.json_stage_of(
         &format!("circular-{}.json", stem(&f)),
-        vec!["circular".into(), s(&f), "--json".into()],
+        vec![
+            "circular".into(),
+            s(&f),
+            "--json".into(),
+            "--out".into(),
+            s(&dir),
+        ],
     )?;
     let sec = p
         .report
         .section(format!("Circular test (ISO 230-4): {}", stem(&f)));
-    sec.text("Circular deviation G, circular hysteresis H and the ballbar diagnostics fitted from the trace, ranked by their contribution to the circularity.");
-    if let Ok(t) = mtec_io::Table::read(&f) {
-        if let (Ok(a), Ok(d)) = (t.f64_column("angle_deg"), t.f64_column("dl_um")) {
-            let radius: f64 = t
-                .comment_value("radius_mm")
-                .and_then(|r| r.parse().ok())
-                .unwrap_or(100.0);
-            let trace: Vec<(f64, f64)> = a.iter().zip(&d).map(|(a, d)| (*a, *d)).collect();
-            if let Some(svg) = polar_svg(&trace, radius) {
-                sec.figure(svg, "Polar plot of the bar-length deviation.");
-            }
-        }
+    sec.text(format!(
+        "Circular deviation G and circular hysteresis H per ISO 230-4 ({} plane, R = {} mm, \
+         F = {} mm/min), then the ballbar diagnostics fitted from the trace, ranked by their \
+         contribution to the circularity (as `mtec circular` prints them).",
+        v["plane"].as_str().unwrap_or("?"),
+        fmt(&v["radius_mm"]),
+        fmt(&v["feed_mm_min"])
+    ));
+    if let Ok(svg) = std::fs::read_to_string(dir.join("polar.svg")) {
+        sec.figure(
+            svg,
+            "Polar plot of the radial deviation about the least-squares centre, ccw (blue) and \
+             cw (red), the mean radius deviation removed.",
+        );
     }
-    json_tables(sec, &v, 0);
+    sec.table(&["quantity", "value"], circular_rows(&v));
+    sec.table(
+        &[
+            "fault",
+            "present",
+            "value",
+            "unit",
+            "± s.e.",
+            "contribution (µm)",
+            "%",
+        ],
+        fault_rows(&v),
+    );
     Ok(())
 }
 
-fn polar_svg(trace: &[(f64, f64)], radius_mm: f64) -> Option<String> {
-    let _ = radius_mm;
-    let pts: Vec<(f64, f64)> = trace.to_vec();
-    Some(line_chart(
-        "Bar-length deviation against angle",
-        "angle (deg)",
-        "ΔL (µm)",
-        &[Series::new("ΔL", pts)],
-        &[],
-    ))
+/// ISO 230-4 numbers as `mtec circular` prints them.
+fn circular_rows(v: &Value) -> Vec<Vec<String>> {
+    let iso = &v["iso230_4"];
+    let um = |k: &str| format!("{:.3} µm", iso[k].as_f64().unwrap_or(f64::NAN));
+    let c = &iso["circle_bidirectional"];
+    let centre = |i: usize| c["centre_um"][i].as_f64().unwrap_or(f64::NAN);
+    vec![
+        vec!["circular deviation G(ccw)".into(), um("G_ccw_um")],
+        vec!["circular deviation G(cw)".into(), um("G_cw_um")],
+        vec![
+            "bidirectional circular deviation G(b)".into(),
+            um("G_bidirectional_um"),
+        ],
+        vec!["circular hysteresis H".into(), um("H_um")],
+        vec![
+            "least-squares centre (X, Y)".into(),
+            format!("({:.3}, {:.3}) µm", centre(0), centre(1)),
+        ],
+        vec![
+            "radius deviation (least-squares circle)".into(),
+            format!(
+                "{:.3} µm",
+                c["radius_deviation_um"].as_f64().unwrap_or(f64::NAN)
+            ),
+        ],
+        vec![
+            "residual RMS after the diagnostics fit".into(),
+            format!(
+                "{:.3} µm",
+                v["diagnostics"]["residual_rms_um"]
+                    .as_f64()
+                    .unwrap_or(f64::NAN)
+            ),
+        ],
+    ]
+}
+
+/// The diagnostics table of `mtec circular`, in its order (by contribution).
+fn fault_rows(v: &Value) -> Vec<Vec<String>> {
+    let Some(faults) = v["diagnostics"]["faults"].as_array() else {
+        return vec![];
+    };
+    let n = |f: &Value, k: &str, d: usize| {
+        f[k].as_f64()
+            .map(|x| format!("{x:.d$}"))
+            .unwrap_or_else(|| "-".into())
+    };
+    faults
+        .iter()
+        .map(|f| {
+            vec![
+                f["label"].as_str().unwrap_or("?").to_string(),
+                if f["present"].as_bool() == Some(true) {
+                    "yes".into()
+                } else {
+                    "no".into()
+                },
+                n(f, "value", 3),
+                f["unit"].as_str().unwrap_or("").to_string(),
+                n(f, "std_error", 3),
+                n(f, "contribution_um", 3),
+                n(f, "contribution_percent", 1),
+            ]
+        })
+        .collect()
 }
 
 /// Ballbar identification of rotary-axis error motions.
@@ -466,18 +552,6 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> Result<PathBuf, CliError> 
     let data = p.path_of(&t.data);
     p.progress_of(&format!("thermal model of {} ({})", t.target, t.model));
     let tag = format!("{}-{}", stem(&data), t.target);
-    let sel = p.json_stage_of(
-        &format!("thermal-select-{tag}.json"),
-        vec![
-            "thermal".into(),
-            "select".into(),
-            "--data".into(),
-            s(&data),
-            "--target".into(),
-            t.target.clone(),
-            "--json".into(),
-        ],
-    )?;
     let model = p.out.join(format!("thermal-model-{tag}.json"));
     let mut fit = vec![
         "thermal".into(),
@@ -519,108 +593,125 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> Result<PathBuf, CliError> 
             "--json".into(),
         ],
     )?;
+    let model_json: Value = mtec_io::read_json(&model)?;
+    let table = mtec_io::Table::read(&data).ok();
+    let predictions: Option<Vec<f64>> = pred
+        .get("predictions")
+        .and_then(Value::as_array)
+        .map(|v| v.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect());
     let sec = p
         .report
         .section(format!("Thermal model: {} from {}", t.target, stem(&data)));
-    sec.text(format!("Sensor selection by the ridge trace (VIF, elimination steps, chosen k), then the fitted model ({}{}) and its prediction against the measured drift.", t.model, if t.lag { ", with a fitted first-order lag of each sensor" } else { "" }));
-    if let Ok(tab) = mtec_io::Table::read(&data) {
-        if let (Ok(y), Some(pr)) = (
-            tab.f64_column(&t.target),
-            pred.get("predictions").and_then(Value::as_array),
-        ) {
-            let pr: Vec<f64> = pr.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect();
-            let xs: Vec<f64> = (0..y.len()).map(|i| i as f64).collect();
-            let meas = Series::new(
-                "measured",
-                xs.iter().zip(&y).map(|(a, b)| (*a, *b)).collect(),
-            );
-            let model_s = Series::new(
-                "predicted",
-                xs.iter().zip(&pr).map(|(a, b)| (*a, *b)).collect(),
-            );
-            let res = Series::new(
-                "residual",
-                xs.iter()
-                    .zip(y.iter().zip(&pr))
-                    .map(|(a, (m, q))| (*a, m - q))
-                    .collect(),
-            );
-            sec.figure(
-                line_chart(
-                    "Measured and predicted drift",
-                    "sample",
-                    "drift (µm)",
-                    &[meas, model_s, res],
-                    &[],
-                ),
-                "Measured thermal drift, the model's prediction and the residual.",
-            );
-            let temps: Vec<Series> = tab
-                .columns_with_suffix("_c")
-                .iter()
-                .take(8)
-                .filter_map(|c| {
-                    tab.f64_column(c).ok().map(|v| {
-                        Series::new(
-                            c.clone(),
-                            v.iter().enumerate().map(|(i, t)| (i as f64, *t)).collect(),
-                        )
-                    })
-                })
-                .collect();
-            if !temps.is_empty() {
-                sec.figure(
-                    line_chart("Temperatures", "sample", "°C", &temps, &[]),
-                    "Temperature sensors (up to 8 shown).",
-                );
-            }
-        }
-    }
-    if let Some(trace) = sel.get("trace") {
-        if let (Some(k), Some(names), Some(coefs)) = (
-            trace.get("k").and_then(Value::as_array),
-            trace.get("sensors").and_then(Value::as_array),
-            trace.get("coefficients").and_then(Value::as_array),
-        ) {
-            let k: Vec<f64> = k.iter().filter_map(Value::as_f64).collect();
-            let series: Vec<Series> = names
-                .iter()
-                .zip(coefs)
-                .map(|(n, c)| {
+    let ridge_trace = super::pipeline_thermal::section(
+        sec,
+        &model_json,
+        table.as_ref(),
+        &t.target,
+        predictions.as_deref(),
+    );
+    if let Some(tab) = &table {
+        let temps: Vec<Series> = tab
+            .columns_with_suffix("_c")
+            .iter()
+            .take(8)
+            .filter_map(|c| {
+                tab.f64_column(c).ok().map(|v| {
                     Series::new(
-                        fmt(n),
-                        k.iter()
-                            .zip(c.as_array().into_iter().flatten())
-                            .map(|(k, c)| (k.log10(), c.as_f64().unwrap_or(0.0)))
-                            .collect(),
+                        c.clone(),
+                        v.iter().enumerate().map(|(i, t)| (i as f64, *t)).collect(),
                     )
                 })
-                .collect();
-            if !series.is_empty() {
-                sec.figure(
-                    line_chart(
-                        "Ridge trace",
-                        "log10 k",
-                        "standardised coefficient",
-                        &series,
-                        &[],
-                    ),
-                    "Ridge trace: standardised coefficients against the ridge parameter k.",
-                );
-            }
+            })
+            .collect();
+        if !temps.is_empty() {
+            sec.figure(
+                line_chart("Temperatures", "sample", "°C", &temps, &[]),
+                "Temperature sensors (up to 8 shown).",
+            );
         }
     }
-    let mut sel_small = sel.clone();
-    if let Some(o) = sel_small.as_object_mut() {
-        o.remove("trace");
+    if ridge_trace {
+        // the model is the ridge-trace selection's: show how the sensors were chosen
+        let sel = p.json_stage_of(
+            &format!("thermal-select-{tag}.json"),
+            vec![
+                "thermal".into(),
+                "select".into(),
+                "--data".into(),
+                s(&data),
+                "--target".into(),
+                t.target.clone(),
+                "--json".into(),
+            ],
+        )?;
+        let sec = p.report.section(format!(
+            "Sensor selection for {}: the ridge trace",
+            t.target
+        ));
+        sec.text(
+            "The ridge-trace selection the model was fitted with: variance inflation factors, \
+             the elimination steps and the chosen k, on all rows of the data.",
+        );
+        if let Some(fig) = ridge_trace_figure(&sel) {
+            sec.figure(
+                fig,
+                "Ridge trace: each sensor's standardised coefficient against the ridge parameter k.",
+            );
+        }
+        let mut sel_small = sel.clone();
+        if let Some(o) = sel_small.as_object_mut() {
+            o.remove("trace");
+        }
+        json_tables(sec, &sel_small, 0);
     }
-    json_tables(sec, &sel_small, 0);
-    let mut pred_small = pred.clone();
-    if let Some(o) = pred_small.as_object_mut() {
-        o.remove("predictions");
-    }
-    json_tables(sec, &pred_small, 0);
     Ok(model)
+}
+
+/// The ridge trace of `thermal select --json`: one line per sensor over log10 k. The file's
+/// `coefficients` are one row per k, one column per sensor.
+fn ridge_trace_figure(sel: &Value) -> Option<String> {
+    let series = ridge_trace_series(sel)?;
+    (!series.is_empty()).then(|| {
+        line_chart(
+            "Ridge trace",
+            "log10 k",
+            "standardised coefficient",
+            &series,
+            &[],
+        )
+    })
+}
+
+fn ridge_trace_series(sel: &Value) -> Option<Vec<Series>> {
+    let trace = sel.get("trace")?;
+    let k: Vec<f64> = trace
+        .get("k")?
+        .as_array()?
+        .iter()
+        .filter_map(Value::as_f64)
+        .collect();
+    let names = trace.get("sensors")?.as_array()?;
+    let rows = trace.get("coefficients")?.as_array()?;
+    if rows.len() != k.len() || k.is_empty() {
+        return None;
+    }
+    let series: Vec<Series> = names
+        .iter()
+        .enumerate()
+        .map(|(j, n)| {
+            Series::new(
+                fmt(n),
+                k.iter()
+                    .zip(rows)
+                    .filter_map(|(k, row)| {
+                        let c = row.as_array()?.get(j)?.as_f64()?;
+                        Some((k.log10(), c))
+                    })
+                    .collect(),
+            )
+        })
+        .collect();
+    Some(series)
 }
 
 /// A volumetric map from a grid; returns the map file.
@@ -770,4 +861,37 @@ pub fn compensation(
         sec.table(&["format", "file", "first lines"], tables);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A squareness is constant over the travel: its spread is its magnitude, not 1e-6.
+    #[test]
+    fn a_constant_element_is_spread_by_its_magnitude() {
+        let (m, sd) = element_statistics(&[19.88; 101]);
+        assert!(
+            (m - 19.88).abs() < 1e-12 && (sd - 19.88).abs() < 1e-12,
+            "{m} {sd}"
+        );
+        let (m, sd) = element_statistics(&[1.0, 2.0, 3.0]);
+        assert_eq!((m, sd), (2.0, 1.0));
+    }
+
+    /// `coefficients` is one row per k: the trace has one line per sensor, over every k (the
+    /// report drew it transposed, one line per k).
+    #[test]
+    fn the_ridge_trace_has_one_line_per_sensor() {
+        let sel = serde_json::json!({"trace": {
+            "k": [0.001, 0.01, 0.1],
+            "sensors": ["s1_c", "s2_c"],
+            "coefficients": [[1.0, -1.0], [0.8, -0.5], [0.3, -0.1]]
+        }});
+        let s = ridge_trace_series(&sel).unwrap();
+        assert_eq!(s.len(), 2);
+        assert_eq!(s[0].name, "s1_c");
+        assert_eq!(s[0].points, vec![(-3.0, 1.0), (-2.0, 0.8), (-1.0, 0.3)]);
+        assert_eq!(s[1].points[2], (-1.0, -0.1));
+    }
 }

@@ -68,8 +68,8 @@ enum Sub {
     /// response to the spindle power: δ = b₀ + Σ c_m·L_τm[(n/1000)^α] + ambient sensors, n from
     /// the --input column, time constants s·τ at rest (s = 1…4: a turning spindle cools faster),
     /// α, τ bank, s, ridge k and ambient sensors chosen by leaving out blocks of the training
-    /// rows). --lag adds a first-order lag of each sensor with a fitted time
-    /// constant (mlr, ridge, ridge-select).
+    /// rows). --lag adds a first-order lag of each sensor, its time constant chosen by how the
+    /// model predicts forward folds of the training rows (mlr, ridge, ridge-select).
     ///
     /// Neural models (any number of comma-separated --target columns; the model file is
     /// `mtec.cnn-lstm/1` or `mtec.bpnn/1`): cnn-lstm (1-D convolution over the features of each
@@ -169,7 +169,8 @@ struct Common {
     /// Ridge parameter k (correlation form); default: where the ridge trace stabilises.
     #[arg(long)]
     k: Option<f64>,
-    /// Add a first-order lag feature per sensor with a fitted time constant.
+    /// Add a first-order lag feature per sensor, its time constant chosen by forward folds of the
+    /// training rows (blocks as --input/--block-min; not by the training fit).
     #[arg(long)]
     lag: bool,
     /// Validation block length in minutes (default: experiments, or the steps of the --input
@@ -598,6 +599,7 @@ fn fit_model(c: &Common, data: &ThermalData, rows: &[usize]) -> Result<ThermalMo
             Mlr {
                 sensors: c.sensors.clone(),
                 lag: c.lag,
+                blocks: block_spec(c),
             }
             .fit_rows(data, rows)?,
         ),

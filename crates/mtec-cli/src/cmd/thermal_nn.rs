@@ -64,7 +64,8 @@ pub struct NnArgs {
     /// Epochs without improvement of the validation loss before stopping.
     #[arg(long)]
     pub patience: Option<usize>,
-    /// cnn-lstm: time steps per window [default: 16].
+    /// cnn-lstm: time steps per window, in rows of the log [default: 16]; in minutes that is
+    /// rows × the log's sampling interval, which the model records (predict refuses another)
     #[arg(long)]
     pub window: Option<usize>,
     /// cnn-lstm: convolution filters [default: 16].
@@ -119,7 +120,13 @@ struct Loaded {
     /// Per row, in model order: (experiment, time_min, sequence value).
     labels: Vec<(u32, f64, Option<f64>)>,
     has_targets: bool,
+    /// The sampling interval of the sequences (median time step, min), when any has two rows.
+    interval_min: Option<f64>,
 }
+
+/// Relative difference of a time step from the interval that is still the same interval (a
+/// logger's clock jitter); a larger one changes what a window of rows spans.
+const INTERVAL_TOLERANCE: f64 = 0.01;
 
 /// Resolves `ez` or `ez_um` against the header (exact name first).
 fn resolve(t: &Table, name: &str) -> Option<String> {
@@ -139,7 +146,10 @@ fn header_error(t: &Table, msg: String) -> CliError {
 /// Reads the log into sequences. `targets` empty or absent columns with `need_targets = false`
 /// give zero targets (prediction only). `strict_time`: a time may not repeat within a sequence
 /// (the sequence model's rows are time steps; the BPNN takes rows one by one and only uses the
-/// time order for its validation tail).
+/// time order for its validation tail). With `strict_time` the time step must also be one
+/// interval throughout (the CNN-LSTM's window counts rows, so a gap or another sampling rate
+/// would change the minutes it spans): `trained_interval_min` when the model recorded it, the
+/// median step of the file otherwise; the first row off it is refused.
 fn load(
     path: &Path,
     feature_names: &[String],
@@ -147,6 +157,7 @@ fn load(
     sequence_by: Option<&str>,
     need_targets: bool,
     strict_time: bool,
+    trained_interval_min: Option<f64>,
 ) -> Result<Loaded, CliError> {
     let t = Table::read(path)?;
     t.require(&["time_min"])?;
@@ -213,10 +224,13 @@ fn load(
     }
     let mut experiments = Vec::new();
     let mut labels = Vec::new();
+    // (time step, row of its later sample) of every sequence
+    let mut steps: Vec<(f64, usize)> = Vec::new();
     for (e, seqs) in groups {
         let mut sequences = Vec::new();
         for (_, mut rows) in seqs {
             rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+            steps.extend(rows.windows(2).map(|w| (w[1].0 - w[0].0, w[1].1)));
             for w in rows.windows(2) {
                 if strict_time && w[0].0 == w[1].0 {
                     return Err(CliError::Input(t.error_at(
@@ -262,11 +276,47 @@ fn load(
     };
     data.validate()
         .map_err(|e| CliError::Input(InputError::file(path, e.to_string())))?;
+    let interval_min = median_step(&steps);
+    if strict_time {
+        if let Some(expected) = trained_interval_min.or(interval_min) {
+            if let Some(&(dt, row)) = steps
+                .iter()
+                .find(|(dt, _)| (dt - expected).abs() > INTERVAL_TOLERANCE * expected)
+            {
+                let why = match trained_interval_min {
+                    Some(_) => {
+                        format!("the model was trained on data sampled every {expected} min")
+                    }
+                    None => format!("the log is sampled every {expected} min (median step)"),
+                };
+                return Err(CliError::Input(t.error_at(
+                    &t.rows[row],
+                    "time_min",
+                    format!(
+                        "a time step of {dt} min, but {why}: the CNN-LSTM's window counts rows, \
+                         so it would span other minutes here; resample the log to one step of \
+                         {expected} min (each gap becomes its own experiment)"
+                    ),
+                )));
+            }
+        }
+    }
     Ok(Loaded {
         data,
         labels,
         has_targets,
+        interval_min,
     })
+}
+
+/// The median of the time steps (min), if there is one.
+fn median_step(steps: &[(f64, usize)]) -> Option<f64> {
+    let mut v: Vec<f64> = steps.iter().map(|s| s.0).filter(|d| *d > 0.0).collect();
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    Some(v[v.len() / 2])
 }
 
 fn parse_ids(list: &[String], what: &str) -> Result<Vec<u32>, CliError> {
@@ -444,6 +494,7 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
         seq_by.as_deref(),
         true,
         r.kind == NnKind::CnnLstm,
+        None,
     )?;
     // the leading sensor features as rises (0: absolute temperatures)
     let rises = if nn.rises { n_sensors } else { 0 };
@@ -479,6 +530,7 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
         (a, Some(b))
     };
     let train_exps: Vec<u32> = train.experiments.iter().map(|e| e.id).collect();
+    let interval = loaded.interval_min;
     let provenance = |training: serde_json::Value,
                       train_m: &[ChannelMetrics],
                       test_m: Option<&Vec<ChannelMetrics>>| {
@@ -491,6 +543,7 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
             "train_metrics": train_m,
             "test_metrics": test_m,
             "training": training,
+            "sample_interval_min": interval,
         })
     };
     let text = match r.kind {
@@ -525,9 +578,12 @@ pub fn fit(r: FitRequest) -> Result<(), CliError> {
             })
             .map_err(|e| nn_error(r.data, e))?;
             let _ = writeln!(say,
-                "CNN-LSTM ({} parameters, window {}, {} filters, LSTM {}) on experiments {:?}: {} epochs, best {}, {:.1} s; {}",
+                "CNN-LSTM ({} parameters, window {} rows = {}, {} filters, LSTM {}) on experiments {:?}: {} epochs, best {}, {:.1} s; {}",
                 report.parameters,
                 model.architecture.window,
+                interval
+                    .map(|i| format!("{} min", i * model.architecture.window as f64))
+                    .unwrap_or_else(|| "? min".into()),
                 model.architecture.conv_channels,
                 model.architecture.lstm_hidden,
                 train_exps,
@@ -658,7 +714,19 @@ pub fn predict(
         .and_then(|v| v.as_str())
         .map(str::to_string);
     let strict = matches!(model, NnModel::CnnLstm(_));
-    let mut loaded = load(data, features, targets, seq_by.as_deref(), false, strict)?;
+    // the CNN-LSTM's window is rows of the interval it was trained on
+    let trained_interval = provenance
+        .get("sample_interval_min")
+        .and_then(|v| v.as_f64());
+    let mut loaded = load(
+        data,
+        features,
+        targets,
+        seq_by.as_deref(),
+        false,
+        strict,
+        trained_interval,
+    )?;
     // trained on rises of the first k features (`thermal fit --rises`): the same here
     let rises = provenance
         .get("rises")
