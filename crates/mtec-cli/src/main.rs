@@ -21,9 +21,13 @@ The workflow, and the commands for each step:
   circular      circular test of two axes: ISO 230-4 G and H, ballbar diagnostics ranked
   map           volumetric error maps: fit a grid (trilinear) and evaluate it at points
   compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
-                (`compensate table`)
+                (`compensate table`), work-offset updates for the thermal state now
+                (`compensate thermal-offset`)
   thermal       thermal drift models from temperature logs: select sensors, fit, predict
                 (regression models, or neural: `thermal fit --model cnn-lstm|bpnn`)
+  machine       the machine's error with a state: `machine build` sums a geometric model and
+                thermal models with their training envelopes, `machine replay` compensates a
+                recorded day through the real-time path
   sensitivity   which error elements drive the volumetric error (EFAST/Sobol/Morris), tolerances
 
 Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
@@ -58,6 +62,9 @@ enum Command {
     Compensate(cmd::compensate::Command),
     /// Thermal error models: ridge-trace sensor selection, MLR/ridge/exp-ambient fit, predict.
     Thermal(cmd::thermal::Args),
+    /// The machine error model with a state: `machine build` (geometric + thermal models with
+    /// their training envelopes), `machine replay` (a recorded day through the real-time path).
+    Machine(cmd::machine::Args),
     /// Global sensitivity (EFAST, Sobol, Morris) of the volumetric error to the error elements.
     Sensitivity(cmd::sensitivity::Args),
     /// Run the whole pipeline of a project file and write an HTML report.
@@ -95,7 +102,11 @@ fn main() -> ExitCode {
         Command::Map(a) => cmd::map::run(a),
         Command::Compensate(cmd::compensate::Command::Gcode(a)) => cmd::compensate_gcode::run(a),
         Command::Compensate(cmd::compensate::Command::Table(a)) => cmd::compensate_table::run(a),
+        Command::Compensate(cmd::compensate::Command::ThermalOffset(a)) => {
+            cmd::compensate_thermal_offset::run(a)
+        }
         Command::Thermal(a) => cmd::thermal::run(a),
+        Command::Machine(a) => cmd::machine::run(a),
         Command::Sensitivity(a) => cmd::sensitivity::run(a),
         Command::Run(a) => cmd::run::run(a),
         Command::Demo(a) => cmd::demo::run(a),

@@ -379,3 +379,35 @@ fn directories_block_devices_and_inputs_are_refused_with_exit_2() {
     let o = mtec(&["map", "fit", "--grid", s(&grid), "-o", s(&glink)]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
 }
+
+/// A German spreadsheet's export (semicolons, decimal commas, trailing separators) gives the same
+/// numbers as the comma file, and the command says how it read it.
+#[test]
+fn spreadsheet_export_reads_like_the_comma_file_with_a_note() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let map = r#"{"format":"mtec.map/1","model":"trilinear","outside":"clamp","source":"t",
+      "x_mm":[0,100],"y_mm":[0,100],"z_mm":[0,100],
+      "ex_um":[1,2,1,2,1,2,1,2],"ey_um":[0,0,0,0,0,0,0,0],"ez_um":[0,0,0,0,1,1,1,1]}"#;
+    std::fs::write(d.join("map.json"), map).unwrap();
+    std::fs::write(d.join("de.csv"), "x_mm;y_mm;z_mm;;\r\n10,5;20;30,25;;\r\n").unwrap();
+    std::fs::write(d.join("en.csv"), "x_mm,y_mm,z_mm\n10.5,20,30.25\n").unwrap();
+    let run = |pts: &str| {
+        let p = |n: &str| d.join(n).to_str().unwrap().to_string();
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_mtec"))
+            .args(["map", "eval", "--map", &p("map.json"), "--points", &p(pts)])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (o.stdout, String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let (de, note) = run("de.csv");
+    let (en, quiet) = run("en.csv");
+    assert_eq!(de, en);
+    assert!(
+        note.contains("note:") && note.contains("decimal comma"),
+        "{note}"
+    );
+    assert!(note.contains("empty column(s)"), "{note}");
+    assert!(!quiet.contains("note:"), "{quiet}");
+}

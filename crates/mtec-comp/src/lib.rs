@@ -9,6 +9,9 @@
 //! (LinuxCNC, Siemens CEC/LEC, FANUC, HEIDENHAIN, Beckhoff) with a checker of each format's rules;
 //! [`machine`] sums a geometric model and thermal models that follow the machine's state
 //! (temperatures, spindle speed) into one stateful [`ErrorModel`];
+//! [`machine_build`] writes that model's file from fitted thermal models and their training
+//! data; [`state_log`] brings a stateful model to the state of a log of readings (for offline
+//! outputs), [`replay`] compensates a recorded day through the real-time path;
 //! [`rt`] evaluates corrections each interpolation cycle without allocating (its C ABI lives in
 //! the `mtec-rt` crate).
 //!
@@ -20,11 +23,15 @@ pub mod gcode;
 pub mod kinematic;
 pub mod load;
 pub mod machine;
+pub mod machine_build;
 pub mod map;
 pub mod model;
 pub mod pose;
+pub mod replay;
 pub mod rt;
+pub mod state_log;
 pub mod table;
+pub mod thermal_offset;
 
 pub use correction::{command_for_target, CorrectionError, CorrectionOptions};
 pub use load::load_error_model;
@@ -33,3 +40,4 @@ pub use map::{GridLimits, GridMap, Outside};
 pub use model::{ErrorModel, StateError, StateStatus};
 pub use pose::{command_for_pose, ChainKinematics, Pose, PoseError, PoseSolveOptions};
 pub use rt::Compensator;
+pub use state_log::{advance_through_log, LogStatus, WithState};

@@ -9,7 +9,9 @@
 //!   (+1 when the model's target is the tool's displacement relative to the workpiece along
 //!   +axis, the convention of every mtec error: actual = commanded + e);
 //! - w: the envelope weight. Each input (temperature, spindle speed, ambient) has the range it
-//!   had in the training data. Inside every range w = 1. An input a distance d outside its range
+//!   had in the training data; the envelope may also name guards, columns the model does not
+//!   read (the shop's air for a model of the spindle speed alone), which become state inputs
+//!   that fade the part like its own inputs. Inside every range w = 1. An input a distance d outside its range
 //!   gives w_i = max(0, 1 − d / width), width = `fade.temperature_c` (default 2 °C) for
 //!   temperature columns (`*_c`) and `fade.other_fraction` (default 10 %) of the training range
 //!   for other inputs; w = min_i w_i. A faded thermal part falls back to no thermal correction,
@@ -18,7 +20,8 @@
 //!   input is outside, so a controller can raise a message.
 //!
 //! The state advances through [`ErrorModel::update_state`] (readings in
-//! [`ErrorModel::state_inputs`] order, the union of the parts' inputs in file order); before the
+//! [`ErrorModel::state_inputs`] order, the union of the parts' inputs in file order, each
+//! part's guards after its inputs in name order); before the
 //! first update the thermal part is zero. Updates do not allocate: every buffer is sized when the
 //! file is loaded.
 
@@ -214,23 +217,15 @@ impl MachineErrorModel {
             if !(spec.sign == 1.0 || spec.sign == -1.0) {
                 return Err(format!("`sign` is {}, it must be 1 or -1", spec.sign));
             }
-            let mut map = Vec::new();
-            for name in stream.inputs() {
-                let Some(&[lo, hi]) = spec.envelope.get(name) else {
-                    return Err(format!(
-                        "`envelope` of `{}` has no training range for input `{name}`: every \
-                         input needs one (mtec machine build computes them from the training data)",
-                        spec.model
-                    ));
-                };
+            // a reading shared by two parts must be inside both ranges
+            let mut add = |name: &String, [lo, hi]: [f64; 2]| -> Result<usize, String> {
                 if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
                     return Err(format!(
                         "`{name}`: the envelope [{lo}, {hi}] is not a range"
                     ));
                 }
-                let j = match inputs.iter().position(|s| s == name) {
+                Ok(match inputs.iter().position(|s| s == name) {
                     Some(j) => {
-                        // a reading shared by two parts must be inside both ranges
                         envelope[j] = [envelope[j][0].max(lo), envelope[j][1].min(hi)];
                         if envelope[j][0] > envelope[j][1] {
                             return Err(format!(
@@ -244,8 +239,24 @@ impl MachineErrorModel {
                         envelope.push([lo, hi]);
                         inputs.len() - 1
                     }
+                })
+            };
+            let mut map = Vec::new();
+            for name in stream.inputs() {
+                let Some(&range) = spec.envelope.get(name) else {
+                    return Err(format!(
+                        "`envelope` of `{}` has no training range for input `{name}`: every \
+                         input needs one (mtec machine build computes them from the training data)",
+                        spec.model
+                    ));
                 };
-                map.push(j);
+                map.push(add(name, range)?);
+            }
+            // guards: envelope columns the model does not read still fade it (module docs)
+            for (name, &range) in &spec.envelope {
+                if !stream.inputs().contains(name) {
+                    add(name, range)?;
+                }
             }
             let n = map.len();
             loaded.push(ThermalPart {

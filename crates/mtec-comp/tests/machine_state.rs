@@ -24,6 +24,7 @@ fn thermal_file() -> String {
         coefficients: vec![3.0, -1.0],
         std_errors: None,
         ridge: None,
+        warnings: Vec::new(),
     });
     let f = ModelFile {
         format: MODEL_FORMAT.into(),
@@ -32,6 +33,10 @@ fn thermal_file() -> String {
         split: Split::default(),
         train_metrics: Metrics::new(&[0.0, 1.0, 2.0], &[0.0, 1.0, 2.0], 2),
         test_metrics: None,
+        validation: None,
+        envelope: Vec::new(),
+        candidates: Vec::new(),
+        warnings: Vec::new(),
     };
     serde_json::to_string_pretty(&f).unwrap()
 }
@@ -123,6 +128,29 @@ fn outside_the_envelope_the_thermal_part_fades_to_nothing() {
     // back inside: full weight again (the filters kept running meanwhile)
     let s = m.update_state(&[25.0, 20.0], 0.0).unwrap();
     assert_eq!((s.thermal_weight, s.outside), (1.0, None));
+}
+
+#[test]
+fn a_guard_column_fades_the_part_although_the_model_does_not_read_it() {
+    // the envelope names `air_c`, which the model does not read: it becomes a state input
+    let (_d, p) = setup(&machine_json(
+        "",
+        r#"{"t1_c": [19, 31], "t2_c": [18, 22], "air_c": [18, 24]}"#,
+    ));
+    let mut m = load(&p);
+    assert_eq!(m.state_inputs(), ["t1_c", "t2_c", "air_c"]);
+    m.update_state(&[25.0, 20.0, 21.0], 0.0).unwrap();
+    let inside = m.error_um([0.0; 3])[2] - 0.5;
+    assert!((inside - (2.0 + 75.0 - 20.0)).abs() < 1e-12);
+    // the air 1.5 °C above its range: weight 1 − 1.5/2, the model's own inputs inside theirs
+    let s = m.update_state(&[25.0, 20.0, 25.5], 0.0).unwrap();
+    assert_eq!(s.outside, Some(2));
+    assert!((s.thermal_weight - 0.25).abs() < 1e-12);
+    let faded = m.error_um([0.0; 3])[2] - 0.5;
+    assert!(
+        (faded - 0.25 * (2.0 + 75.0 - 20.0)).abs() < 1e-12,
+        "{faded}"
+    );
 }
 
 #[test]

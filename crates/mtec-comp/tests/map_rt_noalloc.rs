@@ -85,6 +85,7 @@ fn state_update_does_not_allocate() {
         ambient_lag_min: Some(60.0),
         ambient_lag_coefficients_um_per_c: vec![-0.2],
         inner_cv_rmse_um: None,
+        warnings: Vec::new(),
     });
     let f = ModelFile {
         format: MODEL_FORMAT.into(),
@@ -93,6 +94,10 @@ fn state_update_does_not_allocate() {
         split: Split::default(),
         train_metrics: Metrics::new(&[0.0, 1.0], &[0.0, 1.0], 1),
         test_metrics: None,
+        validation: None,
+        envelope: Vec::new(),
+        candidates: Vec::new(),
+        warnings: Vec::new(),
     };
     std::fs::write(
         dir.path().join("th.json"),

@@ -198,7 +198,7 @@ impl Table {
                 &self.path,
                 self.header_line,
                 i + 1,
-                format!("column `{other}` has the wrong unit suffix: mtec expects `{name}` (units are part of the column name, SPEC §2)"),
+                format!("column `{other}` has the wrong unit suffix: mtec expects `{name}` (units are part of the column name: docs/formats.md, Rules for every file)"),
             ));
         }
         Err(InputError::line(

@@ -117,10 +117,15 @@ fn c_program_updates_the_machine_state() {
             coefficients: vec![3.0],
             std_errors: None,
             ridge: None,
+            warnings: Vec::new(),
         }),
         split: Split::default(),
         train_metrics: Metrics::new(&[0.0, 1.0], &[0.0, 1.0], 1),
         test_metrics: None,
+        validation: None,
+        envelope: Vec::new(),
+        candidates: Vec::new(),
+        warnings: Vec::new(),
     };
     std::fs::write(
         dir.path().join("thermal.json"),

@@ -341,7 +341,7 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
 
     let (h, a, b, phis) = PRESET;
     let mut setup = String::from(
-        "# mtec ballbar setup written by `mtec simulate dbb-rotary` (SPEC §4).\n\
+        "# mtec ballbar setup written by `mtec simulate dbb-rotary` (docs/formats.md, Ballbar).\n\
          # Source layout: modes 1-2 centre ball on the axis at h, tool cup at radius b;\n\
          # modes 3-5 second mount at radius a (table angles 0, 120, 240 deg), tool cup on the\n\
          # axis k = sqrt(b^2 - a^2) above the ball plane.\n",

@@ -31,6 +31,7 @@ pub const SCENARIOS: &[(&str, &str)] = &[
     ("circular-test", "ISO 230-4 ballbar circular test of X and Y with injected faults, and a fault-free run"),
     ("spindle-sensors", "8 collinear spindle temperature sensors and the radial drift (ridge-trace sensor selection)"),
     ("feed-axis-ambient", "Z-axis thermal error along the axis at ambient 15/20/25/30 C (exp-ambient model)"),
+    ("production-day", "a VMC through 4 production days and an unseen day (spindle steps, idle, cooling, day/night air), its project.toml fits, builds and compensates: `mtec run`"),
     ("dbb-rotary", "ballbar on a C axis: 5 installation modes, 4 speeds x 4 h, every 20 min, temperatures T1-T9, for `mtec identify ballbar`"),
 ];
 
@@ -62,6 +63,7 @@ pub fn run_scenario(name: &str, seed: u64) -> Result<ScenarioOutput, SimError> {
         "spindle-sensors" => crate::spindle_sensors::run(seed),
         "feed-axis-ambient" => crate::feed_axis_ambient::run(seed),
         "dbb-rotary" => crate::dbb_rotary::run(seed),
+        "production-day" => crate::production_day::run(seed),
         _ => Err(SimError::UnknownScenario(name.to_string())),
     }
 }

@@ -174,6 +174,37 @@ impl ThermalNetwork {
         record_min: f64,
         step_s: f64,
     ) -> ThermalHistory {
+        let mut out = self.simulate_with(
+            initial_c,
+            |t| ambient.at(t),
+            |time_min, rhs| {
+                let speed = duty.speed_at(time_min - 1e-9);
+                for s in &self.sources {
+                    rhs[s.body] += s.power_w(speed);
+                }
+            },
+            end_min,
+            record_min,
+            step_s,
+        );
+        out.speed = out.time_min.iter().map(|&t| duty.speed_at(t)).collect();
+        out
+    }
+
+    /// Integrates from `initial_c` with any ambient `ambient_c(t_min)` and any heat input:
+    /// `add_power(t_min, rhs)` adds the power (W) each body receives over the step that ends at
+    /// `t_min` to `rhs[body]` (the network's own `sources` are not used, so several inputs, e.g.
+    /// a spindle speed and axis feeds, can drive their own sources). Records every `record_min`
+    /// (`speed` is left empty); the step is `step_s` seconds (backward Euler, module docs).
+    pub fn simulate_with(
+        &self,
+        initial_c: &[f64],
+        ambient_c: impl Fn(f64) -> f64,
+        mut add_power: impl FnMut(f64, &mut DVector<f64>),
+        end_min: f64,
+        record_min: f64,
+        step_s: f64,
+    ) -> ThermalHistory {
         let n = self.bodies.len();
         let h = step_s;
         // System matrix of backward Euler (constant over time): A T' = C/h T + G_amb T_amb + P.
@@ -197,26 +228,22 @@ impl ThermalNetwork {
         };
         let record = |out: &mut ThermalHistory, time: f64, t: &DVector<f64>| {
             out.time_min.push(time);
-            out.ambient_c.push(ambient.at(time));
+            out.ambient_c.push(ambient_c(time));
             out.temps_c.push(t.iter().copied().collect());
-            out.speed.push(duty.speed_at(time));
         };
         record(&mut out, 0.0, &t);
         let steps_per_record = (record_min * 60.0 / h).round().max(1.0) as usize;
         let records = (end_min / record_min).round() as usize;
         let mut time_min = 0.0;
+        let mut rhs = DVector::<f64>::zeros(n);
         for r in 1..=records {
             for _ in 0..steps_per_record {
                 time_min += h / 60.0;
-                let speed = duty.speed_at(time_min - 1e-9);
-                let amb = ambient.at(time_min);
-                let mut rhs = DVector::<f64>::zeros(n);
+                let amb = ambient_c(time_min);
                 for (i, b) in self.bodies.iter().enumerate() {
                     rhs[i] = b.capacity_j_per_k / h * t[i] + b.to_ambient_w_per_k * amb;
                 }
-                for s in &self.sources {
-                    rhs[s.body] += s.power_w(speed);
-                }
+                add_power(time_min, &mut rhs);
                 t = lu
                     .solve(&rhs)
                     .expect("backward-Euler matrix is strictly diagonally dominant, hence regular");

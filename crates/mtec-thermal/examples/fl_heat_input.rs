@@ -53,10 +53,16 @@ fn main() {
         );
         if let Some(dir) = &out {
             let train_metrics = m.evaluate(&d).unwrap();
+            let model = ThermalModel::HeatInput(m);
+            let all: Vec<usize> = (0..d.len()).collect();
             let file = ModelFile {
                 format: MODEL_FORMAT.into(),
                 target: format!("ch{ch}_um"),
-                model: ThermalModel::HeatInput(m),
+                envelope: mtec_thermal::guard::envelope(&model, &d, &all),
+                warnings: model.warnings(),
+                model,
+                validation: None,
+                candidates: Vec::new(),
                 split: Split {
                     train_experiments: d.experiments(),
                     train_rows: d.len(),

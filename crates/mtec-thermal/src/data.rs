@@ -210,6 +210,69 @@ impl ThermalData {
         }
     }
 
+    /// The log `self` (the history) followed by `next`, as one record whose filters run through
+    /// both: the columns must match, and `next` must start after the history ends (its first
+    /// experiment continues the history's last). The result has no target (metrics are taken on
+    /// `next` alone); rows of `next` start at index `self.len()`.
+    pub fn followed_by(&self, next: &ThermalData) -> Result<ThermalData, ThermalError> {
+        if self.sensor_names != next.sensor_names
+            || self.ambient_c.is_some() != next.ambient_c.is_some()
+            || self.position_mm.is_some() != next.position_mm.is_some()
+        {
+            return Err(ThermalError::Invalid(format!(
+                "the history's columns ({}) differ from the data's ({})",
+                self.sensor_names.join(", "),
+                next.sensor_names.join(", ")
+            )));
+        }
+        let (Some(h_end), Some(d_start)) = (self.time_min.last(), next.time_min.first()) else {
+            return Err(ThermalError::Invalid(
+                "the history or the data has no rows".into(),
+            ));
+        };
+        if !(d_start > h_end) {
+            return Err(ThermalError::Invalid(format!(
+                "the data starts at time_min {d_start}, not after the history's last row ({h_end}): the history must be the log just before the data"
+            )));
+        }
+        // the history's last experiment continues into the data's first
+        let last = self.experiment.last().cloned().unwrap_or_default();
+        let first = next.experiment[0].clone();
+        let mut experiment: Vec<String> = self.experiment.clone();
+        experiment.extend(next.experiment.iter().map(|e| {
+            if *e == first {
+                last.clone()
+            } else {
+                e.clone()
+            }
+        }));
+        let cat = |a: &Option<Vec<f64>>, b: &Option<Vec<f64>>| match (a, b) {
+            (Some(a), Some(b)) => Some(a.iter().chain(b).copied().collect()),
+            _ => None,
+        };
+        let mut temps = DMatrix::zeros(self.len() + next.len(), self.sensor_names.len());
+        temps.rows_mut(0, self.len()).copy_from(&self.temps_c);
+        temps
+            .rows_mut(self.len(), next.len())
+            .copy_from(&next.temps_c);
+        Ok(ThermalData {
+            experiment,
+            time_min: self
+                .time_min
+                .iter()
+                .chain(&next.time_min)
+                .copied()
+                .collect(),
+            sensor_names: self.sensor_names.clone(),
+            temps_c: temps,
+            ambient_c: cat(&self.ambient_c, &next.ambient_c),
+            position_mm: cat(&self.position_mm, &next.position_mm),
+            target: None,
+            source: next.source.clone(),
+            lines: self.lines.iter().chain(&next.lines).copied().collect(),
+        })
+    }
+
     /// A message located at the header (used for a column a model needs but the file lacks).
     pub fn header_error(&self, message: impl Into<String>) -> InputError {
         match &self.source {

@@ -30,6 +30,16 @@ pub enum Feature {
     Lag { sensor: String, tau_min: f64 },
     /// Temperature rate over a backward window (°C/min).
     Rate { sensor: String, window_min: f64 },
+    /// First-order lag of the heat input p = (n/1000)^α of a non-temperature column n (e.g.
+    /// `spindle_rpm`), with time constant `tau_min` while n > 0 and `rest_tau_min` at rest:
+    /// [`crate::heat_input::switched_lag`]. On line: one filter state, advanced with the current
+    /// n and Δt by the same exact step.
+    HeatLag {
+        input: String,
+        alpha: f64,
+        tau_min: f64,
+        rest_tau_min: f64,
+    },
 }
 
 impl Feature {
@@ -39,24 +49,54 @@ impl Feature {
             Feature::Temp { sensor } => sensor.clone(),
             Feature::Lag { sensor, tau_min } => format!("lag({sensor},{tau_min:.1}min)"),
             Feature::Rate { sensor, window_min } => format!("rate({sensor},{window_min}min)"),
+            Feature::HeatLag {
+                input,
+                alpha,
+                tau_min,
+                rest_tau_min,
+            } => format!("heat({input}^{alpha},{tau_min:.1}/{rest_tau_min:.1}min)"),
         }
     }
 
-    fn sensor(&self) -> &str {
+    /// The column the feature reads (a temperature sensor, or the heat-input column).
+    pub fn sensor(&self) -> &str {
         match self {
             Feature::Temp { sensor }
             | Feature::Lag { sensor, .. }
             | Feature::Rate { sensor, .. } => sensor,
+            Feature::HeatLag { input, .. } => input,
         }
     }
 
     /// Values of the feature on every row of `data`.
     pub fn values(&self, data: &ThermalData) -> Result<Vec<f64>, ThermalError> {
+        if let Feature::HeatLag {
+            input,
+            alpha,
+            tau_min,
+            rest_tau_min,
+        } = self
+        {
+            let n = crate::validate::input_column(data, input)
+                .ok_or_else(|| ThermalError::MissingColumn(input.clone()))?;
+            let p: Vec<f64> = n
+                .iter()
+                .map(|v| (v / crate::heat_input::INPUT_REF).powf(*alpha))
+                .collect();
+            return Ok(crate::heat_input::switched_lag(
+                data,
+                &p,
+                &n,
+                *tau_min,
+                *rest_tau_min,
+            ));
+        }
         let t = data.sensor(data.sensor_index(self.sensor())?);
         Ok(match self {
             Feature::Temp { .. } => t,
             Feature::Lag { tau_min, .. } => lag_filter(data, &t, *tau_min),
             Feature::Rate { window_min, .. } => rate(data, &t, *window_min),
+            Feature::HeatLag { .. } => unreachable!("returned above"),
         })
     }
 }
@@ -103,12 +143,14 @@ pub fn design(data: &ThermalData, features: &[Feature]) -> Result<DMatrix<f64>, 
     Ok(x)
 }
 
-/// Plain temperature features of the named sensors (all sensors when `sensors` is empty).
+/// Plain temperature features of the named sensors (every `_c` sensor when `sensors` is empty:
+/// an attached input column such as `spindle_rpm` is not a temperature).
 pub fn temp_features(data: &ThermalData, sensors: &[String]) -> Result<Vec<Feature>, ThermalError> {
     if sensors.is_empty() {
         return Ok(data
             .sensor_names
             .iter()
+            .filter(|s| s.ends_with("_c"))
             .map(|s| Feature::Temp { sensor: s.clone() })
             .collect());
     }

@@ -24,10 +24,12 @@
 // like the equations they implement.
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
 
+pub mod auto;
 pub mod data;
 pub mod error;
 pub mod exp_ambient;
 pub mod features;
+pub mod guard;
 pub mod heat_input;
 pub mod lag_select;
 pub mod linear;
@@ -35,6 +37,7 @@ pub mod metrics;
 pub mod model;
 pub mod plot;
 pub mod select;
+pub mod stepwise;
 pub mod stream;
 pub mod validate;
 

@@ -1,13 +1,16 @@
 //! The common fit/predict interface (linfa style: a fitter is a value with its options, `fit`
 //! returns a model, a model `predict`s), the linear thermal models, and the versioned JSON file.
 
+use crate::auto::CandidateScore;
 use crate::data::ThermalData;
 use crate::error::ThermalError;
 use crate::exp_ambient::ExpAmbientModel;
 use crate::features::{design, fit_time_constants, temp_features, Feature};
+use crate::guard::InputRange;
 use crate::linear::{ols, RidgeProblem};
 use crate::metrics::Metrics;
 use crate::select::{k_grid, select_sensors, RidgeTrace, SelectOptions};
+use crate::validate::{forward_folds_of, ridge_forward_scores, thin_folds, BlockSpec, ForwardCv};
 use serde::{Deserialize, Serialize};
 
 /// The format tag of a model file.
@@ -47,6 +50,10 @@ pub enum LinearMethod {
     Ridge,
     RidgeSelect,
     LagSelect,
+    /// Forward-selected temperatures and their first-order lags, ridge k by forward folds.
+    LaggedRidge,
+    /// Lagged ridge plus lagged heat inputs (spindle power with switched time constants).
+    Dynamic,
 }
 
 /// Standardisation kept with a ridge model (its standardised equation is in these units).
@@ -73,6 +80,51 @@ pub struct LinearModel {
     pub std_errors: Option<Vec<f64>>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub ridge: Option<RidgeEquation>,
+    /// What the fit found suspicious (grid-edge k, cancelling coefficients, collapse).
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub warnings: Vec<String>,
+}
+
+/// |β*| above which a standardised coefficient is "large": the feature alone would swing the
+/// prediction by this many standard deviations of the drift.
+pub const LARGE_STANDARDISED_COEFFICIENT: f64 = 4.0;
+
+/// A warning when large standardised coefficients β*_j (b_j·s_j/s_y) of opposite sign cancel:
+/// the prediction is then a small difference of large terms, which amplifies sensor noise and
+/// breaks outside the duty cycle it was fitted on (Hoerl & Kennard 1970: the mark of collinearity).
+pub fn cancellation_warning(names: &[String], beta_std: &[f64]) -> Option<String> {
+    let large: Vec<(usize, f64)> = beta_std
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| b.abs() > LARGE_STANDARDISED_COEFFICIENT || !b.is_finite())
+        .map(|(j, b)| (j, *b))
+        .collect();
+    let pos = large.iter().any(|(_, b)| *b > 0.0);
+    let neg = large.iter().any(|(_, b)| *b < 0.0);
+    (pos && neg).then(|| {
+        let list: Vec<String> = large
+            .iter()
+            .map(|(j, b)| format!("{} {b:+.1}", names.get(*j).map(|s| s.as_str()).unwrap_or("?")))
+            .collect();
+        format!(
+            "large coefficients of opposite sign cancel (standardised, in standard deviations of the drift: {}): the prediction is a small difference of large terms, which amplifies sensor noise and fails outside the training duty cycle; use fewer sensors or more shrinkage (larger k)",
+            list.join(", ")
+        )
+    })
+}
+
+/// Standardised coefficients b_j·s_j/s_y of a fitted equation on the rows `rows` of `x`.
+fn standardised_of(x: &nalgebra::DMatrix<f64>, y: &[f64], b: &[f64]) -> Vec<f64> {
+    let n = y.len() as f64;
+    let sd = |v: &mut dyn Iterator<Item = f64>| {
+        let v: Vec<f64> = v.collect();
+        let m = v.iter().sum::<f64>() / n;
+        (v.iter().map(|a| (a - m).powi(2)).sum::<f64>() / n).sqrt()
+    };
+    let sy = sd(&mut y.iter().copied());
+    (0..x.ncols())
+        .map(|j| b[j] * sd(&mut x.column(j).iter().copied()) / sy)
+        .collect()
 }
 
 impl Predict for LinearModel {
@@ -148,6 +200,9 @@ impl Fit for Mlr {
         let x = design(data, &features)?.select_rows(rows.iter());
         let names: Vec<String> = features.iter().map(|f| f.name()).collect();
         let fit = ols(&x, y, &names)?;
+        let warnings = cancellation_warning(&names, &standardised_of(&x, y, &fit.coefficients))
+            .into_iter()
+            .collect();
         Ok(LinearModel {
             method: LinearMethod::Mlr,
             features,
@@ -155,32 +210,96 @@ impl Fit for Mlr {
             coefficients: fit.coefficients,
             std_errors: Some(fit.std_errors),
             ridge: None,
+            warnings,
         })
     }
 }
 
+/// How a ridge model's k is chosen.
+#[derive(Debug, Clone, PartialEq)]
+pub enum KChoice {
+    /// Given.
+    Fixed(f64),
+    /// Where the ridge trace stabilises (the source method, [`RidgeTrace::stable_k`]).
+    Trace,
+    /// The k of [`k_grid`] with the lowest forward-fold RMSE on the training rows
+    /// ([`crate::validate::forward_folds`]); the ridge trace when the rows hold fewer than two
+    /// blocks.
+    Forward(BlockSpec),
+}
+
+/// The k of `ks` with the lowest pooled forward RMSE of the design `features` (None: no fold).
+pub fn forward_k(
+    data: &ThermalData,
+    rows: &[usize],
+    features: &[Feature],
+    spec: &BlockSpec,
+    ks: &[f64],
+) -> Result<Option<(f64, f64)>, ThermalError> {
+    let folds = thin_folds(data, &forward_folds_of(data, rows, spec), SELECTION_DT_MIN);
+    if folds.is_empty() {
+        return Ok(None);
+    }
+    let cols: Vec<Vec<f64>> = features
+        .iter()
+        .map(|f| f.values(data))
+        .collect::<Result<_, _>>()?;
+    let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+    let scores = ridge_forward_scores(&refs, data.target_um()?, &folds, ks);
+    Ok(scores
+        .iter()
+        .zip(ks)
+        .filter(|((r, _), _)| r.is_finite())
+        .min_by(|a, b| a.0 .0.total_cmp(&b.0 .0))
+        .map(|((r, _), k)| (*k, *r)))
+}
+
+/// Row spacing (min) of the rows that selection scores (see [`thin_folds`]).
+pub const SELECTION_DT_MIN: f64 = 1.0;
+
+#[allow(clippy::too_many_arguments)]
 fn ridge_model(
     method: LinearMethod,
     data: &ThermalData,
     rows: &[usize],
     y: &[f64],
     features: Vec<Feature>,
-    k: Option<f64>,
+    k: KChoice,
     opt: SelectOptions,
 ) -> Result<LinearModel, ThermalError> {
     let x = design(data, &features)?.select_rows(rows.iter());
     let names: Vec<String> = features.iter().map(|f| f.name()).collect();
     let prob = RidgeProblem::new(&x, y, &names)?;
-    let k = match k {
-        Some(k) => k,
-        None => {
-            RidgeTrace::compute(&prob, &names, &k_grid())
-                .stable_k(opt.stable_step)
-                .1
+    let grid = k_grid();
+    let kmax = grid[grid.len() - 1];
+    let mut warnings = Vec::new();
+    let by_trace = |warnings: &mut Vec<String>| {
+        let (idx, k) = RidgeTrace::compute(&prob, &names, &grid).stable_k(opt.stable_step);
+        if idx == grid.len() - 1 {
+            warnings.push(format!(
+                "ridge: the ridge trace does not settle on the k grid (0, 1e-4 … {kmax}); k = {kmax} is the end of the grid, not a stable point: the sensors are too collinear for this rule (try fewer sensors, or --k)"
+            ));
         }
+        k
+    };
+    let k = match k {
+        KChoice::Fixed(k) => k,
+        KChoice::Trace => by_trace(&mut warnings),
+        KChoice::Forward(spec) => match forward_k(data, rows, &features, &spec, &grid)? {
+            Some((k, _)) => {
+                if k == kmax {
+                    warnings.push(format!(
+                        "ridge: k = {kmax}, the largest k on the grid, predicts the forward folds best: the data asks for more shrinkage than the grid allows (the model is close to the mean drift); use fewer sensors"
+                    ));
+                }
+                k
+            }
+            None => by_trace(&mut warnings),
+        },
     };
     let beta = prob.standardised(k)?;
     let (b0, b) = prob.destandardise(&beta);
+    warnings.extend(cancellation_warning(&names, &beta));
     Ok(LinearModel {
         method,
         features,
@@ -195,15 +314,19 @@ fn ridge_model(
             y_mean_um: prob.std.y_mean,
             y_std_um: prob.std.y_std,
         }),
+        warnings,
     })
 }
 
-/// Ridge regression (standardised) on the named sensors; k from the ridge trace when `None`.
+/// Ridge regression (standardised) on the named sensors; k, when `None`, the grid value that
+/// predicts the forward folds of the training rows best (blocks by `blocks`), or where the
+/// ridge trace stabilises when the rows hold fewer than two blocks.
 #[derive(Debug, Clone, Default)]
 pub struct Ridge {
     pub sensors: Vec<String>,
     pub k: Option<f64>,
     pub lag: bool,
+    pub blocks: BlockSpec,
 }
 
 impl Fit for Ridge {
@@ -217,7 +340,10 @@ impl Fit for Ridge {
             rows,
             y,
             features,
-            self.k,
+            match self.k {
+                Some(k) => KChoice::Fixed(k),
+                None => KChoice::Forward(self.blocks.clone()),
+            },
             SelectOptions::default(),
         )
     }
@@ -246,8 +372,12 @@ impl Fit for RidgeSelect {
         let features = sensor_features(data, rows, &sel.selected, self.lag)?;
         // with lags the selection's k (read without them) no longer applies: the lagged design
         // gets its own k where its ridge trace stabilises
-        let k = if self.lag { None } else { Some(sel.k) };
-        ridge_model(
+        let k = if self.lag {
+            KChoice::Trace
+        } else {
+            KChoice::Fixed(sel.k)
+        };
+        let mut m = ridge_model(
             LinearMethod::RidgeSelect,
             data,
             rows,
@@ -255,7 +385,9 @@ impl Fit for RidgeSelect {
             features,
             k,
             self.options,
-        )
+        )?;
+        m.warnings.extend(sel.warnings.iter().cloned());
+        Ok(m)
     }
 }
 
@@ -350,6 +482,42 @@ pub struct ModelFile {
     pub train_metrics: Metrics,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub test_metrics: Option<Metrics>,
+    /// Forward (rolling-origin) validation on the training rows: the error on blocks the model
+    /// had not seen; its pooled RMSE is the uncertainty `predict` reports.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub validation: Option<ForwardCv>,
+    /// Training range of every column the model reads (`predict` flags rows outside).
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub envelope: Vec<InputRange>,
+    /// `--model auto`: every candidate's forward score and which was chosen.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub candidates: Vec<CandidateScore>,
+    /// Warnings of the fit (also printed by `fit`).
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub warnings: Vec<String>,
+}
+
+impl ThermalModel {
+    /// What the fit found suspicious.
+    pub fn warnings(&self) -> Vec<String> {
+        match self {
+            ThermalModel::Linear(m) => m.warnings.clone(),
+            ThermalModel::HeatInput(m) => m.warnings.clone(),
+            ThermalModel::ExpAmbient(m) => m.warnings.clone(),
+        }
+    }
+    /// Whether the model filters its inputs through time (lags, heat lags, rates): its first
+    /// predictions depend on how the filters were started.
+    pub fn has_state(&self) -> bool {
+        match self {
+            ThermalModel::Linear(m) => m
+                .features
+                .iter()
+                .any(|f| !matches!(f, Feature::Temp { .. })),
+            ThermalModel::HeatInput(_) => true,
+            ThermalModel::ExpAmbient(_) => false,
+        }
+    }
 }
 
 impl ModelFile {

@@ -196,6 +196,30 @@ pub struct Selection {
     pub coefficients: Vec<f64>,
     pub comparison: Vec<ComparisonRow>,
     pub options: SelectOptions,
+    /// The selection explains much less than all sensors did (see [`COLLAPSE_R2_DROP`]).
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub warnings: Vec<String>,
+}
+
+/// Fall of the training R² (full MLR → ridge-selected) above which the selection is reported as
+/// a collapse: the rules removed sensors that carried the drift.
+pub const COLLAPSE_R2_DROP: f64 = 0.1;
+
+/// The collapse warning of a comparison table (full MLR row first, ridge-selected second).
+fn collapse_warning(comparison: &[ComparisonRow]) -> Option<String> {
+    let full = comparison.iter().find(|r| r.model == "full MLR")?;
+    let sel = comparison
+        .iter()
+        .find(|r| r.model.starts_with("ridge-selected"))?;
+    let (a, b) = (full.metrics.r2?, sel.metrics.r2?);
+    (a - b > COLLAPSE_R2_DROP).then(|| {
+        format!(
+            "ridge-select collapsed: the {} selected sensors ({}) explain R² = {b:.2} of the training drift against {a:.2} with all {} sensors; the ridge-trace rules removed sensors that carry the drift (use lag-select, --model auto, or choose sensors yourself)",
+            sel.sensors.len(),
+            sel.sensors.join(", "),
+            full.sensors.len()
+        )
+    })
 }
 
 fn columns(x: &DMatrix<f64>, idx: &[usize]) -> DMatrix<f64> {
@@ -361,7 +385,9 @@ pub fn select_sensors(
             ),
         });
     }
+    let warnings = collapse_warning(&comparison).into_iter().collect();
     Ok(Selection {
+        warnings,
         vif: vif_rows,
         trace: full_trace,
         steps,
@@ -412,4 +438,37 @@ pub fn correlation_top_n(x: &DMatrix<f64>, y: &[f64], n: usize) -> Vec<usize> {
     let mut idx: Vec<usize> = r.into_iter().take(n).map(|(j, _)| j).collect();
     idx.sort();
     idx
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(model: &str, sensors: usize, r2: f64) -> ComparisonRow {
+        // y = [1, -1], ŷ chosen so that R² = r2 (SST = 2, SSE = 2(1 − r2))
+        let e = (1.0 - r2).sqrt();
+        ComparisonRow {
+            model: model.into(),
+            sensors: (0..sensors).map(|j| format!("t{j}")).collect(),
+            metrics: Metrics::new(&[1.0, -1.0], &[1.0 - e, -1.0 + e], sensors),
+        }
+    }
+
+    #[test]
+    fn a_collapse_of_r2_warns_and_a_small_fall_does_not() {
+        let w = collapse_warning(&[
+            row("full MLR", 16, 0.94),
+            row("ridge-selected (k = 0.1)", 2, 0.37),
+        ])
+        .expect("0.94 → 0.37 is a collapse");
+        assert!(
+            w.contains("R² = 0.37") && w.contains("0.94") && w.contains("16 sensors"),
+            "{w}"
+        );
+        assert!(collapse_warning(&[
+            row("full MLR", 16, 0.94),
+            row("ridge-selected (k = 0.1)", 3, 0.90)
+        ])
+        .is_none());
+    }
 }

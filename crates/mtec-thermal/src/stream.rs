@@ -146,6 +146,29 @@ fn linear_stream(m: &LinearModel, inputs: &mut Vec<String>) -> Result<Kind, Ther
                 },
                 c,
             )),
+            Feature::HeatLag {
+                input,
+                alpha,
+                tau_min,
+                rest_tau_min,
+            } => {
+                let u = input_index(inputs, input);
+                // L[(n/n_ref)^α] with τ running, τ_rest at rest (heat_input::switched_lag)
+                s.lags.push((
+                    Lag {
+                        input: u,
+                        transform: Transform::Power {
+                            reference: crate::heat_input::INPUT_REF,
+                            alpha: *alpha,
+                        },
+                        tau_run_min: *tau_min,
+                        tau_rest_min: *rest_tau_min,
+                        switch: Some(u),
+                        state: 0.0,
+                    },
+                    c,
+                ))
+            }
             Feature::Rate { .. } => {
                 return Err(ThermalError::Invalid(format!(
                     "feature `{}` needs the readings of a whole window and cannot run on line; \

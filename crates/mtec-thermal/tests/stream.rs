@@ -157,6 +157,7 @@ fn a_lag_on_line_follows_the_analytic_step_response() {
         coefficients: vec![1.0],
         std_errors: None,
         ridge: None,
+        warnings: Vec::new(),
     });
     let mut s = model.stream().unwrap();
     assert_eq!(s.predict_um(0.0), 0.0, "nothing before the first reading");
@@ -186,7 +187,41 @@ fn a_lag_on_line_follows_the_analytic_step_response() {
         coefficients: vec![1.0],
         std_errors: None,
         ridge: None,
+        warnings: Vec::new(),
     });
     let err = rate.stream().unwrap_err().to_string();
     assert!(err.contains("on line"), "{err}");
+}
+
+/// The `heat` feature of the stepwise families (a switched lag of the powered spindle speed)
+/// on line equals its batch values on the real record.
+#[test]
+fn heat_lag_feature_on_line_equals_batch_on_the_real_record() {
+    let d = fl_record("ch2_um");
+    let model = ThermalModel::Linear(mtec_thermal::LinearModel {
+        method: mtec_thermal::model::LinearMethod::Dynamic,
+        features: vec![
+            mtec_thermal::Feature::HeatLag {
+                input: "spindle_rpm".into(),
+                alpha: 1.5,
+                tau_min: 45.0,
+                rest_tau_min: 135.0,
+            },
+            mtec_thermal::Feature::Lag {
+                sensor: "t3_c".into(),
+                tau_min: 80.0,
+            },
+            mtec_thermal::Feature::Temp {
+                sensor: "t7_c".into(),
+            },
+        ],
+        intercept_um: 1.0,
+        coefficients: vec![4.0, 0.7, -0.3],
+        std_errors: None,
+        ridge: None,
+        warnings: Vec::new(),
+    });
+    let batch = model.predict(&d).unwrap();
+    let diff = max_abs_diff(&batch, &run_stream(&model, &d));
+    assert!(diff < 1e-9, "{diff}");
 }

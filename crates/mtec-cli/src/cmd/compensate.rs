@@ -8,4 +8,7 @@ pub enum Command {
     /// Controller compensation tables (LinuxCNC, Siemens CEC/LEC, Fanuc, Heidenhain, Beckhoff).
     #[command(long_about = super::compensate_table::HELP)]
     Table(super::compensate_table::Args),
+    /// The work-offset update (or Siemens temperature-compensation data) for the thermal state now.
+    #[command(name = "thermal-offset", long_about = super::compensate_thermal_offset::HELP)]
+    ThermalOffset(super::compensate_thermal_offset::Args),
 }

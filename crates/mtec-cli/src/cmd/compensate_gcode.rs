@@ -43,7 +43,11 @@ rotary axis words, two codes of one modal group) stop the run with file:line:col
 The model (--model) is any model file mtec writes: a map (mtec.map/1, from `map fit`), a BPNN
 map, a kinematic model, or {\"format\": \"mtec.zero-model/1\"} or a polynomial
 {\"format\": \"mtec.poly-model/1\", \"terms\": [{\"powers\": [1,0,0], \"coef_um\": [0.012,0,0]}]},
-giving [Ex, Ey, Ez] in um as a function of the machine position in mm.
+giving [Ex, Ey, Ez] in um as a function of the machine position in mm. A machine error model
+(mtec.machine-error/1, from `machine build`) has a state: its thermal part depends on the
+machine's temperatures now, so it needs --state LOG.csv (time_min and the model's state inputs,
+rows in time order); every row advances the state and the program is compensated for the state
+after the last row, which the header comment names. Without --state such a model is refused.
 
 Offsets (--offsets, TOML) map program to machine coordinates (machine = program + work offset
 + G92/G52 offset + tool length along Z); G10 L1/L2/L20, G92, G52, G92.1 and G92.2 with literal
@@ -77,6 +81,7 @@ file lengths as inches.
 
 Examples:
   mtec compensate gcode --model model.json part.ngc -o part-comp.ngc --offsets offsets.toml
+  mtec compensate gcode --model machine.json --state temps-now.csv part.ngc -o part-comp.ngc
   mtec compensate gcode --model m.json --flatten-with rs274 --tool-table t.tbl in.ngc -o out.ngc";
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -97,9 +102,13 @@ pub enum UnitsArg {
     long_about = LONG_ABOUT
 )]
 pub struct Args {
-    /// Error model (JSON): mtec.zero-model/1 or mtec.poly-model/1.
+    /// Error model (JSON): any model file mtec writes (see below).
     #[arg(long, value_name = "MODEL.json")]
     pub model: PathBuf,
+    /// State log for a model with a state (mtec.machine-error/1): time_min and the model's
+    /// state inputs; the state after the last row is compensated for. Required for such a model.
+    #[arg(long, value_name = "LOG.csv")]
+    pub state: Option<PathBuf>,
     /// The NC program to correct.
     #[arg(value_name = "IN.ngc")]
     pub input: PathBuf,
@@ -157,7 +166,11 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    let model = load_error_model(&args.model)?;
+    let model = super::state::model_in_state(
+        load_error_model(&args.model)?,
+        &args.model,
+        args.state.as_deref(),
+    )?;
     let mut options = RewriteOptions {
         tolerance_um: args.tolerance_um,
         max_segment_mm: args.max_segment_mm,
@@ -242,6 +255,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
     // the one output routine of mtec-io: a file atomically, a device, FIFO or `-` straight
     // through, a link's target; an input, a directory or a block device refused before any work
     let mut guard = OutputGuard::new(&[&args.input, &args.model]);
+    if let Some(p) = &args.state {
+        guard.add_input(p);
+    }
     if let Some(p) = &args.offsets {
         guard.add_input(p);
     }

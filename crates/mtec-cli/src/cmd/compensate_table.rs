@@ -37,8 +37,15 @@ that axis), the other coordinates at --at X,Y,Z (default: the centre of the map'
 --x/y/z-range for beckhoff); a BPNN extrapolates without warning outside the box it was fitted
 on, so keep the ranges inside it.
 
+State: a machine error model (mtec.machine-error/1) changes with the machine's temperatures; a
+table is one moment of it, the state after the last row of --state LOG.csv (time_min and the
+model's state inputs, rows in time order), named in the table's provenance. Without --state such
+a model is refused. Reload the table when the state changes.
+
 Example:
   mtec compensate table --model map.json --format sinumerik-lec --axis X -o x_lec.ini
+  mtec compensate table --model machine.json --state temps-now.csv --format linuxcnc --axis Z
+    --range -300:0:10 -o z.comp
   mtec compensate table --model map.json --format linuxcnc --axis Z --range -300:0:10 -o z.comp";
 
 /// Target controller format.
@@ -59,6 +66,10 @@ pub struct Args {
     /// `map fit --model bpnn` (mtec.bpnn/1), or a poly/zero model.
     #[arg(long)]
     model: PathBuf,
+    /// State log for a model with a state (mtec.machine-error/1): time_min and the model's
+    /// state inputs; the table is for the state after the last row. Required for such a model.
+    #[arg(long, value_name = "LOG.csv")]
+    state: Option<PathBuf>,
     /// Controller table format.
     #[arg(long, value_enum)]
     format: Format,
@@ -128,7 +139,11 @@ pub struct Args {
 
 pub fn run(a: Args) -> Result<(), CliError> {
     // the CLI's loader: maps and kinematic models (mtec-comp) and the BPNN, poly and zero models
-    let model = super::model_loader::load_error_model(&a.model)?;
+    let model = super::state::model_in_state(
+        super::model_loader::load_error_model(&a.model)?,
+        &a.model,
+        a.state.as_deref(),
+    )?;
     let map = load_map_if_grid(&a.model)?;
     let axis = parse_axis("--axis", &a.axis)?;
     let output_axis = match &a.output_axis {
@@ -142,7 +157,10 @@ pub fn run(a: Args) -> Result<(), CliError> {
         )));
     }
     let provenance = model.describe();
-    let guard = OutputGuard::new(&[&a.model]);
+    let mut guard = OutputGuard::new(&[&a.model]);
+    if let Some(p) = &a.state {
+        guard.add_input(p);
+    }
     // where the table goes is settled before any work (an input, a directory: exit 2)
     let dest = match &a.out {
         Some(p) if a.format == Format::Heidenhain && p.as_os_str() == "-" => {

@@ -21,7 +21,7 @@ given no numbers), the rank, singular values and condition number, the residual 
 1-sigma uncertainty of every identified element. Predictions of the identified set are valid
 at the tool offset of the measurement.
 
-Data (CSV, SPEC §4): line,step,x_mm,y_mm,z_mm,ux,uy,uz,reading_um — one row per point and
+Data (CSV, docs/formats.md, Line measurement CSV): line,step,x_mm,y_mm,z_mm,ux,uy,uz,reading_um — one row per point and
 channel; the reading is the laser reading minus the commanded displacement from the line's
 first point, projected on the unit direction (ux,uy,uz). Name a line's channels `X1`
 (along the line) and `X1.y`, `X1.z` (straightness). The design is read from the points.
@@ -43,7 +43,7 @@ pub struct Args {
     /// Machine description (TOML): chain, travels, tool offset of the measurement.
     #[arg(long)]
     pub machine: PathBuf,
-    /// Line measurements (CSV, SPEC §4).
+    /// Line measurements (CSV, see docs/formats.md).
     #[arg(long)]
     pub data: Option<PathBuf>,
     /// A built-in design: the data must contain its lines; without --data, analyse it alone.

@@ -12,6 +12,11 @@ fn s(p: &Path) -> String {
     p.display().to_string()
 }
 
+/// A JSON value as report text (numbers rounded to a readable precision).
+pub fn fmt_value(v: &Value) -> String {
+    fmt(v)
+}
+
 fn fmt(v: &Value) -> String {
     match v {
         Value::Number(n) => match n.as_f64() {
@@ -456,8 +461,8 @@ pub fn ballbar(p: &mut Pipeline, b: &BallbarStage) -> Result<(), CliError> {
     Ok(())
 }
 
-/// A thermal model: sensor selection, fit, prediction.
-pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> Result<(), CliError> {
+/// A thermal model: sensor selection, fit, prediction; returns the model file.
+pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> Result<PathBuf, CliError> {
     let data = p.path_of(&t.data);
     p.progress_of(&format!("thermal model of {} ({})", t.target, t.model));
     let tag = format!("{}-{}", stem(&data), t.target);
@@ -491,6 +496,15 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> Result<(), CliError> {
     } else if let Some(u) = t.train_until_min {
         fit.extend(["--train-until".into(), u.to_string()]);
     }
+    if t.lag {
+        fit.push("--lag".into());
+    }
+    if let Some(sensors) = &t.sensors {
+        fit.extend(["--sensors".into(), sensors.join(",")]);
+    }
+    if let Some(input) = &t.input {
+        fit.extend(["--input".into(), input.clone()]);
+    }
     super::run::call_checked(&fit)?;
     p.outputs.push(s(&model));
     let pred = p.json_stage_of(
@@ -508,7 +522,7 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> Result<(), CliError> {
     let sec = p
         .report
         .section(format!("Thermal model: {} from {}", t.target, stem(&data)));
-    sec.text("Sensor selection by the ridge trace (VIF, elimination steps, chosen k), then the fitted model's prediction against the measured drift.");
+    sec.text(format!("Sensor selection by the ridge trace (VIF, elimination steps, chosen k), then the fitted model ({}{}) and its prediction against the measured drift.", t.model, if t.lag { ", with a fitted first-order lag of each sensor" } else { "" }));
     if let Ok(tab) = mtec_io::Table::read(&data) {
         if let (Ok(y), Some(pr)) = (
             tab.f64_column(&t.target),
@@ -606,7 +620,7 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> Result<(), CliError> {
         o.remove("predictions");
     }
     json_tables(sec, &pred_small, 0);
-    Ok(())
+    Ok(model)
 }
 
 /// A volumetric map from a grid; returns the map file.

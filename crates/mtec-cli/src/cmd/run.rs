@@ -31,6 +31,12 @@
 //! [compensation]
 //! gcode = ["part.ngc"]
 //! tables = ["linuxcnc"]
+//! [machine_model]              # thermal models of the [[thermal]] stages + envelopes
+//! data = "thermal.csv"
+//! parts = [{ target = "drift_um", axis = "z" }]
+//! [[replay]]                   # a recorded day compensated through the real-time path
+//! state = "day-state.csv"
+//! probes = "day-probes.csv"
 //! ```
 
 use crate::error::CliError;
@@ -79,6 +85,50 @@ pub struct Project {
     pub thermal: Vec<ThermalStage>,
     pub map: Option<MapStage>,
     pub compensation: Option<CompensationStage>,
+    pub machine_model: Option<MachineModelStage>,
+    #[serde(default)]
+    pub replay: Vec<ReplayStage>,
+}
+
+/// `[machine_model]`: `mtec machine build` over the models of the [[thermal]] stages.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MachineModelStage {
+    /// The data the thermal models were fitted on (their envelopes come from it).
+    pub data: PathBuf,
+    pub parts: Vec<MachinePart>,
+    /// Static geometric model file; default: the [map] stage's map, if any.
+    pub geometric: Option<PathBuf>,
+    /// Columns of `data` that guard every thermal part (`machine build --guard`).
+    #[serde(default)]
+    pub guard: Vec<String>,
+    pub fade_c: Option<f64>,
+}
+
+/// One thermal part: the [[thermal]] stage with this target, along `axis`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MachinePart {
+    pub target: String,
+    pub axis: String,
+    #[serde(default = "plus_one")]
+    pub sign: f64,
+}
+
+fn plus_one() -> f64 {
+    1.0
+}
+
+/// `[[replay]]`: `mtec machine replay` of a recorded day.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReplayStage {
+    #[serde(default)]
+    pub name: String,
+    pub state: PathBuf,
+    pub probes: PathBuf,
+    /// Model file; default: the [machine_model] stage's.
+    pub model: Option<PathBuf>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -126,6 +176,13 @@ pub struct ThermalStage {
     pub train: Option<String>,
     pub test: Option<String>,
     pub train_until_min: Option<f64>,
+    /// Add a fitted first-order lag of each sensor (`thermal fit --lag`).
+    #[serde(default)]
+    pub lag: bool,
+    /// Sensors to use (`--sensors`); default: all.
+    pub sensors: Option<Vec<String>>,
+    /// heat-input: the heat-source column (`--input`).
+    pub input: Option<String>,
 }
 
 fn default_thermal_model() -> String {
@@ -328,7 +385,9 @@ pub fn run_project_with(
         + project.ballbar.is_some() as usize
         + project.thermal.len()
         + project.map.is_some() as usize
-        + project.compensation.is_some() as usize;
+        + project.compensation.is_some() as usize
+        + project.machine_model.is_some() as usize
+        + project.replay.len();
     let mut p = Pipeline {
         base: base.to_path_buf(),
         out: out.to_path_buf(),
@@ -395,6 +454,44 @@ pub fn run_project_with(
             inputs.push(check(g, "gcode")?);
         }
     }
+    if let Some(m) = &project.machine_model {
+        inputs.push(check(&m.data, "machine_model data")?);
+        if let Some(g) = &m.geometric {
+            inputs.push(check(g, "machine_model geometric")?);
+        }
+        for part in &m.parts {
+            let n = project
+                .thermal
+                .iter()
+                .filter(|t| t.target == part.target)
+                .count();
+            if n != 1 {
+                return Err(InputError::file(
+                    project_path,
+                    format!(
+                        "[machine_model] part `{}`: {n} [[thermal]] stages have this target, it needs exactly one",
+                        part.target
+                    ),
+                )
+                .into());
+            }
+        }
+    }
+    for r in &project.replay {
+        inputs.push(check(&r.state, "replay state")?);
+        inputs.push(check(&r.probes, "replay probes")?);
+        match &r.model {
+            Some(m) => inputs.push(check(m, "replay model")?),
+            None if project.machine_model.is_none() => {
+                return Err(InputError::file(
+                    project_path,
+                    "[[replay]] needs `model` or a [machine_model] stage",
+                )
+                .into())
+            }
+            None => {}
+        }
+    }
     inputs.extend(machine.clone());
     p.guard = OutputGuard::new(&inputs);
     std::fs::create_dir_all(out)?;
@@ -416,8 +513,9 @@ pub fn run_project_with(
     if let Some(b) = &project.ballbar {
         crate::cmd::pipeline::ballbar(&mut p, b)?;
     }
+    let mut thermal_models = Vec::new();
     for t in &project.thermal {
-        crate::cmd::pipeline::thermal(&mut p, t)?;
+        thermal_models.push((t.target.clone(), crate::cmd::pipeline::thermal(&mut p, t)?));
     }
     let mut map: Option<PathBuf> = None;
     if let Some(m) = &project.map {
@@ -431,6 +529,18 @@ pub fn run_project_with(
             machine.as_deref(),
             identified.as_deref(),
         )?;
+    }
+    let mut machine_model: Option<PathBuf> = None;
+    if let Some(m) = &project.machine_model {
+        machine_model = Some(crate::cmd::machine_stage::build(
+            &mut p,
+            m,
+            &thermal_models,
+            map.as_deref(),
+        )?);
+    }
+    for r in &project.replay {
+        crate::cmd::machine_stage::replay(&mut p, r, machine_model.as_deref())?;
     }
     extra(&mut p)?;
     let html = p.report.to_html();

@@ -18,7 +18,7 @@ use std::path::PathBuf;
 /// element for Ex, Ey, Ez and |E|, and how tightly each must be held for a target accuracy.
 ///
 /// Inputs are the geometric error elements with normal distributions from an error-statistics
-/// CSV (SPEC §4), one row per element, units um (translations, squareness excluded) or urad
+/// CSV (docs/formats.md, Error statistics CSV), one row per element, units um (translations, squareness excluded) or urad
 /// (rotations and squareness):
 ///
 ///   element,mean,std,unit

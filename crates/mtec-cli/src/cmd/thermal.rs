@@ -2,9 +2,14 @@
 
 use crate::error::CliError;
 use mtec_io::{InputError, OutputGuard, Table};
+use mtec_thermal::auto::{Auto, CandidateScore};
+use mtec_thermal::guard::{envelope, outside_envelope};
 use mtec_thermal::model::{ModelFile, Split, ThermalModel};
 use mtec_thermal::select::{select_sensors, SelectOptions, Selection};
-use mtec_thermal::validate::{block_cv, rows_of_experiments, split_at_time, time_blocks};
+use mtec_thermal::validate::{
+    block_cv, duty_cycle_blocks, forward_cv, forward_folds, rows_of_experiments, split_at_time,
+    time_blocks, BlockSpec, ForwardCv,
+};
 use mtec_thermal::{
     features::{design, temp_features},
     heat_input::with_input,
@@ -15,7 +20,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 const FORMAT_HELP: &str = "\
-Thermal log format (CSV, SPEC §4):
+Thermal log format (CSV, docs/formats.md, Thermal CSV):
   experiment,time_min,<sensor>_c...,[ambient_c],[position_mm],<target>_um
 Every `_c` column except `ambient_c` is a temperature sensor. `experiment` may be absent (one
 continuous record). Rows of one experiment are in time order. Other columns are ignored.";
@@ -31,15 +36,28 @@ pub struct Args {
 #[derive(clap::Subcommand)]
 enum Sub {
     /// VIF table, ridge trace, sensor elimination by the ridge-trace rules, chosen k, and the
-    /// comparison of full MLR, ridge-selected and simple-correlation models.
+    /// comparison of full MLR, ridge-selected and simple-correlation models. Warns when the
+    /// selection collapses (its R² falls well below that of all sensors).
     ///
     /// Example: mtec thermal select --data thermal.csv --target radial_um --out sel/
     /// writes sel/ridge_trace.csv, sel/ridge_trace.svg and sel/selection.json and prints the
-    /// report; `--json` prints the selection as JSON instead.
+    /// report; without --out nothing is written; `--json` prints the selection as JSON instead.
     Select(SelectArgs),
     /// Fits a model and writes it as JSON (`mtec.thermal-model/1`) with train/test metrics.
     ///
-    /// Models: mlr (all or --sensors), ridge (k from the ridge trace or --k), ridge-select
+    /// Every regression model is validated forward in time on its training rows (fit on the
+    /// blocks before, score the next; blocks follow the --input steps); the model file keeps
+    /// the folds, their pooled RMSE (the uncertainty `predict` reports) and the training range
+    /// of every input (`predict` flags rows outside it).
+    ///
+    /// auto: candidate families mlr, ridge, heat-input, lagged-ridge, dynamic (temperatures,
+    /// their first-order lags and lags of the spindle power, time constants fitted with the
+    /// coefficients), exp-ambient when its columns exist; every choice inside each family made
+    /// by forward folds of the fold's training rows (nested); a family worse than no
+    /// compensation on any fold is never chosen; the simplest within one standard error of the
+    /// best wins; at most --max-sensors temperature sensors (default 6) plus the --input column.
+    ///
+    /// Models: mlr (all or --sensors), ridge (k by forward folds, or --k), ridge-select
     /// (sensors chosen by the ridge trace), exp-ambient (δ = k·x + b with exponential
     /// saturation in the temperature rises of --sensors UP,NUT, or of the first principal
     /// components of --up-sensors A,B --nut-sensors C,D, and cubic-in-ambient coefficients, b_b
@@ -79,10 +97,13 @@ enum Sub {
     ///
     /// Example: mtec thermal predict --model z.json --data thermal.csv --json
     Predict(PredictArgs),
-    /// Leave-one-block-out cross-validation: whole experiments, or time blocks of --block-min.
+    /// Forward (rolling-origin) validation: fit on every block before, score the next block,
+    /// step forward. Blocks follow the duty cycle (a new block where the --input column steps),
+    /// or experiments, or --block-min minutes. Each fold shows the error without compensation
+    /// and is flagged when the model is worse. --loo gives leave-one-block-out instead, which
+    /// trains on the future of the scored block and is optimistic.
     ///
-    /// Example: mtec thermal cv --data train.csv --target ch1_um --model mlr --lag
-    /// --sensors t1,t5 --block-min 480
+    /// Example: mtec thermal cv --data train.csv --target ch1_um --model auto
     Cv(CvArgs),
 }
 
@@ -97,7 +118,7 @@ struct SelectArgs {
     /// Candidate sensors (default: every `_c` column but ambient_c).
     #[arg(long, value_delimiter = ',')]
     sensors: Vec<String>,
-    /// Folder for ridge_trace.csv, ridge_trace.svg, selection.json (default: beside the data).
+    /// Folder for ridge_trace.csv, ridge_trace.svg, selection.json (default: write nothing).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Print the selection as JSON (`mtec.thermal-selection/1`) on stdout.
@@ -107,6 +128,8 @@ struct SelectArgs {
 
 #[derive(Clone, Copy, clap::ValueEnum, PartialEq)]
 enum ModelKind {
+    /// Chooses the family by nested forward validation (see `fit --help`).
+    Auto,
     Mlr,
     Ridge,
     RidgeSelect,
@@ -149,14 +172,16 @@ struct Common {
     /// Add a first-order lag feature per sensor with a fitted time constant.
     #[arg(long)]
     lag: bool,
-    /// Validation block length in minutes: `cv` leaves out one block at a time, `lag-select`
-    /// chooses its sensors by leaving out blocks of the training rows (default: experiments).
+    /// Validation block length in minutes (default: experiments, or the steps of the --input
+    /// column, or eight equal blocks).
     #[arg(long)]
     block_min: Option<f64>,
-    /// lag-select: largest number of sensors.
-    #[arg(long, default_value_t = 3)]
-    max_sensors: usize,
-    /// heat-input: the heat-source column (spindle speed, rpm).
+    /// auto and lag-select: largest number of temperature sensors (default: auto 6,
+    /// lag-select 3); the --input column does not count.
+    #[arg(long)]
+    max_sensors: Option<usize>,
+    /// The heat-source column (spindle speed, rpm): heat-input and auto's heat features, and
+    /// the duty-cycle steps that cut the validation blocks (used when the file has it).
     #[arg(long, default_value = "spindle_rpm")]
     input: String,
     /// exp-ambient: ΔT_up from several sensors — the first principal component of their
@@ -207,6 +232,11 @@ struct PredictArgs {
     /// Thermal log (CSV) with the model's sensors.
     #[arg(long)]
     data: PathBuf,
+    /// The log before --data (same columns): run the model's filters through it first, so a
+    /// --data that starts mid-record starts from the machine's real thermal state. Without it,
+    /// the filters start in equilibrium with the first row of --data (stated on stderr).
+    #[arg(long)]
+    history: Option<PathBuf>,
     /// Print `{rmse_um, mae_um, max_abs_residual_um, n, predictions, metrics}` as JSON.
     #[arg(long)]
     json: bool,
@@ -222,6 +252,10 @@ struct CvArgs {
     /// Print the per-block metrics as JSON.
     #[arg(long)]
     json: bool,
+    /// Leave-one-block-out instead of forward folds (optimistic: trains on the future of the
+    /// block it scores).
+    #[arg(long)]
+    loo: bool,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
@@ -266,27 +300,137 @@ fn load(path: &Path, target: Option<&str>, require: bool) -> Result<ThermalData,
     load_with_input(path, target, require, None)
 }
 
-/// Reads the log and, for heat-input models, attaches the heat-source column (e.g. `spindle_rpm`).
+/// A non-temperature input column to attach: its name and whether the file must have it.
+type InputColumn<'a> = Option<(&'a str, bool)>;
+
+/// Reads the log and attaches the heat-source column (e.g. `spindle_rpm`): required for
+/// heat-input models, otherwise when the file has it (it marks the duty-cycle blocks).
 fn load_with_input(
     path: &Path,
     target: Option<&str>,
     require: bool,
-    input: Option<&str>,
+    input: InputColumn,
 ) -> Result<ThermalData, CliError> {
     let t = Table::read(path)?;
     let d = ThermalData::from_table(&t, target, require)?;
     match input {
-        Some(name) => {
+        Some((name, required)) if required || t.has(name) => {
             let v = t.f64_column(name)?;
             with_input(&d, name, &v)
                 .map_err(|e| CliError::Input(InputError::file(path, e.to_string())))
         }
-        None => Ok(d),
+        _ => Ok(d),
     }
 }
 
-fn input_of(c: &Common) -> Option<&str> {
-    (c.model == ModelKind::HeatInput).then_some(c.input.as_str())
+fn input_of(c: &Common) -> InputColumn<'_> {
+    Some((c.input.as_str(), c.model == ModelKind::HeatInput))
+}
+
+/// The validation blocks the options ask for.
+fn block_spec(c: &Common) -> BlockSpec {
+    BlockSpec {
+        block_min: c.block_min,
+        input: Some(c.input.clone()),
+    }
+}
+
+/// The auto fitter; exp-ambient is a candidate when the data has its columns and --sensors
+/// names its two sensors.
+fn auto_fitter(c: &Common, data: &ThermalData) -> Auto {
+    let exp = data.ambient_c.is_some() && data.position_mm.is_some() && c.sensors.len() == 2;
+    Auto {
+        sensors: c.sensors.clone(),
+        input: c.input.clone(),
+        max_sensors: c
+            .max_sensors
+            .unwrap_or(mtec_thermal::auto::DEFAULT_MAX_SENSORS),
+        block_min: c.block_min,
+        exp_ambient: exp.then(|| ExpAmbient {
+            up_sensor: c.sensors[0].clone(),
+            nut_sensor: c.sensors[1].clone(),
+            ..Default::default()
+        }),
+    }
+}
+
+/// Forward validation of the options' fitter on the training rows (`None`: fewer than two
+/// blocks), and the warnings it gives.
+fn validate_forward(
+    c: &Common,
+    data: &ThermalData,
+    train: &[usize],
+) -> (Option<ForwardCv>, Vec<String>) {
+    let folds = forward_folds(&duty_cycle_blocks(data, train, &block_spec(c)));
+    if folds.is_empty() {
+        return (None, vec!["no forward validation: the training rows hold fewer than two blocks, so the model carries no uncertainty (use a longer record, experiments, or --block-min)".into()]);
+    }
+    match forward_cv(&CvFitter(c), data, &folds) {
+        Ok(v) => (Some(v), Vec::new()),
+        Err(e) => (None, vec![format!("forward validation failed: {e}")]),
+    }
+}
+
+/// The warning of a model worse than no compensation on some forward folds.
+fn worse_warning(v: &ForwardCv) -> Option<String> {
+    let worse = v.folds_worse_than_uncompensated();
+    (!worse.is_empty()).then(|| {
+        let list: Vec<String> = worse
+            .iter()
+            .map(|&f| {
+                let s = &v.folds[f - 1];
+                format!(
+                    "fold {f} ({:.0}–{:.0} min): {:.2} µm against {:.2} µm uncompensated",
+                    s.test_from_min, s.test_to_min, s.metrics.rmse_um, s.uncompensated_rmse_um
+                )
+            })
+            .collect();
+        format!(
+            "WORSE THAN NO COMPENSATION on forward validation, {}: do not apply this model",
+            list.join("; ")
+        )
+    })
+}
+
+fn print_candidates(say: &mut dyn Write, candidates: &[CandidateScore]) {
+    let _ = writeln!(
+        say,
+        "auto: forward score of every candidate (mean fold RMSE ± standard error; pooled; worst fold vs no compensation)"
+    );
+    for c in candidates {
+        match &c.forward {
+            Some(f) => {
+                let folds: Vec<String> = f
+                    .folds
+                    .iter()
+                    .map(|x| format!("{:.2}/{:.2}", x.metrics.rmse_um, x.uncompensated_rmse_um))
+                    .collect();
+                let _ = writeln!(
+                    say,
+                    "  {:<13} {:>7.3} ± {:<6.3} pooled {:>7.3} um  folds (model/none) {}{}{}",
+                    c.family,
+                    f.mean_rmse_um(),
+                    f.rmse_std_error_um,
+                    f.pooled_rmse_um,
+                    folds.join(" "),
+                    if c.worse_than_uncompensated.is_empty() {
+                        ""
+                    } else {
+                        "  worse than none: never chosen"
+                    },
+                    if c.chosen { "  <- chosen" } else { "" }
+                );
+            }
+            None => {
+                let _ = writeln!(
+                    say,
+                    "  {:<13} not fitted: {}",
+                    c.family,
+                    c.error.as_deref().unwrap_or("")
+                );
+            }
+        }
+    }
 }
 
 /// A model error about the data file: missing columns at the header, the rest about the file.
@@ -312,6 +456,19 @@ fn header_list(d: &ThermalData) -> String {
 }
 
 fn select(a: SelectArgs) -> Result<(), CliError> {
+    // where the files go is settled before any work: a folder, and none of them the input
+    if let Some(dir) = &a.out {
+        if dir.exists() && !dir.is_dir() {
+            return Err(CliError::usage(format!(
+                "--out {} is a file: it must be a folder (ridge_trace.csv, ridge_trace.svg and selection.json go into it)",
+                dir.display()
+            )));
+        }
+        let guard = OutputGuard::new(&[&a.data]);
+        for f in ["ridge_trace.csv", "ridge_trace.svg", "selection.json"] {
+            guard.check(&dir.join(f))?;
+        }
+    }
     let data = load(&a.data, Some(&a.target), true)?;
     let err = |e| located(&data, &a.data, e);
     let features = temp_features(&data, &a.sensors).map_err(err)?;
@@ -322,11 +479,7 @@ fn select(a: SelectArgs) -> Result<(), CliError> {
     let mut doc = serde_json::to_value(&sel).map_err(|e| CliError::Internal(e.into()))?;
     doc["format"] = "mtec.thermal-selection/1".into();
     doc["target"] = data.target_name().unwrap_or_default().into();
-    let out_dir = match (&a.out, a.json) {
-        (Some(d), _) => Some(d.clone()),
-        (None, false) => Some(default_out(&a.data, "select")),
-        (None, true) => None,
-    };
+    let out_dir = a.out.clone();
     if let Some(dir) = &out_dir {
         std::fs::create_dir_all(dir)?;
         let guard = OutputGuard::new(&[&a.data]);
@@ -348,22 +501,18 @@ fn select(a: SelectArgs) -> Result<(), CliError> {
         );
     } else {
         print_selection(&sel, data.target_name().unwrap_or_default());
-        if let Some(dir) = out_dir {
-            println!(
+        match out_dir {
+            Some(dir) => println!(
                 "\nwrote {}/ridge_trace.csv, ridge_trace.svg, selection.json",
                 dir.display()
-            );
+            ),
+            None => println!("\n(nothing written: --out DIR writes ridge_trace.csv, ridge_trace.svg and selection.json)"),
         }
     }
+    for w in &sel.warnings {
+        eprintln!("warning: {w}");
+    }
     Ok(())
-}
-
-fn default_out(data: &Path, what: &str) -> PathBuf {
-    let stem = data
-        .file_stem()
-        .map(|s| s.to_string_lossy().to_string())
-        .unwrap_or_default();
-    data.with_file_name(format!("{stem}-{what}"))
 }
 
 fn fmt_opt(v: Option<f64>, prec: usize) -> String {
@@ -444,6 +593,7 @@ fn print_selection(sel: &Selection, target: &str) {
 
 fn fit_model(c: &Common, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
     Ok(match c.model {
+        ModelKind::Auto => auto_fitter(c, data).fit_rows(data, rows)?,
         ModelKind::Mlr => ThermalModel::Linear(
             Mlr {
                 sensors: c.sensors.clone(),
@@ -456,6 +606,7 @@ fn fit_model(c: &Common, data: &ThermalData, rows: &[usize]) -> Result<ThermalMo
                 sensors: c.sensors.clone(),
                 k: c.k,
                 lag: c.lag,
+                blocks: block_spec(c),
             }
             .fit_rows(data, rows)?,
         ),
@@ -470,8 +621,9 @@ fn fit_model(c: &Common, data: &ThermalData, rows: &[usize]) -> Result<ThermalMo
         ModelKind::LagSelect => ThermalModel::Linear(
             LagSelect {
                 sensors: c.sensors.clone(),
-                max_sensors: c.max_sensors,
+                max_sensors: c.max_sensors.unwrap_or(3),
                 block_min: c.block_min,
+                input: Some(c.input.clone()),
             }
             .fit_rows(data, rows)?,
         ),
@@ -522,8 +674,18 @@ fn check_common(c: &Common) -> Result<(), CliError> {
             ));
         }
     }
-    if c.model == ModelKind::LagSelect && c.max_sensors == 0 {
+    if c.max_sensors == Some(0) {
         return Err(CliError::usage("--max-sensors must be at least 1"));
+    }
+    if c.max_sensors.is_some() && !matches!(c.model, ModelKind::Auto | ModelKind::LagSelect) {
+        return Err(CliError::usage(
+            "--max-sensors goes with --model auto or lag-select",
+        ));
+    }
+    if c.model == ModelKind::Auto && (c.lag || !c.up_sensors.is_empty()) {
+        return Err(CliError::usage(
+            "--model auto chooses lags itself (no --lag) and takes exp-ambient as a candidate only from --sensors UP,NUT",
+        ));
     }
     if c.model != ModelKind::ExpAmbient && !c.up_sensors.is_empty() {
         return Err(CliError::usage(
@@ -607,7 +769,18 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
     if train.is_empty() {
         return Err(CliError::usage("the training selection holds no rows"));
     }
-    let model = fit_model(&a.common, &data, &train).map_err(err)?;
+    let (model, candidates, validation, mut warnings) = if a.common.model == ModelKind::Auto {
+        let f = auto_fitter(&a.common, &data)
+            .fit_auto(&data, &train)
+            .map_err(err)?;
+        (f.model, f.candidates, Some(f.validation), Vec::new())
+    } else {
+        let model = fit_model(&a.common, &data, &train).map_err(err)?;
+        let (v, w) = validate_forward(&a.common, &data, &train);
+        (model, Vec::new(), v, w)
+    };
+    warnings.splice(0..0, model.warnings());
+    warnings.extend(validation.as_ref().and_then(worse_warning));
     let pred = model.predict(&data).map_err(err)?;
     let train_metrics = metrics_on(&model, &data, &train, &pred).map_err(err)?;
     let test_metrics = if test.is_empty() {
@@ -624,10 +797,14 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
     let file = ModelFile {
         format: MODEL_FORMAT.into(),
         target: data.target_name().unwrap_or_default().to_string(),
+        envelope: envelope(&model, &data, &train),
         model,
         split,
         train_metrics,
         test_metrics,
+        validation,
+        candidates,
+        warnings,
     };
     let text = serde_json::to_string_pretty(&file).map_err(|e| CliError::Internal(e.into()))?;
     dest.write(text.as_bytes())?;
@@ -686,13 +863,30 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
                 l.ambient_c, l.b_b_c, l.max_dt_up_c, l.k_b_c, l.max_dt_nut_c
             );
         }
-        for w in &m.warnings {
-            eprintln!("warning: {w}");
-        }
+    }
+    if !file.candidates.is_empty() {
+        print_candidates(&mut *say, &file.candidates);
+    }
+    if let ThermalModel::Linear(m) = &file.model {
+        let names: Vec<String> = m.features.iter().map(|f| f.name()).collect();
+        let _ = writeln!(say, "features: {}", names.join(", "));
     }
     show(&mut say, "train", &file.train_metrics);
+    if let Some(v) = &file.validation {
+        let _ = writeln!(
+            say,
+            "forward validation on the training rows: {} folds, pooled RMSE {:.3} um (the uncertainty predict reports), mean {:.3} ± {:.3} um",
+            v.folds.len(),
+            v.pooled_rmse_um,
+            v.mean_rmse_um(),
+            v.rmse_std_error_um
+        );
+    }
     if let Some(m) = &file.test_metrics {
         show(&mut say, "test", m);
+    }
+    for w in &file.warnings {
+        eprintln!("warning: {w}");
     }
     let _ = writeln!(say, "wrote {}", a.output.display());
     Ok(())
@@ -701,21 +895,70 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
 fn predict(a: PredictArgs) -> Result<(), CliError> {
     // where the predictions go is settled before any work (an input, a directory: exit 2)
     let dest = match &a.output {
-        Some(p) => Some(OutputGuard::new(&[&a.data, &a.model]).check(p)?),
+        Some(p) => {
+            let mut g = OutputGuard::new(&[&a.data, &a.model]);
+            if let Some(h) = &a.history {
+                g.add_input(h);
+            }
+            Some(g.check(p)?)
+        }
         None => None,
     };
     let file: ModelFile = mtec_io::read_json(&a.model)?;
     file.check_format()
         .map_err(|e| CliError::Input(InputError::file(&a.model, e.to_string())))?;
-    let input = match &file.model {
-        ThermalModel::HeatInput(m) => Some(m.input.as_str()),
-        _ => None,
-    };
+    // a non-temperature column the model reads (the heat input) must be in the data
+    let input_name = mtec_thermal::guard::model_columns(&file.model)
+        .into_iter()
+        .find(|c| !c.ends_with("_c") && c != "position_mm");
+    let input = input_name.as_deref().map(|n| (n, true));
     let data = load_with_input(&a.data, Some(&file.target), false, input)?;
-    let pred = file
-        .model
-        .predict(&data)
-        .map_err(|e| located(&data, &a.data, e))?;
+    let (pred, outside) = match &a.history {
+        Some(h) => {
+            let hist = load_with_input(h, None, false, input)?;
+            let all = hist
+                .followed_by(&data)
+                .map_err(|e| CliError::Input(InputError::file(h, e.to_string())))?;
+            let p = file
+                .model
+                .predict(&all)
+                .map_err(|e| located(&all, &a.data, e))?;
+            let o = outside_envelope(&file.envelope, &all);
+            (p[hist.len()..].to_vec(), o[hist.len()..].to_vec())
+        }
+        None => {
+            if file.model.has_state() {
+                let t0 = data.time_min.first().copied().unwrap_or(0.0);
+                eprintln!(
+                    "note: the model's filters start in equilibrium with the first row of {} (time_min {t0}){}; pass the log before it with --history FILE if the machine was not at rest and settled then",
+                    a.data.display(),
+                    if t0 > 0.0 { ", which starts mid-record" } else { "" }
+                );
+            }
+            let p = file
+                .model
+                .predict(&data)
+                .map_err(|e| located(&data, &a.data, e))?;
+            (p, outside_envelope(&file.envelope, &data))
+        }
+    };
+    let uncertainty = file.validation.as_ref().map(|v| v.pooled_rmse_um);
+    let n_out = outside.iter().filter(|o| !o.is_empty()).count();
+    if n_out > 0 {
+        let mut cols: Vec<&String> = outside.iter().flatten().collect();
+        cols.sort();
+        cols.dedup();
+        let first = outside.iter().position(|o| !o.is_empty()).unwrap_or(0);
+        eprintln!(
+            "warning: {n_out} of {} rows have inputs outside the training range ({}; first at line {}): the model extrapolates there and its uncertainty does not hold",
+            outside.len(),
+            cols.iter().map(|c| c.as_str()).collect::<Vec<_>>().join(", "),
+            data.lines.get(first).copied().unwrap_or(0)
+        );
+    }
+    if uncertainty.is_none() {
+        eprintln!("note: the model file has no forward validation, so the predictions carry no uncertainty (refit with this mtec)");
+    }
     let metrics = match data.target_um() {
         Ok(y) => Some(Metrics::new(y, &pred, file.model.predictors())),
         Err(_) => None,
@@ -726,6 +969,8 @@ fn predict(a: PredictArgs) -> Result<(), CliError> {
             "target": file.target,
             "n": pred.len(),
             "predictions": pred,
+            "uncertainty_um": uncertainty,
+            "rows_outside_training_range": n_out,
         });
         if let Some(m) = &metrics {
             doc["rmse_um"] = m.rmse_um.into();
@@ -750,7 +995,10 @@ fn predict(a: PredictArgs) -> Result<(), CliError> {
         if y.is_some() {
             csv.push_str(",measured_um,residual_um");
         }
-        csv.push('\n');
+        if uncertainty.is_some() {
+            csv.push_str(",uncertainty_um");
+        }
+        csv.push_str(",outside_training_range\n");
         for i in 0..pred.len() {
             csv.push_str(&format!(
                 "{},{},{:.4}",
@@ -759,7 +1007,10 @@ fn predict(a: PredictArgs) -> Result<(), CliError> {
             if let Some(y) = y {
                 csv.push_str(&format!(",{:.4},{:.4}", y[i], y[i] - pred[i]));
             }
-            csv.push('\n');
+            if let Some(u) = uncertainty {
+                csv.push_str(&format!(",{u:.4}"));
+            }
+            csv.push_str(&format!(",{}\n", outside[i].join(";")));
         }
         match &dest {
             Some(d) => d.write(csv.as_bytes())?,
@@ -787,6 +1038,54 @@ fn cv(a: CvArgs) -> Result<(), CliError> {
         input_of(&a.common),
     )?;
     let err = |e| located(&data, &a.common.data, e);
+    let all: Vec<usize> = (0..data.len()).collect();
+    if !a.loo {
+        let folds = forward_folds(&duty_cycle_blocks(&data, &all, &block_spec(&a.common)));
+        if folds.is_empty() {
+            return Err(CliError::usage("forward validation needs at least two blocks (experiments, steps of the --input column, or --block-min shorter than the record)"));
+        }
+        let res = forward_cv(&CvFitter(&a.common), &data, &folds).map_err(err)?;
+        if a.json {
+            let mut doc = serde_json::to_value(&res).map_err(|e| CliError::Internal(e.into()))?;
+            doc["format"] = "mtec.thermal-cv/2".into();
+            doc["protocol"] = "forward".into();
+            doc["folds_worse_than_uncompensated"] =
+                serde_json::to_value(res.folds_worse_than_uncompensated())
+                    .map_err(|e| CliError::Internal(e.into()))?;
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?
+            );
+        } else {
+            println!("forward validation: fit on every block before, score the next block");
+            for (i, f) in res.folds.iter().enumerate() {
+                println!(
+                    "fold {:<3} train {:.0}–{:.0} min, score {:.0}–{:.0} min  n={:<6} RMSE {:.3} um  max|res| {:.3} um  uncompensated {:.3} um{}",
+                    i + 1,
+                    f.train_from_min,
+                    f.train_to_min,
+                    f.test_from_min,
+                    f.test_to_min,
+                    f.metrics.n,
+                    f.metrics.rmse_um,
+                    f.metrics.max_abs_residual_um,
+                    f.uncompensated_rmse_um,
+                    if f.worse_than_uncompensated() { "  WORSE THAN NO COMPENSATION" } else { "" }
+                );
+            }
+            println!(
+                "pooled RMSE {:.3} um, max|res| {:.3} um; mean fold RMSE {:.3} ± {:.3} um",
+                res.pooled_rmse_um,
+                res.pooled_max_abs_um,
+                res.mean_rmse_um(),
+                res.rmse_std_error_um
+            );
+        }
+        if let Some(w) = worse_warning(&res) {
+            eprintln!("warning: {w}");
+        }
+        return Ok(());
+    }
     let blocks: Vec<Vec<usize>> = match a.common.block_min {
         Some(b) if b > 0.0 => time_blocks(&data, b),
         Some(_) => return Err(CliError::usage("--block-min must be > 0")),
@@ -798,12 +1097,14 @@ fn cv(a: CvArgs) -> Result<(), CliError> {
             .map_err(err)?,
     };
     if blocks.len() < 2 {
-        return Err(CliError::usage("cross-validation needs at least two blocks (experiments, or --block-min shorter than the record)"));
+        return Err(CliError::usage("leave-one-block-out needs at least two blocks (experiments, or --block-min shorter than the record)"));
     }
     let res = block_cv(&CvFitter(&a.common), &data, &blocks).map_err(err)?;
+    eprintln!("note: leave-one-block-out trains on the future of every block it scores: optimistic for a model that must predict forward (the default forward validation is the honest score)");
     if a.json {
         let mut doc = serde_json::to_value(&res).map_err(|e| CliError::Internal(e.into()))?;
         doc["format"] = "mtec.thermal-cv/1".into();
+        doc["protocol"] = "leave-one-block-out (optimistic)".into();
         println!(
             "{}",
             serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?
@@ -819,7 +1120,7 @@ fn cv(a: CvArgs) -> Result<(), CliError> {
             );
         }
         println!(
-            "pooled RMSE {:.3} um, max|res| {:.3} um",
+            "pooled RMSE {:.3} um, max|res| {:.3} um (leave-one-block-out: optimistic)",
             res.pooled_rmse_um, res.pooled_max_abs_um
         );
     }

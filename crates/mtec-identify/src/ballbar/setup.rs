@@ -150,7 +150,7 @@ impl Setup {
     /// The setup as TOML text in the SPEC §4 format.
     pub fn to_toml(&self) -> String {
         let mut s = String::from(
-            "# mtec ballbar setup: one [[mode]] per installation (SPEC §4).\n\
+            "# mtec ballbar setup: one [[mode]] per installation (docs/formats.md, Ballbar).\n\
              # workpiece_ball_mm: ball on the table at C = 0; tool_ball_mm: fixed while C turns.\n",
         );
         for m in &self.modes {

@@ -1,0 +1,273 @@
+//! `mtec machine build|replay`: the machine error model with a state (`mtec.machine-error/1`).
+
+use crate::error::CliError;
+use mtec_comp::machine::Fade;
+use mtec_comp::machine_build::{self, BuildRequest, PartRequest};
+use mtec_comp::{replay, Compensator, CorrectionOptions};
+use mtec_io::{OutputGuard, Table};
+use std::io::Write;
+use std::path::PathBuf;
+
+const BUILD_HELP: &str = "\
+Writes a machine error model (mtec.machine-error/1): a static geometric model plus thermal
+models, each acting along one axis, that follow the machine's state (temperatures, spindle speed)
+on line. Each thermal model gets its training envelope, the range [min, max] of each of its
+inputs over the rows of --data it was fitted on (its file's split: --train-until, --train
+experiments, or all rows); outside it the thermal part fades to no correction over --fade-c
+(temperatures) or --fade-other of the range (other inputs). --data must be the file the models
+were fitted on: a different number of training rows is refused.
+
+--thermal AXIS=MODEL[,sign=-1]: the model's drift acts along AXIS (x, y or z); sign=-1 when its
+target is the workpiece's displacement relative to the tool (mtec's convention, sign=1, is the
+tool's relative to the workpiece: actual = commanded + error). --guard COL,...: further columns of
+--data whose training range every thermal part must stay in although the models do not read them
+(e.g. the shop's air for a model of the spindle speed alone).
+
+Paths inside the written file are relative to it. The file is read back before it is written.
+
+Example:
+  mtec machine build --geometric map.json --thermal z=dz.json --thermal y=dy.json,sign=-1
+    --data train.csv --guard air_c -o machine.json";
+
+const REPLAY_HELP: &str = "\
+Compensates a recorded day through the real-time code path (the calls of mtec-rt) and says how
+much of the measured error it removes. --state is the controller's log (time_min and the model's
+state inputs); --probes holds the error at the tool tip measured without compensation
+(time_min,[probe,]x_mm,y_mm,z_mm,ex_um,ey_um,ez_um, actual - commanded). For each probe reading
+the model has received every state reading up to its time (update_state), then the correction
+for the probe point is computed (correction_um); the compensated error is the measured one plus
+the correction.
+
+Prints RMS and largest error before and after (X, Y, Z and the vector), the compensation rate
+1 - RMS_after/RMS_before, the reduction of the worst moment, how many readings got worse and how
+many were taken with the thermal part faded (outside the training envelope). -o writes every
+reading (before, correction, after, thermal weight); --json prints the summary as JSON
+(mtec.machine-replay/1).
+
+Example:
+  mtec machine replay --model machine.json --state day-state.csv --probes day-probes.csv
+    -o replay.csv";
+
+/// The machine error model with a state.
+#[derive(clap::Args)]
+pub struct Args {
+    #[command(subcommand)]
+    cmd: Sub,
+}
+
+#[derive(clap::Subcommand)]
+enum Sub {
+    /// Build a machine error model file from a geometric model and fitted thermal models.
+    #[command(long_about = BUILD_HELP)]
+    Build(BuildArgs),
+    /// Compensate a recorded day (state log + probe readings) through the real-time path.
+    #[command(long_about = REPLAY_HELP)]
+    Replay(ReplayArgs),
+}
+
+#[derive(clap::Args)]
+struct BuildArgs {
+    /// Static geometric model (map, kinematic model, BPNN).
+    #[arg(long, value_name = "MAP.json")]
+    geometric: Option<PathBuf>,
+    /// A thermal part: AXIS=MODEL.json[,sign=-1] (repeat for several).
+    #[arg(long, value_name = "AXIS=MODEL.json[,sign=-1]")]
+    thermal: Vec<String>,
+    /// The data the thermal models were fitted on (CSV).
+    #[arg(long, value_name = "TRAIN.csv")]
+    data: Option<PathBuf>,
+    /// Columns of --data that guard every thermal part (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    guard: Vec<String>,
+    /// Fade width of temperature inputs outside their range (°C).
+    #[arg(long, default_value_t = mtec_comp::machine::FADE_TEMPERATURE_C)]
+    fade_c: f64,
+    /// Fade width of other inputs, as a fraction of their training range.
+    #[arg(long, default_value_t = mtec_comp::machine::FADE_OTHER_FRACTION)]
+    fade_other: f64,
+    /// The machine file to write.
+    #[arg(short = 'o', long = "output")]
+    output: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct ReplayArgs {
+    /// Model file (any; a machine error model to follow a state).
+    #[arg(long)]
+    model: PathBuf,
+    /// The controller's state log (CSV: time_min and the model's state inputs).
+    #[arg(long, value_name = "STATE.csv")]
+    state: PathBuf,
+    /// Probe readings (CSV: time_min,[probe,]x_mm,y_mm,z_mm,ex_um,ey_um,ez_um).
+    #[arg(long, value_name = "PROBES.csv")]
+    probes: PathBuf,
+    /// Write every compensated reading here (CSV).
+    #[arg(short = 'o', long = "output")]
+    output: Option<PathBuf>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    match args.cmd {
+        Sub::Build(a) => build(a),
+        Sub::Replay(a) => replay_day(a),
+    }
+}
+
+/// `AXIS=MODEL[,sign=±1]`.
+fn parse_part(s: &str, guards: &[String]) -> Result<PartRequest, CliError> {
+    let bad = |why: &str| {
+        CliError::usage(format!(
+            "--thermal `{s}`: {why}; expected AXIS=MODEL.json[,sign=-1], e.g. z=dz.json"
+        ))
+    };
+    let (axis, rest) = s.split_once('=').ok_or_else(|| bad("no `=`"))?;
+    let axis = axis.trim().to_lowercase();
+    if !["x", "y", "z"].contains(&axis.as_str()) {
+        return Err(bad("the axis is x, y or z"));
+    }
+    let mut it = rest.split(',');
+    let model = PathBuf::from(it.next().unwrap_or_default().trim());
+    if model.as_os_str().is_empty() {
+        return Err(bad("no model file"));
+    }
+    let mut sign = 1.0;
+    for opt in it {
+        match opt.trim().split_once('=') {
+            Some(("sign", "1" | "+1")) => sign = 1.0,
+            Some(("sign", "-1")) => sign = -1.0,
+            _ => return Err(bad(&format!("`{opt}` is not sign=1 or sign=-1"))),
+        }
+    }
+    Ok(PartRequest {
+        axis,
+        model,
+        sign,
+        guards: guards.to_vec(),
+    })
+}
+
+fn build(a: BuildArgs) -> Result<(), CliError> {
+    let parts: Vec<PartRequest> = a
+        .thermal
+        .iter()
+        .map(|s| parse_part(s, &a.guard))
+        .collect::<Result<_, _>>()?;
+    if parts.is_empty() && a.geometric.is_none() {
+        return Err(CliError::usage(
+            "give --geometric, --thermal or both: the machine model sums them",
+        ));
+    }
+    if !parts.is_empty() && a.data.is_none() {
+        return Err(CliError::usage(
+            "--data TRAIN.csv is needed with --thermal: the envelopes come from the rows the models were fitted on",
+        ));
+    }
+    if !a.guard.is_empty() && parts.is_empty() {
+        return Err(CliError::usage("--guard goes with --thermal"));
+    }
+    let mut inputs: Vec<PathBuf> = parts.iter().map(|p| p.model.clone()).collect();
+    inputs.extend(a.geometric.clone());
+    inputs.extend(a.data.clone());
+    let dest = OutputGuard::new(&inputs).check(&a.output)?;
+    let data = a.data.as_deref().map(Table::read).transpose()?;
+    let file = machine_build::build(&BuildRequest {
+        geometric: a.geometric.as_deref(),
+        parts: &parts,
+        data: data.as_ref(),
+        fade: Fade {
+            temperature_c: a.fade_c,
+            other_fraction: a.fade_other,
+        },
+        output: &a.output,
+    })?;
+    dest.write(machine_build::to_json(&file).as_bytes())?;
+    let mut say = super::messages(&dest);
+    if let Some(g) = &file.geometric {
+        let _ = writeln!(say, "geometric: {g}");
+    }
+    for p in &file.thermal {
+        let ranges: Vec<String> = p
+            .envelope
+            .iter()
+            .map(|(k, [lo, hi])| format!("{k} [{lo}, {hi}]"))
+            .collect();
+        let _ = writeln!(
+            say,
+            "thermal {} (sign {:+}): {}; envelope {}",
+            p.axis,
+            p.sign,
+            p.model,
+            ranges.join(", ")
+        );
+    }
+    let _ = writeln!(say, "wrote {}", a.output.display());
+    Ok(())
+}
+
+fn replay_day(a: ReplayArgs) -> Result<(), CliError> {
+    let dest = match &a.output {
+        Some(p) => Some(OutputGuard::new(&[&a.model, &a.state, &a.probes]).check(p)?),
+        None => None,
+    };
+    let model = super::model_loader::load_error_model(&a.model)?;
+    let mut comp = Compensator::new(model, CorrectionOptions::default());
+    let state = Table::read(&a.state)?;
+    let probes = Table::read(&a.probes)?;
+    let (samples, summary) = replay::replay(&mut comp, &state, &probes)?;
+    let provenance = format!(
+        "{}; state {}; probes {}",
+        comp.describe(),
+        a.state.display(),
+        a.probes.display()
+    );
+    if let Some(d) = &dest {
+        d.write(replay::to_csv(&samples, &provenance).as_bytes())?;
+    }
+    if a.json {
+        let mut doc = serde_json::to_value(&summary).map_err(|e| CliError::Internal(e.into()))?;
+        doc["format"] = "mtec.machine-replay/1".into();
+        doc["model"] = comp.describe().into();
+        doc["state_inputs"] = comp.state_inputs().into();
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?
+        );
+        return Ok(());
+    }
+    println!("{}", comp.describe());
+    println!(
+        "{} probe readings, {} state readings",
+        summary.readings, summary.state_rows
+    );
+    println!(
+        "  {:<7} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}",
+        "", "RMS before", "RMS after", "max before", "max after", "comp. rate", "worst"
+    );
+    for (name, r) in [
+        ("X", &summary.x),
+        ("Y", &summary.y),
+        ("Z", &summary.z),
+        ("vector", &summary.vector),
+    ] {
+        println!(
+            "  {name:<7} {:>9.3} um {:>9.3} um {:>9.3} um {:>9.3} um {:>10.1} % {:>10.1} %",
+            r.rms_before_um,
+            r.rms_after_um,
+            r.max_before_um,
+            r.max_after_um,
+            100.0 * r.compensation_rate,
+            100.0 * r.worst_reduction
+        );
+    }
+    println!(
+        "  readings made worse: {} (largest |e| increase {:.3} um); taken with the thermal part faded: {} (smallest weight {:.3})",
+        summary.worse, summary.largest_worsening_um.max(0.0), summary.faded, summary.min_thermal_weight
+    );
+    if let Some(o) = &a.output {
+        println!("wrote {}", o.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,4 @@
+(mtec compensate thermal-offset, model machine.json)
+(state now: now.csv line 4 at 60 min, run from line 2 at 0 min)
+(Z thermal drift +12.00 um, envelope weight 1: the offset moves -12.00 um)
+G90 G10 L2 P1 Z-312.462

@@ -1,0 +1,257 @@
+//! `auto`: choose the model family by forward validation, nested, with the one-standard-error
+//! rule.
+//!
+//! Candidates: `mlr`, `ridge`, `lagged-ridge` and `dynamic` ([`crate::stepwise`]: forward
+//! selection of at most `max_sensors` temperature sensors, the heat input not counted),
+//! `heat-input` ([`crate::heat_input`]) when the data has the input column, and `exp-ambient`
+//! when the caller supplies its fitter (its columns exist). Neural models are never candidates.
+//!
+//! 1. Forward folds of the training rows ([`crate::validate::forward_folds_of`]).
+//! 2. Each candidate is fitted on each fold's training rows, with every choice it makes
+//!    (sensors, time constants, k, α …) made again inside those rows by their own forward folds
+//!    (nested), and scored on the fold's block.
+//! 3. A candidate worse than no compensation on any fold (fold RMSE above the RMS of the
+//!    measured drift there) is flagged and never chosen; so is one that failed.
+//! 4. One-standard-error rule (Hastie, Tibshirani & Friedman, *Elements of Statistical
+//!    Learning*, 2nd ed., §7.10.1): among the rest, the simplest candidate whose mean fold RMSE
+//!    is within one standard error (sd of its fold RMSEs / √folds) of the best mean.
+//!    Simplicity order: mlr, ridge, heat-input, lagged-ridge, dynamic, exp-ambient.
+//! 5. The chosen candidate is refitted on every training row (its choices made again there).
+
+use crate::data::ThermalData;
+use crate::error::ThermalError;
+use crate::heat_input::HeatInput;
+use crate::model::{ExpAmbient, Fit, Predict, ThermalModel};
+use crate::stepwise::{Family, Stepwise};
+use crate::validate::{forward_cv, forward_folds_of, input_column, BlockSpec, ForwardCv};
+use serde::{Deserialize, Serialize};
+
+/// Default number of temperature sensors a candidate may use.
+pub const DEFAULT_MAX_SENSORS: usize = 6;
+
+/// The auto fitter (module docs).
+#[derive(Debug, Clone)]
+pub struct Auto {
+    /// Candidate temperature sensors (every `_c` sensor when empty).
+    pub sensors: Vec<String>,
+    /// Heat-input column (`spindle_rpm`); heat-input and dynamic run only when the data has it.
+    pub input: String,
+    pub max_sensors: usize,
+    pub block_min: Option<f64>,
+    /// The exp-ambient fitter, when its columns exist.
+    pub exp_ambient: Option<ExpAmbient>,
+}
+
+impl Default for Auto {
+    fn default() -> Self {
+        Auto {
+            sensors: Vec::new(),
+            input: "spindle_rpm".into(),
+            max_sensors: DEFAULT_MAX_SENSORS,
+            block_min: None,
+            exp_ambient: None,
+        }
+    }
+}
+
+/// The forward score of one candidate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CandidateScore {
+    pub family: String,
+    /// Simplicity rank (0 simplest) used by the one-standard-error rule.
+    pub complexity: usize,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub forward: Option<ForwardCv>,
+    /// Why the candidate could not be fitted.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub error: Option<String>,
+    /// 1-based folds where it was worse than no compensation.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub worse_than_uncompensated: Vec<usize>,
+    pub chosen: bool,
+}
+
+impl CandidateScore {
+    /// Fit on every fold and never worse than no compensation.
+    pub fn eligible(&self) -> bool {
+        self.forward.is_some() && self.worse_than_uncompensated.is_empty()
+    }
+}
+
+/// The chosen model, its forward validation and every candidate's score.
+#[derive(Debug, Clone)]
+pub struct AutoFit {
+    pub model: ThermalModel,
+    pub family: String,
+    pub validation: ForwardCv,
+    pub candidates: Vec<CandidateScore>,
+}
+
+/// A candidate fitter as a [`ThermalModel`] fitter.
+enum Candidate {
+    Stepwise(Stepwise),
+    HeatInput(HeatInput),
+    ExpAmbient(ExpAmbient),
+}
+
+impl Fit for Candidate {
+    type Model = ThermalModel;
+    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
+        Ok(match self {
+            Candidate::Stepwise(s) => ThermalModel::Linear(s.fit_rows(data, rows)?),
+            Candidate::HeatInput(h) => ThermalModel::HeatInput(h.fit_rows(data, rows)?),
+            Candidate::ExpAmbient(e) => ThermalModel::ExpAmbient(Box::new(e.fit_rows(data, rows)?)),
+        })
+    }
+}
+
+impl Auto {
+    fn candidates(&self, data: &ThermalData) -> Vec<(String, usize, Candidate)> {
+        let has_input = input_column(data, &self.input).is_some();
+        let step = |family: Family| Stepwise {
+            family,
+            sensors: self.sensors.clone(),
+            input: has_input.then(|| self.input.clone()),
+            max_sensors: self.max_sensors,
+            block_min: self.block_min,
+        };
+        let mut out = vec![
+            ("mlr".to_string(), 0, Candidate::Stepwise(step(Family::Mlr))),
+            (
+                "ridge".to_string(),
+                1,
+                Candidate::Stepwise(step(Family::Ridge)),
+            ),
+        ];
+        if has_input {
+            out.push((
+                "heat-input".into(),
+                2,
+                Candidate::HeatInput(HeatInput {
+                    input: self.input.clone(),
+                    block_min: self.block_min,
+                    ..Default::default()
+                }),
+            ));
+        }
+        out.push((
+            "lagged-ridge".into(),
+            3,
+            Candidate::Stepwise(step(Family::LaggedRidge)),
+        ));
+        if has_input {
+            out.push((
+                "dynamic".into(),
+                4,
+                Candidate::Stepwise(step(Family::Dynamic)),
+            ));
+        }
+        if let Some(e) = &self.exp_ambient {
+            out.push(("exp-ambient".into(), 5, Candidate::ExpAmbient(e.clone())));
+        }
+        out
+    }
+
+    /// Scores every candidate on the forward folds of `rows`, chooses one, refits it on `rows`.
+    pub fn fit_auto(&self, data: &ThermalData, rows: &[usize]) -> Result<AutoFit, ThermalError> {
+        let spec = BlockSpec {
+            block_min: self.block_min,
+            input: Some(self.input.clone()),
+        };
+        let folds = forward_folds_of(data, rows, &spec);
+        if folds.is_empty() {
+            return Err(ThermalError::Undetermined(
+                "auto: forward validation needs at least two blocks in the training rows (a longer record, experiments, or --block-min)".into(),
+            ));
+        }
+        let cands = self.candidates(data);
+        let mut scores: Vec<CandidateScore> = Vec::new();
+        for (name, complexity, c) in &cands {
+            let (forward, error) = match forward_cv(c, data, &folds) {
+                Ok(f) => (Some(f), None),
+                Err(e) => (None, Some(e.to_string())),
+            };
+            scores.push(CandidateScore {
+                family: name.clone(),
+                complexity: *complexity,
+                worse_than_uncompensated: forward
+                    .as_ref()
+                    .map(|f| f.folds_worse_than_uncompensated())
+                    .unwrap_or_default(),
+                forward,
+                error,
+                chosen: false,
+            });
+        }
+        let pick = one_standard_error(&scores).ok_or_else(|| {
+            let list: Vec<String> = scores
+                .iter()
+                .map(|s| match (&s.forward, &s.error) {
+                    (Some(f), _) => format!(
+                        "{} {:.2} µm (worse than no compensation on fold {:?})",
+                        s.family, f.pooled_rmse_um, s.worse_than_uncompensated
+                    ),
+                    (None, Some(e)) => format!("{}: {e}", s.family),
+                    (None, None) => s.family.clone(),
+                })
+                .collect();
+            ThermalError::Undetermined(format!(
+                "auto: no candidate is better than no compensation on every forward fold, so none is safe to apply: {}",
+                list.join("; ")
+            ))
+        })?;
+        scores[pick].chosen = true;
+        let model = cands[pick].2.fit_rows(data, rows)?;
+        Ok(AutoFit {
+            model,
+            family: scores[pick].family.clone(),
+            validation: scores[pick].forward.clone().expect("eligible"),
+            candidates: scores,
+        })
+    }
+}
+
+/// Index of the candidate the one-standard-error rule picks among the eligible ones (module
+/// docs), `None` when none is eligible.
+pub fn one_standard_error(scores: &[CandidateScore]) -> Option<usize> {
+    let eligible: Vec<usize> = (0..scores.len())
+        .filter(|&i| scores[i].eligible())
+        .collect();
+    let mean = |i: usize| scores[i].forward.as_ref().expect("eligible").mean_rmse_um();
+    let best = *eligible
+        .iter()
+        .min_by(|&&a, &&b| mean(a).total_cmp(&mean(b)))?;
+    let limit = mean(best)
+        + scores[best]
+            .forward
+            .as_ref()
+            .expect("eligible")
+            .rmse_std_error_um;
+    eligible
+        .into_iter()
+        .filter(|&i| mean(i) <= limit)
+        .min_by(|&a, &b| {
+            scores[a]
+                .complexity
+                .cmp(&scores[b].complexity)
+                .then(mean(a).total_cmp(&mean(b)))
+        })
+}
+
+/// `Predict` of the chosen model (so an `AutoFit` can be used where a model is).
+impl Predict for AutoFit {
+    fn predict(&self, data: &ThermalData) -> Result<Vec<f64>, ThermalError> {
+        self.model.predict(data)
+    }
+    fn predictors(&self) -> usize {
+        self.model.predictors()
+    }
+}
+
+/// `Auto` as a fitter of [`ThermalModel`] (for validating the whole procedure, nested once more).
+impl Fit for Auto {
+    type Model = ThermalModel;
+    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
+        self.fit_auto(data, rows).map(|a| a.model)
+    }
+}
