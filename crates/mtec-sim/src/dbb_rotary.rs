@@ -26,6 +26,13 @@
 //! where `E_bearing` holds harmonics 2–3 (the thermal change the method sees), `E_growth` the
 //! uniform axial growth and radial shift, `E_tilt` a constant tilt (both removed with the set-up
 //! error, see `mtec_identify::ballbar::harmonics`).
+//!
+//! The five-axis calibration ([`five_axis_calibration`], same seed, same truth, cold start of
+//! experiment 1): six more installations ([`supplement_modes`]) that make every motion harmonic
+//! observable except the co-rotating first harmonic (the table's own frame), read like the
+//! campaign's, and an ISO 230-2 rotary positioning test of C (36 targets, 5 runs each way)
+//! against a reference instrument with a smooth error of at most ±1″ and 0.5 µrad noise, which
+//! gives ECC.
 
 use crate::scenario::{OutputFile, ScenarioOutput, SimError};
 use crate::thermal_network::{AmbientProfile, Body, DutyCycle, HeatSource, Link, ThermalNetwork};
@@ -390,6 +397,128 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
     })
 }
 
+/// The ballbar installations that complete the preset for a five-axis machine (ids 6–11), all
+/// at the cold start: radial bars at a second height (ball on the axis at 250 mm, cup at
+/// 500 mm on +X and +Y), short inclined bars (ball at radius 120 mm, 100 mm high, at table
+/// angles 0°, 120°, 240°, cup on the axis 90 mm above the ball plane: a 150 mm bar with its cup
+/// at 190 mm instead of the preset's 500 mm) and an axial bar (ball on the axis at 100 mm, cup
+/// on the axis 150 mm above it). Why these: `mtec_identify::ballbar::revolution`.
+pub fn supplement_modes() -> Vec<(i64, [f64; 3], [f64; 3])> {
+    let mut m = vec![
+        (6, [0.0, 0.0, 250.0], [500.0, 0.0, 250.0]),
+        (7, [0.0, 0.0, 250.0], [0.0, 500.0, 250.0]),
+    ];
+    for (i, p) in [0.0f64, 120.0, 240.0].iter().enumerate() {
+        let p = p.to_radians();
+        m.push((
+            8 + i as i64,
+            [120.0 * p.cos(), 120.0 * p.sin(), 100.0],
+            [0.0, 0.0, 190.0],
+        ));
+    }
+    m.push((11, [0.0, 0.0, 100.0], [0.0, 0.0, 250.0]));
+    m
+}
+
+/// Targets of the rotary positioning test (deg): every 10° over one revolution.
+pub const POSITIONING_STEP_DEG: f64 = 10.0;
+/// Runs in each direction (ISO 230-2 standard test cycle).
+pub const POSITIONING_RUNS: usize = 5;
+/// The reference instrument's error bound (µrad): ±1″, the stated accuracy of a rotary axis
+/// calibrator read with an angular interferometer (Renishaw XR20-W). Simulated as a smooth
+/// error of the instrument's angle (harmonics 1–4, random phases, peak at most this bound).
+pub const POSITIONING_INSTRUMENT_URAD: f64 = 4.85;
+/// Random part of each positioning reading (µrad, 1σ): instrument and axis repeatability.
+pub const POSITIONING_NOISE_URAD: f64 = 0.5;
+
+/// The calibration of the C axis for the five-axis scenario at the cold start of experiment 1
+/// of [`run`] (same seed, same truth).
+#[derive(Debug, Clone)]
+pub struct FiveAxisCalibration {
+    /// [`supplement_modes`].
+    pub modes: Vec<(i64, [f64; 3], [f64; 3])>,
+    /// Their readings, the DBB format of [`run`] (experiment 1, time 0).
+    pub dbb_csv: String,
+    /// Rotary positioning test targets (deg) and deviations (actual − commanded angle, µrad),
+    /// `up[run][target]`, `down[run][target]`, read against the instrument zeroed at 0°.
+    pub positioning_targets_deg: Vec<f64>,
+    pub positioning_up_urad: Vec<Vec<f64>>,
+    pub positioning_down_urad: Vec<Vec<f64>>,
+}
+
+/// Simulates the supplementary installations and the rotary positioning test from the exact
+/// truth of [`run`] with the same seed (set-up errors, noise and the instrument's error drawn
+/// from their own stream).
+pub fn five_axis_calibration(seed: u64) -> Result<FiveAxisCalibration, SimError> {
+    // the truth is the first draw of run()'s stream
+    let truth_axis = AxisTruth::random(&mut StdRng::seed_from_u64(seed));
+    let mut rng = StdRng::seed_from_u64(seed ^ 0x5EED_F1FE_A815);
+    let noise = Normal::new(0.0, BALLBAR_NOISE_UM).map_err(|e| SimError::Invalid(e.to_string()))?;
+    let n_angles = (360.0 / ANGLE_STEP_DEG).round() as usize;
+    let modes = supplement_modes();
+    let mut dbb = String::from("experiment,time_min,mode,angle_deg,dl_um\n");
+    for (id, pw, pt) in &modes {
+        let rnd = |rng: &mut StdRng, s: f64| {
+            Vector3::new(
+                rng.random_range(-s..s),
+                rng.random_range(-s..s),
+                rng.random_range(-s..s),
+            )
+        };
+        let ew_mm = rnd(&mut rng, 0.012);
+        let et_mm = rnd(&mut rng, 0.012);
+        let zero_um = rng.random_range(-1.0..1.0);
+        for i in 0..n_angles {
+            let c = i as f64 * ANGLE_STEP_DEG;
+            let e = truth_axis.motions(c, 0.0, 0.0, 0.0);
+            let dl = exact_reading_um(Vector3::from(*pw), Vector3::from(*pt), ew_mm, et_mm, c, &e)
+                + zero_um
+                + noise.sample(&mut rng);
+            writeln!(dbb, "1,0,{id},{c},{dl:.4}").ok();
+        }
+    }
+    // rotary positioning: the instrument's own error, then the runs
+    let amps = [2.0, 1.3, 0.9, 0.6];
+    let scale = POSITIONING_INSTRUMENT_URAD / amps.iter().sum::<f64>();
+    let instrument = Harmonics(
+        amps.iter()
+            .enumerate()
+            .map(|(n, a)| {
+                (
+                    n as f64 + 1.0,
+                    a * scale * rng.random_range(0.6..1.0),
+                    rng.random_range(0.0..2.0 * PI),
+                )
+            })
+            .collect(),
+    );
+    let pnoise =
+        Normal::new(0.0, POSITIONING_NOISE_URAD).map_err(|e| SimError::Invalid(e.to_string()))?;
+    let m = (360.0 / POSITIONING_STEP_DEG).round() as usize;
+    let targets: Vec<f64> = (0..m).map(|i| i as f64 * POSITIONING_STEP_DEG).collect();
+    let reading = |c: f64| truth_axis.motions(c, 0.0, 0.0, 0.0)[5] + instrument.at(c.to_radians());
+    let zero = reading(0.0) + pnoise.sample(&mut rng);
+    let runs = |rng: &mut StdRng| -> Vec<Vec<f64>> {
+        (0..POSITIONING_RUNS)
+            .map(|_| {
+                targets
+                    .iter()
+                    .map(|&c| reading(c) - zero + pnoise.sample(rng))
+                    .collect()
+            })
+            .collect()
+    };
+    let up = runs(&mut rng);
+    let down = runs(&mut rng);
+    Ok(FiveAxisCalibration {
+        modes,
+        dbb_csv: dbb,
+        positioning_targets_deg: targets,
+        positioning_up_urad: up,
+        positioning_down_urad: down,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -423,6 +552,31 @@ mod tests {
                 assert!(rise[4] < 1.0);
             }
         }
+    }
+
+    /// The calibration simulates the same truth as `run`: the supplementary axial bar reads
+    /// −EZC of `run`'s truth (plus a constant set-up error and noise).
+    #[test]
+    fn five_axis_calibration_reads_the_truth_of_run() {
+        let t = run(4).unwrap().truth;
+        let cal = five_axis_calibration(4).unwrap();
+        let ezc: Vec<f64> = t["motions"]["EZC_um"].as_array().unwrap()[..72]
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let axial: Vec<f64> = cal
+            .dbb_csv
+            .lines()
+            .filter(|l| l.starts_with("1,0,11,"))
+            .map(|l| l.rsplit(',').next().unwrap().parse().unwrap())
+            .collect();
+        assert_eq!(axial.len(), 72);
+        let d: Vec<f64> = axial.iter().zip(&ezc).map(|(a, e)| a + e).collect();
+        let mean = d.iter().sum::<f64>() / 72.0;
+        let rms = (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / 72.0).sqrt();
+        assert!(rms < 0.15, "{rms}");
+        assert_eq!(cal.positioning_up_urad.len(), POSITIONING_RUNS);
+        assert_eq!(cal.positioning_targets_deg.len(), 36);
     }
 
     #[test]

@@ -19,6 +19,12 @@
 //! - [`harmonics`]: installation-error removal (mean and first harmonic of each mode signal).
 //! - [`mod@identify`]: reading the DBB file, grouping it by experiment/time/mode, and the per-angle
 //!   solution.
+//! - [`revolution`]: the revolution-level solve of any number of installations at once, each with
+//!   its own set-up error: harmonics 1 (the part a ballbar can see) to N, for mode sets that
+//!   break the families the five-mode preset cannot see (radial bars at a second height, inclined
+//!   bars with their cup at a second height, an axial bar).
+//! - [`positioning`]: `ECC` from a rotary positioning test (ISO 230-2) against a reference
+//!   instrument: the motion no bar in an axial plane sees.
 //!
 //! What it is not for: the ISO 230-4 circular test of two linear axes (that is `mtec-measure`),
 //! or location errors of the axis (`EX0C EY0C EA0C EB0C`): they are constant or first-harmonic
@@ -51,6 +57,8 @@ pub mod errors;
 pub mod harmonics;
 pub mod identify;
 pub mod model;
+pub mod positioning;
+pub mod revolution;
 pub mod setup;
 pub mod temps;
 
@@ -65,6 +73,11 @@ pub use identify::{identify, Identification, IdentifiedRow, Measurements};
 pub use model::{
     exact_dl_um, first_order_row, identification_matrix, predicted_dl_um, ErrorMotions,
     OBSERVABLE_NAMES,
+};
+pub use positioning::{ecc_from_positioning, mean_bidirectional_urad};
+pub use revolution::{
+    identify_revolution, observability, setup_terms, Basis, FirstHarmonic, ModeSignal,
+    Observability, RevolutionIdentification, SetupTerms,
 };
 pub use setup::{Mode, PresetDims, Setup};
 pub use temps::{time_key, TemperatureLog};
