@@ -170,3 +170,85 @@ fn bad_model_bad_offsets_and_overwriting_the_input_exit_2() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("overwrite"));
     assert_eq!(std::fs::read_to_string(&prog).unwrap(), "G21\n");
 }
+
+/// Issue 24 item 10: a program that leaves the map's box is compensated with clamped values and
+/// says so, with the count and the first place; without --offsets it says that program
+/// coordinates were taken as machine coordinates, and with them it does not.
+#[test]
+fn points_outside_the_map_and_assumed_coordinates_are_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    // a 2×2×2 map over X 0..100, Y 0..50, Z -10..10: e_x = 5 um + 0.1 um/mm · x
+    let map = write(
+        dir.path(),
+        "map.json",
+        r#"{"format": "mtec.map/1", "model": "trilinear", "outside": "clamp",
+            "x_mm": [0.0, 100.0], "y_mm": [0.0, 50.0], "z_mm": [-10.0, 10.0],
+            "ex_um": [5, 5, 5, 5, 15, 15, 15, 15], "ey_um": [0, 0, 0, 0, 0, 0, 0, 0],
+            "ez_um": [0, 0, 0, 0, 0, 0, 0, 0]}"#,
+    );
+    let inside = write(
+        dir.path(),
+        "inside.ngc",
+        "G21 G90 G17\nG0 X10 Y10 Z5\nG1 X90 F300\nM30\n",
+    );
+    // line 3 goes to X150 (outside from column 6), line 4 to Y-20 (outside too)
+    let outside = write(
+        dir.path(),
+        "outside.ngc",
+        "G21 G90 G17\nG0 X10 Y10 Z5\nG1 X150 F300\nG1 Y-20\nM30\n",
+    );
+    let out = dir.path().join("out.ngc");
+
+    let o = compensate(&map, &inside, &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(!err.contains("outside the model's box"), "{err}");
+    assert!(
+        err.contains("no --offsets: program coordinates were taken as machine coordinates"),
+        "{err}"
+    );
+
+    let o = compensate(&map, &outside, &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let line = err
+        .lines()
+        .find(|l| l.contains("outside the model's box"))
+        .unwrap_or_else(|| panic!("no outside warning: {err}"));
+    assert!(
+        line.contains("outside.ngc:3:"),
+        "first point not at line 3: {line}"
+    );
+    // the move to X150 (end and split points beyond X100) and the move to Y-20: at least the
+    // two end points, all of them counted
+    let n: usize = line
+        .split("warning: ")
+        .nth(1)
+        .and_then(|l| l.split(": ").nth(1))
+        .and_then(|l| l.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no count: {line}"));
+    assert!(n >= 2, "{line}");
+    assert!(line.contains("X 0..100 Y 0..50 Z -10..10"), "{line}");
+    assert!(line.contains("X 150.000 Y 10.000 Z 5.000"), "{line}");
+
+    // with --offsets the assumption note goes away (G54 at X0: the same program, same points)
+    let offsets = write(
+        dir.path(),
+        "offsets.toml",
+        "format = \"mtec.gcode-offsets/1\"\n[work_offsets_mm]\nG54 = [0.0, 0.0, 0.0]\n",
+    );
+    let o = mtec()
+        .args(["compensate", "gcode", "--model"])
+        .arg(&map)
+        .arg(&inside)
+        .arg("-o")
+        .arg(&out)
+        .arg("--offsets")
+        .arg(&offsets)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(!err.contains("no --offsets"), "{err}");
+}

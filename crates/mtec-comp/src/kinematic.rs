@@ -6,7 +6,7 @@
 
 use crate::pose::{ChainKinematics, Pose, PoseError};
 use crate::ErrorModel;
-use mtec_model::{ErrorSet, Formalism, Machine, MachineSpec, Order, VolumetricModel};
+use mtec_model::{Axis, ErrorSet, Formalism, Machine, MachineSpec, Order, VolumetricModel};
 use serde::{Deserialize, Serialize};
 
 /// The format tag of a kinematic model file.
@@ -79,6 +79,11 @@ impl ErrorModel for KinematicModel {
     }
     fn kinematics(&self) -> Option<&ChainKinematics> {
         Some(&self.kinematics)
+    }
+    /// The travels of X, Y and Z: the errors were identified over them.
+    fn domain_mm(&self) -> Option<[[f64; 2]; 3]> {
+        let m = self.model.machine();
+        Some([m.travel(Axis::X), m.travel(Axis::Y), m.travel(Axis::Z)])
     }
     fn describe(&self) -> String {
         format!(

@@ -362,6 +362,10 @@ impl ErrorModel for MachineErrorModel {
         self.geometric.as_ref().and_then(|g| g.kinematics())
     }
 
+    fn domain_mm(&self) -> Option<[[f64; 2]; 3]> {
+        self.geometric.as_ref().and_then(|g| g.domain_mm())
+    }
+
     fn describe(&self) -> String {
         let geo = self
             .geometric

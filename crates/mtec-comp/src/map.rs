@@ -586,6 +586,16 @@ impl ErrorModel for GridMap {
         Some(self)
     }
 
+    fn domain_mm(&self) -> Option<[[f64; 2]; 3]> {
+        let r = |a: usize| {
+            [
+                self.axes_mm[a][0],
+                self.axes_mm[a][self.axes_mm[a].len() - 1],
+            ]
+        };
+        Some([r(0), r(1), r(2)])
+    }
+
     fn describe(&self) -> String {
         let r = |a: usize| {
             let ax = &self.axes_mm[a];

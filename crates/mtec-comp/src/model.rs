@@ -84,6 +84,13 @@ pub trait ErrorModel: Send + Sync {
     fn as_grid(&self) -> Option<&crate::GridMap> {
         None
     }
+    /// The box of machine positions [[x_min, x_max], [y_min, y_max], [z_min, z_max]] (mm) the
+    /// model describes: a grid map's grid box, a kinematic model's axis travels. Outside it a
+    /// value is clamped, extrapolated or a fit beyond its data, so users are told when a
+    /// program goes there. `None`: no such box is known.
+    fn domain_mm(&self) -> Option<[[f64; 2]; 3]> {
+        None
+    }
     /// The machine-state inputs the model reads, in the order [`ErrorModel::update_state`] takes
     /// them (temperature columns such as `t3_c`, `spindle_rpm`, `ambient_c`); empty for a static
     /// model.

@@ -135,5 +135,8 @@ impl ErrorModel for WithState {
     fn as_grid(&self) -> Option<&crate::GridMap> {
         self.model.as_grid()
     }
+    fn domain_mm(&self) -> Option<[[f64; 2]; 3]> {
+        self.model.domain_mm()
+    }
     // the state is fixed from here on: no inputs, no updates (the default implementations)
 }

@@ -373,6 +373,36 @@ pub fn run(args: Args) -> Result<(), CliError> {
         report.max_correction_um,
         report.warnings_total
     );
+    if let Some(o) = &report.first_outside_model {
+        let d = o.domain_mm;
+        let _ = writeln!(
+            err,
+            "warning: {}:{}:{}: {} corrected point(s) lie outside the model's box X {}..{} Y {}..{} Z {}..{} mm \
+             (first: X {:.3} Y {:.3} Z {:.3} mm, machine frame); there a map is clamped or extrapolated \
+             and a fit is beyond its data: measure over the program's travel, or check the work offsets",
+            source.display(),
+            o.line,
+            o.column,
+            report.points_outside_model,
+            d[0][0],
+            d[0][1],
+            d[1][0],
+            d[1][1],
+            d[2][0],
+            d[2][1],
+            o.point_mm[0],
+            o.point_mm[1],
+            o.point_mm[2]
+        );
+    }
+    if args.offsets.is_none() && args.flatten.flatten_with.is_none() && report.moves_compensated > 0
+    {
+        let _ = writeln!(
+            err,
+            "note: no --offsets: program coordinates were taken as machine coordinates (G54 = 0); \
+             if the part is set up with work offsets, give them with --offsets (see --help)"
+        );
+    }
     if report.rapids_not_compensated > 0 || report.moves_end_point_only > 0 {
         let _ = writeln!(
             say,

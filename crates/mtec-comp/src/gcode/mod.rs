@@ -83,7 +83,7 @@ pub mod tooltable;
 
 pub use offsets::{Offsets, OffsetsFile};
 pub use rewrite::{
-    header_comment, rewrite, BlockDelete, Diagnostic, GcodeError, OnUnsupported, ProblemKind,
-    RewriteOptions, RewriteReport, Units,
+    header_comment, rewrite, BlockDelete, Diagnostic, GcodeError, OnUnsupported, OutsidePoint,
+    ProblemKind, RewriteOptions, RewriteReport, Units,
 };
 pub use solve::{correction_mm, SolveError};

@@ -250,7 +250,27 @@ pub struct RewriteReport {
     pub rotary_moves: usize,
     /// Moves whose F words were rewritten to keep their duration.
     pub feeds_rewritten: usize,
+    /// Corrected points outside the model's box ([`ErrorModel::domain_mm`]), where a grid map
+    /// is clamped or extrapolated and a fit is beyond its data.
+    pub points_outside_model: usize,
+    /// The first of them.
+    pub first_outside_model: Option<OutsidePoint>,
 }
+
+/// A corrected point outside the model's box.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutsidePoint {
+    pub line: usize,
+    pub column: usize,
+    /// The point, machine frame (mm).
+    pub point_mm: [f64; 3],
+    /// The model's box (mm).
+    pub domain_mm: [[f64; 2]; 3],
+}
+
+/// A point this far outside the model's box (mm) counts as outside (rounding of written words
+/// and of the solve stays inside).
+const OUTSIDE_MODEL_TOL_MM: f64 = 1e-3;
 
 /// Warnings kept in the report; the rest are only counted.
 pub const MAX_WARNINGS_KEPT: usize = 100;
@@ -387,6 +407,8 @@ struct Rewriter<'a> {
     /// The model seen at the rotary axes' current angles, in machine axes (identical to the
     /// model when it has no rotary axes).
     view: RotaryView<'a>,
+    /// The model's box ([`ErrorModel::domain_mm`]).
+    domain: Option<[[f64; 2]; 3]>,
     /// The current block moves in machine coordinates (G53).
     g53: bool,
     /// The current move's original-program offsets less the rewritten program's, mm: a word
@@ -485,6 +507,7 @@ impl<'a> Rewriter<'a> {
             split_stack: Vec::new(),
             bound: PathBound::new(opt.check_step_mm),
             view: RotaryView::new(model),
+            domain: model.domain_mm(),
             g53: false,
             shift: [0.0; 3],
             params: Params::new(),
@@ -1874,6 +1897,7 @@ impl<'a> Rewriter<'a> {
                 if n > self.report.max_correction_um {
                     self.report.max_correction_um = n;
                 }
+                self.note_if_outside_model(target, col);
                 Ok(c)
             }
             Err(e) => {
@@ -1888,6 +1912,28 @@ impl<'a> Rewriter<'a> {
                     }
                 };
                 Err(GcodeError::At(self.diag(col, ProblemKind::Correction, msg)))
+            }
+        }
+    }
+
+    /// Counts `target` when it lies outside the model's box (the first one with its place).
+    fn note_if_outside_model(&mut self, target: [f64; 3], col: usize) {
+        let Some(domain_mm) = self.domain else {
+            return;
+        };
+        let outside = (0..3).any(|a| {
+            target[a] < domain_mm[a][0] - OUTSIDE_MODEL_TOL_MM
+                || target[a] > domain_mm[a][1] + OUTSIDE_MODEL_TOL_MM
+        });
+        if outside {
+            self.report.points_outside_model += 1;
+            if self.report.first_outside_model.is_none() {
+                self.report.first_outside_model = Some(OutsidePoint {
+                    line: self.line_no,
+                    column: col,
+                    point_mm: target,
+                    domain_mm,
+                });
             }
         }
     }

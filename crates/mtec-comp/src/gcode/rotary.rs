@@ -135,4 +135,8 @@ impl ErrorModel for RotaryView<'_> {
     fn kinematics(&self) -> Option<&ChainKinematics> {
         self.model.kinematics()
     }
+    /// In machine axes, as the model's.
+    fn domain_mm(&self) -> Option<[[f64; 2]; 3]> {
+        self.model.domain_mm()
+    }
 }
