@@ -3,6 +3,7 @@
 
 mod cmd;
 mod error;
+mod help;
 mod inputs;
 
 use clap::{Parser, Subcommand};
@@ -43,17 +44,15 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Simulate measurements on the virtual machine (known truth).
+    // Leaf commands take their about, long help and examples from their `Args` (a doc comment
+    // here would replace them with one line).
     Simulate(cmd::simulate::Args),
-    /// Volumetric error at commanded points (HTM or POE, exact or first-order).
     Volumetric(cmd::volumetric::Args),
     /// Identify error elements or error motions from measurements.
     #[command(subcommand)]
     Identify(Identify),
-    /// ISO 230-2 positioning statistics of a linear axis (and VDI/DGQ 3441).
     #[command(name = "iso230-2")]
     Iso230_2(cmd::iso230_2::Args),
-    /// ISO 230-4 circular test and ballbar diagnostics.
     Circular(cmd::circular::Args),
     /// Volumetric error maps: `map fit` (grid CSV -> map JSON), `map eval` (errors at points).
     Map(cmd::map::Args),
@@ -65,11 +64,8 @@ enum Command {
     /// The machine error model with a state: `machine build` (geometric + thermal models with
     /// their training envelopes), `machine replay` (a recorded day through the real-time path).
     Machine(cmd::machine::Args),
-    /// Global sensitivity (EFAST, Sobol, Morris) of the volumetric error to the error elements.
     Sensitivity(cmd::sensitivity::Args),
-    /// Run the whole pipeline of a project file and write an HTML report.
     Run(cmd::run::Args),
-    /// Simulate a machine, run the whole pipeline on it, write the report.
     Demo(cmd::demo::Args),
 }
 

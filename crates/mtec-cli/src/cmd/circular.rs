@@ -21,22 +21,31 @@ lateral play, reversal spikes, straightness and cyclic error (amplitude and pitc
 reported as present when it adds at least --threshold-um to the circularity and exceeds 3
 standard errors.
 
-Input (CSV, SPEC section 4): angle_deg,direction,dl_um
+Input (CSV, docs/formats.md, \"Circular test CSV\"): angle_deg,direction,dl_um
   angle_deg from the plane's first axis towards its second; direction cw or ccw (ccw =
   increasing angle); dl_um = bar length minus nominal. Header comments give the test:
     # radius_mm = 100
     # plane = XY          (XY, YZ or ZX)
     # feed_mm_min = 1000  (optional)
-  Options override them. Both directions, full circles; the diagnostics need >= 90 samples each.
+  Options override them. Both directions, full circles; the diagnostics need >= 90 samples each.";
 
-Example:
-  mtec simulate circular-test --out sim
-  mtec circular sim/circular.csv
-  mtec circular sim/circular.csv --json --out result   (also writes result/polar.svg)";
+const EXAMPLES: &str = crate::help::examples!(
+    "  # a ballbar test of X and Y (R 100 mm, both directions) with injected faults
+  $ mtec simulate circular-test --out c
+  # G, G(b), H per ISO 230-4 and the faults that cause them, ranked; the JSON
+  # results and the polar plot go to c/result (circular.json, polar.svg)
+  $ mtec circular c/circular.csv --out c/result
+  # the same machine without the faults, to compare
+  $ mtec circular c/circular-fault-free.csv"
+);
 
 /// Arguments of `mtec circular`.
 #[derive(clap::Args, Debug)]
-#[command(about = "ISO 230-4 circular test (G, H) and ballbar diagnostics, ranked", long_about = LONG)]
+#[command(
+    about = "ISO 230-4 circular test (G, H) and ballbar diagnostics, ranked",
+    long_about = LONG,
+    after_long_help = EXAMPLES
+)]
 pub struct Args {
     /// The trace file (angle_deg,direction,dl_um).
     pub run: PathBuf,

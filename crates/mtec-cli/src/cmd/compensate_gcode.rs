@@ -59,15 +59,27 @@ know where a turned table puts the tool), U/V/W words (no chain mtec models has 
 that turns a rotary axis, G93 without F, G95 moves that would need new feeds, and poses where
 the linear axes do not move the tool tip along three perpendicular directions.
 
-The model (--model) is any model file mtec writes: a map (mtec.map/1, from `map fit`), a BPNN
-map, a kinematic model (mtec.kinematic-model/1; with rotary axes it is evaluated at the
-commanded angles), or {\"format\": \"mtec.zero-model/1\"} or a polynomial
-{\"format\": \"mtec.poly-model/1\", \"terms\": [{\"powers\": [1,0,0], \"coef_um\": [0.012,0,0]}]},
-giving [Ex, Ey, Ez] in um as a function of the machine position in mm. A machine error model
-(mtec.machine-error/1, from `machine build`) has a state: its thermal part depends on the
-machine's temperatures now, so it needs --state LOG.csv (time_min and the model's state inputs,
-rows in time order); every row advances the state and the program is compensated for the state
-after the last row, which the header comment names. Without --state such a model is refused.
+Models (--model): a JSON file whose \"format\" says what it is (docs/formats.md, \"Other compensable
+model files\"); each gives [Ex, Ey, Ez] in um as a function of the machine position in mm:
+  mtec.map/1              a volumetric error map (trilinear grid): `mtec map fit --grid GRID.csv`
+  mtec.bpnn/1             a neural map of a grid (x, y, z -> ex, ey, ez):
+                          `mtec map fit --grid GRID.csv --model bpnn`
+  mtec.kinematic-model/1  a machine with its error set (three axes, or with A, B, C: evaluated at
+                          the commanded angles): `mtec run` writes kinematic-model.json from a
+                          project with [lines] and [compensation] and no [map]; or by hand,
+                          {\"format\": \"mtec.kinematic-model/1\", \"machine\": {the machine TOML's
+                          keys}, \"errors\": {an error set from `mtec identify lines -o`}}
+  mtec.machine-error/1    a geometric model plus thermal models with a state:
+                          `mtec machine build`; needs --state (below)
+  mtec.poly-model/1       a polynomial E = sum of coef_um * x^i y^j z^k, written by hand:
+                          {\"format\": \"mtec.poly-model/1\", \"terms\": [{\"powers\": [1,0,0],
+                          \"coef_um\": [0.012,0,0]}]}
+  mtec.zero-model/1       no error, written by hand: {\"format\": \"mtec.zero-model/1\"}; the output
+                          is then byte-identical to the input
+A machine error model's thermal part depends on the machine's temperatures now, so it needs
+--state LOG.csv (time_min and the model's state inputs, rows in time order); every row advances
+the state and the program is compensated for the state after the last row, which the header
+comment names. Without --state such a model is refused.
 
 Offsets (--offsets, TOML) map program to machine coordinates (machine = program + work offset
 + G92/G52 offset + tool length along Z); G10 L1/L2/L20, G92, G52, G92.1 and G92.2 with literal
@@ -98,12 +110,19 @@ rs274's line: spindle-synchronised motion (G33, G76), probing (G38.x), rigid tap
 splines (G5.x), U/V/W motion, A/B/C offsets, arcs that turn a rotary axis, a rotated work system
 (G10 L2 R), and anything rs274 itself
 refuses (its message is passed on). Note that stand-alone rs274 reads tool-table and parameter
-file lengths as inches.
+file lengths as inches.";
 
-Examples:
-  mtec compensate gcode --model model.json part.ngc -o part-comp.ngc --offsets offsets.toml
-  mtec compensate gcode --model machine.json --state temps-now.csv part.ngc -o part-comp.ngc
-  mtec compensate gcode --model m.json --flatten-with rs274 --tool-table t.tbl in.ngc -o out.ngc";
+const EXAMPLES: &str = crate::help::examples!(
+    "  # a volumetric error map from a laser-tracker grid
+  $ mtec simulate volumetric-grid --out g
+  $ mtec map fit --grid g/grid.csv -o g/map.json
+  # a part program (a contour with an arc), in machine coordinates
+  $ printf '%s\\n' 'G21 G90 G17' 'G0 X20 Y20 Z50' 'G1 Z20 F300' \\
+      'G1 X200 F1200' 'G2 X200 Y120 J50' 'G1 X20' 'G1 Y20' 'G0 Z50' \\
+      M2 > part.ngc
+  # the program corrected for the map (within --tolerance-um, 0.5 um)
+  $ mtec compensate gcode --model g/map.json part.ngc -o part-compensated.ngc"
+);
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum OnUnsupportedArg {
@@ -120,7 +139,8 @@ pub enum UnitsArg {
 #[derive(clap::Args, Debug)]
 #[command(
     about = "Rewrite an NC program (G-code) so the machine reaches the programmed points",
-    long_about = LONG_ABOUT
+    long_about = LONG_ABOUT,
+    after_long_help = EXAMPLES
 )]
 pub struct Args {
     /// Error model (JSON): any model file mtec writes (see below).

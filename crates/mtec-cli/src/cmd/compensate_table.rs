@@ -40,13 +40,19 @@ on, so keep the ranges inside it.
 State: a machine error model (mtec.machine-error/1) changes with the machine's temperatures; a
 table is one moment of it, the state after the last row of --state LOG.csv (time_min and the
 model's state inputs, rows in time order), named in the table's provenance. Without --state such
-a model is refused. Reload the table when the state changes.
+a model is refused. Reload the table when the state changes.";
 
-Example:
-  mtec compensate table --model map.json --format sinumerik-lec --axis X -o x_lec.ini
-  mtec compensate table --model machine.json --state temps-now.csv --format linuxcnc --axis Z
-    --range -300:0:10 -o z.comp
-  mtec compensate table --model map.json --format linuxcnc --axis Z --range -300:0:10 -o z.comp";
+const EXAMPLES: &str = crate::help::examples!(
+    "  # a volumetric error map from a laser-tracker grid
+  $ mtec simulate volumetric-grid --out g
+  $ mtec map fit --grid g/grid.csv -o g/map.json
+  # LinuxCNC COMP_FILE of X on the map's grid, at the centre of the grid box
+  $ mtec compensate table --model g/map.json --format linuxcnc --axis X \\
+      -o x.comp
+  # Siemens 840D leadscrew error table of Z from 0 to 300 mm in 10 mm steps
+  $ mtec compensate table --model g/map.json --format sinumerik-lec --axis Z \\
+      --range 0:300:10 -o z_lec.ini"
+);
 
 /// Target controller format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -61,9 +67,11 @@ pub enum Format {
 
 /// `mtec compensate table`.
 #[derive(clap::Args)]
+#[command(after_long_help = EXAMPLES)]
 pub struct Args {
-    /// Error model JSON: a map (mtec.map/1), a kinematic error model, a BPNN fitted by
-    /// `map fit --model bpnn` (mtec.bpnn/1), or a poly/zero model.
+    /// Error model JSON: a map (mtec.map/1), a kinematic model (mtec.kinematic-model/1), a BPNN
+    /// map (mtec.bpnn/1), a machine error model (mtec.machine-error/1, with --state), or a
+    /// poly/zero model; `mtec compensate gcode --help` says which command writes each.
     #[arg(long)]
     model: PathBuf,
     /// State log for a model with a state (mtec.machine-error/1): time_min and the model's

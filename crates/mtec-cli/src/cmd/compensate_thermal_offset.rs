@@ -45,13 +45,18 @@ update. An update larger than --max-correction-um (default 500 um) is refused.
 
 Positions (mm, machine coordinates): --position-origin-mm is where the model's position_mm is 0;
 a model whose drift depends on the position (exp-ambient, e = k*x + b) needs --at-mm (offset
-formats: where the offset is used) or --travel-mm (sinumerik-sd: the axis travel, for the bound).
+formats: where the offset is used) or --travel-mm (sinumerik-sd: the axis travel, for the bound).";
 
-Examples:
-  mtec compensate thermal-offset --model machine.json --temps now.csv --starts-at-rest \\
-      --format g10 --offset 1 --base-mm -312.4501
-  mtec compensate thermal-offset --model zaxis.json --training train.csv --temps now.csv \\
-      --starts-at-rest --format sinumerik-sd --machine-axis AX3 --travel-mm -500:0 -o temp.spf";
+const EXAMPLES: &str = crate::help::examples!(
+    "  # training days of a machining centre, and a day's log since it started cold
+  $ mtec simulate production-day --out p
+  $ mtec thermal fit --data p/train.csv --target dz_um --model mlr -o p/dz.json
+  $ mtec machine build --thermal z=p/dz.json -o p/machine.json
+  # the G10 line that updates G54's Z (-312.45 mm, touched off cold) for now
+  $ mtec compensate thermal-offset --model p/machine.json \\
+      --temps p/day-state.csv --starts-at-rest --format g10 --offset 1 \\
+      --base-mm -312.45"
+);
 
 /// Output format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -72,6 +77,7 @@ pub enum Outside {
 
 /// `mtec compensate thermal-offset`.
 #[derive(clap::Args)]
+#[command(after_long_help = EXAMPLES)]
 pub struct Args {
     /// A machine error model (mtec.machine-error/1: thermal parts with axis, sign, envelope) or
     /// a thermal model (mtec.thermal-model/1, with --training).

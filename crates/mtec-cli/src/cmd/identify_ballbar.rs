@@ -36,17 +36,25 @@ Outputs (in --out DIR, default <data>-ballbar/ beside the data):
                      the motion combinations (harmonics >= 2) that the set-up-error removal
                      makes invisible over a revolution (reported as zero in motions.csv)
   polar_<EXC..EBC>.svg, time_<EXC..EBC>.svg   polar plots against C and change with time
-With --json the same content is printed as one JSON object (files only if --out is given).
+With --json the same content is printed as one JSON object (files only if --out is given).";
 
-Example:
-  mtec simulate dbb-rotary --out d --seed 1
-  mtec identify ballbar --setup d/setup.toml --data d/dbb.csv --temps d/temps.csv --out d/id";
+const EXAMPLES: &str = crate::help::examples!(
+    "  # ballbar on a C axis in 5 installations, 4 speeds x 4 h, with temperatures
+  $ mtec simulate dbb-rotary --out d --seed 1
+  # EXC, EYC, EZC, EAC, EBC per angle and time; conditioning, plots in d/id
+  $ mtec identify ballbar --setup d/setup.toml --data d/dbb.csv \\
+      --temps d/temps.csv --out d/id"
+);
 
 const MOTION_COLUMNS: [&str; 5] = ["EXC_um", "EYC_um", "EZC_um", "EAC_urad", "EBC_urad"];
 
 /// Arguments of `mtec identify ballbar`.
 #[derive(clap::Args, Debug)]
-#[command(about = "Rotary-axis error motions from ballbar readings in five modes", long_about = LONG_ABOUT)]
+#[command(
+    about = "Rotary-axis error motions from ballbar readings in five modes",
+    long_about = LONG_ABOUT,
+    after_long_help = EXAMPLES
+)]
 pub struct Args {
     /// Setup TOML with the five [[mode]] tables.
     #[arg(long)]

@@ -21,24 +21,34 @@ given no numbers), the rank, singular values and condition number, the residual 
 1-sigma uncertainty of every identified element. Predictions of the identified set are valid
 at the tool offset of the measurement.
 
-Data (CSV, docs/formats.md, Line measurement CSV): line,step,x_mm,y_mm,z_mm,ux,uy,uz,reading_um — one row per point and
-channel; the reading is the laser reading minus the commanded displacement from the line's
-first point, projected on the unit direction (ux,uy,uz). Name a line's channels `X1`
-(along the line) and `X1.y`, `X1.z` (straightness). The design is read from the points.
-An optional `run` column (1, 2, ...) holds repeat runs: each run of a channel has its own
+Data (CSV, docs/formats.md, \"Line measurement CSV\"): line,step,x_mm,y_mm,z_mm,ux,uy,uz,
+reading_um, one row per point and channel; the reading is the laser reading minus the commanded
+displacement from the line's first point, projected on the unit direction (ux,uy,uz). Name a
+line's channels `X1` (along the line) and `X1.y`, `X1.z` (straightness). The design is read from
+the points. An optional `run` column (1, 2, ...) holds repeat runs: each run of a channel has its own
 zero and alignment slope, and least squares averages the runs.
 
 --design checks the data against a built-in design; without --data it analyses that design
-alone (what it can identify) on the machine.
+alone (what it can identify) on the machine.";
 
-Examples:
-  mtec simulate vmc-9line --out d --seed 1
-  mtec identify lines --machine d/machine.toml --data d/lines.csv -o d/errors.json
-  mtec volumetric --machine d/machine.toml --errors d/errors.json --points pts.csv
-  mtec identify lines --machine d/machine.toml --design nine-line";
+/// The examples that end the help of `mtec identify lines`.
+pub const EXAMPLES: &str = crate::help::examples!(
+    "  # the 9-line laser measurements of a 3-axis machining centre (simulated)
+  $ mtec simulate vmc-9line --out d --seed 1
+  # what the 9-line design can identify on this machine, before measuring
+  $ mtec identify lines --machine d/machine.toml --design nine-line
+  # the 21 error elements with their uncertainties, written as an error set
+  $ mtec identify lines --machine d/machine.toml --data d/lines.csv \\
+      -o d/errors.json
+  # the volumetric error the identified set predicts at one point
+  $ printf 'x_mm,y_mm,z_mm\\n500,700,250\\n' > pts.csv
+  $ mtec volumetric --machine d/machine.toml --errors d/errors.json \\
+      --points pts.csv"
+);
 
 /// Options of `mtec identify lines` (its help text is [`LONG_ABOUT`]).
 #[derive(clap::Args, Debug)]
+#[command(after_long_help = EXAMPLES)]
 pub struct Args {
     /// Machine description (TOML): chain, travels, tool offset of the measurement.
     #[arg(long)]

@@ -14,19 +14,27 @@ asks: per target and direction the mean deviation, the standard uncertainty s an
 band, the reversal value B_i; and the axis values E_up, E_down, E, M, R_up, R_down, R, B, mean B,
 A_up, A_down, A. A second report gives the VDI/DGQ 3441 values Ps, U, Pa and P.
 
-Input (CSV, SPEC section 4): target_mm,run,direction,deviation_um
+Input (CSV, docs/formats.md, \"ISO 230-2 run CSV\"): target_mm,run,direction,deviation_um
   direction is + (target approached moving in the positive direction) or -;
   every run must visit every target in each direction; at least 2 runs per direction
-  (ISO 230-2 asks for 5: fewer gives a warning).
+  (ISO 230-2 asks for 5: fewer gives a warning).";
 
-Example:
-  mtec simulate iso230-2 --out sim
-  mtec iso230-2 sim/iso230-2.csv
-  mtec iso230-2 sim/iso230-2.csv --json | jq .A_um";
+const EXAMPLES: &str = crate::help::examples!(
+    "  # five bidirectional laser runs of one axis over 11 targets
+  $ mtec simulate iso230-2 --out p
+  # A, E, R, B, M per ISO 230-2 and Ps, U, Pa, P per VDI 3441, as a text report
+  $ mtec iso230-2 p/iso230-2.csv
+  # the same as one JSON object (mtec.iso230-2/1), also in p/iso230-2.json
+  $ mtec iso230-2 p/iso230-2.csv --json --out p"
+);
 
 /// Arguments of `mtec iso230-2`.
 #[derive(clap::Args, Debug)]
-#[command(about = "ISO 230-2 positioning statistics (A, E, R, B, M) and VDI 3441 of a linear axis", long_about = LONG)]
+#[command(
+    about = "ISO 230-2 positioning statistics (A, E, R, B, M) and VDI 3441 of a linear axis",
+    long_about = LONG,
+    after_long_help = EXAMPLES
+)]
 pub struct Args {
     /// The run file (target_mm,run,direction,deviation_um).
     pub run: PathBuf,

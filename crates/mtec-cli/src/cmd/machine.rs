@@ -25,11 +25,7 @@ tool's relative to the workpiece: actual = commanded + error). --guard COL,...: 
 --data whose training range every thermal part must stay in although the models do not read them
 (e.g. the shop's air for a model of the spindle speed alone).
 
-Paths inside the written file are relative to it. The file is read back before it is written.
-
-Example:
-  mtec machine build --geometric map.json --thermal z=dz.json --thermal y=dy.json,sign=-1
-    --data train.csv --guard air_c -o machine.json";
+Paths inside the written file are relative to it. The file is read back before it is written.";
 
 const REPLAY_HELP: &str = "\
 Compensates a recorded day through the real-time code path (the calls of mtec-rt) and says how
@@ -44,11 +40,29 @@ Prints RMS and largest error before and after (X, Y, Z and the vector), the comp
 1 - RMS_after/RMS_before, the reduction of the worst moment, how many readings got worse and how
 many were taken with the thermal part faded (outside the training envelope). -o writes every
 reading (before, correction, after, thermal weight); --json prints the summary as JSON
-(mtec.machine-replay/1).
+(mtec.machine-replay/1).";
 
-Example:
-  mtec machine replay --model machine.json --state day-state.csv --probes day-probes.csv
-    -o replay.csv";
+const BUILD_EXAMPLES: &str = crate::help::examples!(
+    "  # four production days of a machining centre: temperatures, spindle, drift
+  $ mtec simulate production-day --out p
+  # thermal models of the drift along Z and X
+  $ mtec thermal fit --data p/train.csv --target dz_um --model mlr -o p/dz.json
+  $ mtec thermal fit --data p/train.csv --target dx_um --model mlr -o p/dx.json
+  # one model of the machine; each thermal part fades out outside its training
+  # envelope, and outside the training days' air temperatures (--guard)
+  $ mtec machine build --thermal z=p/dz.json --thermal x=p/dx.json \\
+      --data p/train.csv --guard air_c -o p/machine.json"
+);
+
+const REPLAY_EXAMPLES: &str = crate::help::examples!(
+    "  # training days, and an unseen day: the controller's log and probed errors
+  $ mtec simulate production-day --out p
+  $ mtec thermal fit --data p/train.csv --target dz_um --model mlr -o p/dz.json
+  $ mtec machine build --thermal z=p/dz.json -o p/machine.json
+  # the unseen day through the real-time path: RMS before, after, per reading
+  $ mtec machine replay --model p/machine.json --state p/day-state.csv \\
+      --probes p/day-probes.csv -o p/replay.csv"
+);
 
 /// The machine error model with a state.
 #[derive(clap::Args)]
@@ -68,6 +82,7 @@ enum Sub {
 }
 
 #[derive(clap::Args)]
+#[command(after_long_help = BUILD_EXAMPLES)]
 struct BuildArgs {
     /// Static geometric model (map, kinematic model, BPNN).
     #[arg(long, value_name = "MAP.json")]
@@ -93,6 +108,7 @@ struct BuildArgs {
 }
 
 #[derive(clap::Args)]
+#[command(after_long_help = REPLAY_EXAMPLES)]
 struct ReplayArgs {
     /// Model file (any; a machine error model to follow a state).
     #[arg(long)]

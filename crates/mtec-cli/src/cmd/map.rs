@@ -18,10 +18,7 @@ Duplicated, missing or stray nodes are reported with their line and column.
 --model trilinear: the map interpolates trilinearly between nodes, as a controller's 3-D
 compensation does. --outside says what happens beyond the grid box: clamp (default: the value at
 the nearest point of the box), extrapolate (the edge cell continued linearly) or refuse.
---controller fanuc-3d checks at most 25 equally spaced points per axis; linuxcnc at most 256.
-
-Example:
-  mtec map fit --grid grid.csv --model trilinear --outside clamp -o map.json";
+--controller fanuc-3d checks at most 25 equally spaced points per axis; linuxcnc at most 256.";
 
 const EVAL_HELP: &str = "\
 Evaluates an error model (a map from `mtec map fit`, or any model file mtec reads) at points.
@@ -29,10 +26,26 @@ Evaluates an error model (a map from `mtec map fit`, or any model file mtec read
 The points file is CSV with at least the columns x_mm,y_mm,z_mm (other columns are ignored).
 The output has the columns x_mm,y_mm,z_mm,ex_um,ey_um,ez_um, one row per input row, in the same
 order; it goes to stdout unless -o is given. A point the model cannot evaluate (outside a map
-whose policy is refuse) is an error naming its line.
+whose policy is refuse) is an error naming its line.";
 
-Example:
-  mtec map eval --map map.json --points points.csv -o errors.csv";
+const FIT_EXAMPLES: &str = crate::help::examples!(
+    "  # a laser-tracker grid: 11 x 11 x 11 points over 600 x 800 x 300 mm
+  $ mtec simulate volumetric-grid --out g
+  # the trilinear map of a controller's 3-D compensation; outside: edge value
+  $ mtec map fit --grid g/grid.csv --model trilinear --outside clamp \\
+      -o g/map.json
+  # a neural map of the same grid (3-10-3 network instead of 3993 grid values)
+  $ mtec map fit --grid g/grid.csv --model bpnn --hidden 10 -o g/bpnn.json"
+);
+
+const EVAL_EXAMPLES: &str = crate::help::examples!(
+    "  # a measured grid and its map
+  $ mtec simulate volumetric-grid --out g
+  $ mtec map fit --grid g/grid.csv -o g/map.json
+  # the map's errors along the body diagonals the tracker measured too, to
+  # compare with their ex_um, ey_um, ez_um (map eval reads x_mm, y_mm, z_mm)
+  $ mtec map eval --map g/map.json --points g/diagonals.csv -o diag-map.csv"
+);
 
 /// `mtec map`: volumetric error maps.
 #[derive(clap::Args)]
@@ -61,6 +74,7 @@ pub enum MapModel {
 }
 
 #[derive(clap::Args)]
+#[command(after_long_help = FIT_EXAMPLES)]
 struct FitArgs {
     /// Grid CSV: x_mm,y_mm,z_mm,ex_um,ey_um,ez_um.
     #[arg(long)]
@@ -86,6 +100,7 @@ struct FitArgs {
 }
 
 #[derive(clap::Args)]
+#[command(after_long_help = EVAL_EXAMPLES)]
 struct EvalArgs {
     /// Model JSON (mtec.map/1, ...).
     #[arg(long)]

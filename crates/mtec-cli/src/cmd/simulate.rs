@@ -4,16 +4,31 @@ use crate::error::CliError;
 use mtec_io::write_output;
 use std::path::PathBuf;
 
-/// Simulate measurements on the virtual machine (known ground truth).
-///
-/// Writes the scenario's measurement files and `truth.json` (the errors the analysis should
-/// find) into --out. The same seed always gives the same files.
-///
-/// Example:
-///   mtec simulate vmc-9line --out d --seed 1
-///   mtec identify lines --machine d/machine.toml --data d/lines.csv
+const LONG: &str = "\
+Simulate measurements on the virtual machine (known ground truth).
+
+Writes the scenario's measurement files and `truth.json` (the errors the analysis should find)
+into --out. The same seed always gives the same files; another seed gives other noise and other
+error shapes. The files are described in docs/formats.md, \"Simulation outputs\".";
+
+const EXAMPLES: &str = crate::help::examples!(
+    "  # 9-line laser measurements of a 3-axis machining centre, and its truth
+  $ mtec simulate vmc-9line --out d --seed 1
+  # the errors identified from the lines: compare d/errors.json, d/truth.json
+  $ mtec identify lines --machine d/machine.toml --data d/lines.csv \\
+      -o d/errors.json
+  # another machine of the same kind: other noise, other error shapes
+  $ mtec simulate vmc-9line --out d2 --seed 2"
+);
+
+/// Arguments of `mtec simulate`.
 #[derive(clap::Args, Debug)]
-#[command(after_help = scenario_list())]
+#[command(
+    about = "Simulate measurements on the virtual machine (known truth)",
+    long_about = LONG,
+    after_help = scenario_list(),
+    after_long_help = format!("{}\n{EXAMPLES}", scenario_list())
+)]
 pub struct Args {
     /// Scenario name (see the list below).
     pub scenario: String,

@@ -25,6 +25,41 @@ Thermal log format (CSV, docs/formats.md, Thermal CSV):
 Every `_c` column except `ambient_c` is a temperature sensor. `experiment` may be absent (one
 continuous record). Rows of one experiment are in time order. Other columns are ignored.";
 
+const SELECT_EXAMPLES: &str = crate::help::examples!(
+    "  # eight collinear spindle temperature sensors and the radial drift
+  $ mtec simulate spindle-sensors --out t
+  # VIF, ridge trace and the sensors the ridge-trace rules keep; plots in t/sel
+  $ mtec thermal select --data t/thermal.csv --target radial_um --out t/sel"
+);
+
+const FIT_EXAMPLES: &str = crate::help::examples!(
+    "  # Z drift along the axis at ambient 15, 20, 25 and 30 C (experiments 1 to 4)
+  $ mtec simulate feed-axis-ambient --out f
+  # the exp-ambient model: trained at 15, 20 and 30 C, tested at 25 C
+  $ mtec thermal fit --data f/thermal.csv --target ez_um --model exp-ambient \\
+      --sensors up,nut --train 1,2,4 --test 3 -o f/z.json
+  # a neural model of it (BPNN, 8 hidden units, the position as an input)
+  $ mtec thermal fit --data f/thermal.csv --target ez_um --model bpnn \\
+      --hidden 8 --features position_mm --train 1,2,4 --test 3 -o f/z-bpnn.json"
+);
+
+const PREDICT_EXAMPLES: &str = crate::help::examples!(
+    "  # a Z drift model trained at three ambient temperatures
+  $ mtec simulate feed-axis-ambient --out f
+  $ mtec thermal fit --data f/thermal.csv --target ez_um --model exp-ambient \\
+      --sensors up,nut --train 1,2,4 --test 3 -o f/z.json
+  # the prediction per row, residual where the log has ez_um, and the RMSE
+  $ mtec thermal predict --model f/z.json --data f/thermal.csv -o f/pred.csv"
+);
+
+const CV_EXAMPLES: &str = crate::help::examples!(
+    "  # 4 production days: temperatures, spindle speed, drift at the table centre
+  $ mtec simulate production-day --out p
+  # which model predicts each block's Z drift best from the blocks before it
+  $ mtec thermal cv --data p/train.csv --target dz_um --model auto \\
+      --input spindle_rpm"
+);
+
 /// Thermal error models: sensor selection, fitting and prediction.
 #[derive(clap::Args)]
 #[command(after_help = FORMAT_HELP)]
@@ -39,9 +74,9 @@ enum Sub {
     /// comparison of full MLR, ridge-selected and simple-correlation models. Warns when the
     /// selection collapses (its R² falls well below that of all sensors).
     ///
-    /// Example: mtec thermal select --data thermal.csv --target radial_um --out sel/
-    /// writes sel/ridge_trace.csv, sel/ridge_trace.svg and sel/selection.json and prints the
-    /// report; without --out nothing is written; `--json` prints the selection as JSON instead.
+    /// --out DIR writes DIR/ridge_trace.csv, DIR/ridge_trace.svg and DIR/selection.json besides
+    /// printing the report; without --out nothing is written; `--json` prints the selection as
+    /// JSON instead.
     Select(SelectArgs),
     /// Fits a model and writes it as JSON (`mtec.thermal-model/1`) with train/test metrics.
     ///
@@ -79,35 +114,21 @@ enum Sub {
     /// then --features columns. Training shows epoch, loss and validation loss (the tail of
     /// every training sequence), stops early when the validation loss no longer improves, and
     /// on Ctrl-C keeps the best epoch so far.
-    ///
-    /// Example: mtec thermal fit --data thermal.csv --target ez_um --model exp-ambient
-    /// --sensors up,nut --train 1,2,4 --test 3 -o z.json
-    ///
-    /// Sensor groups: mtec thermal fit --data thermal.csv --target ez_um --model exp-ambient
-    /// --up-sensors up,column --nut-sensors nut,up --train 1,2,4 --test 3 -o zg.json
-    ///
-    /// Example (rotary axis, after `mtec identify ballbar --temps temps.csv --out id`):
-    /// mtec thermal fit --model cnn-lstm --data id/motions.csv
-    /// --target EXC_um,EYC_um,EZC_um,EAC_urad,EBC_urad --sequence-by angle_deg
-    /// --features angle_deg --angle-harmonics 3 --train 1,2,4 --test 3 -o rotary.json
     Fit(Box<FitArgs>),
     /// Predicts the drift with a model file; metrics when the data hold the target. Also reads
     /// the neural models (`mtec.cnn-lstm/1`, `mtec.bpnn/1`): then one `pred_<target>` column per
     /// target (and `<target>,res_<target>` when the data hold it).
-    ///
-    /// Example: mtec thermal predict --model z.json --data thermal.csv --json
     Predict(PredictArgs),
     /// Forward (rolling-origin) validation: fit on every block before, score the next block,
     /// step forward. Blocks follow the duty cycle (a new block where the --input column steps),
     /// or experiments, or --block-min minutes. Each fold shows the error without compensation
     /// and is flagged when the model is worse. --loo gives leave-one-block-out instead, which
     /// trains on the future of the scored block and is optimistic.
-    ///
-    /// Example: mtec thermal cv --data train.csv --target ch1_um --model auto
     Cv(CvArgs),
 }
 
 #[derive(clap::Args)]
+#[command(after_long_help = SELECT_EXAMPLES)]
 struct SelectArgs {
     /// Thermal log (CSV).
     #[arg(long)]
@@ -206,6 +227,7 @@ struct Common {
 }
 
 #[derive(clap::Args)]
+#[command(after_long_help = FIT_EXAMPLES)]
 struct FitArgs {
     #[command(flatten)]
     common: Common,
@@ -226,6 +248,7 @@ struct FitArgs {
 }
 
 #[derive(clap::Args)]
+#[command(after_long_help = PREDICT_EXAMPLES)]
 struct PredictArgs {
     /// Model file (JSON, `mtec.thermal-model/1`).
     #[arg(long)]
@@ -247,6 +270,7 @@ struct PredictArgs {
 }
 
 #[derive(clap::Args)]
+#[command(after_long_help = CV_EXAMPLES)]
 struct CvArgs {
     #[command(flatten)]
     common: Common,
