@@ -7,6 +7,7 @@ mod support;
 use support::{mtec, text};
 
 /// A smooth volumetric error over the 0..100 mm cube (µm): what the network learns.
+#[cfg(feature = "neural")]
 fn field(x: f64, y: f64, z: f64) -> [f64; 3] {
     [
         -1.0 + 0.02 * x + 0.0001 * y * z,
@@ -15,6 +16,7 @@ fn field(x: f64, y: f64, z: f64) -> [f64; 3] {
     ]
 }
 
+#[cfg(feature = "neural")]
 #[test]
 fn bpnn_model_writes_a_linuxcnc_table_equal_to_its_predictions() {
     let dir = tempfile::tempdir().unwrap();

@@ -1,6 +1,10 @@
 //! `mtec thermal fit|predict --model cnn-lstm|bpnn` end to end on the `dbb-rotary` campaign:
 //! simulate, identify the error motions with `mtec identify ballbar --temps`, train on
 //! experiments 1, 2, 4 (few epochs), predict, and bad input (exit 2).
+//!
+//! They need the cargo feature `neural` (`cargo test --workspace --all-features`); without it
+//! `tests/outputs.rs` checks that the neural commands are refused with exit 2.
+#![cfg(feature = "neural")]
 
 mod support;
 

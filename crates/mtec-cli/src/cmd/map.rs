@@ -34,8 +34,8 @@ const FIT_EXAMPLES: &str = crate::help::examples!(
   # the trilinear map of a controller's 3-D compensation; outside: edge value
   $ mtec map fit --grid g/grid.csv --model trilinear --outside clamp \\
       -o g/map.json
-  # a neural map of the same grid (3-10-3 network instead of 3993 grid values)
-  $ mtec map fit --grid g/grid.csv --model bpnn --hidden 10 -o g/bpnn.json"
+  # a build with the neural models (cargo feature `neural`) also fits a BPNN
+  # map of the grid: --model bpnn --hidden 10 (73 weights, not 3993 values)"
 );
 
 const EVAL_EXAMPLES: &str = crate::help::examples!(
@@ -69,7 +69,8 @@ enum MapCommand {
 pub enum MapModel {
     /// Trilinear interpolation between grid nodes.
     Trilinear,
-    /// A one-hidden-layer back-propagation network (x, y, z → ex, ey, ez), see --hidden.
+    /// A one-hidden-layer back-propagation network (x, y, z → ex, ey, ez), see --hidden; in a
+    /// build with the cargo feature `neural`.
     Bpnn,
 }
 
@@ -135,9 +136,12 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
     let dest = OutputGuard::new(&[&a.grid]).check(&a.out)?;
     let map = match a.model {
         MapModel::Trilinear => GridMap::read_csv(&a.grid, &limits, outside)?,
+        #[cfg(feature = "neural")]
         MapModel::Bpnn => {
             return super::map_bpnn::fit_bpnn(&a.grid, a.hidden, &a.out, &dest);
         }
+        #[cfg(not(feature = "neural"))]
+        MapModel::Bpnn => return Err(super::neural::unavailable("`map fit --model bpnn`")),
     };
     let mut json =
         serde_json::to_string_pretty(&map.to_file()).map_err(|e| CliError::Internal(e.into()))?;

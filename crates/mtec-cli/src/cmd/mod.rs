@@ -12,10 +12,12 @@ pub mod machine;
 pub mod machine_stage;
 pub mod map;
 pub mod model_loader;
+pub mod neural;
 pub mod sensitivity;
 pub mod simulate;
 pub mod state;
 pub mod thermal;
+#[cfg(feature = "neural")]
 pub mod thermal_nn;
 pub mod volumetric;
 
@@ -25,6 +27,7 @@ pub mod pipeline;
 pub mod pipeline_thermal;
 pub mod run;
 
+#[cfg(feature = "neural")]
 pub mod map_bpnn;
 
 /// Where a command's report lines go: stdout, or stderr when the output file itself streams to

@@ -38,9 +38,11 @@ const FIT_EXAMPLES: &str = crate::help::examples!(
   # the exp-ambient model: trained at 15, 20 and 30 C, tested at 25 C
   $ mtec thermal fit --data f/thermal.csv --target ez_um --model exp-ambient \\
       --sensors up,nut --train 1,2,4 --test 3 -o f/z.json
-  # a neural model of it (BPNN, 8 hidden units, the position as an input)
-  $ mtec thermal fit --data f/thermal.csv --target ez_um --model bpnn \\
-      --hidden 8 --features position_mm --train 1,2,4 --test 3 -o f/z-bpnn.json"
+  # plain multiple linear regression on the same two sensors, to compare
+  $ mtec thermal fit --data f/thermal.csv --target ez_um --model mlr \\
+      --sensors up,nut --train 1,2,4 --test 3 -o f/z-mlr.json
+  # a build with the neural models (cargo feature `neural`) also fits
+  # --model bpnn --hidden 8 --features position_mm, and --model cnn-lstm"
 );
 
 const PREDICT_EXAMPLES: &str = crate::help::examples!(
@@ -106,7 +108,8 @@ enum Sub {
     /// rows). --lag adds a first-order lag of each sensor, its time constant chosen by how the
     /// model predicts forward folds of the training rows (mlr, ridge, ridge-select).
     ///
-    /// Neural models (any number of comma-separated --target columns; the model file is
+    /// Neural models (in a build with the cargo feature `neural`; any number of comma-separated
+    /// --target columns; the model file is
     /// `mtec.cnn-lstm/1` or `mtec.bpnn/1`): cnn-lstm (1-D convolution over the features of each
     /// time step, max pooling, LSTM over --window steps, dense output; one sequence per
     /// experiment, or per value of --sequence-by within it) and bpnn (one hidden layer of
@@ -157,17 +160,19 @@ enum ModelKind {
     ExpAmbient,
     LagSelect,
     HeatInput,
-    /// Neural: CNN-LSTM sequence model (several targets; --window, --sequence-by, ...).
+    /// Neural (a build with `--features neural`): CNN-LSTM sequence model (several targets;
+    /// --window, --sequence-by, ...).
     CnnLstm,
-    /// Neural: one-hidden-layer BPNN on the current row (several targets; --hidden).
+    /// Neural (a build with `--features neural`): one-hidden-layer BPNN on the current row
+    /// (several targets; --hidden).
     Bpnn,
 }
 
 impl ModelKind {
-    fn neural(self) -> Option<super::thermal_nn::NnKind> {
+    fn neural(self) -> Option<super::neural::NnKind> {
         match self {
-            ModelKind::CnnLstm => Some(super::thermal_nn::NnKind::CnnLstm),
-            ModelKind::Bpnn => Some(super::thermal_nn::NnKind::Bpnn),
+            ModelKind::CnnLstm => Some(super::neural::NnKind::CnnLstm),
+            ModelKind::Bpnn => Some(super::neural::NnKind::Bpnn),
             _ => None,
         }
     }
@@ -244,7 +249,7 @@ struct FitArgs {
     #[arg(short = 'o', long = "output")]
     output: PathBuf,
     #[command(flatten)]
-    nn: super::thermal_nn::NnArgs,
+    nn: super::neural::NnArgs,
 }
 
 #[derive(clap::Args)]
@@ -290,10 +295,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             Some(kind) => fit_neural(kind, *a),
             None => fit(*a),
         },
-        Sub::Predict(a) => match super::thermal_nn::read_model(&a.model)? {
-            Some(m) => super::thermal_nn::predict(m, &a.model, &a.data, a.json, a.output.as_ref()),
-            None => predict(a),
-        },
+        Sub::Predict(a) => predict_any(a),
         Sub::Cv(a) if a.common.model.neural().is_some() => Err(CliError::usage(
             "thermal cv runs the regression models; for cnn-lstm and bpnn use thermal fit --train ... --test ...",
         )),
@@ -301,8 +303,39 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
 }
 
+/// `thermal predict`: a neural model file goes to `thermal_nn`, any other to [`predict`].
+#[cfg(feature = "neural")]
+fn predict_any(a: PredictArgs) -> Result<(), CliError> {
+    match super::thermal_nn::read_model(&a.model)? {
+        Some(m) => super::thermal_nn::predict(m, &a.model, &a.data, a.json, a.output.as_ref()),
+        None => predict(a),
+    }
+}
+
+/// `thermal predict` without the neural models: their model files are refused (exit 2).
+#[cfg(not(feature = "neural"))]
+fn predict_any(a: PredictArgs) -> Result<(), CliError> {
+    match super::neural::neural_format(&a.model)? {
+        Some(format) => Err(super::neural::unavailable(&format!(
+            "`thermal predict` with a {format} model ({})",
+            a.model.display()
+        ))),
+        None => predict(a),
+    }
+}
+
+/// `--model cnn-lstm|bpnn` in a build without the neural models.
+#[cfg(not(feature = "neural"))]
+fn fit_neural(kind: super::neural::NnKind, _a: FitArgs) -> Result<(), CliError> {
+    Err(super::neural::unavailable(match kind {
+        super::neural::NnKind::CnnLstm => "`thermal fit --model cnn-lstm`",
+        super::neural::NnKind::Bpnn => "`thermal fit --model bpnn`",
+    }))
+}
+
 /// `--model cnn-lstm|bpnn`: the options the neural fit does not take are refused here.
-fn fit_neural(kind: super::thermal_nn::NnKind, a: FitArgs) -> Result<(), CliError> {
+#[cfg(feature = "neural")]
+fn fit_neural(kind: super::neural::NnKind, a: FitArgs) -> Result<(), CliError> {
     let c = &a.common;
     if c.k.is_some() || c.lag || c.block_min.is_some() || a.train_until.is_some() {
         return Err(CliError::usage(

@@ -36,71 +36,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
-/// Options of the neural models (ignored by the regression models).
-#[derive(clap::Args, Debug, Clone)]
-pub struct NnArgs {
-    /// cnn-lstm: column that splits an experiment into sequences (e.g. `angle_deg`: one time
-    /// series per angle); default: one sequence per experiment.
-    #[arg(long)]
-    pub sequence_by: Option<String>,
-    /// Extra feature columns after the sensors (e.g. `angle_deg`, `ambient_c`, `position_mm`).
-    /// `cos_K(COL)` / `sin_K(COL)` is cos/sin of K times the angle column COL (degrees).
-    #[arg(long, value_delimiter = ',')]
-    pub features: Vec<String>,
-    /// Give each --features angle column (name ending in `_deg`) as its first N harmonics
-    /// cos_k(COL), sin_k(COL), k = 1..N, instead of degrees: continuous across 0°/360°, and the
-    /// static error motions of a rotary axis are sums of such harmonics (3 is a good start).
-    #[arg(long, value_name = "N")]
-    pub angle_harmonics: Option<u8>,
-    /// The sensors as rises over the first row of each sequence (of each experiment without
-    /// --sequence-by) instead of absolute temperatures: thermal errors are defined against the
-    /// state of the first (static) measurement, and a room that starts warmer or colder than in
-    /// the training runs then does not throw the model. `thermal predict` applies it again.
-    #[arg(long)]
-    pub rises: bool,
-    /// Largest number of training epochs (cnn-lstm, bpnn: Levenberg–Marquardt iterations).
-    #[arg(long)]
-    pub epochs: Option<usize>,
-    /// Epochs without improvement of the validation loss before stopping.
-    #[arg(long)]
-    pub patience: Option<usize>,
-    /// cnn-lstm: time steps per window, in rows of the log [default: 16]; in minutes that is
-    /// rows × the log's sampling interval, which the model records (predict refuses another)
-    #[arg(long)]
-    pub window: Option<usize>,
-    /// cnn-lstm: convolution filters [default: 16].
-    #[arg(long)]
-    pub conv_channels: Option<usize>,
-    /// cnn-lstm: LSTM hidden units [default: 32].
-    #[arg(long)]
-    pub lstm_hidden: Option<usize>,
-    /// cnn-lstm: Adam step size [default: 0.003].
-    #[arg(long)]
-    pub learning_rate: Option<f64>,
-    /// cnn-lstm: cosine decay of the step size over --epochs down to this fraction of
-    /// --learning-rate (1 = constant) [default: 1].
-    #[arg(long, value_name = "F")]
-    pub final_lr_fraction: Option<f64>,
-    /// cnn-lstm: mini-batch size [default: 64].
-    #[arg(long)]
-    pub batch_size: Option<usize>,
-    /// bpnn: hidden units [default: 10].
-    #[arg(long)]
-    pub hidden: Option<usize>,
-    /// Seed of the weight initialisation and batch order (same seed, same weights).
-    #[arg(long, default_value_t = 42)]
-    pub seed: u64,
-    /// No progress bar.
-    #[arg(long)]
-    pub quiet: bool,
-}
-
-/// Which network.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum NnKind {
-    CnnLstm,
-    Bpnn,
-}
+pub use super::neural::{NnArgs, NnKind};
 
 /// Everything `thermal fit` passes to a neural fit.
 pub struct FitRequest<'a> {
@@ -668,19 +604,22 @@ pub enum NnModel {
 
 /// Reads `path` as a neural model when its `format` says so (`None`: another model kind).
 pub fn read_model(path: &Path) -> Result<Option<NnModel>, CliError> {
-    let v: serde_json::Value = mtec_io::read_json(path)?;
-    let format = v.get("format").and_then(|f| f.as_str()).unwrap_or("");
+    let Some(format) = super::neural::neural_format(path)? else {
+        return Ok(None);
+    };
     let text = std::fs::read_to_string(path)?;
     let bad = |e: NnError| CliError::Input(InputError::file(path, e.to_string()));
-    Ok(match format {
-        mtec_nn::cnn_lstm::FORMAT => {
-            Some(NnModel::CnnLstm(CnnLstm::from_json(&text).map_err(bad)?))
-        }
-        f if f == mtec_nn::bpnn::FORMAT => Some(NnModel::Bpnn(
-            Bpnn::from_json(&text).map_err(|e| bad(e.into()))?,
-        )),
-        _ => None,
-    })
+    Ok(Some(if format == super::neural::CNN_LSTM_FORMAT {
+        NnModel::CnnLstm(CnnLstm::from_json(&text).map_err(bad)?)
+    } else {
+        NnModel::Bpnn(Bpnn::from_json(&text).map_err(|e| bad(e.into()))?)
+    }))
+}
+
+/// The format the CLI recognises before it has the network crate is the network's own.
+#[test]
+fn cnn_lstm_format_is_the_networks() {
+    assert_eq!(super::neural::CNN_LSTM_FORMAT, mtec_nn::cnn_lstm::FORMAT);
 }
 
 /// `thermal predict` with a neural model: predictions per row (CSV or JSON), metrics when the

@@ -1,0 +1,104 @@
+//! Whether this `mtec` has the neural models, and their command-line options.
+//!
+//! The neural models (`thermal fit --model cnn-lstm|bpnn`, `map fit --model bpnn`, and
+//! `thermal predict` with their model files) live in `mtec-nn`, which pulls in candle, a deep-
+//! learning library whose compilation is more than half of a cold release build (measured in
+//! docs/building.md). They are the cargo feature `neural` of this crate, off by default so that
+//! the README's `cargo run --release -- demo` builds in a few minutes; the options are parsed
+//! either way, so a build without them refuses such a command with exit 2 and says how to get
+//! them instead of calling the option unknown.
+
+use crate::error::CliError;
+use std::path::Path;
+
+/// The model file of a CNN-LSTM (`mtec_nn::cnn_lstm::FORMAT`; a test checks they agree).
+pub const CNN_LSTM_FORMAT: &str = "mtec.cnn-lstm/1";
+
+/// The refusal of `what` (e.g. "`thermal fit --model cnn-lstm`") by a build without the
+/// neural models: a usage error (exit 2) that says how to build them.
+#[cfg_attr(feature = "neural", allow(dead_code))]
+pub fn unavailable(what: &str) -> CliError {
+    CliError::usage(format!(
+        "{what} needs the neural models, and this mtec was built without them (cargo feature \
+         `neural`, off by default because it more than doubles a cold build): build with \
+         `cargo build --release --features neural`, or install with \
+         `cargo install --path crates/mtec-cli --features neural`"
+    ))
+}
+
+/// The neural format `path` declares (`mtec.cnn-lstm/1`, `mtec.bpnn/1`), or `None` for any
+/// other model file (read by whichever loader the command uses).
+pub fn neural_format(path: &Path) -> Result<Option<&'static str>, CliError> {
+    let v: serde_json::Value = mtec_io::read_json(path)?;
+    Ok(match v.get("format").and_then(|f| f.as_str()) {
+        Some(CNN_LSTM_FORMAT) => Some(CNN_LSTM_FORMAT),
+        Some(f) if f == mtec_comp::bpnn::FORMAT => Some(mtec_comp::bpnn::FORMAT),
+        _ => None,
+    })
+}
+
+/// Options of the neural models (ignored by the regression models).
+#[derive(clap::Args, Debug, Clone)]
+pub struct NnArgs {
+    /// cnn-lstm: column that splits an experiment into sequences (e.g. `angle_deg`: one time
+    /// series per angle); default: one sequence per experiment.
+    #[arg(long)]
+    pub sequence_by: Option<String>,
+    /// Extra feature columns after the sensors (e.g. `angle_deg`, `ambient_c`, `position_mm`).
+    /// `cos_K(COL)` / `sin_K(COL)` is cos/sin of K times the angle column COL (degrees).
+    #[arg(long, value_delimiter = ',')]
+    pub features: Vec<String>,
+    /// Give each --features angle column (name ending in `_deg`) as its first N harmonics
+    /// cos_k(COL), sin_k(COL), k = 1..N, instead of degrees: continuous across 0°/360°, and the
+    /// static error motions of a rotary axis are sums of such harmonics (3 is a good start).
+    #[arg(long, value_name = "N")]
+    pub angle_harmonics: Option<u8>,
+    /// The sensors as rises over the first row of each sequence (of each experiment without
+    /// --sequence-by) instead of absolute temperatures: thermal errors are defined against the
+    /// state of the first (static) measurement, and a room that starts warmer or colder than in
+    /// the training runs then does not throw the model. `thermal predict` applies it again.
+    #[arg(long)]
+    pub rises: bool,
+    /// Largest number of training epochs (cnn-lstm, bpnn: Levenberg–Marquardt iterations).
+    #[arg(long)]
+    pub epochs: Option<usize>,
+    /// Epochs without improvement of the validation loss before stopping.
+    #[arg(long)]
+    pub patience: Option<usize>,
+    /// cnn-lstm: time steps per window, in rows of the log [default: 16]; in minutes that is
+    /// rows × the log's sampling interval, which the model records (predict refuses another)
+    #[arg(long)]
+    pub window: Option<usize>,
+    /// cnn-lstm: convolution filters [default: 16].
+    #[arg(long)]
+    pub conv_channels: Option<usize>,
+    /// cnn-lstm: LSTM hidden units [default: 32].
+    #[arg(long)]
+    pub lstm_hidden: Option<usize>,
+    /// cnn-lstm: Adam step size [default: 0.003].
+    #[arg(long)]
+    pub learning_rate: Option<f64>,
+    /// cnn-lstm: cosine decay of the step size over --epochs down to this fraction of
+    /// --learning-rate (1 = constant) [default: 1].
+    #[arg(long, value_name = "F")]
+    pub final_lr_fraction: Option<f64>,
+    /// cnn-lstm: mini-batch size [default: 64].
+    #[arg(long)]
+    pub batch_size: Option<usize>,
+    /// bpnn: hidden units [default: 10].
+    #[arg(long)]
+    pub hidden: Option<usize>,
+    /// Seed of the weight initialisation and batch order (same seed, same weights).
+    #[arg(long, default_value_t = 42)]
+    pub seed: u64,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Which network.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NnKind {
+    CnnLstm,
+    Bpnn,
+}
