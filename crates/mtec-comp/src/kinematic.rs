@@ -20,6 +20,26 @@ pub struct KinematicFile {
     pub errors: ErrorSet,
 }
 
+impl KinematicFile {
+    /// The file of a machine and its (identified) error set: what `identify lines
+    /// --kinematic-model` and `mtec run` write, and `compensate` and mtec-rt read. Refused here,
+    /// before anything is written, when the pair would not load as a [`KinematicModel`] (a chain
+    /// without X, Y and Z, an invalid error set), so no unloadable model file is ever written.
+    pub fn new(machine: &Machine, errors: &ErrorSet) -> Result<KinematicFile, String> {
+        KinematicModel::new(machine, errors, "")?;
+        Ok(KinematicFile {
+            format: KINEMATIC_FORMAT.to_string(),
+            machine: machine.to_spec(),
+            errors: errors.clone(),
+        })
+    }
+
+    /// The JSON text of the file (pretty-printed, as the other mtec model files).
+    pub fn to_json(&self) -> Result<String, serde_json::Error> {
+        serde_json::to_string_pretty(self)
+    }
+}
+
 /// A kinematic error model: a chain with X, Y, Z and any rotary axes.
 #[derive(Debug, Clone)]
 pub struct KinematicModel {

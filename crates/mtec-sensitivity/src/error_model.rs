@@ -52,6 +52,9 @@ pub struct ElementStat {
     pub unit: String,
 }
 
+/// Positions per travel at which [`ErrorStatistics::of_identified`] samples each function.
+pub const IDENTIFIED_SAMPLES: usize = 101;
+
 /// The error-statistics file (SPEC §4: `element,mean,std,unit`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ErrorStatistics {
@@ -152,6 +155,32 @@ impl ErrorStatistics {
             }
         }
         ErrorStatistics { elements }
+    }
+
+    /// Statistics of an identified error set, the inputs `sensitivity --stats` reads (what
+    /// `identify lines --stats` and a project's `[sensitivity]` stage write): each element's
+    /// function over [`IDENTIFIED_SAMPLES`] positions of its travel ([`Self::from_error_set`]),
+    /// except that a constant element (a squareness, a location) takes its magnitude |mean| as
+    /// its spread (at least 1e-6). It has no spread over the travel, and a spread of zero would
+    /// give it no index and allow it a vanishing tolerance (issue 24): the element is as large
+    /// as it is, and the sensitivity asks how much that matters.
+    pub fn of_identified(set: &ErrorSet, machine: &Machine) -> ErrorStatistics {
+        let mut stats = ErrorStatistics::from_error_set(set, machine, IDENTIFIED_SAMPLES);
+        for e in &mut stats.elements {
+            if e.std == 0.0 {
+                e.std = e.mean.abs().max(1e-6);
+            }
+        }
+        stats
+    }
+
+    /// The CSV text of [`Self::of_identified`]'s statistics, headed by a comment that says
+    /// how they were made.
+    pub fn to_identified_csv(&self) -> String {
+        format!(
+            "# statistics of each identified error function over its axis travel (mean, population std of {IDENTIFIED_SAMPLES} evenly spaced positions); a constant element (squareness, location) has no spread over the travel, so its std is its magnitude |value|\n{}",
+            self.to_csv()
+        )
     }
 
     /// The CSV text of the statistics.
@@ -663,4 +692,50 @@ pub fn allocate(
         current_expanded_um: expanded,
         rows,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mtec_model::ErrorFunction;
+
+    /// A squareness is constant over the travel: its spread is its magnitude, not 0 or 1e-6; a
+    /// varying element keeps its population std over the travel.
+    #[test]
+    fn identified_statistics_spread_a_constant_element_by_its_magnitude() {
+        let m = Machine::vmc_xyfz(100.0);
+        let mut set = ErrorSet::new("test");
+        let ec0y = ErrorElement::parse("EC0Y").unwrap();
+        let eb0z = ErrorElement::parse("EB0Z").unwrap();
+        let exx = ErrorElement::parse("EXX").unwrap();
+        set.insert(ec0y, ErrorFunction::constant(-19.88));
+        set.insert(eb0z, ErrorFunction::constant(0.0));
+        // EXX = 6 q/600 µm over X's travel [0, 600]: 101 values 0, 0.06, ..., 6; mean 3,
+        // population variance (6/100)² · Σ(k − 50)² / 101 = 0.0036 · 85850 / 101
+        set.insert(exx, ErrorFunction::polynomial(vec![0.0, 0.01]));
+        let stats = ErrorStatistics::of_identified(&set, &m);
+        let get = |n: &str| {
+            stats
+                .elements
+                .iter()
+                .find(|e| e.element == n)
+                .unwrap()
+                .clone()
+        };
+        let s = get("EC0Y");
+        // the mean of 101 equal values, to the rounding of their sum
+        assert!(
+            (s.mean + 19.88).abs() < 1e-12 && s.std == s.mean.abs(),
+            "{s:?}"
+        );
+        assert_eq!(s.unit, "urad");
+        assert_eq!(get("EB0Z").std, 1e-6);
+        let s = get("EXX");
+        assert!((s.mean - 3.0).abs() < 1e-12, "{}", s.mean);
+        let want = (0.0036 * 85850.0 / 101.0f64).sqrt();
+        assert!((s.std - want).abs() < 1e-12, "{} vs {want}", s.std);
+        assert_eq!(stats.elements.len(), 3);
+        let csv = stats.to_identified_csv();
+        assert!(csv.starts_with("# statistics") && csv.contains("\nelement,mean,std,unit\n"));
+    }
 }

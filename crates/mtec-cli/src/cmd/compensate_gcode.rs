@@ -65,10 +65,9 @@ model files\"); each gives [Ex, Ey, Ez] in um as a function of the machine posit
   mtec.bpnn/1             a neural map of a grid (x, y, z -> ex, ey, ez):
                           `mtec map fit --grid GRID.csv --model bpnn`
   mtec.kinematic-model/1  a machine with its error set (three axes, or with A, B, C: evaluated at
-                          the commanded angles): `mtec run` writes kinematic-model.json from a
-                          project with [lines] and [compensation] and no [map]; or by hand,
-                          {\"format\": \"mtec.kinematic-model/1\", \"machine\": {the machine TOML's
-                          keys}, \"errors\": {an error set from `mtec identify lines -o`}}
+                          the commanded angles): `mtec identify lines --kinematic-model
+                          FILE`; `mtec run` writes kinematic-model.json from a project with
+                          [lines] and [compensation] and no [map]
   mtec.machine-error/1    a geometric model plus thermal models with a state:
                           `mtec machine build`; needs --state (below)
   mtec.poly-model/1       a polynomial E = sum of coef_um * x^i y^j z^k, written by hand:

@@ -4,7 +4,9 @@ use super::run::{
     BallbarStage, CompensationStage, LinesStage, MapStage, Pipeline, SensitivityStage, ThermalStage,
 };
 use crate::error::CliError;
+use mtec_comp::kinematic::KinematicFile;
 use mtec_report::{bar_chart, line_chart, scatter_chart, Section, Series};
+use mtec_sensitivity::error_model::ErrorStatistics;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -251,37 +253,14 @@ pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> Result<PathBuf
     Ok(errors)
 }
 
-/// Writes error statistics (element, mean, std over the travel) of an error set for sensitivity.
+/// Writes error statistics (element, mean, std over the travel) of an error set for sensitivity
+/// (the library's [`ErrorStatistics::of_identified`], as `identify lines --stats` writes them).
 fn stats_from_errors(machine: &Path, errors: &Path, out: &Path) -> Result<(), CliError> {
     let mach = crate::inputs::read_machine(machine)?;
     let set = crate::inputs::read_errors(errors)?;
-    let mut csv = String::from("# statistics of each identified error function over its axis travel (mean, std of 101 samples); a constant element (squareness, location) has no spread over the travel, so its std is its magnitude |value|\nelement,mean,std,unit\n");
-    for el in mtec_model::three_axis_elements() {
-        let Some(f) = set.get(&el) else { continue };
-        let [lo, hi] = mach.travel(el.axis);
-        let v: Vec<f64> = (0..=100)
-            .map(|k| f.value(lo + (hi - lo) * k as f64 / 100.0))
-            .collect();
-        let (m, sd) = element_statistics(&v);
-        csv.push_str(&format!("{},{m:.6},{sd:.6},{}\n", el.name(), el.unit()));
-    }
-    mtec_io::write_output(out, csv.as_bytes())?;
+    let stats = ErrorStatistics::of_identified(&set, &mach);
+    mtec_io::write_output(out, stats.to_identified_csv().as_bytes())?;
     Ok(())
-}
-
-/// Mean and standard deviation of an error element's values over its travel. A constant element
-/// (a squareness, a location error) has none over the travel; taking that as its spread would
-/// rank it last and "allow" it a vanishing tolerance (issue 24). Its spread is its magnitude
-/// instead: the element is as large as it is, and the sensitivity asks how much that matters.
-fn element_statistics(v: &[f64]) -> (f64, f64) {
-    let m = v.iter().sum::<f64>() / v.len() as f64;
-    let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len().max(2) - 1) as f64).sqrt();
-    let scale = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-    if sd <= 1e-9 * scale.max(1e-12) {
-        (m, m.abs().max(1e-6))
-    } else {
-        (m, sd)
-    }
 }
 
 /// Global sensitivity of the volumetric error.
@@ -781,16 +760,14 @@ pub fn compensation(
     let model = match (map, machine, identified) {
         (Some(m), _, _) => m.to_path_buf(),
         (None, Some(mach), Some(errors)) => {
-            let spec: mtec_model::MachineSpec = mtec_io::read_toml(mach)?;
+            let machine = crate::inputs::read_machine(mach)?;
             let set = crate::inputs::read_errors(errors)?;
             let f = p.out.join("kinematic-model.json");
-            let doc = serde_json::json!({ "format": mtec_comp::kinematic::KINEMATIC_FORMAT, "machine": spec, "errors": set });
-            mtec_io::write_output(
-                &f,
-                serde_json::to_string_pretty(&doc)
-                    .unwrap_or_default()
-                    .as_bytes(),
-            )?;
+            // the same file `identify lines --kinematic-model` writes
+            let doc = KinematicFile::new(&machine, &set)
+                .map_err(|m| CliError::Input(mtec_io::InputError::file(mach, m)))?;
+            let text = doc.to_json().map_err(|e| CliError::Internal(e.into()))?;
+            mtec_io::write_output(&f, text.as_bytes())?;
             p.outputs.push(s(&f));
             f
         }
@@ -866,18 +843,6 @@ pub fn compensation(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A squareness is constant over the travel: its spread is its magnitude, not 1e-6.
-    #[test]
-    fn a_constant_element_is_spread_by_its_magnitude() {
-        let (m, sd) = element_statistics(&[19.88; 101]);
-        assert!(
-            (m - 19.88).abs() < 1e-12 && (sd - 19.88).abs() < 1e-12,
-            "{m} {sd}"
-        );
-        let (m, sd) = element_statistics(&[1.0, 2.0, 3.0]);
-        assert_eq!((m, sd), (2.0, 1.0));
-    }
 
     /// `coefficients` is one row per k: the trace has one line per sensor, over every k (the
     /// report drew it transposed, one line per k).
