@@ -25,7 +25,8 @@ The workflow, and the commands for each step:
                 (`compensate table`), work-offset updates for the thermal state now
                 (`compensate thermal-offset`)
   thermal       thermal drift models from temperature logs: select sensors, fit, predict
-                (regression models, or neural: `thermal fit --model cnn-lstm|bpnn`)
+                (regression models; neural ones, `thermal fit --model cnn-lstm|bpnn`, in a
+                build with `cargo build --release --features neural`)
   machine       the machine's error with a state: `machine build` sums a geometric model and
                 thermal models with their training envelopes, `machine replay` compensates a
                 recorded day through the real-time path
