@@ -48,6 +48,27 @@ fn target_key(t: f64) -> i64 {
 /// Largest accepted |deviation| (1 m): anything larger is a unit or export mistake.
 pub const MAX_DEVIATION_UM: f64 = 1e6;
 impl PositioningData {
+    /// The same runs with every measured position scaled by `factor` (an environmental length
+    /// correction, see [`crate::air`]): the measured position P_i + x_ij becomes
+    /// factor · (P_i + x_ij), so the deviation becomes factor · (P_i + x_ij) − P_i. Positions are
+    /// those of the file, i.e. the interferometer is taken to read 0 at target 0 mm.
+    pub fn with_scaled_positions(&self, factor: f64) -> PositioningData {
+        let scale = |devs: &Vec<Vec<f64>>| -> Vec<Vec<f64>> {
+            devs.iter()
+                .zip(&self.targets_mm)
+                .map(|(row, &p_mm)| {
+                    let p_um = p_mm * 1000.0;
+                    row.iter().map(|&x| factor * (p_um + x) - p_um).collect()
+                })
+                .collect()
+        };
+        PositioningData {
+            up_um: scale(&self.up_um),
+            down_um: scale(&self.down_um),
+            ..self.clone()
+        }
+    }
+
     /// Reads and validates a run file.
     pub fn read(path: &Path) -> Result<PositioningData, InputError> {
         let table = Table::read(path)?;
