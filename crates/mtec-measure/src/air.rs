@@ -45,7 +45,7 @@ pub const HENE_WAVELENGTH_NM: f64 = 632.99;
 /// Which equation gives the refractive index.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AirFormula {
-    /// Ciddor (1996): valid 300–1690 nm, −40..100 °C, 10..140 kPa, 0..100 % RH.
+    /// Ciddor (1996): dispersion formula 230–1690 nm; built for air far from standard too.
     Ciddor,
     /// Birch & Downs (1993/1994) updated Edlén: 350–650 nm, near-standard shop-floor air.
     Edlen,
@@ -60,10 +60,10 @@ impl AirFormula {
         }
     }
 
-    /// Wavelength range (nm) where the equation was fitted (NIST documentation, section VI).
+    /// Wavelength range (nm) mtec accepts (docs/methods.md §2.1).
     pub fn wavelength_range_nm(self) -> (f64, f64) {
         match self {
-            AirFormula::Ciddor => (300.0, 1690.0),
+            AirFormula::Ciddor => (230.0, 1690.0),
             AirFormula::Edlen => (350.0, 650.0),
         }
     }
@@ -276,6 +276,7 @@ mod tests {
     // Published values: the `ref_index` package (P. Nair, pypi.org/project/ref-index), an
     // implementation of the NIST toolbox equations, documents these results in its README at
     // λ_vac = 633.0 nm, 101 325 Pa, 450 ppm CO2.
+    #[allow(clippy::excessive_precision)] // the digits as published
     const REF_INDEX: [(f64, f64, f64, f64); 3] = [
         // (t °C, RH %, Ciddor, Edlén)
         (20.0, 20.0, 1.000_271_628_534_057_8, 1.000_271_629_169_164_9),

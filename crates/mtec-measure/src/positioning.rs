@@ -228,6 +228,17 @@ mod tests {
     }
 
     #[test]
+    fn scaled_positions_move_each_deviation_by_the_scaled_position() {
+        // k = 1 + 10 ppm: at 10 mm (10 000 µm) a deviation x becomes k (10 000 + x) − 10 000,
+        // i.e. x + 0.1 µm + 10 ppm of x; at 0 mm only the 10 ppm of x remains.
+        let d = parse(OK).unwrap().with_scaled_positions(1.0 + 1e-5);
+        assert!((d.up_um[1][0] - (2.0 + 0.1 + 2e-5)).abs() < 1e-9);
+        assert!((d.down_um[1][1] - (7.0 + 0.1 + 7e-5)).abs() < 1e-9);
+        assert!((d.up_um[0][1] - (5.0 + 5e-5)).abs() < 1e-12);
+        assert_eq!(d.targets_mm, vec![0.0, 10.0]);
+    }
+
+    #[test]
     fn located_errors() {
         let bad_dir = OK.replace("10,2,-,7", "10,2,down,7");
         let e = parse(&bad_dir).unwrap_err();

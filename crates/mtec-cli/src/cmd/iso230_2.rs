@@ -20,13 +20,15 @@ Input (CSV, docs/formats.md, \"ISO 230-2 run CSV\"): target_mm,run,direction,dev
   every run must visit every target in each direction; at least 2 runs per direction
   (ISO 230-2 asks for 5: fewer gives a warning).
 
-Environmental compensation (docs/methods.md, \"Refractive index of air\"), applied to the measured
-positions P_i + x_ij before the statistics (the interferometer is taken to read 0 at target 0 mm):
-  --air-temp-c, --pressure-pa, --humidity-pct (all three): the readings were taken with the index
-  the laser assumed (--laser-n, default: the chosen formula at 20 °C, 101325 Pa, 50 % RH) and are
-  scaled by n_laser / n_actual, n_actual from Ciddor (default) or the updated Edlén equation;
-  --material-temp-c, --alpha-um-per-m-k (both): ISO 1 normalisation to 20 °C, positions divided
-  by 1 + alpha (T - 20).
+Environmental compensation (docs/methods.md, section 2.1), applied to the
+measured positions P_i + x_ij before the statistics (the interferometer is
+taken to read 0 at target 0 mm):
+  --air-temp-c, --pressure-pa, --humidity-pct (all three): the readings were
+  taken with the index the laser assumed (--laser-n; default: the formula at
+  20 °C, 101325 Pa, 50 % RH) and are scaled by n_laser / n_actual, n_actual
+  from Ciddor (default) or the updated Edlén equation (--air-formula);
+  --material-temp-c, --alpha-um-per-m-k (both): ISO 1 normalisation to 20 °C,
+  positions divided by 1 + alpha (T - 20).
 The report states n used, n actual and each correction in ppm.";
 
 const EXAMPLES: &str = crate::help::examples!(
@@ -36,7 +38,7 @@ const EXAMPLES: &str = crate::help::examples!(
   $ mtec iso230-2 p/iso230-2.csv
   # the same as one JSON object (mtec.iso230-2/1), also in p/iso230-2.json
   $ mtec iso230-2 p/iso230-2.csv --json --out p
-  # the same run taken in 23.5 °C air at 98.7 kPa and 40 % RH on a steel axis at 24 °C
+  # corrected for 23.5 °C, 98.7 kPa, 40 % RH air and a 24 °C steel axis
   $ mtec iso230-2 p/iso230-2.csv --air-temp-c 23.5 --pressure-pa 98700 \\
       --humidity-pct 40 --material-temp-c 24 --alpha-um-per-m-k 11.5"
 );
