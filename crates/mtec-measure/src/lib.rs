@@ -13,6 +13,7 @@
 //! What it is not for: identifying the error elements of a whole machine (that is
 //! `mtec-identify`), simulating measurements (`mtec-sim`) or drawing plots (`mtec-report`).
 
+pub mod air;
 pub mod circular;
 pub mod iso230_2;
 pub mod positioning;

@@ -48,6 +48,27 @@ fn target_key(t: f64) -> i64 {
 /// Largest accepted |deviation| (1 m): anything larger is a unit or export mistake.
 pub const MAX_DEVIATION_UM: f64 = 1e6;
 impl PositioningData {
+    /// The same runs with every measured position scaled by `factor` (an environmental length
+    /// correction, see [`crate::air`]): the measured position P_i + x_ij becomes
+    /// factor · (P_i + x_ij), so the deviation becomes factor · (P_i + x_ij) − P_i. Positions are
+    /// those of the file, i.e. the interferometer is taken to read 0 at target 0 mm.
+    pub fn with_scaled_positions(&self, factor: f64) -> PositioningData {
+        let scale = |devs: &Vec<Vec<f64>>| -> Vec<Vec<f64>> {
+            devs.iter()
+                .zip(&self.targets_mm)
+                .map(|(row, &p_mm)| {
+                    let p_um = p_mm * 1000.0;
+                    row.iter().map(|&x| factor * (p_um + x) - p_um).collect()
+                })
+                .collect()
+        };
+        PositioningData {
+            up_um: scale(&self.up_um),
+            down_um: scale(&self.down_um),
+            ..self.clone()
+        }
+    }
+
     /// Reads and validates a run file.
     pub fn read(path: &Path) -> Result<PositioningData, InputError> {
         let table = Table::read(path)?;
@@ -204,6 +225,17 @@ mod tests {
         assert_eq!(d.up_um, vec![vec![1.0, 5.0], vec![2.0, 6.0]]);
         assert_eq!(d.down_um, vec![vec![4.0, 8.0], vec![3.0, 7.0]]);
         assert_eq!(d.warnings.len(), 3, "{:?}", d.warnings);
+    }
+
+    #[test]
+    fn scaled_positions_move_each_deviation_by_the_scaled_position() {
+        // k = 1 + 10 ppm: at 10 mm (10 000 µm) a deviation x becomes k (10 000 + x) − 10 000,
+        // i.e. x + 0.1 µm + 10 ppm of x; at 0 mm only the 10 ppm of x remains.
+        let d = parse(OK).unwrap().with_scaled_positions(1.0 + 1e-5);
+        assert!((d.up_um[1][0] - (2.0 + 0.1 + 2e-5)).abs() < 1e-9);
+        assert!((d.down_um[1][1] - (7.0 + 0.1 + 7e-5)).abs() < 1e-9);
+        assert!((d.up_um[0][1] - (5.0 + 5e-5)).abs() < 1e-12);
+        assert_eq!(d.targets_mm, vec![0.0, 10.0]);
     }
 
     #[test]
