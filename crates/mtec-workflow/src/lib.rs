@@ -1,0 +1,22 @@
+//! The mtec workflow as a library.
+//!
+//! Every job the `mtec` command does lives here, so that a Rust program, the Python module and
+//! the CLI run the same code and write the same files:
+//!
+//! - [`ops`]: one module per job (`ops::iso230_2`, `ops::map`, ...). Each takes an options
+//!   struct (plain data: paths and values, no command-line types), reads its inputs, calls the
+//!   numerical crates, writes its outputs atomically and returns a typed outcome that serialises
+//!   to the JSON the CLI prints with `--json` and renders the CLI's text report (`Display`).
+//!   Warnings go into the outcome and to the [`Observer`]; nothing is printed here.
+//! - [`Error`]: bad input (located: file, line, column), a usage error, or an internal failure;
+//!   the CLI maps them to exit codes 2, 2 and 1.
+//!
+//! Conventions of an op: `pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome>`;
+//! outputs that would overwrite an input are refused before any work (`mtec_io::OutputGuard`).
+
+pub mod error;
+pub mod observer;
+pub mod ops;
+
+pub use error::{Error, Result};
+pub use observer::{Collect, Observer, Silent};
