@@ -20,6 +20,7 @@
 pub mod bpnn;
 pub mod correction;
 pub mod gcode;
+pub mod hand;
 pub mod kinematic;
 pub mod load;
 pub mod machine;

@@ -2,8 +2,10 @@
 //!
 //! Known formats: `mtec.map/1` (a [`GridMap`]), `mtec.kinematic-model/1` (identified error
 //! functions on a machine) and `mtec.bpnn/1` (a network fitted to a volumetric grid by
-//! `mtec map fit --model bpnn`, 3 inputs and 3 outputs) and `mtec.machine-error/1` (a geometric
-//! model plus thermal models with a state, [`crate::machine`]).
+//! `mtec map fit --model bpnn`, 3 inputs and 3 outputs), `mtec.machine-error/1` (a geometric
+//! model plus thermal models with a state, [`crate::machine`]), and the hand-written
+//! `mtec.zero-model/1` and `mtec.poly-model/1` ([`crate::hand`]). This is the one registry of
+//! error models: the CLI, the workflow library and the real-time library all load through it.
 
 use crate::map::{GridMap, MapFile, MAP_FORMAT};
 use crate::ErrorModel;
@@ -16,6 +18,8 @@ pub const KNOWN_FORMATS: &[&str] = &[
     crate::kinematic::KINEMATIC_FORMAT,
     crate::bpnn::FORMAT,
     crate::machine::MACHINE_FORMAT,
+    crate::hand::ZERO_FORMAT,
+    crate::hand::POLY_FORMAT,
 ];
 
 /// Loads an error model file, whatever its kind, as an [`ErrorModel`].
@@ -40,6 +44,14 @@ pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> 
         }
         crate::machine::MACHINE_FORMAT => {
             Ok(Box::new(crate::machine::MachineErrorModel::load(path)?))
+        }
+        crate::hand::ZERO_FORMAT => Ok(Box::new(crate::hand::ZeroModel::new(
+            path.display().to_string(),
+        ))),
+        crate::hand::POLY_FORMAT => {
+            let f: crate::hand::PolyFile = serde_json::from_str(&text)
+                .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
+            Ok(Box::new(crate::hand::PolyModel::new(f, path)?))
         }
         other => Err(located_format_error(
             path,
@@ -154,5 +166,48 @@ mod tests {
         );
         let e = load_error_model(&p2).err().unwrap();
         assert!(e.message.contains("strictly increasing"), "{e}");
+    }
+
+    /// A refused model file names every format the registry reads.
+    #[test]
+    fn refusals_name_every_readable_format() {
+        for (text, located) in [
+            ("{\"terms\": []}", false),
+            ("{\n  \"format\": \"mtec.bogus/1\"\n}\n", true),
+        ] {
+            let (_d, p) = write(text);
+            let Err(e) = load_error_model(&p) else {
+                panic!("{text} was accepted")
+            };
+            for f in KNOWN_FORMATS {
+                assert!(e.message.contains(f), "{text}: {e} lacks {f}");
+            }
+            assert!(e.message.contains("mtec.poly-model/1"), "{e}");
+            assert_eq!(e.line.is_some(), located, "{e}");
+        }
+    }
+
+    /// The hand-written models: zero everywhere; a polynomial evaluated term by term
+    /// (8 + 0.012·x, -4, 3 + 1.5e-5·y² at (100, 200, 0): 9.2, -4, 3.6 µm); unknown fields located.
+    #[test]
+    fn hand_written_models() {
+        let (_d, p) = write("{\"format\": \"mtec.zero-model/1\"}");
+        assert_eq!(
+            load_error_model(&p).unwrap().error_um([1.0, 2.0, 3.0]),
+            [0.0; 3]
+        );
+        let (_d2, p2) = write(
+            r#"{"format": "mtec.poly-model/1", "terms": [
+                {"powers": [0, 0, 0], "coef_um": [8.0, -4.0, 3.0]},
+                {"powers": [1, 0, 0], "coef_um": [0.012, 0.0, 0.0]},
+                {"powers": [0, 2, 0], "coef_um": [0.0, 0.0, 1.5e-5]}]}"#,
+        );
+        let e = load_error_model(&p2).unwrap().error_um([100.0, 200.0, 0.0]);
+        for (a, b) in e.iter().zip([9.2, -4.0, 3.6]) {
+            assert!((a - b).abs() < 1e-12, "{e:?}");
+        }
+        let (_d3, p3) = write("{\"format\": \"mtec.poly-model/1\",\n \"terms\": [], \"x\": 1}");
+        let e = load_error_model(&p3).err().unwrap();
+        assert_eq!(e.line, Some(2), "{e}");
     }
 }

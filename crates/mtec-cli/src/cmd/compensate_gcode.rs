@@ -3,13 +3,13 @@
 use crate::cmd::flatten::{
     extra_inputs, flatten_input, FlattenArgs, Flattened, MachineUnitsArg, OnOff,
 };
-use crate::cmd::model_loader::load_error_model;
 use crate::error::CliError;
 use mtec_comp::gcode::offsets::WORK_SYSTEMS;
 use mtec_comp::gcode::tooltable::{load_tool_table, MachineUnits};
 use mtec_comp::gcode::{
     rewrite, BlockDelete, GcodeError, OffsetsFile, OnUnsupported, RewriteOptions, Units,
 };
+use mtec_comp::load_error_model;
 use mtec_io::{InputError, OutputGuard};
 use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::PathBuf;

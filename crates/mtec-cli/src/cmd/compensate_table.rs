@@ -148,7 +148,7 @@ pub struct Args {
 pub fn run(a: Args) -> Result<(), CliError> {
     // the CLI's loader: maps and kinematic models (mtec-comp) and the BPNN, poly and zero models
     let model = super::state::model_in_state(
-        super::model_loader::load_error_model(&a.model)?,
+        mtec_comp::load_error_model(&a.model)?,
         &a.model,
         a.state.as_deref(),
     )?;

@@ -225,7 +225,7 @@ fn replay_day(a: ReplayArgs) -> Result<(), CliError> {
         Some(p) => Some(OutputGuard::new(&[&a.model, &a.state, &a.probes]).check(p)?),
         None => None,
     };
-    let model = super::model_loader::load_error_model(&a.model)?;
+    let model = mtec_comp::load_error_model(&a.model)?;
     let mut comp = Compensator::new(model, CorrectionOptions::default());
     let state = Table::read(&a.state)?;
     let probes = Table::read(&a.probes)?;

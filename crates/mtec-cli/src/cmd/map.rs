@@ -164,7 +164,7 @@ fn eval(a: EvalArgs) -> Result<(), CliError> {
         Some(path) => OutputGuard::new(&[&a.map, &a.points]).check(path)?,
         None => mtec_io::Destination::Stdout,
     };
-    let model = super::model_loader::load_error_model(&a.map)?;
+    let model = mtec_comp::load_error_model(&a.map)?;
     let table = Table::read(&a.points)?;
     let cols = [
         table.column("x_mm")?,

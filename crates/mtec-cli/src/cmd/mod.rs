@@ -11,7 +11,6 @@ pub mod iso230_2;
 pub mod machine;
 pub mod machine_stage;
 pub mod map;
-pub mod model_loader;
 pub mod neural;
 pub mod sensitivity;
 pub mod simulate;

@@ -1,6 +1,4 @@
-//! Loading an error model from JSON: the single dispatch point `load_error_model`.
-//!
-//! Until model files are unified across the toolkit, two small formats are read here:
+//! Models written by hand, to check a rewriter or a controller path with a known answer:
 //!
 //! ```json
 //! { "format": "mtec.zero-model/1" }
@@ -15,59 +13,30 @@
 //!              { "powers": [0, 2, 0], "coef_um": [0.0, 0.0, 1.5e-5] } ] }
 //! ```
 //! a polynomial: E(x, y, z) = Σ coef_um · x^i · y^j · z^k with x, y, z the machine position in
-//! mm and E = [Ex, Ey, Ez] in µm. Every other format (grid maps, kinematic models, BPNN maps,
-//! machine error models) is read by `mtec_comp::load_error_model`.
+//! mm and E = [Ex, Ey, Ez] in µm.
 
-use mtec_comp::ErrorModel;
+use crate::ErrorModel;
 use mtec_io::InputError;
 use serde::Deserialize;
 use std::path::Path;
 
 /// A model with no error (written by hand, to check the rewriter).
-const ZERO_FORMAT: &str = "mtec.zero-model/1";
+pub const ZERO_FORMAT: &str = "mtec.zero-model/1";
 /// A polynomial model (written by hand).
-const POLY_FORMAT: &str = "mtec.poly-model/1";
-
-/// Reads a model file and returns the model it describes.
-pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> {
-    let doc: serde_json::Value = mtec_io::read_json(path)?;
-    let format = doc.get("format").and_then(|f| f.as_str()).ok_or_else(|| {
-        InputError::file(
-            path,
-            format!(
-                "no \"format\" string: a model file says what it is, one of: {}, {ZERO_FORMAT}, \
-                 {POLY_FORMAT}",
-                mtec_comp::load::KNOWN_FORMATS.join(", ")
-            ),
-        )
-    })?;
-    match format {
-        ZERO_FORMAT => Ok(Box::new(ZeroModel {
-            source: path.display().to_string(),
-        })),
-        POLY_FORMAT => {
-            let file: PolyFile = mtec_io::read_json(path)?;
-            let model = PolyModel::new(file, path)?;
-            Ok(Box::new(model))
-        }
-        // every other model kind (maps, kinematic models, BPNN maps, ...) is read by mtec-comp,
-        // whose list of the formats it reads lacks the two above
-        other => {
-            let known = mtec_comp::load::KNOWN_FORMATS.contains(&other);
-            mtec_comp::load_error_model(path).map_err(|mut e| {
-                if !known {
-                    e.message
-                        .push_str(&format!(", {ZERO_FORMAT}, {POLY_FORMAT}"));
-                }
-                e
-            })
-        }
-    }
-}
+pub const POLY_FORMAT: &str = "mtec.poly-model/1";
 
 /// No error anywhere.
 pub struct ZeroModel {
     source: String,
+}
+
+impl ZeroModel {
+    /// A zero model described as loaded from `source`.
+    pub fn new(source: impl Into<String>) -> Self {
+        ZeroModel {
+            source: source.into(),
+        }
+    }
 }
 
 impl ErrorModel for ZeroModel {
@@ -81,7 +50,7 @@ impl ErrorModel for ZeroModel {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct PolyFile {
+pub(crate) struct PolyFile {
     #[allow(dead_code)]
     format: String,
     #[serde(default)]
@@ -103,7 +72,7 @@ pub struct PolyModel {
 }
 
 impl PolyModel {
-    fn new(file: PolyFile, path: &Path) -> Result<Self, InputError> {
+    pub(crate) fn new(file: PolyFile, path: &Path) -> Result<Self, InputError> {
         for (n, t) in file.terms.iter().enumerate() {
             if !t.coef_um.iter().all(|c| c.is_finite()) {
                 return Err(InputError::file(
@@ -148,33 +117,5 @@ impl ErrorModel for PolyModel {
     }
     fn describe(&self) -> String {
         self.describe.clone()
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A refused model file names every format `load_error_model` reads.
-    #[test]
-    fn refusals_name_every_readable_format() {
-        let dir = tempfile::tempdir().unwrap();
-        for (text, located) in [
-            ("{\"terms\": []}", false),
-            ("{\n  \"format\": \"mtec.bogus/1\"\n}\n", true),
-        ] {
-            let p = dir.path().join("m.json");
-            std::fs::write(&p, text).unwrap();
-            let Err(e) = load_error_model(&p) else {
-                panic!("{text} was accepted")
-            };
-            for f in mtec_comp::load::KNOWN_FORMATS
-                .iter()
-                .chain(&[ZERO_FORMAT, POLY_FORMAT])
-            {
-                assert!(e.message.contains(f), "{text}: {e} lacks {f}");
-            }
-            assert_eq!(e.line.is_some(), located, "{e}");
-        }
     }
 }
