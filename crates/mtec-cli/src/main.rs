@@ -5,6 +5,7 @@ mod cmd;
 mod error;
 mod help;
 mod inputs;
+mod observer;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

@@ -25,14 +25,14 @@ pub const KNOWN_FORMATS: &[&str] = &[
 /// Loads an error model file, whatever its kind, as an [`ErrorModel`].
 pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> {
     let text = mtec_io::read_text(path)?;
-    let value: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| mtec_io::json_error(path, &e))?;
     let format = model_format(path, &text, &value)?;
     match format.as_str() {
         MAP_FORMAT => Ok(Box::new(load_map_text(path, &text)?)),
         crate::kinematic::KINEMATIC_FORMAT => {
-            let f: crate::kinematic::KinematicFile = serde_json::from_str(&text)
-                .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
+            let f: crate::kinematic::KinematicFile =
+                serde_json::from_str(&text).map_err(|e| mtec_io::json_error(path, &e))?;
             let m = crate::kinematic::KinematicModel::from_file(f, path.display().to_string())
                 .map_err(|e| InputError::file(path, e))?;
             Ok(Box::new(m))
@@ -49,8 +49,8 @@ pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> 
             path.display().to_string(),
         ))),
         crate::hand::POLY_FORMAT => {
-            let f: crate::hand::PolyFile = serde_json::from_str(&text)
-                .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
+            let f: crate::hand::PolyFile =
+                serde_json::from_str(&text).map_err(|e| mtec_io::json_error(path, &e))?;
             Ok(Box::new(crate::hand::PolyModel::new(f, path)?))
         }
         other => Err(located_format_error(
@@ -72,8 +72,7 @@ pub fn load_map(path: &Path) -> Result<GridMap, InputError> {
 }
 
 fn load_map_text(path: &Path, text: &str) -> Result<GridMap, InputError> {
-    let file: MapFile = serde_json::from_str(text)
-        .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
+    let file: MapFile = serde_json::from_str(text).map_err(|e| mtec_io::json_error(path, &e))?;
     let map = GridMap::from_file(file).map_err(|e| InputError::file(path, e.to_string()))?;
     // a map without provenance is described by the file it was loaded from
     Ok(if map.source().is_empty() {

@@ -141,8 +141,8 @@ impl MachineErrorModel {
     /// Reads a `mtec.machine-error/1` file and the model files it names.
     pub fn load(path: &Path) -> Result<MachineErrorModel, InputError> {
         let text = mtec_io::read_text(path)?;
-        let file: MachineFile = serde_json::from_str(&text)
-            .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
+        let file: MachineFile =
+            serde_json::from_str(&text).map_err(|e| mtec_io::json_error(path, &e))?;
         let at = |needle: &str, msg: String| match text.find(needle) {
             Some(off) => {
                 let (l, c) = mtec_io::line_col(&text, off);
@@ -175,8 +175,8 @@ impl MachineErrorModel {
         for spec in &file.thermal {
             let mpath = dir.join(&spec.model);
             let mtext = mtec_io::read_text(&mpath)?;
-            let mf: ModelFile = serde_json::from_str(&mtext)
-                .map_err(|e| InputError::at(&mpath, e.line(), e.column(), e.to_string()))?;
+            let mf: ModelFile =
+                serde_json::from_str(&mtext).map_err(|e| mtec_io::json_error(&mpath, &e))?;
             mf.check_format()
                 .map_err(|e| InputError::file(&mpath, e.to_string()))?;
             let stream = mf

@@ -79,16 +79,27 @@ pub fn parse_toml<T: serde::de::DeserializeOwned>(
 /// Parses a JSON document into `T`; errors carry serde_json's line and column.
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, InputError> {
     let text = read_text(path)?;
-    serde_json::from_str(&text).map_err(|e| {
-        // serde_json appends " at line L column C"; the location is carried separately
-        let msg = e.to_string();
-        let msg = msg
-            .rsplit_once(" at line ")
-            .map_or(msg.clone(), |(m, _)| m.to_string());
-        // serde_json says column 0 for "before the first character" (an error at the end of a
-        // line or file); mtec's columns are 1-based
-        InputError::at(path, e.line().max(1), e.column().max(1), msg)
-    })
+    parse_json(path, &text)
+}
+
+/// Parses the JSON text of `path` into `T`; errors carry serde_json's line and column.
+pub fn parse_json<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    text: &str,
+) -> Result<T, InputError> {
+    serde_json::from_str(text).map_err(|e| json_error(path, &e))
+}
+
+/// A serde_json error as a located input error of `path`.
+pub fn json_error(path: &Path, e: &serde_json::Error) -> InputError {
+    // serde_json appends " at line L column C"; the location is carried separately
+    let msg = e.to_string();
+    let msg = msg
+        .rsplit_once(" at line ")
+        .map_or(msg.clone(), |(m, _)| m.to_string());
+    // serde_json says column 0 for "before the first character" (an error at the end of a
+    // line or file); mtec's columns are 1-based
+    InputError::at(path, e.line().max(1), e.column().max(1), msg)
 }
 
 /// 1-based line and column of a byte offset in `text`.

@@ -17,6 +17,20 @@
 pub mod error;
 pub mod observer;
 pub mod ops;
+pub mod rs274;
+pub mod state;
 
 pub use error::{Error, Result};
 pub use observer::{Collect, Observer, Silent};
+
+/// The refusal of `what` (e.g. "`thermal fit --model cnn-lstm`") by a build without the neural
+/// models (cargo feature `neural`, off by default: candle more than doubles a cold build): a
+/// usage error that says how to build them.
+pub fn neural_unavailable(what: &str) -> Error {
+    Error::usage(format!(
+        "{what} needs the neural models, and this mtec was built without them (cargo feature \
+         `neural`, off by default because it more than doubles a cold build): build with \
+         `cargo build --release --features neural`, or install with \
+         `cargo install --path crates/mtec-cli --features neural`"
+    ))
+}

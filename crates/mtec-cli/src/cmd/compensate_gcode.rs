@@ -1,17 +1,10 @@
 //! `mtec compensate gcode`: rewrites an NC program so the machine reaches the programmed points.
 
-use crate::cmd::flatten::{
-    extra_inputs, flatten_input, FlattenArgs, Flattened, MachineUnitsArg, OnOff,
-};
 use crate::error::CliError;
-use mtec_comp::gcode::offsets::WORK_SYSTEMS;
-use mtec_comp::gcode::tooltable::{load_tool_table, MachineUnits};
-use mtec_comp::gcode::{
-    rewrite, BlockDelete, GcodeError, OffsetsFile, OnUnsupported, RewriteOptions, Units,
-};
-use mtec_comp::load_error_model;
-use mtec_io::{InputError, OutputGuard};
-use std::io::{BufRead, BufReader, BufWriter, Write};
+use mtec_comp::gcode::tooltable::MachineUnits;
+use mtec_comp::gcode::{OnUnsupported, RewriteOptions, Units};
+use mtec_workflow::ops::compensate_gcode::{self, Options};
+use mtec_workflow::rs274::Rs274;
 use std::path::PathBuf;
 
 pub const LONG_ABOUT: &str = "\
@@ -208,13 +201,80 @@ pub struct Args {
     pub flatten: FlattenArgs,
 }
 
+/// The interpreters a program can be flattened with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum FlattenWith {
+    /// LinuxCNC's stand-alone interpreter (`rs274 -g`, Debian package linuxcnc-uspace).
+    Rs274,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum OnOff {
+    On,
+    Off,
+}
+
+/// Units of a tool table's lengths.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MachineUnitsArg {
+    Mm,
+    Inch,
+}
+
+/// The flattening options of `compensate gcode`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct FlattenArgs {
+    /// Run the program through LinuxCNC's interpreter first and compensate the moves it makes
+    /// (for O-word subroutines/loops, canned cycles, cutter compensation, parameters, G92...).
+    /// The output is then a LinuxCNC-only plain program.
+    #[arg(long, value_enum, value_name = "rs274")]
+    pub flatten_with: Option<FlattenWith>,
+    /// The rs274 binary to use (default: `rs274` on PATH).
+    #[arg(long, value_name = "PATH", requires = "flatten_with")]
+    pub rs274: Option<PathBuf>,
+    /// LinuxCNC tool table (.tbl): tool lengths for G43 (Z offsets, in --machine-units);
+    /// with --flatten-with, passed to rs274 (`-t`), which bakes lengths and cutter radii in.
+    #[arg(long, value_name = "FILE.tbl")]
+    pub tool_table: Option<PathBuf>,
+    /// The machine's units (LinuxCNC's INI LINEAR_UNITS), in which tool tables and parameter
+    /// files hold their lengths (not the program's G20/G21). Stand-alone rs274 reads both as
+    /// inches, so with `mm` they are handed to it converted.
+    #[arg(long, value_enum, default_value = "mm", value_name = "mm|inch")]
+    pub machine_units: MachineUnitsArg,
+    /// Parameter file for rs274 (`-v`): work offsets and other parameters (copied, never written).
+    #[arg(long, value_name = "FILE.var", requires = "flatten_with")]
+    pub var_file: Option<PathBuf>,
+    /// The operator's block delete switch: `on` skips `/` blocks (copied, not interpreted),
+    /// `off` runs them; not given, a `/` block that moves or sets a mode is refused. With
+    /// --flatten-with, `on` is passed to rs274 as `-b`.
+    #[arg(long, value_enum, value_name = "on|off")]
+    pub block_delete: Option<OnOff>,
+    /// Stop rs274 after this many seconds (a program that loops forever).
+    #[arg(
+        long,
+        default_value_t = 300.0,
+        value_name = "S",
+        requires = "flatten_with"
+    )]
+    pub rs274_timeout_s: f64,
+}
+
 pub fn run(args: Args) -> Result<(), CliError> {
-    let model = super::state::model_in_state(
-        load_error_model(&args.model)?,
-        &args.model,
-        args.state.as_deref(),
-    )?;
-    let mut options = RewriteOptions {
+    let parse3 = |s: &str, what: &str, unit: &str| -> Result<[f64; 3], CliError> {
+        let v: Vec<f64> = s
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| CliError::usage(format!("{what} '{s}': expected {unit}")))?;
+        if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
+            let names = unit.split(' ').next().unwrap_or("");
+            return Err(CliError::usage(format!(
+                "{what} '{s}': expected three numbers {names}"
+            )));
+        }
+        Ok([v[0], v[1], v[2]])
+    };
+    let rewrite = RewriteOptions {
         tolerance_um: args.tolerance_um,
         max_segment_mm: args.max_segment_mm,
         chord_tolerance_um: args.chord_tolerance_um,
@@ -232,202 +292,47 @@ pub fn run(args: Args) -> Result<(), CliError> {
         check_step_mm: args.check_step_mm,
         check_step_deg: args.check_step_deg,
         max_line_chars: args.max_line_chars,
+        start_position_mm: args
+            .start_position_mm
+            .as_deref()
+            .map(|s| parse3(s, "--start-position-mm", "x,y,z in mm"))
+            .transpose()?,
+        start_rotary_deg: args
+            .start_rotary_deg
+            .as_deref()
+            .map(|s| parse3(s, "--start-rotary-deg", "a,b,c in degrees"))
+            .transpose()?,
         ..RewriteOptions::default()
     };
-    if let Some(s) = &args.start_position_mm {
-        let v: Vec<f64> = s
-            .split(',')
-            .map(|x| x.trim().parse::<f64>())
-            .collect::<Result<_, _>>()
-            .map_err(|_| {
-                CliError::usage(format!("--start-position-mm '{s}': expected x,y,z in mm"))
-            })?;
-        if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
-            return Err(CliError::usage(format!(
-                "--start-position-mm '{s}': expected three numbers x,y,z"
-            )));
-        }
-        options.start_position_mm = Some([v[0], v[1], v[2]]);
-    }
-    if let Some(s) = &args.start_rotary_deg {
-        let v: Vec<f64> = s
-            .split(',')
-            .map(|x| x.trim().parse::<f64>())
-            .collect::<Result<_, _>>()
-            .map_err(|_| {
-                CliError::usage(format!(
-                    "--start-rotary-deg '{s}': expected a,b,c in degrees"
-                ))
-            })?;
-        if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
-            return Err(CliError::usage(format!(
-                "--start-rotary-deg '{s}': expected three numbers a,b,c"
-            )));
-        }
-        options.start_rotary_deg = Some([v[0], v[1], v[2]]);
-    }
-    if let Some(p) = &args.offsets {
-        let file: OffsetsFile = mtec_io::read_toml(p)?;
-        options.offsets = file.validate().map_err(|m| InputError::file(p, m))?;
-    }
-    if let Some(b) = args.flatten.block_delete {
-        options.block_delete = match b {
-            OnOff::On => BlockDelete::On,
-            OnOff::Off => BlockDelete::Off,
-        };
-    }
-    if let (Some(t), None) = (&args.flatten.tool_table, &args.flatten.flatten_with) {
-        // G43 lengths from the controller's own tool table (rs274 reads it itself when flattening)
-        let units = match args.flatten.machine_units {
+    let f = args.flatten;
+    let opts = Options {
+        model: args.model,
+        state: args.state,
+        input: args.input,
+        output: args.output,
+        rewrite,
+        offsets: args.offsets,
+        tool_table: f.tool_table,
+        machine_units: match f.machine_units {
             MachineUnitsArg::Mm => MachineUnits::Mm,
             MachineUnitsArg::Inch => MachineUnits::Inch,
-        };
-        let table = load_tool_table(t, units).map_err(CliError::Usage)?;
-        let (offsets, notes) = options
-            .offsets
-            .clone()
-            .with_tool_table(&table)
-            .map_err(|m| InputError::file(t, m))?;
-        for n in notes {
-            eprintln!("warning: {}: {n}", t.display());
-        }
-        options.offsets = offsets;
-    }
-    options.validate().map_err(CliError::Usage)?;
-
-    // the one output routine of mtec-io: a file atomically, a device, FIFO or `-` straight
-    // through, a link's target; an input, a directory or a block device refused before any work
-    let mut guard = OutputGuard::new(&[&args.input, &args.model]);
-    if let Some(p) = &args.state {
-        guard.add_input(p);
-    }
-    if let Some(p) = &args.offsets {
-        guard.add_input(p);
-    }
-    for p in extra_inputs(&args.flatten) {
-        guard.add_input(p);
-    }
-    let dest = guard.check(&args.output)?;
-    // with --flatten-with, the rewriter reads the flattened program; its errors name that
-    let (reader, source): (Box<dyn BufRead>, PathBuf) = if args.flatten.flatten_with.is_some() {
-        let Flattened {
-            text,
-            report,
-            work_offsets_mm,
-        } = flatten_input(&args.input, &args.flatten)?;
-        // the model is evaluated at machine positions: without --offsets, take the work
-        // offsets rs274 read from --var-file; with it, say when the two disagree
-        if args.offsets.is_none() {
-            options.offsets.work_mm = work_offsets_mm;
-            options.offsets.known = [true; 9];
-        } else if let Some(i) = (0..9).find(|&i| {
-            (0..3).any(|a| (options.offsets.work_mm[i][a] - work_offsets_mm[i][a]).abs() > 1e-6)
-        }) {
-            eprintln!(
-                "warning: {} in --offsets is {:?} mm but rs274 read {:?} mm (--var-file): the model is evaluated with --offsets",
-                WORK_SYSTEMS[i], options.offsets.work_mm[i], work_offsets_mm[i]
-            );
-        }
-        eprintln!(
-            "{}: flattened by rs274: {} canonical lines -> {} lines ({} straight moves, {} arcs{})",
-            args.input.display(),
-            report.canonical_lines,
-            report.lines_written,
-            report.straight_moves,
-            report.arcs,
-            if report.offsets_folded {
-                "; offsets folded into the coordinates"
-            } else {
-                ""
-            }
-        );
-        let mut name = args.input.clone().into_os_string();
-        name.push(" [flattened by rs274]");
-        (Box::new(std::io::Cursor::new(text)), PathBuf::from(name))
-    } else {
-        let input = std::fs::File::open(&args.input)
-            .map_err(|e| InputError::file(&args.input, format!("cannot read: {e}")))?;
-        (
-            Box::new(BufReader::with_capacity(1 << 16, input)),
-            args.input.clone(),
-        )
+        },
+        block_delete: f.block_delete.map(|b| b == OnOff::On),
+        flatten: f.flatten_with.map(|FlattenWith::Rs274| Rs274 {
+            bin: f.rs274,
+            var_file: f.var_file,
+            timeout_s: f.rs274_timeout_s,
+        }),
     };
-
-    // dropped on error, an unfinished output leaves the target untouched
-    let mut writer = BufWriter::with_capacity(1 << 16, dest.open()?);
-    let report = rewrite(reader, &mut writer, model.as_ref(), &options).map_err(|e| match e {
-        GcodeError::At(d) => CliError::Input(InputError::at(&source, d.line, d.column, d.message)),
-        GcodeError::Io(e) => CliError::Internal(anyhow::anyhow!("{}: {e}", args.input.display())),
-    })?;
-    writer.into_inner().map_err(|e| e.into_error())?.commit()?;
-    let stderr = std::io::stderr();
-    let mut err = stderr.lock();
-    for w in &report.warnings {
-        let _ = writeln!(
-            err,
-            "warning: {}:{}:{}: {} (line copied unchanged)",
-            source.display(),
-            w.line,
-            w.column,
-            w.message
-        );
+    let done = compensate_gcode::run(&opts, &mut crate::observer::Stderr::default())?;
+    // the report goes to stdout unless the program itself does (-o -)
+    if opts.output.as_os_str() == "-" {
+        eprint!("{done}");
+    } else {
+        print!("{done}");
     }
-    if report.warnings_total > report.warnings.len() {
-        let _ = writeln!(
-            err,
-            "warning: … and {} more",
-            report.warnings_total - report.warnings.len()
-        );
-    }
-    let mut say = super::messages(&dest);
-    let _ = writeln!(
-        say,
-        "{}: {} lines read, {} written ({} added by splitting); {} moves corrected, {} arcs linearised, largest correction {:.2} um; {} warnings",
-        args.output.display(),
-        report.lines_read,
-        report.lines_written,
-        report.lines_added,
-        report.moves_compensated,
-        report.arcs_linearised,
-        report.max_correction_um,
-        report.warnings_total
-    );
-    if let Some(o) = &report.first_outside_model {
-        let d = o.domain_mm;
-        let _ = writeln!(
-            err,
-            "warning: {}:{}:{}: {} corrected point(s) lie outside the model's box X {}..{} Y {}..{} Z {}..{} mm \
-             (first: X {:.3} Y {:.3} Z {:.3} mm, machine frame); there a map is clamped or extrapolated \
-             and a fit is beyond its data: measure over the program's travel, or check the work offsets",
-            source.display(),
-            o.line,
-            o.column,
-            report.points_outside_model,
-            d[0][0],
-            d[0][1],
-            d[1][0],
-            d[1][1],
-            d[2][0],
-            d[2][1],
-            o.point_mm[0],
-            o.point_mm[1],
-            o.point_mm[2]
-        );
-    }
-    if args.offsets.is_none() && args.flatten.flatten_with.is_none() && report.moves_compensated > 0
-    {
-        let _ = writeln!(
-            err,
-            "note: no --offsets: program coordinates were taken as machine coordinates (G54 = 0); \
-             if the part is set up with work offsets, give them with --offsets (see --help)"
-        );
-    }
-    if report.rapids_not_compensated > 0 || report.moves_end_point_only > 0 {
-        let _ = writeln!(
-            say,
-            "  {} rapids before all axes were known copied uncorrected; {} feed moves from an unknown start corrected at their end point only",
-            report.rapids_not_compensated, report.moves_end_point_only
-        );
+    for n in &done.notes {
+        eprintln!("note: {n}");
     }
     Ok(())
 }

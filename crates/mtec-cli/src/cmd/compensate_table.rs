@@ -147,10 +147,11 @@ pub struct Args {
 
 pub fn run(a: Args) -> Result<(), CliError> {
     // the CLI's loader: maps and kinematic models (mtec-comp) and the BPNN, poly and zero models
-    let model = super::state::model_in_state(
+    let model = mtec_workflow::state::model_in_state(
         mtec_comp::load_error_model(&a.model)?,
         &a.model,
         a.state.as_deref(),
+        &mut crate::observer::Stderr::default(),
     )?;
     let map = load_map_if_grid(&a.model)?;
     let axis = parse_axis("--axis", &a.axis)?;
@@ -315,8 +316,8 @@ fn table_error(model: &Path, e: TableError) -> CliError {
 /// The grid map itself when the model file is a map (for its grid as default sampling).
 fn load_map_if_grid(path: &Path) -> Result<Option<GridMap>, InputError> {
     let text = mtec_io::read_text(path)?;
-    let value: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| mtec_io::json_error(path, &e))?;
     if mtec_comp::load::model_format(path, &text, &value)? == MAP_FORMAT {
         Ok(Some(mtec_comp::load::load_map(path)?))
     } else {

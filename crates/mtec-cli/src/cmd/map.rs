@@ -1,9 +1,8 @@
 //! `mtec map fit|eval`: volumetric error maps from a measured grid, and their values at points.
 
 use crate::error::CliError;
-use mtec_comp::map::{GridLimits, GridMap, Outside};
-use mtec_io::{InputError, OutputGuard, Table};
-use std::fmt::Write as _;
+use mtec_comp::map::Outside;
+use mtec_workflow::ops::map;
 use std::path::PathBuf;
 
 const FIT_HELP: &str = "\
@@ -124,79 +123,34 @@ pub fn run(args: Args) -> Result<(), CliError> {
 fn fit(a: FitArgs) -> Result<(), CliError> {
     let outside = Outside::parse(&a.outside)
         .ok_or_else(|| CliError::usage(format!("unknown --outside `{}`", a.outside)))?;
-    let mut limits = GridLimits::for_controller(&a.controller)
-        .ok_or_else(|| CliError::usage(format!("unknown --controller `{}`", a.controller)))?;
-    if let Some(n) = a.max_points_per_axis {
-        if n < 1 {
-            return Err(CliError::usage("--max-points-per-axis must be at least 1"));
-        }
-        limits.max_points_per_axis = Some(n);
-    }
-    // where the map goes is settled before any work (an input, a directory: exit 2)
-    let dest = OutputGuard::new(&[&a.grid]).check(&a.out)?;
-    let map = match a.model {
-        MapModel::Trilinear => GridMap::read_csv(&a.grid, &limits, outside)?,
-        #[cfg(feature = "neural")]
-        MapModel::Bpnn => {
-            return super::map_bpnn::fit_bpnn(&a.grid, a.hidden, &a.out, &dest);
-        }
-        #[cfg(not(feature = "neural"))]
-        MapModel::Bpnn => return Err(super::neural::unavailable("`map fit --model bpnn`")),
+    let opts = map::FitOptions {
+        grid: a.grid,
+        kind: match a.model {
+            MapModel::Trilinear => map::MapKind::Trilinear,
+            MapModel::Bpnn => map::MapKind::Bpnn { hidden: a.hidden },
+        },
+        outside,
+        controller: a.controller,
+        max_points_per_axis: a.max_points_per_axis,
+        out: a.out,
     };
-    let mut json =
-        serde_json::to_string_pretty(&map.to_file()).map_err(|e| CliError::Internal(e.into()))?;
-    json.push('\n');
-    dest.write(json.as_bytes())?;
-    let n = map.axes_mm();
-    eprintln!(
-        "map: {}×{}×{} nodes, outside = {} -> {}",
-        n[0].len(),
-        n[1].len(),
-        n[2].len(),
-        outside.name(),
-        a.out.display()
-    );
+    let done = map::fit(&opts, &mut crate::observer::Stderr::default())?;
+    // a BPNN's fit report goes to stdout unless the model itself does (-o -); the trilinear
+    // map's one line always to stderr
+    if matches!(opts.kind, map::MapKind::Bpnn { .. }) && opts.out.as_os_str() != "-" {
+        print!("{done}");
+    } else {
+        eprint!("{done}");
+    }
     Ok(())
 }
 
 fn eval(a: EvalArgs) -> Result<(), CliError> {
-    let dest = match &a.out {
-        Some(path) => OutputGuard::new(&[&a.map, &a.points]).check(path)?,
-        None => mtec_io::Destination::Stdout,
+    let opts = map::EvalOptions {
+        model: a.map,
+        points: a.points,
+        out: a.out,
     };
-    let model = mtec_comp::load_error_model(&a.map)?;
-    let table = Table::read(&a.points)?;
-    let cols = [
-        table.column("x_mm")?,
-        table.column("y_mm")?,
-        table.column("z_mm")?,
-    ];
-    let mut out = String::with_capacity(64 * table.rows.len() + 64);
-    out.push_str("x_mm,y_mm,z_mm,ex_um,ey_um,ez_um\n");
-    for row in &table.rows {
-        let mut p = [0.0; 3];
-        for (pa, &c) in p.iter_mut().zip(&cols) {
-            *pa = table.cell_f64(row, c)?;
-        }
-        let e = model.error_um(p);
-        if !e.iter().all(|v| v.is_finite()) {
-            return Err(InputError::at(
-                &a.points,
-                row.line,
-                cols[0] + 1,
-                format!(
-                    "the model has no value at ({}, {}, {}) mm (outside the map's grid, whose policy is refuse; see `mtec map fit --outside`)",
-                    p[0], p[1], p[2]
-                ),
-            )
-            .into());
-        }
-        let _ = writeln!(
-            out,
-            "{},{},{},{},{},{}",
-            row.fields[cols[0]], row.fields[cols[1]], row.fields[cols[2]], e[0], e[1], e[2]
-        );
-    }
-    dest.write(out.as_bytes())?;
+    map::eval(&opts, &mut crate::observer::Stderr::default())?;
     Ok(())
 }

@@ -4,7 +4,6 @@ pub mod circular;
 pub mod compensate_gcode;
 pub mod compensate_table;
 pub mod compensate_thermal_offset;
-pub mod flatten;
 pub mod identify_ballbar;
 pub mod identify_lines;
 pub mod iso230_2;
@@ -14,7 +13,6 @@ pub mod map;
 pub mod neural;
 pub mod sensitivity;
 pub mod simulate;
-pub mod state;
 pub mod thermal;
 #[cfg(feature = "neural")]
 pub mod thermal_nn;
@@ -25,9 +23,6 @@ pub mod demo;
 pub mod pipeline;
 pub mod pipeline_thermal;
 pub mod run;
-
-#[cfg(feature = "neural")]
-pub mod map_bpnn;
 
 /// Where a command's report lines go: stdout, or stderr when the output file itself streams to
 /// stdout (`-o -`), so the two never mix. Write errors (a closed pipe) are the caller's to ignore.

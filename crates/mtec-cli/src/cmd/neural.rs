@@ -18,12 +18,7 @@ pub const CNN_LSTM_FORMAT: &str = "mtec.cnn-lstm/1";
 /// neural models: a usage error (exit 2) that says how to build them.
 #[cfg_attr(feature = "neural", allow(dead_code))]
 pub fn unavailable(what: &str) -> CliError {
-    CliError::usage(format!(
-        "{what} needs the neural models, and this mtec was built without them (cargo feature \
-         `neural`, off by default because it more than doubles a cold build): build with \
-         `cargo build --release --features neural`, or install with \
-         `cargo install --path crates/mtec-cli --features neural`"
-    ))
+    mtec_workflow::neural_unavailable(what)
 }
 
 /// The neural format `path` declares (`mtec.cnn-lstm/1`, `mtec.bpnn/1`), or `None` for any

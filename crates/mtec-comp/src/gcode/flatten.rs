@@ -87,7 +87,7 @@ impl Default for FlattenOptions {
 }
 
 /// What a flattening did.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct FlattenReport {
     pub canonical_lines: usize,
     pub lines_written: usize,

@@ -193,7 +193,7 @@ pub fn rounding_um(decimals: usize, units: Units) -> f64 {
 }
 
 /// What kind of problem stopped the rewrite.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum ProblemKind {
     /// The line cannot be read (lexer error, two X words, …).
     Syntax,
@@ -204,7 +204,7 @@ pub enum ProblemKind {
 }
 
 /// A located problem: line and column are 1-based.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Diagnostic {
     pub line: usize,
     pub column: usize,
@@ -228,7 +228,7 @@ pub enum GcodeError {
 }
 
 /// What a rewrite did.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct RewriteReport {
     pub lines_read: usize,
     pub lines_written: usize,
@@ -258,7 +258,7 @@ pub struct RewriteReport {
 }
 
 /// A corrected point outside the model's box.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct OutsidePoint {
     pub line: usize,
     pub column: usize,

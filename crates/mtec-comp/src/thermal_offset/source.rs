@@ -104,8 +104,8 @@ impl OffsetModel {
     /// geometric part is not an offset and is ignored).
     pub fn load(path: &Path, opts: LoadOptions) -> Result<OffsetModel, OffsetError> {
         let text = mtec_io::read_text(path)?;
-        let value: serde_json::Value = serde_json::from_str(&text)
-            .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
+        let value: serde_json::Value =
+            serde_json::from_str(&text).map_err(|e| mtec_io::json_error(path, &e))?;
         let format = value.get("format").and_then(|f| f.as_str()).unwrap_or("");
         let dir = path.parent().unwrap_or(Path::new("."));
         let (specs, fade) = match format {
@@ -117,8 +117,8 @@ impl OffsetModel {
                             .into(),
                     ));
                 }
-                let file: MachineFile = serde_json::from_str(&text)
-                    .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
+                let file: MachineFile =
+                    serde_json::from_str(&text).map_err(|e| mtec_io::json_error(path, &e))?;
                 let specs: Vec<(ThermalPartSpec, ModelFile)> = file
                     .thermal
                     .into_iter()
@@ -226,8 +226,7 @@ impl OffsetModel {
 
 fn read_model(path: &Path) -> Result<ModelFile, InputError> {
     let text = mtec_io::read_text(path)?;
-    let m: ModelFile = serde_json::from_str(&text)
-        .map_err(|e| InputError::at(path, e.line(), e.column(), e.to_string()))?;
+    let m: ModelFile = serde_json::from_str(&text).map_err(|e| mtec_io::json_error(path, &e))?;
     m.check_format()
         .map_err(|e| InputError::file(path, e.to_string()))?;
     Ok(m)

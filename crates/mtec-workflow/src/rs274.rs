@@ -6,11 +6,12 @@
 //! and the user's files are never touched), with the program's absolute path, and with HOME set
 //! to that folder (rs274 writes its tool data to `$HOME/.tool.mmap`).
 
-use crate::error::CliError;
+use crate::Error as CliError;
 use mtec_comp::gcode::flatten::{
     axes_named, flatten, rotary_axes_named, work_offsets_from_probe, FlattenOptions, FlattenReport,
     WORK_OFFSET_PROBE,
 };
+use mtec_comp::gcode::tooltable::MachineUnits;
 use mtec_io::InputError;
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -19,71 +20,35 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// The interpreters a program can be flattened with.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum FlattenWith {
-    /// LinuxCNC's stand-alone interpreter (`rs274 -g`, Debian package linuxcnc-uspace).
-    Rs274,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum OnOff {
-    On,
-    Off,
-}
-
-/// Units of a tool table's lengths.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum MachineUnitsArg {
-    Mm,
-    Inch,
-}
-
-/// The flattening options of `compensate gcode`.
-#[derive(clap::Args, Debug, Clone)]
-pub struct FlattenArgs {
-    /// Run the program through LinuxCNC's interpreter first and compensate the moves it makes
-    /// (for O-word subroutines/loops, canned cycles, cutter compensation, parameters, G92...).
-    /// The output is then a LinuxCNC-only plain program.
-    #[arg(long, value_enum, value_name = "rs274")]
-    pub flatten_with: Option<FlattenWith>,
-    /// The rs274 binary to use (default: `rs274` on PATH).
-    #[arg(long, value_name = "PATH", requires = "flatten_with")]
-    pub rs274: Option<PathBuf>,
-    /// LinuxCNC tool table (.tbl): tool lengths for G43 (Z offsets, in --machine-units);
-    /// with --flatten-with, passed to rs274 (`-t`), which bakes lengths and cutter radii in.
-    #[arg(long, value_name = "FILE.tbl")]
-    pub tool_table: Option<PathBuf>,
-    /// The machine's units (LinuxCNC's INI LINEAR_UNITS), in which tool tables and parameter
-    /// files hold their lengths (not the program's G20/G21). Stand-alone rs274 reads both as
-    /// inches, so with `mm` they are handed to it converted.
-    #[arg(long, value_enum, default_value = "mm", value_name = "mm|inch")]
-    pub machine_units: MachineUnitsArg,
-    /// Parameter file for rs274 (`-v`): work offsets and other parameters (copied, never written).
-    #[arg(long, value_name = "FILE.var", requires = "flatten_with")]
+/// How to run LinuxCNC's interpreter (`compensate gcode --flatten-with rs274`).
+#[derive(Debug, Clone)]
+pub struct Rs274 {
+    /// The rs274 binary (default: `rs274` on PATH).
+    pub bin: Option<PathBuf>,
+    /// Parameter file (`-v`): work offsets and other parameters (copied, never written).
     pub var_file: Option<PathBuf>,
-    /// The operator's block delete switch: `on` skips `/` blocks (copied, not interpreted),
-    /// `off` runs them; not given, a `/` block that moves or sets a mode is refused. With
-    /// --flatten-with, `on` is passed to rs274 as `-b`.
-    #[arg(long, value_enum, value_name = "on|off")]
-    pub block_delete: Option<OnOff>,
     /// Stop rs274 after this many seconds (a program that loops forever).
-    #[arg(
-        long,
-        default_value_t = 300.0,
-        value_name = "S",
-        requires = "flatten_with"
-    )]
-    pub rs274_timeout_s: f64,
+    pub timeout_s: f64,
 }
 
-/// The files flattening reads besides the program (for the never-overwrite-an-input check).
-pub fn extra_inputs(args: &FlattenArgs) -> Vec<&Path> {
-    [&args.tool_table, &args.var_file]
-        .into_iter()
-        .flatten()
-        .map(|p| p.as_path())
-        .collect()
+impl Default for Rs274 {
+    fn default() -> Self {
+        Rs274 {
+            bin: None,
+            var_file: None,
+            timeout_s: 300.0,
+        }
+    }
+}
+
+/// What flattening needs besides the interpreter: the tool table, the machine's units and
+/// the block delete switch (shared with the rewriter).
+pub struct FlattenInputs<'a> {
+    pub rs274: &'a Rs274,
+    pub tool_table: Option<&'a Path>,
+    pub machine_units: MachineUnits,
+    /// `Some(true)`: block delete on (`-b`).
+    pub block_delete: Option<bool>,
 }
 
 /// A temporary folder removed when dropped.
@@ -268,13 +233,13 @@ pub struct Flattened {
 }
 
 /// Flattens `input` with rs274; returns the plain program and what flattening did.
-pub fn flatten_input(input: &Path, args: &FlattenArgs) -> Result<Flattened, CliError> {
-    if !(args.rs274_timeout_s.is_finite() && args.rs274_timeout_s > 0.0) {
+pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, CliError> {
+    if !(args.rs274.timeout_s.is_finite() && args.rs274.timeout_s > 0.0) {
         return Err(CliError::usage(
             "--rs274-timeout-s must be a positive number",
         ));
     }
-    let bin = match &args.rs274 {
+    let bin = match &args.rs274.bin {
         Some(p) => {
             if !p.exists() {
                 return Err(CliError::usage(format!(
@@ -296,7 +261,7 @@ pub fn flatten_input(input: &Path, args: &FlattenArgs) -> Result<Flattened, CliE
     let tmp = TempDir::new()?;
     // stand-alone rs274 reads tool tables and parameter files as inches: a metric machine's
     // files are handed to it converted (lengths / 25.4), an inch machine's as they are
-    let metric = args.machine_units == MachineUnitsArg::Mm;
+    let metric = args.machine_units == MachineUnits::Mm;
     let copy = |src: &Path, name: &str| -> Result<PathBuf, CliError> {
         let dst = tmp.0.join(name);
         let text = std::fs::read_to_string(src)
@@ -309,11 +274,11 @@ pub fn flatten_input(input: &Path, args: &FlattenArgs) -> Result<Flattened, CliE
         std::fs::write(&dst, text)?;
         Ok(dst)
     };
-    let timeout = Duration::from_secs_f64(args.rs274_timeout_s.min(1e6));
+    let timeout = Duration::from_secs_f64(args.rs274.timeout_s.min(1e6));
 
     // 1. the work-offset table at program start, read by rs274 itself from the same var file
     let mut probe_flags = Vec::new();
-    if let Some(v) = &args.var_file {
+    if let Some(v) = &args.rs274.var_file {
         probe_flags.push("-v".to_string());
         probe_flags.push(copy(v, "probe.var")?.display().to_string());
     }
@@ -323,7 +288,8 @@ pub fn flatten_input(input: &Path, args: &FlattenArgs) -> Result<Flattened, CliE
     if run.status != Some(0) {
         return Err(CliError::usage(format!(
             "rs274 could not read the work offsets{}: {}",
-            args.var_file
+            args.rs274
+                .var_file
                 .as_ref()
                 .map(|v| format!(" from {}", v.display()))
                 .unwrap_or_default(),
@@ -339,11 +305,11 @@ pub fn flatten_input(input: &Path, args: &FlattenArgs) -> Result<Flattened, CliE
         flags.push("-t".to_string());
         flags.push(copy(t, "tool.tbl")?.display().to_string());
     }
-    if let Some(v) = &args.var_file {
+    if let Some(v) = &args.rs274.var_file {
         flags.push("-v".to_string());
         flags.push(copy(v, "program.var")?.display().to_string());
     }
-    if args.block_delete == Some(OnOff::On) {
+    if args.block_delete == Some(true) {
         flags.push("-b".to_string());
     }
     let run = run_rs274(&bin, &tmp.0, &flags, &abs_input, timeout)?;

@@ -2,7 +2,7 @@
 //! table`): a model with a state is brought to the state of the log before it is used, and a
 //! stateful model without a log is refused (its thermal part would silently be left out).
 
-use crate::error::CliError;
+use crate::{Error as CliError, Observer};
 use mtec_comp::{advance_through_log, ErrorModel, WithState};
 use mtec_io::Table;
 use std::path::Path;
@@ -14,6 +14,7 @@ pub fn model_in_state(
     mut model: Box<dyn ErrorModel>,
     model_path: &Path,
     state: Option<&Path>,
+    obs: &mut dyn Observer,
 ) -> Result<Box<dyn ErrorModel>, CliError> {
     let inputs = model.state_inputs().to_vec();
     match (inputs.is_empty(), state) {
@@ -35,14 +36,14 @@ pub fn model_in_state(
             let status = advance_through_log(model.as_mut(), &table)?;
             let line = status.describe(&log.display().to_string());
             if status.last.thermal_weight < 1.0 {
-                eprintln!(
-                    "warning: at the last reading of {} the thermal part is faded to {:.3} (`{}` outside the training envelope)",
+                obs.warning(&format!(
+                    "at the last reading of {} the thermal part is faded to {:.3} (`{}` outside the training envelope)",
                     log.display(),
                     status.last.thermal_weight,
                     status.outside.as_deref().unwrap_or("?")
-                );
+                ));
             }
-            eprintln!("{line}");
+            obs.progress(&line);
             Ok(Box::new(WithState::new(model, &line)))
         }
     }

@@ -1,0 +1,294 @@
+//! `map fit` and `map eval`: a volumetric error map from a measured grid, and an error model's
+//! values at points.
+
+use crate::{Error, Observer, Result};
+use mtec_comp::map::{GridLimits, GridMap, Outside};
+use mtec_io::{Destination, InputError, OutputGuard, Table};
+use serde::Serialize;
+use std::fmt;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// The kind of map `fit` builds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MapKind {
+    /// Trilinear interpolation between grid nodes (a controller's 3-D compensation).
+    Trilinear,
+    /// A one-hidden-layer network (needs the `neural` feature).
+    Bpnn {
+        /// Hidden neurons, 1 to 1000.
+        hidden: usize,
+    },
+}
+
+/// Options of [`fit`].
+#[derive(Debug, Clone)]
+pub struct FitOptions {
+    /// Grid CSV: x_mm,y_mm,z_mm,ex_um,ey_um,ez_um, one row per node.
+    pub grid: PathBuf,
+    pub kind: MapKind,
+    /// What the map does beyond the grid box.
+    pub outside: Outside,
+    /// Grid limits of a controller: `none`, `fanuc-3d` or `linuxcnc`.
+    pub controller: String,
+    /// At most this many points per axis (overrides the controller's limit).
+    pub max_points_per_axis: Option<usize>,
+    /// The map file to write (`mtec.map/1`, or `mtec.bpnn/1` for a BPNN).
+    pub out: PathBuf,
+}
+
+impl FitOptions {
+    /// A trilinear map of `grid` written to `out`, clamped outside the box, no controller limit.
+    pub fn trilinear(grid: impl Into<PathBuf>, out: impl Into<PathBuf>) -> Self {
+        FitOptions {
+            grid: grid.into(),
+            kind: MapKind::Trilinear,
+            outside: Outside::Clamp,
+            controller: "none".into(),
+            max_points_per_axis: None,
+            out: out.into(),
+        }
+    }
+}
+
+/// What [`fit`] did.
+#[derive(Debug, Clone, Serialize)]
+pub struct FitOutcome {
+    /// `trilinear` or `bpnn`.
+    pub model: &'static str,
+    /// Nodes per axis of a trilinear map.
+    pub nodes: Option<[usize; 3]>,
+    /// The outside policy of a trilinear map.
+    pub outside: Option<&'static str>,
+    /// A BPNN's activation and fit report (fit errors per axis, parameters, training).
+    #[cfg(feature = "neural")]
+    pub bpnn: Option<BpnnFit>,
+    pub out: PathBuf,
+}
+
+impl fmt::Display for FitOutcome {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        #[cfg(feature = "neural")]
+        if let Some(b) = &self.bpnn {
+            return write_bpnn_report(f, b, &self.out);
+        }
+        let n = self.nodes.unwrap_or_default();
+        writeln!(
+            f,
+            "map: {}×{}×{} nodes, outside = {} -> {}",
+            n[0],
+            n[1],
+            n[2],
+            self.outside.unwrap_or("clamp"),
+            self.out.display()
+        )
+    }
+}
+
+/// A fitted BPNN map: its activation and fit report.
+#[cfg(feature = "neural")]
+#[derive(Debug, Clone, Serialize)]
+pub struct BpnnFit {
+    pub hidden: usize,
+    pub activation: String,
+    pub report: mtec_nn::GridFitReport,
+}
+
+/// Builds a map from a measured grid and writes it.
+pub fn fit(opts: &FitOptions, obs: &mut dyn Observer) -> Result<FitOutcome> {
+    let mut limits = GridLimits::for_controller(&opts.controller)
+        .ok_or_else(|| Error::usage(format!("unknown --controller `{}`", opts.controller)))?;
+    if let Some(n) = opts.max_points_per_axis {
+        if n < 1 {
+            return Err(Error::usage("--max-points-per-axis must be at least 1"));
+        }
+        limits.max_points_per_axis = Some(n);
+    }
+    // where the map goes is settled before any work (an input, a directory: exit 2)
+    let dest = OutputGuard::new(&[&opts.grid]).check(&opts.out)?;
+    let map = match opts.kind {
+        MapKind::Trilinear => GridMap::read_csv(&opts.grid, &limits, opts.outside)?,
+        MapKind::Bpnn { hidden } => return fit_bpnn(opts, hidden, &dest, obs),
+    };
+    let mut json = serde_json::to_string_pretty(&map.to_file())?;
+    json.push('\n');
+    dest.write(json.as_bytes())?;
+    let n = map.axes_mm();
+    Ok(FitOutcome {
+        model: "trilinear",
+        nodes: Some([n[0].len(), n[1].len(), n[2].len()]),
+        outside: Some(opts.outside.name()),
+        #[cfg(feature = "neural")]
+        bpnn: None,
+        out: opts.out.clone(),
+    })
+}
+
+#[cfg(not(feature = "neural"))]
+fn fit_bpnn(_: &FitOptions, _: usize, _: &Destination, _: &mut dyn Observer) -> Result<FitOutcome> {
+    Err(crate::neural_unavailable("`map fit --model bpnn`"))
+}
+
+/// Fits a one-hidden-layer BPNN (3-hidden-3, sigmoid, Levenberg–Marquardt with early stopping on
+/// a seeded 15 % validation split) to the grid and writes it as `mtec.bpnn/1`, which compensation
+/// evaluates without any neural-network library. The grid need not be regular.
+#[cfg(feature = "neural")]
+fn fit_bpnn(
+    opts: &FitOptions,
+    hidden: usize,
+    dest: &Destination,
+    obs: &mut dyn Observer,
+) -> Result<FitOutcome> {
+    use mtec_nn::{fit_grid, GridFitConfig};
+    let grid_path = &opts.grid;
+    if hidden == 0 || hidden > 1000 {
+        return Err(Error::usage(format!(
+            "--hidden must be between 1 and 1000, got {hidden}"
+        )));
+    }
+    let table = Table::read(grid_path)?;
+    let cols = ["x_mm", "y_mm", "z_mm", "ex_um", "ey_um", "ez_um"];
+    table.require(&cols)?;
+    let c: Vec<Vec<f64>> = cols
+        .iter()
+        .map(|n| table.f64_column(n))
+        .collect::<std::result::Result<_, _>>()?;
+    let n = table.rows.len();
+    if n < 8 {
+        return Err(InputError::file(
+            grid_path,
+            format!("a grid needs at least 8 points, the file has {n}"),
+        )
+        .into());
+    }
+    let p: Vec<[f64; 3]> = (0..n).map(|i| [c[0][i], c[1][i], c[2][i]]).collect();
+    let e: Vec<[f64; 3]> = (0..n).map(|i| [c[3][i], c[4][i], c[5][i]]).collect();
+    obs.progress(&format!("training a 3-{hidden}-3 BPNN on {n} grid points"));
+    let config = GridFitConfig {
+        hidden,
+        progress: true,
+        ..GridFitConfig::default()
+    };
+    let (mut net, report) = fit_grid(&p, &e, &config).map_err(|e| match e {
+        mtec_nn::NnError::Data(m) => Error::Input(InputError::file(grid_path, m)),
+        other => Error::Internal(anyhow::anyhow!(other)),
+    })?;
+    net.provenance = serde_json::json!({
+        "grid": grid_path.display().to_string(),
+        "fit": &report,
+        "training": net.provenance,
+    });
+    dest.write(net.to_json().as_bytes())?;
+    Ok(FitOutcome {
+        model: "bpnn",
+        nodes: None,
+        outside: None,
+        bpnn: Some(BpnnFit {
+            hidden,
+            activation: format!("{:?}", net.activation),
+            report,
+        }),
+        out: opts.out.clone(),
+    })
+}
+
+#[cfg(feature = "neural")]
+fn write_bpnn_report(
+    f: &mut fmt::Formatter<'_>,
+    b: &BpnnFit,
+    out: &std::path::Path,
+) -> fmt::Result {
+    let r = &b.report;
+    writeln!(
+        f,
+        "BPNN 3-{}-3 ({}) fitted to {} grid points: {} parameters instead of {} grid values",
+        b.hidden, b.activation, r.points, r.parameters, r.grid_values
+    )?;
+    writeln!(
+        f,
+        "fit error (model - grid), um:   min      max     mean      std"
+    )?;
+    for (axis, s) in [
+        ("x", &r.fit_error_x),
+        ("y", &r.fit_error_y),
+        ("z", &r.fit_error_z),
+    ] {
+        writeln!(
+            f,
+            "  e{axis}                       {:8.3} {:8.3} {:8.3} {:8.3}",
+            s.min_um, s.max_um, s.mean_um, s.std_um
+        )?;
+    }
+    writeln!(
+        f,
+        "training: {} Levenberg-Marquardt iterations, best {}, {}",
+        r.training.epochs, r.training.best_epoch, r.training.stop_reason
+    )?;
+    writeln!(f, "wrote {}", out.display())
+}
+
+/// Options of [`eval`].
+#[derive(Debug, Clone)]
+pub struct EvalOptions {
+    /// Any model file mtec reads (`mtec_comp::load_error_model`).
+    pub model: PathBuf,
+    /// Points CSV with at least x_mm,y_mm,z_mm.
+    pub points: PathBuf,
+    /// Output CSV; `None` writes to stdout.
+    pub out: Option<PathBuf>,
+}
+
+/// What [`eval`] did.
+#[derive(Debug, Clone, Serialize)]
+pub struct EvalOutcome {
+    /// Points evaluated (rows written).
+    pub points: usize,
+    pub out: Option<PathBuf>,
+}
+
+/// Evaluates an error model at the points of a CSV file and writes
+/// x_mm,y_mm,z_mm,ex_um,ey_um,ez_um, one row per input row, in the same order.
+pub fn eval(opts: &EvalOptions, _obs: &mut dyn Observer) -> Result<EvalOutcome> {
+    let dest = match &opts.out {
+        Some(path) => OutputGuard::new(&[&opts.model, &opts.points]).check(path)?,
+        None => Destination::Stdout,
+    };
+    let model = mtec_comp::load_error_model(&opts.model)?;
+    let table = Table::read(&opts.points)?;
+    let cols = [
+        table.column("x_mm")?,
+        table.column("y_mm")?,
+        table.column("z_mm")?,
+    ];
+    let mut out = String::with_capacity(64 * table.rows.len() + 64);
+    out.push_str("x_mm,y_mm,z_mm,ex_um,ey_um,ez_um\n");
+    for row in &table.rows {
+        let mut p = [0.0; 3];
+        for (pa, &c) in p.iter_mut().zip(&cols) {
+            *pa = table.cell_f64(row, c)?;
+        }
+        let e = model.error_um(p);
+        if !e.iter().all(|v| v.is_finite()) {
+            return Err(InputError::at(
+                &opts.points,
+                row.line,
+                cols[0] + 1,
+                format!(
+                    "the model has no value at ({}, {}, {}) mm (outside the map's grid, whose policy is refuse; see `mtec map fit --outside`)",
+                    p[0], p[1], p[2]
+                ),
+            )
+            .into());
+        }
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{}",
+            row.fields[cols[0]], row.fields[cols[1]], row.fields[cols[2]], e[0], e[1], e[2]
+        );
+    }
+    dest.write(out.as_bytes())?;
+    Ok(EvalOutcome {
+        points: table.rows.len(),
+        out: opts.out.clone(),
+    })
+}
