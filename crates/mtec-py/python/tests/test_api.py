@@ -44,3 +44,17 @@ def test_stubs_name_every_function():
     stubs = (pkg / "__init__.pyi").read_text()
     for name in FUNCTIONS:
         assert f"def {name}(" in stubs, name
+
+
+def test_docs_examples_run():
+    """The examples of docs/python.md run and print what the page says."""
+    from conftest import REPO
+
+    text = (REPO / "docs" / "python.md").read_text()
+    blocks = [b.split("```", 1)[0] for b in text.split("```python\n")[1:]]
+    parser = doctest.DocTestParser()
+    test = parser.get_doctest("\n".join(blocks), {}, "docs/python.md", None, 0)
+    assert len(test.examples) >= 8
+    runner = doctest.DocTestRunner()
+    runner.run(test)
+    assert runner.failures == 0

@@ -16,7 +16,7 @@ def test_same_numbers_as_the_cli(cli, sim, tmp_path):
     rng = np.random.default_rng(7)
     pts = rng.uniform([0, 0, 0], [600, 800, 300], size=(20, 3))
     csv = tmp_path / "pts.csv"
-    csv.write_text("x_mm,y_mm,z_mm\n" + "".join(f"{x!r},{y!r},{z!r}\n" for x, y, z in pts))
+    csv.write_text("x_mm,y_mm,z_mm\n" + "".join(f"{float(x)!r},{float(y)!r},{float(z)!r}\n" for x, y, z in pts))
     for form in ("htm-exact", "poe-first"):
         ref = cli.json("volumetric", "--machine", d["machine.toml"], "--errors",
                        d["truth.json"], "--points", csv, "--form", form, "--json")
