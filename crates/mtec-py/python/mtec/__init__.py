@@ -1,0 +1,39 @@
+"""mtec: machine-tool error measurement, identification, modelling and compensation.
+
+The Python face of the mtec Rust workspace: each function runs the library code the `mtec`
+command runs (in-process, no subprocess), with numpy arrays in and out. See docs/python.md.
+
+Tabular inputs are a CSV path or a mapping of column name to 1-D array (a dict of numpy
+arrays, a pandas DataFrame), validated as the CLI validates files. Errors in the inputs raise
+`mtec.InputError` (a ValueError) with `.file`, `.line` and `.column`.
+"""
+
+from ._mtec import (
+    InputError,
+    __version__,
+    compensate_gcode,
+    identify_ballbar,
+    identify_lines,
+    iso230_2,
+    map_eval,
+    map_fit,
+    simulate,
+    thermal_fit,
+    thermal_predict,
+    volumetric,
+)
+
+__all__ = [
+    "InputError",
+    "__version__",
+    "compensate_gcode",
+    "identify_ballbar",
+    "identify_lines",
+    "iso230_2",
+    "map_eval",
+    "map_fit",
+    "simulate",
+    "thermal_fit",
+    "thermal_predict",
+    "volumetric",
+]

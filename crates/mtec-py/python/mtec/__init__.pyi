@@ -1,0 +1,114 @@
+"""Type stubs of the mtec module (the functions are implemented in Rust, mtec._mtec)."""
+
+import os
+from typing import Any, Literal, Mapping, Optional, Sequence, Tuple, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+PathLike = Union[str, "os.PathLike[str]"]
+ArrayLike = npt.ArrayLike
+#: A CSV file, or its columns: a mapping of column name to 1-D array (dict, pandas.DataFrame).
+Columns = Union[PathLike, Mapping[str, ArrayLike]]
+FloatArray = npt.NDArray[np.float64]
+
+class InputError(ValueError):
+    """An input is wrong; `str(e)` is `file:line:column: message`.
+
+    For arrays passed instead of a CSV file, `file` is `<arrays>`, `line` the 1-based row
+    (index + 1) and `column` the 1-based position of the column.
+    """
+
+    file: str
+    line: Optional[int]
+    column: Optional[int]
+    message: str
+
+def iso230_2(data: Columns) -> dict[str, Any]:
+    """ISO 230-2:2014 positioning statistics and VDI/DGQ 3441 values of a linear axis."""
+
+def identify_lines(
+    machine: PathLike,
+    data: Columns,
+    degree: int = 3,
+    errors_out: Optional[PathLike] = None,
+    kinematic_model_out: Optional[PathLike] = None,
+) -> dict[str, Any]:
+    """The error elements of a three-axis machine from laser line measurements (9-line method)."""
+
+def identify_ballbar(setup: PathLike, data: Columns) -> dict[str, Any]:
+    """The error motions EXC, EYC, EZC, EAC, EBC of a rotary C axis from ballbar readings."""
+
+@overload
+def volumetric(
+    machine: PathLike,
+    errors: PathLike,
+    points: Union[Columns, ArrayLike],
+    form: Literal["htm-exact", "htm-first", "poe-exact", "poe-first"] = ...,
+    orientation: Literal[False] = ...,
+) -> FloatArray: ...
+@overload
+def volumetric(
+    machine: PathLike,
+    errors: PathLike,
+    points: Union[Columns, ArrayLike],
+    form: Literal["htm-exact", "htm-first", "poe-exact", "poe-first"] = ...,
+    *,
+    orientation: Literal[True],
+) -> Tuple[FloatArray, FloatArray]: ...
+def thermal_fit(
+    data: Columns,
+    target: str,
+    model: Literal["auto", "mlr", "ridge", "heat-input", "exp-ambient"] = "auto",
+    *,
+    sensors: Sequence[str] = ...,
+    k: Optional[float] = None,
+    lag: bool = False,
+    block_min: Optional[float] = None,
+    max_sensors: Optional[int] = None,
+    input: str = "spindle_rpm",
+    train: Sequence[str] = ...,
+    test: Sequence[str] = ...,
+    train_until: Optional[float] = None,
+    out: Optional[PathLike] = None,
+) -> dict[str, Any]:
+    """Fits a thermal error model (`mtec.thermal-model/1`) to a temperature log."""
+
+def thermal_predict(
+    model: PathLike, data: Columns, history: Optional[Columns] = None
+) -> dict[str, Any]:
+    """Predicts the thermal drift (µm) of every row of a log with a model file."""
+
+def map_fit(
+    grid: Columns,
+    out: Optional[PathLike] = None,
+    outside: Literal["clamp", "extrapolate", "refuse"] = "clamp",
+    controller: Literal["none", "fanuc-3d", "linuxcnc"] = "none",
+    max_points_per_axis: Optional[int] = None,
+) -> dict[str, Any]:
+    """A volumetric error map (`mtec.map/1`, trilinear) from a measured grid."""
+
+def map_eval(model: PathLike, points: Union[Columns, ArrayLike]) -> FloatArray:
+    """An error model's (N, 3) errors ex, ey, ez (µm) at (N, 3) points x, y, z (mm)."""
+
+def compensate_gcode(
+    program: str,
+    model: PathLike,
+    *,
+    state: Optional[PathLike] = None,
+    offsets: Optional[PathLike] = None,
+    start_position_mm: Optional[Tuple[float, float, float]] = None,
+    tolerance_um: float = 0.5,
+    max_segment_mm: float = 10.0,
+    chord_tolerance_um: float = 0.5,
+    max_correction_um: float = 500.0,
+    on_unsupported: Literal["refuse", "pass-through-with-warning"] = "refuse",
+    default_units: Literal["mm", "inch"] = "mm",
+    name: str = "<program>",
+) -> Tuple[str, dict[str, Any]]:
+    """An NC program rewritten so the machine with the model's errors cuts the programmed path."""
+
+def simulate(scenario: str, out: PathLike, seed: int = 1) -> dict[str, str]:
+    """Writes a scenario's simulated measurement files and truth.json into `out`."""

@@ -1,0 +1,114 @@
+"""Maps and G-code compensation: trilinear interpolation by hand, the CLI's files, and the
+compensated program checked against the model it was compensated with."""
+
+import re
+
+import numpy as np
+import pytest
+
+import mtec
+from conftest import EXAMPLES, read_csv_columns
+
+GRID = EXAMPLES / "vmc" / "grid.csv"
+PART = EXAMPLES / "vmc" / "part.ngc"
+
+
+def trilinear(axes, values, p):
+    """Trilinear interpolation inside a rectilinear grid, from its definition."""
+    idx, w = [], []
+    for a, x in zip(axes, p):
+        i = min(max(np.searchsorted(a, x) - 1, 0), len(a) - 2)
+        idx.append(i)
+        w.append((x - a[i]) / (a[i + 1] - a[i]))
+    out = 0.0
+    for c in range(8):
+        b = [(c >> k) & 1 for k in range(3)]
+        weight = np.prod([w[k] if b[k] else 1 - w[k] for k in range(3)])
+        out = out + weight * values[idx[0] + b[0], idx[1] + b[1], idx[2] + b[2]]
+    return out
+
+
+def test_map_is_trilinear_and_the_clis_file(cli, tmp_path):
+    m = mtec.map_fit(GRID, out=tmp_path / "py.json")
+    cli.run("map", "fit", "--grid", GRID, "-o", tmp_path / "cli.json")
+    assert (tmp_path / "py.json").read_bytes() == (tmp_path / "cli.json").read_bytes()
+    axes = [m["x_mm"], m["y_mm"], m["z_mm"]]
+    rng = np.random.default_rng(3)
+    lo, hi = [a[0] for a in axes], [a[-1] for a in axes]
+    pts = rng.uniform(lo, hi, size=(200, 3))
+    e = mtec.map_eval(tmp_path / "py.json", pts)
+    want = np.array([[trilinear(axes, m[k], p) for k in ("ex_um", "ey_um", "ez_um")]
+                     for p in pts])
+    np.testing.assert_allclose(e, want, rtol=1e-12, atol=1e-12)
+    # the nodes themselves are the measured values
+    cols = read_csv_columns(GRID)
+    nodes = np.column_stack([cols["x_mm"], cols["y_mm"], cols["z_mm"]])
+    np.testing.assert_allclose(
+        mtec.map_eval(tmp_path / "py.json", nodes),
+        np.column_stack([cols["ex_um"], cols["ey_um"], cols["ez_um"]]), atol=1e-12)
+
+
+def test_map_eval_is_the_clis(cli, tmp_path):
+    mtec.map_fit(GRID, out=tmp_path / "m.json")
+    pts = tmp_path / "pts.csv"
+    pts.write_text("x_mm,y_mm,z_mm\n10,20,30\n555.5,1.25,299\n300,400,150\n")
+    out = cli.run("map", "eval", "--map", tmp_path / "m.json", "--points", pts)
+    ref = np.array([[float(v) for v in l.split(",")[3:]] for l in out.splitlines()[1:]])
+    np.testing.assert_array_equal(mtec.map_eval(tmp_path / "m.json", pts), ref)
+
+
+def test_map_grid_errors_are_located(tmp_path):
+    cols = read_csv_columns(GRID)
+    for k in cols:
+        cols[k] = cols[k][:-1]  # a missing node
+    with pytest.raises(mtec.InputError) as e:
+        mtec.map_fit(cols)
+    assert e.value.file == "<arrays>"
+    m = tmp_path / "refuse.json"
+    mtec.map_fit(GRID, out=m, outside="refuse")
+    with pytest.raises(mtec.InputError) as e:
+        mtec.map_eval(m, np.array([[10.0, 10.0, 10.0], [-5.0, 10.0, 10.0]]))
+    assert (e.value.line, e.value.column) == (2, 1)
+    with pytest.raises(ValueError, match="outside `nowhere`"):
+        mtec.map_fit(GRID, outside="nowhere")
+
+
+def test_gcode_is_the_clis_and_cuts_true(cli, tmp_path):
+    model = tmp_path / "m.json"
+    mtec.map_fit(GRID, out=model)
+    program = PART.read_text()
+    text, report = mtec.compensate_gcode(program, model, name=str(PART))
+    cli.run("compensate", "gcode", "--model", model, PART, "-o", tmp_path / "cli.ngc")
+    assert text == (tmp_path / "cli.ngc").read_text()
+    assert report["moves_compensated"] > 0 and report["lines_read"] == len(program.splitlines())
+    # every corrected end point p satisfies p + e(p) = t for the programmed t (to the rounding)
+    pos = {}
+    commanded = []
+    for line in text.splitlines():
+        if line.startswith("(") or not re.search(r"\bG[01]\b|^[XYZ]", line):
+            continue
+        for ax, v in re.findall(r"([XYZ])(-?[\d.]+)", line):
+            pos[ax] = float(v)
+        if len(pos) == 3:
+            commanded.append([pos["X"], pos["Y"], pos["Z"]])
+    p = np.array(commanded)
+    reached = p + mtec.map_eval(model, p) / 1000.0
+    targets_x = {50.0, 550.0, 300.0}
+    assert any(abs(r[0] - t) < 1e-4 for r in reached for t in targets_x)
+    # the final drilled point X300 Y400 Z180 is reached within the 4-decimal rounding
+    drill = [r for r, q in zip(reached, p) if abs(q[2] - 180) < 0.1]
+    assert drill and np.allclose(drill[0], [300.0, 400.0, 180.0], atol=6e-5)
+
+
+def test_gcode_refusal_is_located(tmp_path):
+    model = tmp_path / "m.json"
+    mtec.map_fit(GRID, out=model)
+    with pytest.raises(mtec.InputError) as e:
+        mtec.compensate_gcode("G21 G90\nG0 X0 Y0 Z0\nG81 X10 Y10 Z-5 R1 F100\n", model,
+                              name="drill.ngc")
+    assert e.value.file == "drill.ngc" and e.value.line == 3 and e.value.column is not None
+    with pytest.raises(ValueError, match="on_unsupported"):
+        mtec.compensate_gcode("G0 X1\n", model, on_unsupported="ignore")
+    with pytest.raises(mtec.InputError) as e:
+        mtec.compensate_gcode("G0 X1\n", EXAMPLES / "vmc" / "machine.toml")
+    assert e.value.file.endswith("machine.toml") and e.value.line == 1

@@ -1,0 +1,119 @@
+"""ISO 230-2: against the standard's formulas in numpy, and against the CLI's numbers."""
+
+import numpy as np
+import pytest
+
+import mtec
+from conftest import EXAMPLES, read_csv_columns
+
+RUNS = EXAMPLES / "vmc" / "iso230-2.csv"
+
+
+def iso_by_hand(cols):
+    """ISO 230-2:2014 clause 3 from the definitions, in numpy (independent of mtec)."""
+    t = cols["target_mm"]
+    targets = np.unique(t)
+    up = [cols["deviation_um"][(t == p) & (cols["direction"] == "+")] for p in targets]
+    dn = [cols["deviation_um"][(t == p) & (cols["direction"] == "-")] for p in targets]
+    mu = np.array([u.mean() for u in up])
+    md = np.array([d.mean() for d in dn])
+    su = np.array([u.std(ddof=1) for u in up])  # 3.3.5
+    sd = np.array([d.std(ddof=1) for d in dn])
+    b = mu - md  # 3.3.2
+    ri = np.maximum.reduce([2 * su + 2 * sd + np.abs(b), 4 * su, 4 * sd])  # 3.3.7
+    xbar = (mu + md) / 2
+    return {
+        "B_um": np.abs(b).max(),
+        "mean_B_um": b.mean(),
+        "R_up_um": (4 * su).max(),
+        "R_down_um": (4 * sd).max(),
+        "R_um": ri.max(),
+        "E_up_um": mu.max() - mu.min(),
+        "E_down_um": md.max() - md.min(),
+        "E_um": max(mu.max(), md.max()) - min(mu.min(), md.min()),
+        "M_um": xbar.max() - xbar.min(),
+        "A_up_um": (mu + 2 * su).max() - (mu - 2 * su).min(),
+        "A_down_um": (md + 2 * sd).max() - (md - 2 * sd).min(),
+        "A_um": max((mu + 2 * su).max(), (md + 2 * sd).max())
+        - min((mu - 2 * su).min(), (md - 2 * sd).min()),
+        "targets": targets,
+        "mean_up_um": mu,
+        "s_down_um": sd,
+    }
+
+
+def test_axis_values_follow_the_standard():
+    cols = read_csv_columns(RUNS)
+    ref = iso_by_hand(cols)
+    r = mtec.iso230_2(RUNS)
+    for k in ["B_um", "mean_B_um", "R_up_um", "R_down_um", "R_um", "E_up_um", "E_down_um",
+              "E_um", "M_um", "A_up_um", "A_down_um", "A_um"]:
+        assert r[k] == pytest.approx(ref[k], rel=1e-12, abs=1e-12), k
+    np.testing.assert_allclose(r["targets"]["target_mm"], ref["targets"], rtol=0, atol=0)
+    np.testing.assert_allclose(r["targets"]["mean_up_um"], ref["mean_up_um"], rtol=1e-12)
+    np.testing.assert_allclose(r["targets"]["s_down_um"], ref["s_down_um"], rtol=1e-12)
+    assert r["runs_up"] == r["runs_down"] == 5
+
+
+def test_same_numbers_as_the_cli(cli):
+    ref = cli.json("iso230-2", RUNS, "--json")
+    r = mtec.iso230_2(str(RUNS))
+    for k, v in ref.items():
+        if k in ("targets", "vdi3441", "corrections"):
+            continue
+        assert r[k] == v, k
+    for k in ref["targets"][0]:
+        assert r["targets"][k].tolist() == [t[k] for t in ref["targets"]], k
+    for k in ("Ps_um", "U_um", "Pa_um", "P_um"):
+        assert r["vdi3441"][k] == ref["vdi3441"][k]
+
+
+def test_arrays_give_the_csv_numbers():
+    cols = read_csv_columns(RUNS)
+    from_arrays = mtec.iso230_2(cols)
+    from_file = mtec.iso230_2(RUNS)
+    assert from_arrays["A_um"] == from_file["A_um"]
+    assert from_arrays["file"] == "<arrays>"
+    np.testing.assert_array_equal(from_arrays["targets"]["r_um"], from_file["targets"]["r_um"])
+    # integer directions are not accepted: +1/-1 is not the file's `+`/`-`
+    cols["direction"] = np.where(cols["direction"] == "+", 1, -1)
+    with pytest.raises(mtec.InputError) as e:
+        mtec.iso230_2(cols)
+    assert (e.value.file, e.value.line, e.value.column) == ("<arrays>", 1, 3)
+
+
+def test_bad_rows_are_located(tmp_path):
+    cols = read_csv_columns(RUNS)
+    cols["deviation_um"] = cols["deviation_um"].copy()
+    cols["deviation_um"][6] = np.nan
+    with pytest.raises(mtec.InputError) as e:
+        mtec.iso230_2(cols)
+    assert (e.value.file, e.value.line, e.value.column) == ("<arrays>", 7, 4)
+    assert "not a finite number" in e.value.message
+    assert isinstance(e.value, ValueError)
+
+    text = RUNS.read_text().splitlines()
+    header = next(i for i, l in enumerate(text) if l.startswith("target_mm"))
+    row = text[header + 3].split(",")
+    row[2] = "up"
+    text[header + 3] = ",".join(row)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("\n".join(text) + "\n")
+    with pytest.raises(mtec.InputError) as e:
+        mtec.iso230_2(bad)
+    assert (e.value.file, e.value.line, e.value.column) == (str(bad), header + 4, 3)
+    assert str(e.value).startswith(f"{bad}:{header + 4}:3: direction is `up`")
+
+
+def test_missing_column_and_ragged_columns():
+    cols = read_csv_columns(RUNS)
+    del cols["run"]
+    with pytest.raises(mtec.InputError) as e:
+        mtec.iso230_2(cols)
+    assert e.value.line is None and "missing column `run`" in e.value.message
+    cols = read_csv_columns(RUNS)
+    cols["run"] = cols["run"][:-1]
+    with pytest.raises(ValueError, match="every column needs one value per row"):
+        mtec.iso230_2(cols)
+    with pytest.raises(ValueError, match="CSV path or a mapping"):
+        mtec.iso230_2(42)

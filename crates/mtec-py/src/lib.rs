@@ -1,0 +1,48 @@
+//! The Python module `mtec` (built by maturin as `mtec._mtec`, re-exported by
+//! `python/mtec/__init__.py`): the library crates' jobs with numpy arrays in and out.
+//!
+//! Conventions of every function here:
+//! - Tabular inputs are a CSV path (`str` or `os.PathLike`) or a mapping of column name to a 1-D
+//!   array (a `dict` of numpy arrays, a pandas `DataFrame`); both go through the same validation
+//!   as the command line ([`columns`]).
+//! - Results are what the CLI prints with `--json`, as Python objects, with every list of flat
+//!   numeric records turned into a dict of 1-D numpy arrays ([`convert`]).
+//! - Files are written through `mtec_io` (atomically, never over an input).
+//! - Errors ([`errors`]): a located input error is `mtec.InputError` (a `ValueError` with `.file`,
+//!   `.line`, `.column`, `.message`), a usage error a `ValueError`, an internal failure a
+//!   `RuntimeError`.
+//! - Long numerical work runs without the GIL.
+//!
+//! The pipeline from a project file (`mtec_workflow`) goes into [`workflow`] when it lands.
+
+mod columns;
+mod comp;
+mod convert;
+mod errors;
+mod identify;
+mod measure;
+mod model;
+mod sim;
+mod thermal;
+// the place of the project pipeline's binding (`mtec.run_project`), see its docs
+mod workflow;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+fn _mtec(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("InputError", py.get_type::<errors::InputError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(measure::iso230_2, m)?)?;
+    m.add_function(wrap_pyfunction!(identify::identify_lines, m)?)?;
+    m.add_function(wrap_pyfunction!(identify::identify_ballbar, m)?)?;
+    m.add_function(wrap_pyfunction!(model::volumetric, m)?)?;
+    m.add_function(wrap_pyfunction!(thermal::thermal_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(thermal::thermal_predict, m)?)?;
+    m.add_function(wrap_pyfunction!(comp::map_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(comp::map_eval, m)?)?;
+    m.add_function(wrap_pyfunction!(comp::compensate_gcode, m)?)?;
+    m.add_function(wrap_pyfunction!(sim::simulate, m)?)?;
+    Ok(())
+}
