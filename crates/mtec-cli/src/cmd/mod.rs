@@ -39,3 +39,24 @@ pub(crate) fn messages(dest: &mtec_io::Destination) -> Box<dyn std::io::Write> {
         Box::new(std::io::stdout())
     }
 }
+
+/// The observer of a command: warnings and progress on stderr, as `warning: ...` and `... `.
+pub(crate) struct Stderr;
+
+impl mtec_workflow::Observer for Stderr {
+    fn progress(&mut self, what: &str) {
+        eprintln!("{what}");
+    }
+    fn warning(&mut self, what: &str) {
+        eprintln!("warning: {what}");
+    }
+}
+
+/// Writes a report to stdout; a reader that closed the pipe early (`| head`) is not an error.
+pub(crate) fn emit(text: &str) -> Result<(), crate::error::CliError> {
+    use std::io::Write as _;
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
+}
