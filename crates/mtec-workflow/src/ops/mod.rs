@@ -1,4 +1,5 @@
 //! One module per job of the `mtec` command.
 
 pub mod circular;
+pub mod identify_lines;
 pub mod iso230_2;
