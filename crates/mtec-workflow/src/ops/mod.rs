@@ -1,5 +1,6 @@
 //! One module per job of the `mtec` command.
 
 pub mod circular;
+pub mod identify_ballbar;
 pub mod identify_lines;
 pub mod iso230_2;
