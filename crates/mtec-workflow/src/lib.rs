@@ -15,6 +15,7 @@
 //! outputs that would overwrite an input are refused before any work (`mtec_io::OutputGuard`).
 
 pub mod error;
+pub mod inputs;
 pub mod observer;
 pub mod ops;
 pub mod rs274;

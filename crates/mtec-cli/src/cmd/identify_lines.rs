@@ -1,11 +1,8 @@
 //! `mtec identify lines`: the error elements of a three-axis machine from line measurements.
 
 use crate::error::CliError;
-use crate::inputs::read_machine;
-use mtec_comp::kinematic::KinematicFile;
-use mtec_identify::lines::{self, LineData, LinesError, DEFAULT_DEGREE};
-use mtec_io::{Destination, InputError, OutputGuard};
-use mtec_sensitivity::error_model::ErrorStatistics;
+use mtec_identify::lines::DEFAULT_DEGREE;
+use mtec_workflow::ops::identify_lines::{self as op, Options};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -94,168 +91,35 @@ pub struct Args {
     pub stats: Option<PathBuf>,
 }
 
-/// The files `identify lines` writes, settled before any work.
-struct Outputs {
-    errors: Option<(PathBuf, Destination)>,
-    kinematic_model: Option<(PathBuf, Destination)>,
-    stats: Option<(PathBuf, Destination)>,
-}
-
-impl Outputs {
-    /// Checks every output before any work: none may be an input, a directory or another of
-    /// them, at most one may be stdout (`-`), and all need measurements (exit 2).
-    fn check(args: &Args) -> Result<Outputs, CliError> {
-        let named = [
-            ("-o", &args.output),
-            ("--kinematic-model", &args.kinematic_model),
-            ("--stats", &args.stats),
-        ];
-        let given: Vec<(&str, &PathBuf)> = named
-            .iter()
-            .filter_map(|(o, p)| p.as_ref().map(|p| (*o, p)))
-            .collect();
-        if let (Some((opt, _)), None) = (given.first(), &args.data) {
-            return Err(CliError::usage(format!(
-                "{opt} needs measurements (--data): a design alone identifies no values"
-            )));
+impl Args {
+    fn options(&self) -> Options {
+        Options {
+            machine: self.machine.clone(),
+            data: self.data.clone(),
+            design: self.design.clone(),
+            degree: self.degree,
+            output: self.output.clone(),
+            kinematic_model: self.kinematic_model.clone(),
+            stats: self.stats.clone(),
         }
-        let on_stdout: Vec<&str> = given
-            .iter()
-            .filter(|(_, p)| p.as_os_str() == "-")
-            .map(|(o, _)| *o)
-            .collect();
-        if on_stdout.len() > 1 {
-            return Err(CliError::usage(format!(
-                "{} all name stdout (-): at most one output can go there",
-                on_stdout.join(" and ")
-            )));
-        }
-        let mut inputs = vec![args.machine.clone()];
-        inputs.extend(args.data.clone());
-        let guard = OutputGuard::new(&inputs);
-        // each output against the ones before it, so that two never name one file
-        let mut earlier: Vec<(&str, OutputGuard)> = Vec::new();
-        let mut check = |opt: &'static str,
-                         p: &Option<PathBuf>|
-         -> Result<Option<(PathBuf, Destination)>, CliError> {
-            let Some(p) = p else { return Ok(None) };
-            let dest = guard.check(p)?;
-            for (other, g) in &earlier {
-                if g.check(p).is_err() {
-                    return Err(CliError::Input(InputError::file(
-                        p,
-                        format!(
-                            "{opt} names the same file as {other}: give each output its own file"
-                        ),
-                    )));
-                }
-            }
-            earlier.push((opt, OutputGuard::new(&[p])));
-            Ok(Some((p.clone(), dest)))
-        };
-        Ok(Outputs {
-            errors: check("-o", &args.output)?,
-            kinematic_model: check("--kinematic-model", &args.kinematic_model)?,
-            stats: check("--stats", &args.stats)?,
-        })
-    }
-
-    /// The destinations that are given, in the order they are written.
-    fn all(&self) -> impl Iterator<Item = &(PathBuf, Destination)> {
-        [&self.errors, &self.kinematic_model, &self.stats]
-            .into_iter()
-            .flatten()
     }
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    // where the outputs go is settled before any work (an input, a directory: exit 2)
-    let outputs = Outputs::check(&args)?;
-    let machine = read_machine(&args.machine)?;
-    let preset = match &args.design {
-        Some(name) => Some(
-            mtec_model::line_preset(name, &machine, 20, 10.0).ok_or_else(|| {
-                InputError::file(
-                    &args.machine,
-                    format!("the `{name}` design needs a machine with axes X, Y and Z"),
-                )
-            })?,
-        ),
-        None => None,
-    };
-    let data =
-        match (&args.data, &preset) {
-            (Some(path), _) => {
-                let d = LineData::read(path)?;
-                if let Some(p) = &preset {
-                    lines::check_design(&d, p).map_err(|m| {
-                        InputError::file(
-                            path,
-                            format!("{m} (--design {})", args.design.as_deref().unwrap_or("")),
-                        )
-                    })?;
-                }
-                d
-            }
-            (None, Some(p)) => LineData::from_specs(p).map_err(CliError::Usage)?,
-            (None, None) => return Err(CliError::usage(
-                "give the measurements with --data LINES.csv, or a design to analyse with --design",
-            )),
-        };
-    let id = lines::identify(&machine, &data, args.degree).map_err(|e| match e {
-        LinesError::Input(i) => CliError::Input(i),
-        LinesError::Model(m) => CliError::Input(InputError::file(&args.machine, m.to_string())),
-        other => CliError::Input(InputError::file(
-            args.data.as_deref().unwrap_or(&args.machine),
-            other.to_string(),
-        )),
-    })?;
-    // everything is made before anything is written: a machine the compensation cannot
-    // evaluate (no X, Y, Z) refuses the kinematic model, and no file is left half-done
-    let kinematic = match &outputs.kinematic_model {
-        Some(_) => Some(
-            KinematicFile::new(&machine, &id.errors)
-                .map_err(|m| CliError::Input(InputError::file(&args.machine, m)))?
-                .to_json()
-                .map_err(|e| CliError::Internal(e.into()))?,
-        ),
-        None => None,
-    };
-    let stats = outputs
-        .stats
-        .as_ref()
-        .map(|_| ErrorStatistics::of_identified(&id.errors, &machine).to_identified_csv());
-    let errors = match &outputs.errors {
-        Some(_) => {
-            Some(serde_json::to_vec_pretty(&id.errors).map_err(|e| CliError::Internal(e.into()))?)
-        }
-        None => None,
-    };
-    // a closed pipe (`| head`) is not an error worth a panic: ignore write failures to stdout;
-    // with an output on stdout (`-o -`) the report goes to stderr
-    let mut stdout = match outputs.all().find(|(_, d)| d.is_stdout()) {
-        Some((_, d)) => super::messages(d),
-        None => Box::new(std::io::stdout()),
-    };
-    if args.json {
-        let text =
-            serde_json::to_string_pretty(&id.report).map_err(|e| CliError::Internal(e.into()))?;
-        let _ = writeln!(stdout, "{text}");
+    let opts = args.options();
+    let outcome = op::run(&opts, &mut crate::observer::Stderr::default())?;
+    // with an output on stdout (`-o -`) the report goes to stderr; a closed pipe (`| head`)
+    // is not an error worth a panic
+    let mut out: Box<dyn Write> = if op::writes_to_stdout(&opts) {
+        Box::new(std::io::stderr())
     } else {
-        let _ = write!(stdout, "{}", id.report.to_text());
-    }
-    let _ = stdout.flush();
-    for (out, bytes) in [
-        (&outputs.errors, errors),
-        (&outputs.kinematic_model, kinematic.map(String::into_bytes)),
-        (&outputs.stats, stats.map(String::into_bytes)),
-    ] {
-        if let (Some((path, dest)), Some(bytes)) = (out, bytes) {
-            dest.write(&bytes)?;
-            if !args.json {
-                let _ = writeln!(stdout, "Wrote {}", path.display());
-            }
-        }
-    }
+        Box::new(std::io::stdout())
+    };
+    let _ = if args.json {
+        writeln!(out, "{}", outcome.to_json()?)
+    } else {
+        write!(out, "{outcome}")
+    };
+    let _ = out.flush();
     Ok(())
 }

@@ -1,12 +1,8 @@
 //! `mtec iso230-2`: ISO 230-2 positioning statistics of a linear axis (and VDI/DGQ 3441).
 
 use crate::error::CliError;
-use mtec_io::OutputGuard;
-use mtec_measure::air::{self, Air, AirFormula};
-use mtec_measure::{evaluate_iso230_2, vdi3441, PositioningData};
-use serde_json::json;
-use std::fmt::Write as _;
-use std::io::Write as _;
+use mtec_measure::air::{self, AirFormula};
+use mtec_workflow::ops::iso230_2::{self as op, Options};
 use std::path::PathBuf;
 
 const LONG: &str = "\
@@ -116,229 +112,29 @@ pub struct Args {
     pub alpha_um_per_m_k: Option<f64>,
 }
 
-/// The corrections applied to the measured positions and their product.
-struct Corrections {
-    air: Option<serde_json::Value>,
-    material: Option<serde_json::Value>,
-    factor: f64,
-    lines: Vec<String>,
-}
-
-fn corrections(args: &Args) -> Result<Corrections, CliError> {
-    let mut c = Corrections {
-        air: None,
-        material: None,
-        factor: 1.0,
-        lines: Vec::new(),
-    };
-    let formula = AirFormula::from(args.air_formula);
-    match (args.air_temp_c, args.pressure_pa, args.humidity_pct) {
-        (Some(t), Some(p), Some(h)) => {
-            let actual = Air {
-                temperature_c: t,
-                pressure_pa: p,
-                humidity_pct: h,
-                co2_ppm: args.co2_ppm,
-            };
-            actual.validate().map_err(CliError::usage)?;
-            air::validate_wavelength(formula, args.wavelength_nm).map_err(CliError::usage)?;
-            let n_laser = match args.laser_n {
-                Some(n) if n.is_finite() && (1.0..=1.001).contains(&n) => n,
-                Some(n) => {
-                    return Err(CliError::usage(format!(
-                        "--laser-n is {n}: expected a refractive index of air, 1 to 1.001"
-                    )))
-                }
-                None => air::refractive_index(formula, &air::STANDARD_AIR, args.wavelength_nm),
-            };
-            let n_actual = air::refractive_index(formula, &actual, args.wavelength_nm);
-            let k = air::index_correction_factor(n_laser, n_actual);
-            c.factor *= k;
-            let ppm = (k - 1.0) * 1e6;
-            c.lines.push(format!(
-                "air ({}, {} nm): {t} °C, {p} Pa, {h} % RH, {} ppm CO2: n_laser {n_laser:.9}, n_actual {n_actual:.9}, correction {ppm:+.3} ppm",
-                formula.name(),
-                args.wavelength_nm,
-                args.co2_ppm
-            ));
-            c.air = Some(json!({
-                "formula": formula.name(),
-                "wavelength_nm": args.wavelength_nm,
-                "temperature_c": t,
-                "pressure_pa": p,
-                "humidity_pct": h,
-                "co2_ppm": args.co2_ppm,
-                "n_laser": n_laser,
-                "n_actual": n_actual,
-                "correction_ppm": ppm,
-            }));
-        }
-        (None, None, None) => {
-            if args.laser_n.is_some() {
-                return Err(CliError::usage(
-                    "--laser-n needs the air the run was taken in: --air-temp-c, --pressure-pa and --humidity-pct",
-                ));
-            }
-        }
-        _ => {
-            return Err(CliError::usage(
-                "the air correction needs all of --air-temp-c, --pressure-pa and --humidity-pct",
-            ))
+impl Args {
+    fn options(&self) -> Options {
+        Options {
+            run: self.run.clone(),
+            out: self.out.clone(),
+            air_temp_c: self.air_temp_c,
+            pressure_pa: self.pressure_pa,
+            humidity_pct: self.humidity_pct,
+            co2_ppm: self.co2_ppm,
+            wavelength_nm: self.wavelength_nm,
+            air_formula: self.air_formula.into(),
+            laser_n: self.laser_n,
+            material_temp_c: self.material_temp_c,
+            alpha_um_per_m_k: self.alpha_um_per_m_k,
         }
     }
-    match (args.material_temp_c, args.alpha_um_per_m_k) {
-        (Some(t), Some(alpha)) => {
-            air::validate_material(t, alpha).map_err(CliError::usage)?;
-            let k = air::normalisation_factor(t, alpha);
-            c.factor *= k;
-            let ppm = (k - 1.0) * 1e6;
-            c.lines.push(format!(
-                "material (ISO 1, to 20 °C): {t} °C, alpha {alpha} um/m/K: correction {ppm:+.3} ppm"
-            ));
-            c.material = Some(json!({
-                "temperature_c": t,
-                "alpha_um_per_m_k": alpha,
-                "correction_ppm": ppm,
-            }));
-        }
-        (None, None) => {}
-        _ => {
-            return Err(CliError::usage(
-                "the ISO 1 normalisation needs both --material-temp-c and --alpha-um-per-m-k",
-            ))
-        }
-    }
-    Ok(c)
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    let corr = corrections(&args)?;
-    let mut data = PositioningData::read(&args.run)?;
-    if corr.factor != 1.0 {
-        data = data.with_scaled_positions(corr.factor);
-    }
-    let iso = evaluate_iso230_2(&data);
-    let vdi = vdi3441(&iso);
-    for w in &data.warnings {
-        eprintln!("warning: {}: {w}", args.run.display());
-    }
-    let mut doc = json!({
-        "format": "mtec.iso230-2/1",
-        "file": args.run.display().to_string(),
-        "runs_up": iso.runs_up,
-        "runs_down": iso.runs_down,
-    });
-    let obj = doc.as_object_mut().expect("object");
-    if let serde_json::Value::Object(axis) =
-        serde_json::to_value(&iso.axis).map_err(anyhow::Error::from)?
-    {
-        obj.extend(axis);
-    }
-    obj.insert(
-        "targets".into(),
-        serde_json::to_value(&iso.targets).map_err(anyhow::Error::from)?,
-    );
-    obj.insert(
-        "vdi3441".into(),
-        serde_json::to_value(&vdi).map_err(anyhow::Error::from)?,
-    );
-    obj.insert(
-        "corrections".into(),
-        json!({"air": corr.air, "material": corr.material, "scale_factor": corr.factor}),
-    );
-    obj.insert("warnings".into(), json!(data.warnings));
-    let text = serde_json::to_string_pretty(&doc).map_err(anyhow::Error::from)?;
-    if let Some(dir) = &args.out {
-        OutputGuard::new(&[&args.run]).write(&dir.join("iso230-2.json"), text.as_bytes())?;
-    }
+    let outcome = op::run(&args.options(), &mut crate::observer::Stderr::default())?;
     if args.json {
-        return emit(&format!("{text}\n"));
-    }
-    let mut o = String::new();
-    let _ = writeln!(
-        o,
-        "ISO 230-2:2014 positioning of {} ({} runs +, {} runs -)",
-        args.run.display(),
-        iso.runs_up,
-        iso.runs_down
-    );
-    for line in &corr.lines {
-        let _ = writeln!(o, "corrected for {line}");
-    }
-    if !corr.lines.is_empty() {
-        let _ = writeln!(
-            o,
-            "measured positions scaled by {:.12} ({:+.3} ppm)",
-            corr.factor,
-            (corr.factor - 1.0) * 1e6
-        );
-    }
-    let _ = writeln!(o);
-    let _ = writeln!(
-        o,
-        "{:>10} {:>9} {:>9} {:>7} {:>7} {:>8} {:>8} {:>7}",
-        "target_mm", "mean+_um", "mean-_um", "s+_um", "s-_um", "B_i_um", "mean_um", "R_i_um"
-    );
-    for t in &iso.targets {
-        let _ = writeln!(
-            o,
-            "{:>10.3} {:>9.3} {:>9.3} {:>7.3} {:>7.3} {:>8.3} {:>8.3} {:>7.3}",
-            t.target_mm,
-            t.mean_up_um,
-            t.mean_down_um,
-            t.s_up_um,
-            t.s_down_um,
-            t.reversal_um,
-            t.mean_bidirectional_um,
-            t.r_um
-        );
-    }
-    let a = &iso.axis;
-    let _ = writeln!(o);
-    let _ = writeln!(o, "axis values (um)        up      down     bidirectional");
-    let _ = writeln!(
-        o,
-        "  A  accuracy      {:>8.3}  {:>8.3}  {:>8.3}",
-        a.a_up_um, a.a_down_um, a.a_um
-    );
-    let _ = writeln!(
-        o,
-        "  E  systematic    {:>8.3}  {:>8.3}  {:>8.3}",
-        a.e_up_um, a.e_down_um, a.e_um
-    );
-    let _ = writeln!(
-        o,
-        "  R  repeatability {:>8.3}  {:>8.3}  {:>8.3}",
-        a.r_up_um, a.r_down_um, a.r_um
-    );
-    let _ = writeln!(
-        o,
-        "  M  range of mean bidirectional deviation       {:>8.3}",
-        a.m_um
-    );
-    let _ = writeln!(
-        o,
-        "  B  reversal value (max |B_i|)                  {:>8.3}",
-        a.b_um
-    );
-    let _ = writeln!(
-        o,
-        "  mean reversal value                            {:>8.3}",
-        a.mean_b_um
-    );
-    let _ = writeln!(o);
-    let _ = writeln!(
-        o,
-        "VDI/DGQ 3441 (um): Ps = {:.3}  U = {:.3}  Pa = {:.3}  P = {:.3}",
-        vdi.ps_um, vdi.u_um, vdi.pa_um, vdi.p_um
-    );
-    emit(&o)
-}
-
-/// Writes the report to stdout; a reader that closed the pipe early (`| head`) is not an error.
-fn emit(text: &str) -> Result<(), CliError> {
-    match std::io::stdout().lock().write_all(text.as_bytes()) {
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
-        _ => Ok(()),
+        super::emit(&format!("{}\n", outcome.to_json()?))
+    } else {
+        super::emit(&outcome.to_string())
     }
 }

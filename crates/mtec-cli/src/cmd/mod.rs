@@ -33,3 +33,12 @@ pub(crate) fn messages(dest: &mtec_io::Destination) -> Box<dyn std::io::Write> {
         Box::new(std::io::stdout())
     }
 }
+
+/// Writes a report to stdout; a reader that closed the pipe early (`| head`) is not an error.
+pub(crate) fn emit(text: &str) -> Result<(), crate::error::CliError> {
+    use std::io::Write as _;
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
+}

@@ -57,6 +57,7 @@ pub mod errors;
 pub mod harmonics;
 pub mod identify;
 pub mod model;
+pub mod motions_file;
 pub mod positioning;
 pub mod revolution;
 pub mod setup;

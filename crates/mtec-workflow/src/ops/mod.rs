@@ -1,4 +1,8 @@
 //! One module per job of the `mtec` command.
 
+pub mod circular;
 pub mod compensate_gcode;
+pub mod identify_ballbar;
+pub mod identify_lines;
+pub mod iso230_2;
 pub mod map;

@@ -1,0 +1,274 @@
+//! A circular test of two linear axes (ballbar, ISO 230-4): G, G(b), H and the ballbar
+//! diagnostics ranked by their contribution; optionally `circular.json` and a polar plot.
+//! The job of `mtec circular`.
+
+use crate::{Error, Observer, Result};
+use mtec_io::{InputError, OutputGuard};
+use mtec_measure::circular::{
+    diagnose, evaluate, radii_about, CircularTrace, Diagnostics, DiagnosticsConfig, Iso230_4,
+    Plane, TraceOptions, Travel,
+};
+use mtec_report::polar::{polar_svg, PolarOptions, PolarTrace};
+use serde::Serialize;
+use std::fmt;
+use std::path::PathBuf;
+
+/// The results file the job writes into [`Options::out`].
+pub const RESULTS_FILE: &str = "circular.json";
+/// The polar plot the job writes into [`Options::out`].
+pub const PLOT_FILE: &str = "polar.svg";
+
+/// What to evaluate and how.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// The trace file (CSV `angle_deg,direction,dl_um`).
+    pub run: PathBuf,
+    /// Nominal radius (mm); overrides `# radius_mm` in the file.
+    pub radius_mm: Option<f64>,
+    /// Feed (mm/min); overrides `# feed_mm_min`. Needed for the servo mismatch in ms.
+    pub feed_mm_min: Option<f64>,
+    /// Plane; overrides `# plane`.
+    pub plane: Option<Plane>,
+    /// Contribution (µm) from which a fault is reported as present.
+    pub threshold_um: f64,
+    /// Folder to write `circular.json` and `polar.svg` into; `None` writes nothing.
+    pub out: Option<PathBuf>,
+}
+
+impl Options {
+    /// The header's radius, plane and feed, the default threshold (0.3 µm), nothing written.
+    pub fn new(run: impl Into<PathBuf>) -> Options {
+        Options {
+            run: run.into(),
+            radius_mm: None,
+            feed_mm_min: None,
+            plane: None,
+            threshold_um: 0.3,
+            out: None,
+        }
+    }
+}
+
+/// Samples per direction.
+#[derive(Debug, Clone, Serialize)]
+pub struct Samples {
+    pub ccw: usize,
+    pub cw: usize,
+}
+
+/// The result: `mtec.circular/1` (docs/formats.md).
+#[derive(Debug, Clone, Serialize)]
+pub struct Outcome {
+    /// `mtec.circular/1`.
+    pub format: String,
+    /// The trace file as given.
+    pub file: String,
+    /// Nominal radius (mm).
+    pub radius_mm: f64,
+    pub plane: Plane,
+    /// Feed (mm/min), when known.
+    pub feed_mm_min: Option<f64>,
+    pub samples: Samples,
+    /// G, G(b), H and the least-squares circles (µm).
+    pub iso230_4: Iso230_4,
+    /// The faults, ranked by contribution.
+    pub diagnostics: Diagnostics,
+}
+
+impl Outcome {
+    /// The outcome as the pretty JSON text of `circular.json` (keys sorted).
+    pub fn to_json(&self) -> Result<String> {
+        Ok(serde_json::to_string_pretty(&serde_json::to_value(self)?)?)
+    }
+}
+
+/// Checks the options (usage errors).
+fn check(o: &Options) -> Result<()> {
+    for (name, v) in [
+        ("--radius-mm", o.radius_mm),
+        ("--feed-mm-min", o.feed_mm_min),
+    ] {
+        if let Some(v) = v {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(Error::usage(format!(
+                    "{name} {v}: must be a positive number"
+                )));
+            }
+        }
+    }
+    if !(o.threshold_um >= 0.0 && o.threshold_um.is_finite()) {
+        return Err(Error::usage("--threshold-um must be a non-negative number"));
+    }
+    Ok(())
+}
+
+/// Evaluates the trace; writes `circular.json` and `polar.svg` into `opts.out` when given.
+pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
+    check(opts)?;
+    let guard = OutputGuard::new(&[&opts.run]);
+    if let Some(dir) = &opts.out {
+        guard.check(&dir.join(RESULTS_FILE))?;
+        guard.check(&dir.join(PLOT_FILE))?;
+    }
+    let trace = CircularTrace::read(
+        &opts.run,
+        &TraceOptions {
+            radius_mm: opts.radius_mm,
+            plane: opts.plane,
+            feed_mm_min: opts.feed_mm_min,
+        },
+    )?;
+    let iso = evaluate(&trace);
+    let cfg = DiagnosticsConfig {
+        threshold_um: opts.threshold_um,
+        ..Default::default()
+    };
+    let diagnostics =
+        diagnose(&trace, &cfg).map_err(|e| InputError::file(&opts.run, e.to_string()))?;
+    let outcome = Outcome {
+        format: "mtec.circular/1".into(),
+        file: opts.run.display().to_string(),
+        radius_mm: trace.radius_mm,
+        plane: trace.plane,
+        feed_mm_min: trace.feed_mm_min,
+        samples: Samples {
+            ccw: trace.ccw.len(),
+            cw: trace.cw.len(),
+        },
+        iso230_4: iso,
+        diagnostics,
+    };
+    if let Some(dir) = &opts.out {
+        guard.write(&dir.join(RESULTS_FILE), outcome.to_json()?.as_bytes())?;
+        guard.write(
+            &dir.join(PLOT_FILE),
+            polar_plot(&trace, &outcome.iso230_4)?.as_bytes(),
+        )?;
+    }
+    Ok(outcome)
+}
+
+/// The polar plot of both directions: radii about the bidirectional least-squares centre,
+/// minus its radius deviation.
+fn polar_plot(trace: &CircularTrace, iso: &Iso230_4) -> Result<String> {
+    let c = &iso.circle_bidirectional;
+    let dev = |t: Travel| -> (Vec<f64>, Vec<f64>) {
+        let s = trace.samples(t);
+        let r = radii_about(trace.radius_mm, s, c);
+        (
+            s.iter().map(|x| x.angle_deg).collect(),
+            r.iter().map(|v| v - c.radius_deviation_um).collect(),
+        )
+    };
+    let (a_ccw, d_ccw) = dev(Travel::Ccw);
+    let (a_cw, d_cw) = dev(Travel::Cw);
+    polar_svg(
+        &[
+            PolarTrace {
+                label: "ccw",
+                angles_deg: &a_ccw,
+                deviations_um: &d_ccw,
+                color: (31, 119, 180),
+            },
+            PolarTrace {
+                label: "cw",
+                angles_deg: &a_cw,
+                deviations_um: &d_cw,
+                color: (214, 39, 40),
+            },
+        ],
+        &PolarOptions {
+            title: format!(
+                "Circular test {} R{} mm: G(b) {:.2} um",
+                trace.plane.name(),
+                trace.radius_mm,
+                iso.g_bidirectional_um
+            ),
+            ..Default::default()
+        },
+    )
+    .map_err(|e| Error::Internal(anyhow::anyhow!(e.to_string())))
+}
+
+impl fmt::Display for Outcome {
+    fn fmt(&self, o: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let [a1, a2] = self.plane.axes();
+        let iso = &self.iso230_4;
+        writeln!(
+            o,
+            "ISO 230-4 circular test {} (plane {}{}, R = {} mm{})",
+            self.file,
+            a1,
+            a2,
+            self.radius_mm,
+            self.feed_mm_min
+                .map(|f| format!(", F = {f} mm/min"))
+                .unwrap_or_default()
+        )?;
+        writeln!(o)?;
+        writeln!(
+            o,
+            "  circular deviation G(ccw)          {:>9.3} um",
+            iso.g_ccw_um
+        )?;
+        writeln!(
+            o,
+            "  circular deviation G(cw)           {:>9.3} um",
+            iso.g_cw_um
+        )?;
+        writeln!(
+            o,
+            "  bidirectional circular dev. G(b)   {:>9.3} um",
+            iso.g_bidirectional_um
+        )?;
+        writeln!(
+            o,
+            "  circular hysteresis H              {:>9.3} um",
+            iso.h_um
+        )?;
+        let c = &iso.circle_bidirectional;
+        writeln!(
+            o,
+            "  least-squares centre ({a1}, {a2})      ({:.3}, {:.3}) um, radius deviation {:.3} um",
+            c.centre_um[0], c.centre_um[1], c.radius_deviation_um
+        )?;
+        writeln!(o)?;
+        let diag = &self.diagnostics;
+        writeln!(
+            o,
+            "diagnostics, ranked by contribution to circularity (present: >= {} um and > 3 s.e.)",
+            diag.threshold_um
+        )?;
+        writeln!(
+            o,
+            "  {:<40} {:>11} {:<5} {:>9} {:>8} {:>6}",
+            "fault", "value", "unit", "+/- s.e.", "contrib", "%"
+        )?;
+        for d in &diag.faults {
+            let label = match d.pitch_mm {
+                Some(p) if d.present => format!("{} (pitch {p:.2} mm)", d.label),
+                _ => d.label.clone(),
+            };
+            writeln!(
+                o,
+                "{} {:<40} {:>11.3} {:<5} {:>9.3} {:>8.3} {:>6.1}",
+                if d.present { "*" } else { " " },
+                label,
+                d.value,
+                d.unit,
+                d.std_error,
+                d.contribution_um,
+                d.contribution_percent
+            )?;
+        }
+        writeln!(
+            o,
+            "  residual RMS after the fit: {:.3} um",
+            diag.residual_rms_um
+        )?;
+        for n in &diag.notes {
+            writeln!(o, "  note: {n}")?;
+        }
+        Ok(())
+    }
+}
