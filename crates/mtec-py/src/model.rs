@@ -3,53 +3,15 @@
 use crate::columns::{as_path, path_arg, read_table};
 use crate::convert::matrix;
 use crate::errors::{usage, Result, ARRAYS};
-use mtec_io::{read_json, read_toml, InputError, Table};
-use mtec_model::{Axis, ErrorSet, Formalism, Machine, MachineSpec, Order, VolumetricModel};
+use mtec_io::{InputError, Table};
+use mtec_model::{Axis, Formalism, Machine, Order, VolumetricModel};
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use std::path::Path;
 
-// The three readers below are those of the CLI (crates/mtec-cli/src/inputs.rs); they move to
-// mtec-workflow with the CLI's jobs, and this module then calls them there.
-
-/// Reads and validates a machine description.
-pub fn read_machine(path: &Path) -> std::result::Result<Machine, InputError> {
-    let spec: MachineSpec = read_toml(path)?;
-    Machine::from_spec(spec).map_err(|e| InputError::file(path, e.to_string()))
-}
-
-/// Reads an error set: a `mtec.errors/1` file, or a simulation's `truth.json` (its `errors`).
-pub fn read_errors(path: &Path) -> std::result::Result<ErrorSet, InputError> {
-    let v: serde_json::Value = read_json(path)?;
-    let set: ErrorSet = if v.get("format").and_then(|f| f.as_str()) == Some("mtec.truth/1") {
-        serde_json::from_value(v.get("errors").cloned().unwrap_or_default()).map_err(|e| {
-            InputError::file(
-                path,
-                format!("the truth's `errors` is not an error set: {e}"),
-            )
-        })?
-    } else {
-        // parse the text again as an error set so that mistakes are located (line, column)
-        read_json(path).map_err(|e| InputError {
-            message: format!("not an error set: {}", e.message),
-            ..e
-        })?
-    };
-    set.validate()
-        .map_err(|e| InputError::file(path, e.to_string()))?;
-    Ok(set)
-}
-
-/// The pose column of an axis: `x_mm` for X, `c_deg` for C.
-pub fn pose_column(a: Axis) -> String {
-    let l = a.letter().to_ascii_lowercase();
-    if a.is_rotary() {
-        format!("{l}_deg")
-    } else {
-        format!("{l}_mm")
-    }
-}
+// the readers the CLI and the workflow use
+pub use mtec_workflow::inputs::{pose_column, read_errors, read_machine};
 
 /// A pose coordinate outside its axis' travel is refused: the error functions are not known there.
 fn check_travel(
