@@ -13,7 +13,7 @@
 
 use crate::error::CliError;
 use mtec_io::{Destination, InputError, Table};
-use mtec_nn::{fit_grid, GridFitConfig};
+use mtec_nn::{fit_grid_monitored, GridFitConfig};
 use std::io::Write;
 use std::path::Path;
 
@@ -49,10 +49,12 @@ pub fn fit_bpnn(
     let e: Vec<[f64; 3]> = (0..n).map(|i| [c[3][i], c[4][i], c[5][i]]).collect();
     let config = GridFitConfig {
         hidden,
-        progress: true,
         ..GridFitConfig::default()
     };
-    let (mut net, report) = fit_grid(&p, &e, &config).map_err(|e| match e {
+    let mut term = super::terminal::Terminal::new(false);
+    let fitted = fit_grid_monitored(&p, &e, &config, &mut term);
+    term.done();
+    let (mut net, report) = fitted.map_err(|e| match e {
         mtec_nn::NnError::Data(m) => CliError::Input(InputError::file(grid_path, m)),
         other => CliError::Internal(anyhow::anyhow!(other)),
     })?;

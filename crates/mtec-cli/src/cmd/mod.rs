@@ -16,9 +16,8 @@ pub mod neural;
 pub mod sensitivity;
 pub mod simulate;
 pub mod state;
+pub mod terminal;
 pub mod thermal;
-#[cfg(feature = "neural")]
-pub mod thermal_nn;
 pub mod volumetric;
 
 pub mod compensate;

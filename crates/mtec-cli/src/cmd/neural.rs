@@ -9,32 +9,12 @@
 //! them instead of calling the option unknown.
 
 use crate::error::CliError;
-use std::path::Path;
 
-/// The model file of a CNN-LSTM (`mtec_nn::cnn_lstm::FORMAT`; a test checks they agree).
-pub const CNN_LSTM_FORMAT: &str = "mtec.cnn-lstm/1";
-
-/// The refusal of `what` (e.g. "`thermal fit --model cnn-lstm`") by a build without the
-/// neural models: a usage error (exit 2) that says how to build them.
+/// The refusal of `what` (e.g. "`map fit --model bpnn`") by a build without the neural models:
+/// a usage error (exit 2) that says how to build them.
 #[cfg_attr(feature = "neural", allow(dead_code))]
 pub fn unavailable(what: &str) -> CliError {
-    CliError::usage(format!(
-        "{what} needs the neural models, and this mtec was built without them (cargo feature \
-         `neural`, off by default because it more than doubles a cold build): build with \
-         `cargo build --release --features neural`, or install with \
-         `cargo install --path crates/mtec-cli --features neural`"
-    ))
-}
-
-/// The neural format `path` declares (`mtec.cnn-lstm/1`, `mtec.bpnn/1`), or `None` for any
-/// other model file (read by whichever loader the command uses).
-pub fn neural_format(path: &Path) -> Result<Option<&'static str>, CliError> {
-    let v: serde_json::Value = mtec_io::read_json(path)?;
-    Ok(match v.get("format").and_then(|f| f.as_str()) {
-        Some(CNN_LSTM_FORMAT) => Some(CNN_LSTM_FORMAT),
-        Some(f) if f == mtec_comp::bpnn::FORMAT => Some(mtec_comp::bpnn::FORMAT),
-        _ => None,
-    })
+    mtec_workflow::ops::thermal::unavailable(what)
 }
 
 /// Options of the neural models (ignored by the regression models).
@@ -94,11 +74,4 @@ pub struct NnArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
-}
-
-/// Which network.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum NnKind {
-    CnnLstm,
-    Bpnn,
 }

@@ -1,1 +1,3 @@
 //! One module per job of the `mtec` command.
+
+pub mod thermal;
