@@ -85,7 +85,7 @@ impl FitOptions {
             ));
         }
         if let Some(k) = self.k {
-            if !(k >= 0.0 && k.is_finite()) || !kind.takes_k {
+            if !(k >= 0.0 && k.is_finite() && kind.takes_k) {
                 return Err(format!(
                     "--k must be a number ≥ 0 and goes with --model {}",
                     names_where(|k| k.takes_k)

@@ -16,6 +16,7 @@ pub mod neural;
 pub mod sensitivity;
 pub mod simulate;
 pub mod state;
+#[cfg(feature = "neural")]
 pub mod terminal;
 pub mod thermal;
 pub mod volumetric;

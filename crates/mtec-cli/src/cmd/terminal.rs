@@ -1,5 +1,6 @@
 //! What a long command shows on the terminal while a library job runs: warnings on stderr,
-//! training progress as one redrawn line, Ctrl-C as the request to stop.
+//! training progress as one redrawn line, Ctrl-C as the request to stop (the neural trainings,
+//! the only long jobs that report epochs).
 
 use mtec_workflow::Observer;
 use std::io::IsTerminal;
@@ -66,7 +67,6 @@ pub mod ctrl_c {
     }
 
     /// Runs `f` with Ctrl-C turned into a request to stop ([`requested`]).
-    #[cfg_attr(not(feature = "neural"), allow(dead_code))]
     pub fn during<T>(f: impl FnOnce() -> T) -> T {
         INTERRUPTED.store(false, Ordering::Relaxed);
         let handler = on_sigint as extern "C" fn(libc::c_int);

@@ -5,6 +5,7 @@
 //! `neural::fit`); the model kinds and their `--model` values come from
 //! `mtec_thermal::registry`. This module parses the arguments and prints.
 
+#[cfg(feature = "neural")]
 use super::terminal::{ctrl_c, Terminal};
 use crate::error::CliError;
 use clap::builder::{PossibleValue, PossibleValuesParser};
@@ -444,7 +445,9 @@ fn predict(a: PredictArgs) -> Result<(), CliError> {
         history: a.history,
         output: a.output,
     };
-    let outcome = op::predict(&opts, &mut Terminal::new(true))?;
+    let mut obs = mtec_workflow::Collect::default();
+    let outcome = op::predict(&opts, &mut obs)?;
+    print_warnings(&obs);
     for n in outcome.notes() {
         eprintln!("note: {n}");
     }

@@ -517,7 +517,8 @@ pub struct Prediction {
 #[derive(Debug, Clone, Serialize)]
 #[serde(untagged)]
 pub enum PredictOutcome {
-    Regression(Prediction),
+    /// Boxed: the metrics make it the large variant.
+    Regression(Box<Prediction>),
     #[cfg(feature = "neural")]
     Neural(neural::Prediction),
 }
@@ -544,6 +545,7 @@ impl PredictOutcome {
 /// The report beside the CSV: the neural models' metrics table (the regression models have
 /// none: their metrics are in the JSON).
 impl fmt::Display for PredictOutcome {
+    #[cfg_attr(not(feature = "neural"), allow(unused_variables))]
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             PredictOutcome::Regression(_) => Ok(()),
@@ -593,7 +595,7 @@ pub fn predict(opts: &PredictOptions, obs: &mut dyn Observer) -> Result<PredictO
             opts.model.display()
         )));
     }
-    predict_regression(opts, obs).map(PredictOutcome::Regression)
+    predict_regression(opts, obs).map(|p| PredictOutcome::Regression(Box::new(p)))
 }
 
 fn predict_regression(opts: &PredictOptions, obs: &mut dyn Observer) -> Result<Prediction> {
