@@ -31,7 +31,9 @@ use support::{export, print_bench_lines, print_comparison, ExampleArgs};
 const LR_FINAL_FRACTION: f64 = 0.05;
 
 fn main() {
-    mtec_nn::threads::prefer_single_thread();
+    if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
+        std::env::set_var(var, value);
+    }
     let args = ExampleArgs::from_env();
     let arg = |name: &str| args.value(name);
     let seed: u64 = arg("--seed").map_or(2, |s| s.parse().expect("--seed S"));
@@ -61,7 +63,6 @@ fn main() {
         export(&rotary.data, &dir);
     }
     let mut cfg = CnnLstmConfig {
-        progress: true,
         final_learning_rate_fraction: LR_FINAL_FRACTION,
         ..CnnLstmConfig::default()
     };

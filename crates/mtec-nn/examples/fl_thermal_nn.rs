@@ -121,7 +121,6 @@ fn main() {
         batch_size: 64,
         learning_rate: 3e-3,
         patience: 6,
-        progress: true,
         ..CnnLstmConfig::default()
     };
     let bpnn_cfg = BpnnTrainConfig {

@@ -14,7 +14,9 @@ use mtec_nn::{compare_on_split, BpnnTrainConfig, CnnLstmConfig};
 use support::{export, print_bench_lines, print_comparison, ExampleArgs};
 
 fn main() {
-    mtec_nn::threads::prefer_single_thread();
+    if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
+        std::env::set_var(var, value);
+    }
     let args = ExampleArgs::from_env();
     let arg = |name: &str| args.value(name);
     let fixed = args.flag("--fixed");
@@ -27,7 +29,6 @@ fn main() {
         export(&data, &dir);
     }
     let mut cfg = CnnLstmConfig {
-        progress: true,
         ..CnnLstmConfig::default()
     };
     if let Some(n) = arg("--epochs") {

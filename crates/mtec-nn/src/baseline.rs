@@ -6,11 +6,12 @@
 //! sequence (block-wise, never random rows).
 
 use crate::bpnn::Bpnn;
-use crate::bpnn_train::{train_bpnn_with_validation, BpnnTrainConfig, TrainReport};
+use crate::bpnn_train::{train_bpnn_with_validation_monitored, BpnnTrainConfig, TrainReport};
 use crate::cnn_lstm::{train_cnn_lstm, CnnLstm, CnnLstmConfig, CnnLstmReport};
 use crate::dataset::ThermalDataset;
 use crate::error::{NnError, Result};
 use crate::metrics::{channel_metrics, ChannelMetrics};
+use crate::progress::{Monitor, Quiet};
 use serde::Serialize;
 
 /// Trains the BPNN baseline on the scored rows of `train` (current features → targets), holding
@@ -18,6 +19,15 @@ use serde::Serialize;
 pub fn train_bpnn_baseline(
     train: &ThermalDataset,
     config: &BpnnTrainConfig,
+) -> Result<(Bpnn, TrainReport)> {
+    train_bpnn_baseline_monitored(train, config, &mut Quiet)
+}
+
+/// [`train_bpnn_baseline`] reporting every epoch to `monitor`, which may stop it.
+pub fn train_bpnn_baseline_monitored(
+    train: &ThermalDataset,
+    config: &BpnnTrainConfig,
+    monitor: &mut dyn Monitor,
 ) -> Result<(Bpnn, TrainReport)> {
     train.validate()?;
     let (mut xt, mut yt, mut xv, mut yv) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -40,7 +50,8 @@ pub fn train_bpnn_baseline(
             "no training rows left after the validation split".into(),
         ));
     }
-    let (mut net, report) = train_bpnn_with_validation(&xt, &yt, &xv, &yv, config)?;
+    let (mut net, report) =
+        train_bpnn_with_validation_monitored(&xt, &yt, &xv, &yv, config, monitor)?;
     net.input_names = train.feature_names.clone();
     net.output_names = train.target_names.clone();
     Ok((net, report))

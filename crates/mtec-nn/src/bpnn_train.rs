@@ -20,14 +20,13 @@
 use crate::bpnn::{param_count, Activation, Affine, Bpnn};
 use crate::error::{NnError, Result};
 use crate::lm::{self, Control, LmConfig, LmProblem};
-use crate::progress::Progress;
+use crate::progress::{Epoch, Monitor, Quiet, StopReason};
 use crate::rng;
 use candle_core::{Device, Tensor, Var};
 use candle_nn::optim::{AdamW, Optimizer as _, ParamsAdamW};
 use nalgebra::{DMatrix, DVector};
 use rand::seq::SliceRandom;
 use serde::{Deserialize, Serialize};
-use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Which optimiser trains the network.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -56,11 +55,6 @@ pub struct BpnnTrainConfig {
     /// Epochs without validation improvement before stopping; `None` = 6 (LM) or 50 (Adam).
     pub patience: Option<usize>,
     pub seed: u64,
-    /// Show a progress bar on the terminal.
-    pub progress: bool,
-    /// When this flag turns true (e.g. Ctrl-C in the CLI), training stops after the current
-    /// epoch and keeps the best epoch's weights.
-    pub stop: Option<&'static AtomicBool>,
 }
 
 impl Default for BpnnTrainConfig {
@@ -75,8 +69,6 @@ impl Default for BpnnTrainConfig {
             validation_fraction: 0.15,
             patience: None,
             seed: 42,
-            progress: false,
-            stop: None,
         }
     }
 }
@@ -88,7 +80,7 @@ pub struct TrainReport {
     pub best_epoch: usize,
     pub train_mse: f64,
     pub validation_mse: Option<f64>,
-    pub stop_reason: String,
+    pub stop_reason: StopReason,
     /// (train MSE, validation MSE) per epoch.
     pub history: Vec<(f64, Option<f64>)>,
 }
@@ -99,6 +91,16 @@ pub fn train_bpnn(
     x: &[Vec<f64>],
     y: &[Vec<f64>],
     config: &BpnnTrainConfig,
+) -> Result<(Bpnn, TrainReport)> {
+    train_bpnn_monitored(x, y, config, &mut Quiet)
+}
+
+/// [`train_bpnn`] reporting every epoch to `monitor`, which may stop it.
+pub fn train_bpnn_monitored(
+    x: &[Vec<f64>],
+    y: &[Vec<f64>],
+    config: &BpnnTrainConfig,
+    monitor: &mut dyn Monitor,
 ) -> Result<(Bpnn, TrainReport)> {
     check_rows(x, y)?;
     let mut idx: Vec<usize> = (0..x.len()).collect();
@@ -111,7 +113,7 @@ pub fn train_bpnn(
         |ids: &[usize], rows: &[Vec<f64>]| ids.iter().map(|&i| rows[i].clone()).collect::<Vec<_>>();
     let (xt, yt) = (pick(train_idx, x), pick(train_idx, y));
     let (xv, yv) = (pick(val_idx, x), pick(val_idx, y));
-    train_bpnn_with_validation(&xt, &yt, &xv, &yv, config)
+    train_bpnn_with_validation_monitored(&xt, &yt, &xv, &yv, config, monitor)
 }
 
 /// Separates the split's random stream from the initialisation's.
@@ -124,6 +126,18 @@ pub fn train_bpnn_with_validation(
     xv: &[Vec<f64>],
     yv: &[Vec<f64>],
     config: &BpnnTrainConfig,
+) -> Result<(Bpnn, TrainReport)> {
+    train_bpnn_with_validation_monitored(xt, yt, xv, yv, config, &mut Quiet)
+}
+
+/// [`train_bpnn_with_validation`] reporting every epoch to `monitor`, which may stop it.
+pub fn train_bpnn_with_validation_monitored(
+    xt: &[Vec<f64>],
+    yt: &[Vec<f64>],
+    xv: &[Vec<f64>],
+    yv: &[Vec<f64>],
+    config: &BpnnTrainConfig,
+    monitor: &mut dyn Monitor,
 ) -> Result<(Bpnn, TrainReport)> {
     check_rows(xt, yt)?;
     if !xv.is_empty() {
@@ -164,8 +178,8 @@ pub fn train_bpnn_with_validation(
         &theta0,
     );
     let (theta, report) = match config.optimizer {
-        Optimizer::LevenbergMarquardt => train_lm(&template, &train, &val, theta0, config),
-        Optimizer::Adam => train_adam(&template, &train, &val, theta0, config)?,
+        Optimizer::LevenbergMarquardt => train_lm(&template, &train, &val, theta0, config, monitor),
+        Optimizer::Adam => train_adam(&template, &train, &val, theta0, config, monitor)?,
     };
     let mut net = template;
     net.set_params(&theta);
@@ -315,19 +329,9 @@ impl LmProblem for BpnnLeastSquares<'_> {
     }
 }
 
-/// True when the caller's stop flag is set.
-pub(crate) fn user_stop(flag: Option<&'static AtomicBool>) -> bool {
-    flag.is_some_and(|f| f.load(Ordering::Relaxed))
-}
-
-pub(crate) fn user_stop_reason(epoch: usize, best_epoch: usize) -> String {
-    format!("stopped by the user after epoch {epoch}; keeping the best epoch {best_epoch}")
-}
-
 /// Early-stopping bookkeeping shared by both optimisers.
 struct EarlyStop {
     patience: usize,
-    stop: Option<&'static AtomicBool>,
     best: f64,
     best_epoch: usize,
     best_theta: Vec<f64>,
@@ -335,10 +339,9 @@ struct EarlyStop {
 }
 
 impl EarlyStop {
-    fn new(patience: usize, stop: Option<&'static AtomicBool>, theta0: &[f64]) -> Self {
+    fn new(patience: usize, theta0: &[f64]) -> Self {
         EarlyStop {
             patience,
-            stop,
             best: f64::INFINITY,
             best_epoch: 0,
             best_theta: theta0.to_vec(),
@@ -347,14 +350,16 @@ impl EarlyStop {
     }
 
     /// Records an epoch; returns a reason to stop when validation has not improved for
-    /// `patience` epochs. Without validation rows the training loss plays its role.
+    /// `patience` epochs, or when the monitor asks to stop. Without validation rows the
+    /// training loss plays its role.
     fn record(
         &mut self,
         epoch: usize,
         theta: &[f64],
         train: f64,
         val: Option<f64>,
-    ) -> Option<String> {
+        monitor: &dyn Monitor,
+    ) -> Option<StopReason> {
         self.history.push((train, val));
         let watch = val.unwrap_or(train);
         if watch < self.best {
@@ -362,14 +367,17 @@ impl EarlyStop {
             self.best_epoch = epoch;
             self.best_theta = theta.to_vec();
         }
-        if user_stop(self.stop) {
-            return Some(user_stop_reason(epoch, self.best_epoch));
+        if monitor.stop_requested() {
+            return Some(StopReason::User {
+                epoch,
+                best_epoch: self.best_epoch,
+            });
         }
         if epoch - self.best_epoch >= self.patience {
-            return Some(format!(
-                "early stop: no validation improvement for {} epochs (best epoch {})",
-                self.patience, self.best_epoch
-            ));
+            return Some(StopReason::EarlyStop {
+                patience: self.patience,
+                best_epoch: self.best_epoch,
+            });
         }
         None
     }
@@ -381,6 +389,7 @@ fn train_lm(
     val: &Normalised,
     theta0: Vec<f64>,
     config: &BpnnTrainConfig,
+    monitor: &mut dyn Monitor,
 ) -> (Vec<f64>, TrainReport) {
     let problem = BpnnLeastSquares {
         net: template.clone(),
@@ -391,18 +400,23 @@ fn train_lm(
         ..LmConfig::default()
     };
     let n_rows = (train.x.len() * template.n_out()) as f64;
-    let mut stop = EarlyStop::new(config.patience.unwrap_or(6), config.stop, &theta0);
-    let progress = Progress::new(config.progress, config.max_epochs, "BPNN (LM)");
+    let mut stop = EarlyStop::new(config.patience.unwrap_or(6), &theta0);
     let outcome = lm::minimise(&problem, &theta0, &lm_config, |it, theta, sse| {
         let train_mse = sse / n_rows;
         let val_mse = (!val.x.is_empty()).then(|| mse(&problem.with(theta), val));
-        progress.epoch(it, train_mse, val_mse);
-        match stop.record(it, theta, train_mse, val_mse) {
+        monitor.epoch(&Epoch {
+            model: "BPNN (LM)",
+            epoch: it,
+            max_epochs: config.max_epochs,
+            loss: train_mse,
+            validation_loss: val_mse,
+        });
+        match stop.record(it, theta, train_mse, val_mse, &*monitor) {
             Some(why) => Control::Stop(why),
             None => Control::Continue,
         }
     });
-    progress.finish(&outcome.stop_reason);
+    monitor.finished(&outcome.stop_reason);
     // LM may stop (μ at maximum, gradient) before the first callback: keep the start then.
     let best_theta = if stop.history.is_empty() {
         outcome.theta.clone()
@@ -433,6 +447,7 @@ fn train_adam(
     val: &Normalised,
     theta0: Vec<f64>,
     config: &BpnnTrainConfig,
+    monitor: &mut dyn Monitor,
 ) -> Result<(Vec<f64>, TrainReport)> {
     let dev = Device::Cpu;
     let (n_in, n_h, n_out) = (template.n_in(), template.n_hidden(), template.n_out());
@@ -466,9 +481,8 @@ fn train_adam(
     let batch = config.batch_size.unwrap_or(n).clamp(1, n);
     let mut order: Vec<u32> = (0..n as u32).collect();
     let mut shuffle_rng = rng::seeded(config.seed ^ SPLIT_STREAM.rotate_left(17));
-    let mut stop = EarlyStop::new(config.patience.unwrap_or(50), config.stop, &theta0);
-    let progress = Progress::new(config.progress, config.max_epochs, "BPNN (Adam)");
-    let mut stop_reason = format!("maximum of {} epochs", config.max_epochs);
+    let mut stop = EarlyStop::new(config.patience.unwrap_or(50), &theta0);
+    let mut stop_reason = StopReason::MaxEpochs(config.max_epochs);
     let mut epochs = 0;
     let current_theta = || -> Result<Vec<f64>> {
         let mut t = w1.as_tensor().flatten_all()?.to_vec1::<f64>()?;
@@ -496,17 +510,23 @@ fn train_adam(
         let net = template_with(template, &theta);
         let train_mse = mse(&net, train);
         let val_mse = (!val.x.is_empty()).then(|| mse(&net, val));
-        progress.epoch(epoch, train_mse, val_mse);
+        monitor.epoch(&Epoch {
+            model: "BPNN (Adam)",
+            epoch,
+            max_epochs: config.max_epochs,
+            loss: train_mse,
+            validation_loss: val_mse,
+        });
         if !train_mse.is_finite() {
-            stop_reason = "training diverged (non-finite loss)".into();
+            stop_reason = StopReason::Diverged;
             break;
         }
-        if let Some(why) = stop.record(epoch, &theta, train_mse, val_mse) {
+        if let Some(why) = stop.record(epoch, &theta, train_mse, val_mse, &*monitor) {
             stop_reason = why;
             break;
         }
     }
-    progress.finish(&stop_reason);
+    monitor.finished(&stop_reason);
     let _ = n_in;
     let best = template_with(template, &stop.best_theta);
     let report = TrainReport {

@@ -28,14 +28,13 @@ use crate::bpnn::Affine;
 use crate::dataset::{Sequence, ThermalDataset};
 use crate::error::{NnError, Result};
 use crate::metrics::{channel_metrics, ChannelMetrics};
-use crate::progress::Progress;
+use crate::progress::{Epoch, Monitor, Quiet, StopReason};
 use crate::rng;
 use candle_core::{DType, Device, Tensor, Var};
 use candle_nn::optim::{AdamW, Optimizer as _, ParamsAdamW};
 use rand::seq::SliceRandom;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 pub const FORMAT: &str = "mtec.cnn-lstm/1";
@@ -67,10 +66,6 @@ pub struct CnnLstmConfig {
     /// Epochs without validation improvement before stopping.
     pub patience: usize,
     pub seed: u64,
-    pub progress: bool,
-    /// When this flag turns true (e.g. Ctrl-C in the CLI), training stops after the current
-    /// epoch and keeps the best epoch's weights.
-    pub stop: Option<&'static AtomicBool>,
 }
 
 impl Default for CnnLstmConfig {
@@ -90,8 +85,6 @@ impl Default for CnnLstmConfig {
             validation_fraction: 0.15,
             patience: 15,
             seed: 42,
-            progress: false,
-            stop: None,
         }
     }
 }
@@ -103,7 +96,7 @@ pub struct CnnLstmReport {
     pub best_epoch: usize,
     pub train_loss: f64,
     pub validation_loss: Option<f64>,
-    pub stop_reason: String,
+    pub stop_reason: StopReason,
     pub seconds: f64,
     pub seconds_per_epoch: f64,
     pub train_windows: usize,
@@ -282,10 +275,20 @@ fn all_rows(d: &ThermalDataset, targets: bool) -> Vec<Vec<f64>> {
 }
 
 /// Trains a CNN-LSTM on every experiment of `train` (split the dataset first with
-/// [`ThermalDataset::split`]). Prints a progress bar when `config.progress`.
+/// [`ThermalDataset::split`]).
 pub fn train_cnn_lstm(
     train: &ThermalDataset,
     config: &CnnLstmConfig,
+) -> Result<(CnnLstm, CnnLstmReport)> {
+    train_cnn_lstm_monitored(train, config, &mut Quiet)
+}
+
+/// [`train_cnn_lstm`] reporting every epoch to `monitor`, which may stop it (after the current
+/// epoch, keeping the best epoch's weights).
+pub fn train_cnn_lstm_monitored(
+    train: &ThermalDataset,
+    config: &CnnLstmConfig,
+    monitor: &mut dyn Monitor,
 ) -> Result<(CnnLstm, CnnLstmReport)> {
     train.validate()?;
     let arch = config.architecture;
@@ -362,10 +365,9 @@ pub fn train_cnn_lstm(
     let mut adam = AdamW::new(vars.values().cloned().collect(), params)?;
     let mut order: Vec<u32> = (0..tr.n as u32).collect();
     let mut shuffle = rng::seeded(config.seed.wrapping_add(0x9e37_79b9));
-    let progress = Progress::new(config.progress, config.max_epochs, "CNN-LSTM");
     let mut best = (f64::INFINITY, 0usize, snapshot(&vars)?);
     let mut history = Vec::new();
-    let mut stop_reason = format!("maximum of {} epochs", config.max_epochs);
+    let mut stop_reason = StopReason::MaxEpochs(config.max_epochs);
     let mut epochs = 0;
     for epoch in 1..=config.max_epochs {
         epochs = epoch;
@@ -390,28 +392,37 @@ pub fn train_cnn_lstm(
             None => None,
         };
         history.push((train_loss, val_loss));
-        progress.epoch(epoch, train_loss, val_loss);
+        monitor.epoch(&Epoch {
+            model: "CNN-LSTM",
+            epoch,
+            max_epochs: config.max_epochs,
+            loss: train_loss,
+            validation_loss: val_loss,
+        });
         if !train_loss.is_finite() {
-            stop_reason = "training diverged (non-finite loss)".into();
+            stop_reason = StopReason::Diverged;
             break;
         }
         let watch = val_loss.unwrap_or(train_loss);
         if watch < best.0 {
             best = (watch, epoch, snapshot(&vars)?);
         }
-        if crate::bpnn_train::user_stop(config.stop) {
-            stop_reason = crate::bpnn_train::user_stop_reason(epoch, best.1);
+        if monitor.stop_requested() {
+            stop_reason = StopReason::User {
+                epoch,
+                best_epoch: best.1,
+            };
             break;
         }
         if epoch - best.1 >= config.patience {
-            stop_reason = format!(
-                "early stop: no validation improvement for {} epochs (best epoch {})",
-                config.patience, best.1
-            );
+            stop_reason = StopReason::EarlyStop {
+                patience: config.patience,
+                best_epoch: best.1,
+            };
             break;
         }
     }
-    progress.finish(&stop_reason);
+    monitor.finished(&stop_reason);
     let seconds = start.elapsed().as_secs_f64();
     let (_, best_epoch, weights) = best;
     let mut model = CnnLstm {

@@ -13,6 +13,9 @@ pub enum NnError {
     /// A model file is not a valid model of the expected format and version.
     #[error("invalid model file: {0}")]
     Model(String),
+    /// A data file is wrong; the message names file, line and column.
+    #[error("{0}")]
+    Input(#[from] mtec_io::InputError),
     /// The tensor library failed (an internal error, not the user's input).
     #[error("tensor library: {0}")]
     Candle(#[from] candle_core::Error),

@@ -5,8 +5,9 @@
 
 use crate::bpnn::Activation;
 use crate::bpnn::Bpnn;
-use crate::bpnn_train::{train_bpnn, BpnnTrainConfig, Optimizer, TrainReport};
+use crate::bpnn_train::{train_bpnn_monitored, BpnnTrainConfig, Optimizer, TrainReport};
 use crate::error::{NnError, Result};
+use crate::progress::{Monitor, Quiet};
 use serde::Serialize;
 
 /// How to fit the map.
@@ -17,7 +18,6 @@ pub struct GridFitConfig {
     pub optimizer: Optimizer,
     pub max_epochs: usize,
     pub seed: u64,
-    pub progress: bool,
 }
 
 impl Default for GridFitConfig {
@@ -28,7 +28,6 @@ impl Default for GridFitConfig {
             optimizer: Optimizer::LevenbergMarquardt,
             max_epochs: 500,
             seed: 42,
-            progress: false,
         }
     }
 }
@@ -77,6 +76,16 @@ pub fn fit_grid(
     e_um: &[[f64; 3]],
     config: &GridFitConfig,
 ) -> Result<(Bpnn, GridFitReport)> {
+    fit_grid_monitored(p_mm, e_um, config, &mut Quiet)
+}
+
+/// [`fit_grid`] reporting every epoch to `monitor`, which may stop it.
+pub fn fit_grid_monitored(
+    p_mm: &[[f64; 3]],
+    e_um: &[[f64; 3]],
+    config: &GridFitConfig,
+    monitor: &mut dyn Monitor,
+) -> Result<(Bpnn, GridFitReport)> {
     if p_mm.len() != e_um.len() {
         return Err(NnError::Data(format!(
             "{} points but {} error rows",
@@ -98,10 +107,9 @@ pub fn fit_grid(
         optimizer: config.optimizer,
         max_epochs: config.max_epochs,
         seed: config.seed,
-        progress: config.progress,
         ..BpnnTrainConfig::default()
     };
-    let (mut net, training) = train_bpnn(&x, &y, &train_config)?;
+    let (mut net, training) = train_bpnn_monitored(&x, &y, &train_config, monitor)?;
     net.input_names = ["x_mm", "y_mm", "z_mm"].map(String::from).to_vec();
     net.output_names = ["ex_um", "ey_um", "ez_um"].map(String::from).to_vec();
     let mut err = [Vec::new(), Vec::new(), Vec::new()];

@@ -15,10 +15,14 @@
 //!   (experiments × sequences × time × features) and the split by experiment; [`metrics`] the
 //!   RMSE / MAE / residual-ratio report shared with the BPNN baseline.
 //!
-//! What it is not for: reading measurement files or choosing which columns are features (the CLI
-//! and the thermal crate do that), and GPU training. This is the only crate of the workspace
-//! that depends on the neural-network library (candle, see `NN_CHOICE.md`); everything it
-//! exports is plain Rust data.
+//! - [`thermal_log`]: a thermal log (CSV) as a sequence dataset, which of its columns are
+//!   features and targets, and the training configuration of a `thermal fit` on it.
+//! - [`progress`]: the [`Monitor`] a caller passes to a training to follow its epochs and stop it,
+//!   and the typed [`StopReason`].
+//!
+//! What it is not for: writing files or drawing progress (the caller does), and GPU training.
+//! This is the only crate of the workspace that depends on the neural-network library (candle,
+//! see `NN_CHOICE.md`); everything it exports is plain Rust data.
 
 pub mod baseline;
 /// The network as plain data lives in `mtec-comp` (a compensable model, evaluated without
@@ -33,17 +37,24 @@ pub mod error;
 pub mod grid_fit;
 pub mod lm;
 pub mod metrics;
-mod progress;
+pub mod progress;
 mod rng;
 pub mod rotary;
 pub mod synthetic;
+pub mod thermal_log;
 pub mod threads;
 
-pub use baseline::{compare_on_split, evaluate_bpnn, train_bpnn_baseline, SplitComparison};
+pub use baseline::{
+    compare_on_split, evaluate_bpnn, train_bpnn_baseline, train_bpnn_baseline_monitored,
+    SplitComparison,
+};
 pub use bpnn::{Activation, Bpnn};
-pub use bpnn_train::{train_bpnn, BpnnTrainConfig, Optimizer, TrainReport};
-pub use cnn_lstm::{train_cnn_lstm, CnnLstm, CnnLstmConfig, CnnLstmReport};
+pub use bpnn_train::{train_bpnn, train_bpnn_monitored, BpnnTrainConfig, Optimizer, TrainReport};
+pub use cnn_lstm::{
+    train_cnn_lstm, train_cnn_lstm_monitored, CnnLstm, CnnLstmConfig, CnnLstmReport,
+};
 pub use dataset::{Experiment, Sequence, ThermalDataset};
 pub use error::NnError;
-pub use grid_fit::{fit_grid, GridFitConfig, GridFitReport};
+pub use grid_fit::{fit_grid, fit_grid_monitored, GridFitConfig, GridFitReport};
 pub use metrics::ChannelMetrics;
+pub use progress::{Epoch, Monitor, Quiet, StopReason};

@@ -8,6 +8,7 @@
 //! stop on a *validation* criterion between iterations (early stopping), which that crate's
 //! run-to-convergence interface does not offer; the linear algebra is nalgebra's Cholesky.
 
+use crate::progress::StopReason;
 use nalgebra::{DMatrix, DVector};
 
 /// A least-squares problem: residuals e(θ) and their Jacobian J(θ) = ∂e/∂θ.
@@ -44,7 +45,7 @@ impl Default for LmConfig {
 /// What the per-iteration callback asks for.
 pub enum Control {
     Continue,
-    Stop(String),
+    Stop(StopReason),
 }
 
 /// Result of a minimisation: the last accepted θ, its SSE, iterations and why it stopped.
@@ -53,7 +54,7 @@ pub struct LmOutcome {
     pub theta: Vec<f64>,
     pub sse: f64,
     pub iterations: usize,
-    pub stop_reason: String,
+    pub stop_reason: StopReason,
 }
 
 /// Minimises ½‖e(θ)‖² from `theta0`; `on_iteration(iteration, θ, sse)` runs after every accepted
@@ -69,7 +70,7 @@ pub fn minimise<P: LmProblem>(
     let mut e = problem.residuals(theta.as_slice());
     let mut sse = e.norm_squared();
     let mut mu = config.mu_initial;
-    let mut stop_reason = format!("maximum of {} iterations", config.max_iterations);
+    let mut stop_reason = StopReason::MaxIterations(config.max_iterations);
     let mut iterations = 0;
     'outer: for it in 1..=config.max_iterations {
         iterations = it;
@@ -77,7 +78,7 @@ pub fn minimise<P: LmProblem>(
         let jtj = j.tr_mul(&j);
         let g = j.tr_mul(&e); // gradient of ½‖e‖²
         if g.amax() < config.min_gradient {
-            stop_reason = format!("gradient below {:e}", config.min_gradient);
+            stop_reason = StopReason::SmallGradient(config.min_gradient);
             break;
         }
         loop {
@@ -90,7 +91,7 @@ pub fn minimise<P: LmProblem>(
                 None => {
                     mu *= config.mu_increase;
                     if mu > config.mu_max {
-                        stop_reason = "damping μ exceeded its maximum".into();
+                        stop_reason = StopReason::DampingExceeded;
                         break 'outer;
                     }
                     continue;
@@ -108,7 +109,7 @@ pub fn minimise<P: LmProblem>(
             }
             mu *= config.mu_increase;
             if mu > config.mu_max {
-                stop_reason = "damping μ exceeded its maximum (no further decrease)".into();
+                stop_reason = StopReason::NoFurtherDecrease;
                 break 'outer;
             }
         }

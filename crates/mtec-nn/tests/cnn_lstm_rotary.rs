@@ -29,7 +29,9 @@ fn small_config(epochs: usize) -> CnnLstmConfig {
 
 /// Every test starts here: one candle thread (`mtec_nn::threads`, set once before any training).
 fn data() -> mtec_nn::ThermalDataset {
-    mtec_nn::threads::prefer_single_thread();
+    if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
+        std::env::set_var(var, value);
+    }
     rotary_thermal(&RotaryThermalSpec {
         angles: 4,
         ..RotaryThermalSpec::default()

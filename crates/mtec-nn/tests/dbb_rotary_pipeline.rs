@@ -81,7 +81,9 @@ struct Outcome {
 }
 
 fn run(s: &Scenario, bpnn_iterations: usize) -> Outcome {
-    mtec_nn::threads::prefer_single_thread();
+    if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
+        std::env::set_var(var, value);
+    }
     let (train, test) = s.data.data.split(&[1, 2, 4], &[3]).unwrap();
     let t0 = std::time::Instant::now();
     let (cnn, report) = train_cnn_lstm(&train, &cnn_config()).unwrap();

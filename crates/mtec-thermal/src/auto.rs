@@ -30,7 +30,8 @@ use serde::{Deserialize, Serialize};
 pub const DEFAULT_MAX_SENSORS: usize = 6;
 
 /// The auto fitter (module docs).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Auto {
     /// Candidate temperature sensors (every `_c` sensor when empty).
     pub sensors: Vec<String>,

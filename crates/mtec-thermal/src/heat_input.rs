@@ -185,7 +185,8 @@ fn is_one(v: &f64) -> bool {
 /// The fitter: grids of α, τ banks, ridge k and ambient-sensor counts; inner forward folds on
 /// the training rows ([`crate::validate::forward_folds`]) pick one point when the grid has more
 /// than one.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default)]
 pub struct HeatInput {
     /// Input column attached with [`with_input`].
     pub input: String,

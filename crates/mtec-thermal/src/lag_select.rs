@@ -21,12 +21,14 @@ use crate::features::{design, lag_filter, tau_grid, Feature};
 use crate::linear::ols;
 use crate::model::{target_rows, Fit, LinearMethod, LinearModel, SELECTION_DT_MIN};
 use crate::validate::{forward_folds_of, ridge_forward_scores, thin_folds, BlockSpec, ForwardFold};
+use serde::{Deserialize, Serialize};
 
 /// A scored candidate step: score, its features, their columns, the sensor index.
 type Candidate = (f64, Vec<Feature>, Vec<Vec<f64>>, usize);
 
 /// The fitter (see module docs).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default)]
 pub struct LagSelect {
     /// Candidate sensors (all when empty).
     pub sensors: Vec<String>,

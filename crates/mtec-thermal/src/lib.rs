@@ -35,7 +35,9 @@ pub mod lag_select;
 pub mod linear;
 pub mod metrics;
 pub mod model;
+pub mod model_file;
 pub mod plot;
+pub mod registry;
 pub mod select;
 pub mod stepwise;
 pub mod stream;
@@ -53,6 +55,7 @@ pub use model::{
     ExpAmbient, Fit, LinearModel, Mlr, ModelFile, Predict, Ridge, RidgeSelect, ThermalModel,
     MODEL_FORMAT,
 };
+pub use registry::{FitOptions, ModelSpec, KINDS};
 pub use select::{select_sensors, RidgeTrace, SelectOptions, Selection};
 pub use stream::ThermalStream;
 pub use summary::{ModelSummary, Term};

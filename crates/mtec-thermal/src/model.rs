@@ -190,7 +190,8 @@ pub fn target_rows(data: &ThermalData, rows: &[usize]) -> Result<Vec<f64>, Therm
 }
 
 /// Multiple linear regression (OLS) on the named sensors (all when empty).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Mlr {
     pub sensors: Vec<String>,
     /// Add a first-order lag of each sensor (τ chosen by forward folds).
@@ -328,7 +329,8 @@ fn ridge_model(
 /// Ridge regression (standardised) on the named sensors; k, when `None`, the grid value that
 /// predicts the forward folds of the training rows best (blocks by `blocks`), or where the
 /// ridge trace stabilises when the rows hold fewer than two blocks.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Ridge {
     pub sensors: Vec<String>,
     pub k: Option<f64>,
@@ -357,7 +359,8 @@ impl Fit for Ridge {
 }
 
 /// Ridge-trace sensor selection, then ridge regression on the selected sensors at the chosen k.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default)]
 pub struct RidgeSelect {
     pub sensors: Vec<String>,
     pub options: SelectOptions,
@@ -400,7 +403,8 @@ impl Fit for RidgeSelect {
 }
 
 /// The exp-ambient feed-axis model fitter (see [`crate::exp_ambient`]).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default)]
 pub struct ExpAmbient {
     pub up_sensor: String,
     pub nut_sensor: String,

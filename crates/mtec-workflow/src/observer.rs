@@ -37,3 +37,21 @@ impl Observer for Collect {
         self.warnings.push(what.to_string());
     }
 }
+
+/// An observer as a neural training's monitor: each epoch as progress, the end of the training
+/// as progress, the observer's stop request as the training's.
+#[cfg(feature = "neural")]
+pub(crate) struct Relay<'a>(pub &'a mut dyn Observer);
+
+#[cfg(feature = "neural")]
+impl mtec_nn::Monitor for Relay<'_> {
+    fn epoch(&mut self, e: &mtec_nn::Epoch) {
+        self.0.progress(&e.to_string());
+    }
+    fn finished(&mut self, reason: &mtec_nn::StopReason) {
+        self.0.progress(&format!("stopped: {reason}"));
+    }
+    fn stop_requested(&self) -> bool {
+        self.0.stop_requested()
+    }
+}

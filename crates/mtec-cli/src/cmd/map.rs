@@ -134,7 +134,7 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
         max_points_per_axis: a.max_points_per_axis,
         out: a.out,
     };
-    let done = map::fit(&opts, &mut crate::observer::Stderr::default())?;
+    let done = fit_observed(&opts)?;
     // a BPNN's fit report goes to stdout unless the model itself does (-o -); the trilinear
     // map's one line always to stderr
     if matches!(opts.kind, map::MapKind::Bpnn { .. }) && opts.out.as_os_str() != "-" {
@@ -143,6 +143,24 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
         eprint!("{done}");
     }
     Ok(())
+}
+
+/// A BPNN's training shows its epochs on one redrawn line and stops on Ctrl-C (keeping the best
+/// epoch); the trilinear map's steps are lines on stderr.
+#[cfg(feature = "neural")]
+fn fit_observed(opts: &map::FitOptions) -> Result<map::FitOutcome, CliError> {
+    if matches!(opts.kind, map::MapKind::Bpnn { .. }) {
+        let mut term = super::terminal::Terminal::new(false);
+        let done = super::terminal::ctrl_c::during(|| map::fit(opts, &mut term));
+        term.done();
+        return done;
+    }
+    map::fit(opts, &mut crate::observer::Stderr::default())
+}
+
+#[cfg(not(feature = "neural"))]
+fn fit_observed(opts: &map::FitOptions) -> Result<map::FitOutcome, CliError> {
+    map::fit(opts, &mut crate::observer::Stderr::default())
 }
 
 fn eval(a: EvalArgs) -> Result<(), CliError> {

@@ -13,9 +13,9 @@ pub mod map;
 pub mod neural;
 pub mod sensitivity;
 pub mod simulate;
-pub mod thermal;
 #[cfg(feature = "neural")]
-pub mod thermal_nn;
+pub mod terminal;
+pub mod thermal;
 pub mod volumetric;
 
 pub mod compensate;

@@ -6,31 +6,7 @@
 //! docs/building.md). They are the cargo feature `neural` of this crate, off by default so that
 //! the README's `cargo run --release -- demo` builds in a few minutes; the options are parsed
 //! either way, so a build without them refuses such a command with exit 2 and says how to get
-//! them instead of calling the option unknown.
-
-use crate::error::CliError;
-use std::path::Path;
-
-/// The model file of a CNN-LSTM (`mtec_nn::cnn_lstm::FORMAT`; a test checks they agree).
-pub const CNN_LSTM_FORMAT: &str = "mtec.cnn-lstm/1";
-
-/// The refusal of `what` (e.g. "`thermal fit --model cnn-lstm`") by a build without the
-/// neural models: a usage error (exit 2) that says how to build them.
-#[cfg_attr(feature = "neural", allow(dead_code))]
-pub fn unavailable(what: &str) -> CliError {
-    mtec_workflow::neural_unavailable(what)
-}
-
-/// The neural format `path` declares (`mtec.cnn-lstm/1`, `mtec.bpnn/1`), or `None` for any
-/// other model file (read by whichever loader the command uses).
-pub fn neural_format(path: &Path) -> Result<Option<&'static str>, CliError> {
-    let v: serde_json::Value = mtec_io::read_json(path)?;
-    Ok(match v.get("format").and_then(|f| f.as_str()) {
-        Some(CNN_LSTM_FORMAT) => Some(CNN_LSTM_FORMAT),
-        Some(f) if f == mtec_comp::bpnn::FORMAT => Some(mtec_comp::bpnn::FORMAT),
-        _ => None,
-    })
-}
+//! them instead of calling the option unknown (`mtec_workflow::neural_unavailable`).
 
 /// Options of the neural models (ignored by the regression models).
 #[derive(clap::Args, Debug, Clone)]
@@ -89,11 +65,4 @@ pub struct NnArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
-}
-
-/// Which network.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum NnKind {
-    CnnLstm,
-    Bpnn,
 }

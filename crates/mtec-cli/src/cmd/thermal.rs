@@ -1,21 +1,16 @@
 //! `mtec thermal select|fit|predict|cv`: thermal error models from temperature logs.
 
+//!
+//! The jobs are `mtec_workflow::ops::thermal` (`select`, `fit`, `predict`, `cv`, and the neural
+//! `neural::fit`); the model kinds and their `--model` values come from
+//! `mtec_thermal::registry`. This module parses the arguments and prints.
+
+#[cfg(feature = "neural")]
+use super::terminal::{ctrl_c, Terminal};
 use crate::error::CliError;
-use mtec_io::{InputError, OutputGuard, Table};
-use mtec_thermal::auto::{Auto, CandidateScore};
-use mtec_thermal::guard::{envelope, outside_envelope};
-use mtec_thermal::model::{ModelFile, Split, ThermalModel};
-use mtec_thermal::select::{select_sensors, SelectOptions, Selection};
-use mtec_thermal::validate::{
-    block_cv, duty_cycle_blocks, forward_cv, forward_folds, rows_of_experiments, split_at_time,
-    time_blocks, BlockSpec, ForwardCv,
-};
-use mtec_thermal::{
-    features::{design, temp_features},
-    heat_input::with_input,
-    ExpAmbient, Fit, HeatInput, LagSelect, Metrics, Mlr, Predict, Ridge, RidgeSelect, ThermalData,
-    ThermalError, MODEL_FORMAT,
-};
+use clap::builder::{PossibleValue, PossibleValuesParser};
+use mtec_thermal::model_file::SplitBy;
+use mtec_workflow::ops::thermal as op;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -150,32 +145,26 @@ struct SelectArgs {
     json: bool,
 }
 
-#[derive(Clone, Copy, clap::ValueEnum, PartialEq)]
-enum ModelKind {
-    /// Chooses the family by nested forward validation (see `fit --help`).
-    Auto,
-    Mlr,
-    Ridge,
-    RidgeSelect,
-    ExpAmbient,
-    LagSelect,
-    HeatInput,
-    /// Neural (a build with `--features neural`): CNN-LSTM sequence model (several targets;
-    /// --window, --sequence-by, ...).
-    CnnLstm,
-    /// Neural (a build with `--features neural`): one-hidden-layer BPNN on the current row
-    /// (several targets; --hidden).
-    Bpnn,
-}
-
-impl ModelKind {
-    fn neural(self) -> Option<super::neural::NnKind> {
-        match self {
-            ModelKind::CnnLstm => Some(super::neural::NnKind::CnnLstm),
-            ModelKind::Bpnn => Some(super::neural::NnKind::Bpnn),
-            _ => None,
+/// The `--model` values: every kind of the registry (`mtec_thermal::registry::KINDS`), then the
+/// neural models (refused with exit 2 by a build without them).
+fn model_values() -> PossibleValuesParser {
+    let regression = mtec_thermal::registry::KINDS.iter().map(|k| {
+        let v = PossibleValue::new(k.name);
+        if k.help.is_empty() {
+            v
+        } else {
+            v.help(k.help)
         }
-    }
+    });
+    let neural = [
+        PossibleValue::new("cnn-lstm").help(
+            "Neural (a build with `--features neural`): CNN-LSTM sequence model (several targets; --window, --sequence-by, ...)",
+        ),
+        PossibleValue::new("bpnn").help(
+            "Neural (a build with `--features neural`): one-hidden-layer BPNN on the current row (several targets; --hidden)",
+        ),
+    ];
+    PossibleValuesParser::new(regression.chain(neural))
 }
 
 #[derive(clap::Args)]
@@ -187,8 +176,8 @@ struct Common {
     #[arg(long)]
     target: String,
     /// Model family.
-    #[arg(long, value_enum)]
-    model: ModelKind,
+    #[arg(long, value_parser = model_values())]
+    model: String,
     /// Sensors to use (exp-ambient: exactly two, the upper bearing then the nut).
     #[arg(long, value_delimiter = ',')]
     sensors: Vec<String>,
@@ -288,900 +277,235 @@ struct CvArgs {
     loo: bool,
 }
 
+/// candle sizes its thread pool once, from the environment: one thread is ~8x faster for these
+/// nets (`mtec_nn::threads`). The command sets it before its first candle op, while it has no
+/// other thread.
+#[cfg(feature = "neural")]
+fn single_candle_thread() {
+    if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
+        std::env::set_var(var, value);
+    }
+}
+
+/// Where a report goes: stdout, or stderr when the output itself streams to stdout (`-o -`).
+fn say_for(output: &Path) -> Box<dyn Write> {
+    if output == Path::new("-") {
+        Box::new(std::io::stderr())
+    } else {
+        Box::new(std::io::stdout())
+    }
+}
+
+impl Common {
+    fn fit_options(&self) -> mtec_thermal::FitOptions {
+        mtec_thermal::FitOptions {
+            sensors: self.sensors.clone(),
+            k: self.k,
+            lag: self.lag,
+            block_min: self.block_min,
+            max_sensors: self.max_sensors,
+            input: self.input.clone(),
+            up_sensors: self.up_sensors.clone(),
+            nut_sensors: self.nut_sensors.clone(),
+        }
+    }
+}
+
+impl FitArgs {
+    fn options(&self) -> op::FitOptions {
+        op::FitOptions {
+            data: self.common.data.clone(),
+            target: self.common.target.clone(),
+            model: self.common.model.clone(),
+            fit: self.common.fit_options(),
+            split: match self.train_until {
+                Some(t) => SplitBy::Until(t),
+                None => SplitBy::Experiments {
+                    train: self.train.clone(),
+                    test: self.test.clone(),
+                },
+            },
+            output: self.output.clone(),
+        }
+    }
+}
+
 pub fn run(args: Args) -> Result<(), CliError> {
     match args.cmd {
         Sub::Select(a) => select(a),
-        Sub::Fit(a) => match a.common.model.neural() {
-            Some(kind) => fit_neural(kind, *a),
-            None => fit(*a),
-        },
-        Sub::Predict(a) => predict_any(a),
-        Sub::Cv(a) if a.common.model.neural().is_some() => Err(CliError::usage(
-            "thermal cv runs the regression models; for cnn-lstm and bpnn use thermal fit --train ... --test ...",
-        )),
+        Sub::Fit(a) if op::is_neural(&a.common.model) => fit_neural(*a),
+        Sub::Fit(a) => fit(*a),
+        Sub::Predict(a) => predict(a),
         Sub::Cv(a) => cv(a),
     }
 }
 
-/// `thermal predict`: a neural model file goes to `thermal_nn`, any other to [`predict`].
-#[cfg(feature = "neural")]
-fn predict_any(a: PredictArgs) -> Result<(), CliError> {
-    match super::thermal_nn::read_model(&a.model)? {
-        Some(m) => super::thermal_nn::predict(m, &a.model, &a.data, a.json, a.output.as_ref()),
-        None => predict(a),
+fn select(a: SelectArgs) -> Result<(), CliError> {
+    let opts = op::SelectOptions {
+        data: a.data,
+        target: a.target,
+        sensors: a.sensors,
+        out: a.out,
+    };
+    // the warnings follow the report, as they always did
+    let mut obs = mtec_workflow::Collect::default();
+    let outcome = op::select(&opts, &mut obs)?;
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&serde_json::to_value(&outcome)?)?
+        );
+    } else {
+        print!("{outcome}");
     }
+    print_warnings(&obs);
+    Ok(())
 }
 
-/// `thermal predict` without the neural models: their model files are refused (exit 2).
-#[cfg(not(feature = "neural"))]
-fn predict_any(a: PredictArgs) -> Result<(), CliError> {
-    match super::neural::neural_format(&a.model)? {
-        Some(format) => Err(super::neural::unavailable(&format!(
-            "`thermal predict` with a {format} model ({})",
-            a.model.display()
-        ))),
-        None => predict(a),
+fn fit(a: FitArgs) -> Result<(), CliError> {
+    let opts = a.options();
+    let mut obs = mtec_workflow::Collect::default();
+    let outcome = op::fit(&opts, &mut obs)?;
+    let mut say = say_for(&opts.output);
+    // the report, its warnings, then where the model went
+    let report = outcome.to_string();
+    let (body, wrote) = report
+        .trim_end()
+        .rsplit_once('\n')
+        .unwrap_or(("", report.trim_end()));
+    if !body.is_empty() {
+        let _ = writeln!(say, "{body}");
     }
+    let _ = say.flush();
+    print_warnings(&obs);
+    let _ = writeln!(say, "{wrote}");
+    Ok(())
 }
 
 /// `--model cnn-lstm|bpnn` in a build without the neural models.
 #[cfg(not(feature = "neural"))]
-fn fit_neural(kind: super::neural::NnKind, _a: FitArgs) -> Result<(), CliError> {
-    Err(super::neural::unavailable(match kind {
-        super::neural::NnKind::CnnLstm => "`thermal fit --model cnn-lstm`",
-        super::neural::NnKind::Bpnn => "`thermal fit --model bpnn`",
-    }))
+fn fit_neural(a: FitArgs) -> Result<(), CliError> {
+    Err(mtec_workflow::neural_unavailable(&format!(
+        "`thermal fit --model {}`",
+        a.common.model
+    )))
 }
 
 /// `--model cnn-lstm|bpnn`: the options the neural fit does not take are refused here.
 #[cfg(feature = "neural")]
-fn fit_neural(kind: super::neural::NnKind, a: FitArgs) -> Result<(), CliError> {
+fn fit_neural(a: FitArgs) -> Result<(), CliError> {
+    use mtec_nn::thermal_log::{NnFitOptions, NnKind};
     let c = &a.common;
     if c.k.is_some() || c.lag || c.block_min.is_some() || a.train_until.is_some() {
         return Err(CliError::usage(
             "--k, --lag, --block-min and --train-until go with the regression models; the neural models split by --train/--test experiments",
         ));
     }
-    super::thermal_nn::fit(super::thermal_nn::FitRequest {
-        kind,
-        data: &c.data,
-        target: &c.target,
-        sensors: &c.sensors,
-        train: &a.train,
-        test: &a.test,
-        output: &a.output,
-        nn: &a.nn,
-    })
-}
-
-fn load(path: &Path, target: Option<&str>, require: bool) -> Result<ThermalData, CliError> {
-    load_with_input(path, target, require, None)
-}
-
-/// A non-temperature input column to attach: its name and whether the file must have it.
-type InputColumn<'a> = Option<(&'a str, bool)>;
-
-/// Reads the log and attaches the heat-source column (e.g. `spindle_rpm`): required for
-/// heat-input models, otherwise when the file has it (it marks the duty-cycle blocks).
-fn load_with_input(
-    path: &Path,
-    target: Option<&str>,
-    require: bool,
-    input: InputColumn,
-) -> Result<ThermalData, CliError> {
-    let t = Table::read(path)?;
-    let d = ThermalData::from_table(&t, target, require)?;
-    match input {
-        Some((name, required)) if required || t.has(name) => {
-            let v = t.f64_column(name)?;
-            with_input(&d, name, &v)
-                .map_err(|e| CliError::Input(InputError::file(path, e.to_string())))
-        }
-        _ => Ok(d),
-    }
-}
-
-fn input_of(c: &Common) -> InputColumn<'_> {
-    Some((c.input.as_str(), c.model == ModelKind::HeatInput))
-}
-
-/// The validation blocks the options ask for.
-fn block_spec(c: &Common) -> BlockSpec {
-    BlockSpec {
-        block_min: c.block_min,
-        input: Some(c.input.clone()),
-    }
-}
-
-/// The auto fitter; exp-ambient is a candidate when the data has its columns and --sensors
-/// names its two sensors.
-fn auto_fitter(c: &Common, data: &ThermalData) -> Auto {
-    let exp = data.ambient_c.is_some() && data.position_mm.is_some() && c.sensors.len() == 2;
-    Auto {
+    let kind = NnKind::from_name(&c.model).ok_or_else(|| CliError::usage("not a neural model"))?;
+    let nn = &a.nn;
+    let opts = op::neural::FitOptions {
+        data: c.data.clone(),
+        target: c.target.clone(),
         sensors: c.sensors.clone(),
-        input: c.input.clone(),
-        max_sensors: c
-            .max_sensors
-            .unwrap_or(mtec_thermal::auto::DEFAULT_MAX_SENSORS),
-        block_min: c.block_min,
-        exp_ambient: exp.then(|| ExpAmbient {
-            up_sensor: c.sensors[0].clone(),
-            nut_sensor: c.sensors[1].clone(),
-            ..Default::default()
-        }),
-    }
-}
-
-/// Forward validation of the options' fitter on the training rows (`None`: fewer than two
-/// blocks), and the warnings it gives.
-fn validate_forward(
-    c: &Common,
-    data: &ThermalData,
-    train: &[usize],
-) -> (Option<ForwardCv>, Vec<String>) {
-    let folds = forward_folds(&duty_cycle_blocks(data, train, &block_spec(c)));
-    if folds.is_empty() {
-        return (None, vec!["no forward validation: the training rows hold fewer than two blocks, so the model carries no uncertainty (use a longer record, experiments, or --block-min)".into()]);
-    }
-    match forward_cv(&CvFitter(c), data, &folds) {
-        Ok(v) => (Some(v), Vec::new()),
-        Err(e) => (None, vec![format!("forward validation failed: {e}")]),
-    }
-}
-
-/// The warning of a model worse than no compensation on some forward folds.
-fn worse_warning(v: &ForwardCv) -> Option<String> {
-    let worse = v.folds_worse_than_uncompensated();
-    (!worse.is_empty()).then(|| {
-        let list: Vec<String> = worse
-            .iter()
-            .map(|&f| {
-                let s = &v.folds[f - 1];
-                format!(
-                    "fold {f} ({:.0}–{:.0} min): {:.2} µm against {:.2} µm uncompensated",
-                    s.test_from_min, s.test_to_min, s.metrics.rmse_um, s.uncompensated_rmse_um
-                )
-            })
-            .collect();
-        format!(
-            "WORSE THAN NO COMPENSATION on forward validation, {}: do not apply this model",
-            list.join("; ")
-        )
-    })
-}
-
-fn print_candidates(say: &mut dyn Write, candidates: &[CandidateScore]) {
-    let _ = writeln!(
-        say,
-        "auto: forward score of every candidate (mean fold RMSE ± standard error; pooled; worst fold vs no compensation)"
-    );
-    for c in candidates {
-        match &c.forward {
-            Some(f) => {
-                let folds: Vec<String> = f
-                    .folds
-                    .iter()
-                    .map(|x| format!("{:.2}/{:.2}", x.metrics.rmse_um, x.uncompensated_rmse_um))
-                    .collect();
-                let _ = writeln!(
-                    say,
-                    "  {:<13} {:>7.3} ± {:<6.3} pooled {:>7.3} um  folds (model/none) {}{}{}",
-                    c.family,
-                    f.mean_rmse_um(),
-                    f.rmse_std_error_um,
-                    f.pooled_rmse_um,
-                    folds.join(" "),
-                    if c.worse_than_uncompensated.is_empty() {
-                        ""
-                    } else {
-                        "  worse than none: never chosen"
-                    },
-                    if c.chosen { "  <- chosen" } else { "" }
-                );
-            }
-            None => {
-                let _ = writeln!(
-                    say,
-                    "  {:<13} not fitted: {}",
-                    c.family,
-                    c.error.as_deref().unwrap_or("")
-                );
-            }
-        }
-    }
-}
-
-/// A model error about the data file: missing columns at the header, the rest about the file.
-fn located(data: &ThermalData, path: &Path, e: ThermalError) -> CliError {
-    match e {
-        ThermalError::MissingColumn(c) => CliError::Input(data.header_error(format!(
-            "missing column `{c}`; the header has: {}",
-            header_list(data)
-        ))),
-        other => CliError::Input(InputError::file(path, other.to_string())),
-    }
-}
-
-fn header_list(d: &ThermalData) -> String {
-    let mut h = d.sensor_names.clone();
-    if d.ambient_c.is_some() {
-        h.push("ambient_c".into());
-    }
-    if d.position_mm.is_some() {
-        h.push("position_mm".into());
-    }
-    h.join(", ")
-}
-
-fn select(a: SelectArgs) -> Result<(), CliError> {
-    // where the files go is settled before any work: a folder, and none of them the input
-    if let Some(dir) = &a.out {
-        if dir.exists() && !dir.is_dir() {
-            return Err(CliError::usage(format!(
-                "--out {} is a file: it must be a folder (ridge_trace.csv, ridge_trace.svg and selection.json go into it)",
-                dir.display()
-            )));
-        }
-        let guard = OutputGuard::new(&[&a.data]);
-        for f in ["ridge_trace.csv", "ridge_trace.svg", "selection.json"] {
-            guard.check(&dir.join(f))?;
-        }
-    }
-    let data = load(&a.data, Some(&a.target), true)?;
-    let err = |e| located(&data, &a.data, e);
-    let features = temp_features(&data, &a.sensors).map_err(err)?;
-    let names: Vec<String> = features.iter().map(|f| f.name()).collect();
-    let x = design(&data, &features).map_err(err)?;
-    let y = data.target_um().map_err(err)?;
-    let sel = select_sensors(&x, y, &names, SelectOptions::default()).map_err(err)?;
-    let mut doc = serde_json::to_value(&sel).map_err(|e| CliError::Internal(e.into()))?;
-    doc["format"] = "mtec.thermal-selection/1".into();
-    doc["target"] = data.target_name().unwrap_or_default().into();
-    let out_dir = a.out.clone();
-    if let Some(dir) = &out_dir {
-        std::fs::create_dir_all(dir)?;
-        let guard = OutputGuard::new(&[&a.data]);
-        guard.write(&dir.join("ridge_trace.csv"), sel.trace.to_csv().as_bytes())?;
-        let svg = mtec_thermal::plot::ridge_trace_svg(&sel.trace, sel.k)
-            .map_err(|e| CliError::Internal(anyhow::anyhow!("plot: {e}")))?;
-        guard.write(&dir.join("ridge_trace.svg"), svg.as_bytes())?;
-        guard.write(
-            &dir.join("selection.json"),
-            serde_json::to_string_pretty(&doc)
-                .map_err(|e| CliError::Internal(e.into()))?
-                .as_bytes(),
-        )?;
-    }
-    if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?
-        );
-    } else {
-        print_selection(&sel, data.target_name().unwrap_or_default());
-        match out_dir {
-            Some(dir) => println!(
-                "\nwrote {}/ridge_trace.csv, ridge_trace.svg, selection.json",
-                dir.display()
-            ),
-            None => println!("\n(nothing written: --out DIR writes ridge_trace.csv, ridge_trace.svg and selection.json)"),
-        }
-    }
-    for w in &sel.warnings {
-        eprintln!("warning: {w}");
-    }
-    Ok(())
-}
-
-fn fmt_opt(v: Option<f64>, prec: usize) -> String {
-    v.map(|x| format!("{x:.prec$}"))
-        .unwrap_or_else(|| "-".into())
-}
-
-fn print_selection(sel: &Selection, target: &str) {
-    println!("Variance inflation factors (VIF > 10: severe collinearity)");
-    for v in &sel.vif {
-        println!(
-            "  {:<16} {:>12} {}",
-            v.sensor,
-            v.vif
-                .map(|x| format!("{x:.1}"))
-                .unwrap_or_else(|| "inf".into()),
-            if v.severe { "severe" } else { "" }
-        );
-    }
-    println!(
-        "\nRidge-trace elimination (rules: stable-small, unstable-to-zero, unstable, sign-change)"
-    );
-    for (i, s) in sel.steps.iter().enumerate() {
-        println!(
-            "  step {}: {:<17} removed {:<24} at k = {:.4}; remaining {}",
-            i + 1,
-            s.rule,
-            s.removed.join(","),
-            s.k,
-            s.remaining.join(",")
-        );
-    }
-    println!(
-        "\nSelected sensors: {}   chosen k = {:.4}",
-        sel.selected.join(", "),
-        sel.k
-    );
-    let std_eq: Vec<String> = sel
-        .selected
-        .iter()
-        .zip(&sel.standardised_coefficients)
-        .map(|(s, b)| format!("{b:+.4}·z({s})"))
-        .collect();
-    println!(
-        "Standardised equation:    z({target}) = {}",
-        std_eq.join(" ")
-    );
-    let eq: Vec<String> = sel
-        .selected
-        .iter()
-        .zip(&sel.coefficients)
-        .map(|(s, b)| format!("{b:+.4}·{s}"))
-        .collect();
-    println!(
-        "De-standardised equation: {target} = {:.4} {}",
-        sel.intercept_um,
-        eq.join(" ")
-    );
-    println!("\nComparison");
-    println!(
-        "  {:<34} {:>3} {:>8} {:>10} {:>12} {:>10} {:>12}",
-        "model", "n", "R²", "max|res|", "SSE", "MSE", "F"
-    );
-    for r in &sel.comparison {
-        let m = &r.metrics;
-        println!(
-            "  {:<34} {:>3} {:>8} {:>10.3} {:>12.3} {:>10} {:>12}",
-            r.model,
-            r.sensors.len(),
-            fmt_opt(m.r2, 4),
-            m.max_abs_residual_um,
-            m.sse_um2,
-            fmt_opt(m.mse_um2, 4),
-            fmt_opt(m.f_statistic, 1)
-        );
-    }
-}
-
-fn fit_model(c: &Common, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
-    Ok(match c.model {
-        ModelKind::Auto => auto_fitter(c, data).fit_rows(data, rows)?,
-        ModelKind::Mlr => ThermalModel::Linear(
-            Mlr {
-                sensors: c.sensors.clone(),
-                lag: c.lag,
-                blocks: block_spec(c),
-            }
-            .fit_rows(data, rows)?,
-        ),
-        ModelKind::Ridge => ThermalModel::Linear(
-            Ridge {
-                sensors: c.sensors.clone(),
-                k: c.k,
-                lag: c.lag,
-                blocks: block_spec(c),
-            }
-            .fit_rows(data, rows)?,
-        ),
-        ModelKind::RidgeSelect => ThermalModel::Linear(
-            RidgeSelect {
-                sensors: c.sensors.clone(),
-                options: SelectOptions::default(),
-                lag: c.lag,
-            }
-            .fit_rows(data, rows)?,
-        ),
-        ModelKind::LagSelect => ThermalModel::Linear(
-            LagSelect {
-                sensors: c.sensors.clone(),
-                max_sensors: c.max_sensors.unwrap_or(3),
-                block_min: c.block_min,
-                input: Some(c.input.clone()),
-            }
-            .fit_rows(data, rows)?,
-        ),
-        ModelKind::HeatInput => ThermalModel::HeatInput(
-            HeatInput {
-                input: c.input.clone(),
-                block_min: c.block_min,
-                ..Default::default()
-            }
-            .fit_rows(data, rows)?,
-        ),
-        ModelKind::ExpAmbient if !c.up_sensors.is_empty() => ThermalModel::ExpAmbient(Box::new(
-            ExpAmbient {
-                up_sensors: c.up_sensors.clone(),
-                nut_sensors: c.nut_sensors.clone(),
-                ..Default::default()
-            }
-            .fit_rows(data, rows)?,
-        )),
-        ModelKind::CnnLstm | ModelKind::Bpnn => {
-            return Err(ThermalError::Invalid(
-                "the neural models are fitted by `thermal fit --model cnn-lstm|bpnn`".into(),
-            ))
-        }
-        ModelKind::ExpAmbient => {
-            let [up, nut] = c.sensors.as_slice() else {
-                return Err(ThermalError::Invalid(
-                    "exp-ambient needs --sensors UP,NUT: the upper-bearing sensor, then the ball-screw-nut sensor (or --up-sensors A,B --nut-sensors C,D for sensor groups)".into(),
-                ));
-            };
-            ThermalModel::ExpAmbient(Box::new(
-                ExpAmbient {
-                    up_sensor: up.clone(),
-                    nut_sensor: nut.clone(),
-                    ..Default::default()
-                }
-                .fit_rows(data, rows)?,
-            ))
-        }
-    })
-}
-
-fn check_common(c: &Common) -> Result<(), CliError> {
-    if let Some(b) = c.block_min {
-        if !(b > 0.0 && b.is_finite()) {
-            return Err(CliError::usage(
-                "--block-min must be a number of minutes > 0",
-            ));
-        }
-    }
-    if c.max_sensors == Some(0) {
-        return Err(CliError::usage("--max-sensors must be at least 1"));
-    }
-    if c.max_sensors.is_some() && !matches!(c.model, ModelKind::Auto | ModelKind::LagSelect) {
-        return Err(CliError::usage(
-            "--max-sensors goes with --model auto or lag-select",
-        ));
-    }
-    if c.model == ModelKind::Auto && (c.lag || !c.up_sensors.is_empty()) {
-        return Err(CliError::usage(
-            "--model auto chooses lags itself (no --lag) and takes exp-ambient as a candidate only from --sensors UP,NUT",
-        ));
-    }
-    if c.model != ModelKind::ExpAmbient && !c.up_sensors.is_empty() {
-        return Err(CliError::usage(
-            "--up-sensors and --nut-sensors go with --model exp-ambient",
-        ));
-    }
-    if c.model == ModelKind::ExpAmbient && c.lag {
-        return Err(CliError::usage(
-            "--lag applies to the linear models, not exp-ambient",
-        ));
-    }
-    if let Some(k) = c.k {
-        if !(k >= 0.0 && k.is_finite()) || c.model != ModelKind::Ridge {
-            return Err(CliError::usage(
-                "--k must be a number ≥ 0 and goes with --model ridge",
-            ));
-        }
-    }
-    Ok(())
-}
-
-fn metrics_on(
-    model: &ThermalModel,
-    data: &ThermalData,
-    rows: &[usize],
-    pred: &[f64],
-) -> Result<Metrics, ThermalError> {
-    let y = data.target_um()?;
-    let yt: Vec<f64> = rows.iter().map(|&i| y[i]).collect();
-    let pt: Vec<f64> = rows.iter().map(|&i| pred[i]).collect();
-    Ok(Metrics::new(&yt, &pt, model.predictors()))
-}
-
-fn fit(a: FitArgs) -> Result<(), CliError> {
-    check_common(&a.common)?;
-    // where the model goes is settled before any work (an input, a directory: exit 2)
-    let dest = OutputGuard::new(&[&a.common.data]).check(&a.output)?;
-    // the report goes to stderr when the model itself streams to stdout (`-o -`)
-    let mut say = super::messages(&dest);
-    let data = load_with_input(
-        &a.common.data,
-        Some(&a.common.target),
-        true,
-        input_of(&a.common),
-    )?;
-    let err = |e| located(&data, &a.common.data, e);
-    let all: Vec<usize> = (0..data.len()).collect();
-    let (train, test, split) = if let Some(t) = a.train_until {
-        let (tr, te) = split_at_time(&data, t);
-        let s = Split {
-            train_until_min: Some(t),
-            ..Default::default()
-        };
-        (tr, te, s)
-    } else if !a.train.is_empty() {
-        let tr = rows_of_experiments(&data, &a.train).map_err(err)?;
-        let te = if a.test.is_empty() {
-            all.iter().copied().filter(|i| !tr.contains(i)).collect()
-        } else {
-            rows_of_experiments(&data, &a.test).map_err(err)?
-        };
-        let test_exps = if a.test.is_empty() {
-            data.experiments()
-                .into_iter()
-                .filter(|e| !a.train.contains(e))
-                .collect()
-        } else {
-            a.test.clone()
-        };
-        let s = Split {
-            train_experiments: a.train.clone(),
-            test_experiments: test_exps,
-            ..Default::default()
-        };
-        (tr, te, s)
-    } else if !a.test.is_empty() {
-        return Err(CliError::usage("--test needs --train"));
-    } else {
-        (all, Vec::new(), Split::default())
+        train: a.train.clone(),
+        test: a.test.clone(),
+        output: a.output.clone(),
+        nn: NnFitOptions {
+            sequence_by: nn.sequence_by.clone(),
+            features: nn.features.clone(),
+            angle_harmonics: nn.angle_harmonics,
+            rises: nn.rises,
+            epochs: nn.epochs,
+            patience: nn.patience,
+            window: nn.window,
+            conv_channels: nn.conv_channels,
+            lstm_hidden: nn.lstm_hidden,
+            learning_rate: nn.learning_rate,
+            final_lr_fraction: nn.final_lr_fraction,
+            batch_size: nn.batch_size,
+            hidden: nn.hidden,
+            seed: nn.seed,
+            ..NnFitOptions::new(kind)
+        },
     };
-    if train.is_empty() {
-        return Err(CliError::usage("the training selection holds no rows"));
-    }
-    let (model, candidates, validation, mut warnings) = if a.common.model == ModelKind::Auto {
-        let f = auto_fitter(&a.common, &data)
-            .fit_auto(&data, &train)
-            .map_err(err)?;
-        (f.model, f.candidates, Some(f.validation), Vec::new())
-    } else {
-        let model = fit_model(&a.common, &data, &train).map_err(err)?;
-        let (v, w) = validate_forward(&a.common, &data, &train);
-        (model, Vec::new(), v, w)
-    };
-    warnings.splice(0..0, model.warnings());
-    warnings.extend(validation.as_ref().and_then(worse_warning));
-    let pred = model.predict(&data).map_err(err)?;
-    let train_metrics = metrics_on(&model, &data, &train, &pred).map_err(err)?;
-    let test_metrics = if test.is_empty() {
-        None
-    } else {
-        Some(metrics_on(&model, &data, &test, &pred).map_err(err)?)
-    };
-    let mut split = split;
-    if split.train_experiments.is_empty() && split.train_until_min.is_none() {
-        split.train_experiments = data.experiments();
-    }
-    split.train_rows = train.len();
-    split.test_rows = test.len();
-    let file = ModelFile {
-        format: MODEL_FORMAT.into(),
-        target: data.target_name().unwrap_or_default().to_string(),
-        envelope: envelope(&model, &data, &train),
-        model,
-        split,
-        train_metrics,
-        test_metrics,
-        validation,
-        candidates,
-        warnings,
-    };
-    let text = serde_json::to_string_pretty(&file).map_err(|e| CliError::Internal(e.into()))?;
-    dest.write(text.as_bytes())?;
-    let show = |say: &mut dyn std::io::Write, name: &str, m: &Metrics| {
-        let _ = writeln!(
-            say,
-            "{name:<6} n={:<6} RMSE {:.3} um  MAE {:.3} um  max|res| {:.3} um  R² {}  compensation {}",
-            m.n,
-            m.rmse_um,
-            m.mae_um,
-            m.max_abs_residual_um,
-            fmt_opt(m.r2, 4),
-            m.compensation_rate.map(|c| format!("{:.1} %", 100.0 * c)).unwrap_or_else(|| "-".into())
-        );
-    };
-    if let ThermalModel::ExpAmbient(m) = &file.model {
-        let _ = writeln!(say,
-            "exp-ambient: δ = k·x + b, b = b_a(1 − exp(−ΔT_up/b_b)), k = k_a(1 − exp(−ΔT_nut/k_b)); b_a, ln b_b, k_a, ln k_b polynomials of degree {} in u = (T_a − 20 °C)/10 °C (coefficient ± standard uncertainty, ascending powers)",
-            m.degree
-        );
-        for (name, group) in [("ΔT_up", &m.up_group), ("ΔT_nut", &m.nut_group)] {
-            if !group.is_empty() {
-                let terms: Vec<String> = group
-                    .iter()
-                    .map(|g| format!("{:.4}·Δ{}", g.weight, g.sensor))
-                    .collect();
-                let _ = writeln!(
-                    say,
-                    "  {name} = {} (first principal component)",
-                    terms.join(" + ")
-                );
-            }
-        }
-        for (name, c, sd) in [
-            ("b_a [um]", &m.b_a, &m.b_a_sd),
-            ("ln b_b [C]", &m.ln_b_b, &m.ln_b_b_sd),
-            ("k_a [um/mm]", &m.k_a, &m.k_a_sd),
-            ("ln k_b [C]", &m.ln_k_b, &m.ln_k_b_sd),
-        ] {
-            let terms: Vec<String> = c
-                .iter()
-                .zip(sd)
-                .map(|(c, s)| format!("{c:.5} ± {s:.5}"))
-                .collect();
-            let _ = writeln!(say, "  {name:<12} {}", terms.join(", "));
-        }
-        if !m.held_at_cap.is_empty() {
-            let _ = writeln!(say,
-                "  held at the linear-limit cap (100 × the largest training rise, not fitted; ± 0 means held): {}",
-                m.held_at_cap.join(", ")
-            );
-        }
-        for l in &m.identifiability {
-            let _ = writeln!(say,
-                "  at {} °C: b_b = {:.4} °C (max ΔT_up {:.2} °C), k_b = {:.4} °C (max ΔT_nut {:.2} °C)",
-                l.ambient_c, l.b_b_c, l.max_dt_up_c, l.k_b_c, l.max_dt_nut_c
-            );
-        }
-    }
-    if !file.candidates.is_empty() {
-        print_candidates(&mut *say, &file.candidates);
-    }
-    if let ThermalModel::Linear(m) = &file.model {
-        let names: Vec<String> = m.features.iter().map(|f| f.name()).collect();
-        let _ = writeln!(say, "features: {}", names.join(", "));
-    }
-    show(&mut say, "train", &file.train_metrics);
-    if let Some(v) = &file.validation {
-        let _ = writeln!(
-            say,
-            "forward validation on the training rows: {} folds, pooled RMSE {:.3} um (the uncertainty predict reports), mean {:.3} ± {:.3} um",
-            v.folds.len(),
-            v.pooled_rmse_um,
-            v.mean_rmse_um(),
-            v.rmse_std_error_um
-        );
-    }
-    if let Some(m) = &file.test_metrics {
-        show(&mut say, "test", m);
-    }
-    for w in &file.warnings {
-        eprintln!("warning: {w}");
-    }
-    let _ = writeln!(say, "wrote {}", a.output.display());
+    single_candle_thread();
+    let mut term = Terminal::new(nn.quiet);
+    let outcome = ctrl_c::during(|| op::neural::fit(&opts, &mut term));
+    term.done();
+    let _ = write!(say_for(&opts.output), "{}", outcome?);
     Ok(())
 }
 
 fn predict(a: PredictArgs) -> Result<(), CliError> {
-    // where the predictions go is settled before any work (an input, a directory: exit 2)
-    let dest = match &a.output {
-        Some(p) => {
-            let mut g = OutputGuard::new(&[&a.data, &a.model]);
-            if let Some(h) = &a.history {
-                g.add_input(h);
-            }
-            Some(g.check(p)?)
-        }
-        None => None,
+    #[cfg(feature = "neural")]
+    single_candle_thread();
+    let opts = op::PredictOptions {
+        model: a.model,
+        data: a.data,
+        history: a.history,
+        output: a.output,
     };
-    let file: ModelFile = mtec_io::read_json(&a.model)?;
-    file.check_format()
-        .map_err(|e| CliError::Input(InputError::file(&a.model, e.to_string())))?;
-    // a non-temperature column the model reads (the heat input) must be in the data
-    let input_name = mtec_thermal::guard::model_columns(&file.model)
-        .into_iter()
-        .find(|c| !c.ends_with("_c") && c != "position_mm");
-    let input = input_name.as_deref().map(|n| (n, true));
-    let data = load_with_input(&a.data, Some(&file.target), false, input)?;
-    let (pred, outside) = match &a.history {
-        Some(h) => {
-            let hist = load_with_input(h, None, false, input)?;
-            let all = hist
-                .followed_by(&data)
-                .map_err(|e| CliError::Input(InputError::file(h, e.to_string())))?;
-            let p = file
-                .model
-                .predict(&all)
-                .map_err(|e| located(&all, &a.data, e))?;
-            let o = outside_envelope(&file.envelope, &all);
-            (p[hist.len()..].to_vec(), o[hist.len()..].to_vec())
-        }
-        None => {
-            if file.model.has_state() {
-                let t0 = data.time_min.first().copied().unwrap_or(0.0);
-                eprintln!(
-                    "note: the model's filters start in equilibrium with the first row of {} (time_min {t0}){}; pass the log before it with --history FILE if the machine was not at rest and settled then",
-                    a.data.display(),
-                    if t0 > 0.0 { ", which starts mid-record" } else { "" }
-                );
-            }
-            let p = file
-                .model
-                .predict(&data)
-                .map_err(|e| located(&data, &a.data, e))?;
-            (p, outside_envelope(&file.envelope, &data))
-        }
-    };
-    let uncertainty = file.validation.as_ref().map(|v| v.pooled_rmse_um);
-    let n_out = outside.iter().filter(|o| !o.is_empty()).count();
-    if n_out > 0 {
-        let mut cols: Vec<&String> = outside.iter().flatten().collect();
-        cols.sort();
-        cols.dedup();
-        let first = outside.iter().position(|o| !o.is_empty()).unwrap_or(0);
-        eprintln!(
-            "warning: {n_out} of {} rows have inputs outside the training range ({}; first at line {}): the model extrapolates there and its uncertainty does not hold",
-            outside.len(),
-            cols.iter().map(|c| c.as_str()).collect::<Vec<_>>().join(", "),
-            data.lines.get(first).copied().unwrap_or(0)
-        );
+    let mut obs = mtec_workflow::Collect::default();
+    let outcome = op::predict(&opts, &mut obs)?;
+    print_warnings(&obs);
+    for n in outcome.notes() {
+        eprintln!("note: {n}");
     }
-    if uncertainty.is_none() {
-        eprintln!("note: the model file has no forward validation, so the predictions carry no uncertainty (refit with this mtec)");
-    }
-    let metrics = match data.target_um() {
-        Ok(y) => Some(Metrics::new(y, &pred, file.model.predictors())),
-        Err(_) => None,
+    // with `-o -` the CSV has stdout and the JSON summary and metrics go to stderr
+    let mut say: Box<dyn Write> = match &opts.output {
+        Some(p) => say_for(p),
+        None => Box::new(std::io::stdout()),
     };
     if a.json {
-        let mut doc = serde_json::json!({
-            "format": "mtec.thermal-prediction/1",
-            "target": file.target,
-            "n": pred.len(),
-            "predictions": pred,
-            "uncertainty_um": uncertainty,
-            "rows_outside_training_range": n_out,
-        });
-        if let Some(m) = &metrics {
-            doc["rmse_um"] = m.rmse_um.into();
-            doc["mae_um"] = m.mae_um.into();
-            doc["max_abs_residual_um"] = m.max_abs_residual_um.into();
-            doc["metrics"] = serde_json::to_value(m).map_err(|e| CliError::Internal(e.into()))?;
-        }
-        // with `-o -` the CSV has stdout and the JSON summary goes to stderr
-        let mut say = match &dest {
-            Some(d) => super::messages(d),
-            None => Box::new(std::io::stdout()),
-        };
         let _ = writeln!(
             say,
             "{}",
-            serde_json::to_string(&doc).map_err(|e| CliError::Internal(e.into()))?
+            serde_json::to_string(&serde_json::to_value(&outcome)?)?
         );
+    } else {
+        // the metrics table (neural models); beside a CSV on stdout it goes to stderr
+        let report = outcome.to_string();
+        match &opts.output {
+            Some(_) => {
+                let _ = write!(say, "{report}");
+            }
+            None => eprint!("{report}"),
+        }
     }
-    if a.output.is_some() || !a.json {
-        let y = data.target_um().ok();
-        let mut csv = String::from("experiment,time_min,predicted_um");
-        if y.is_some() {
-            csv.push_str(",measured_um,residual_um");
-        }
-        if uncertainty.is_some() {
-            csv.push_str(",uncertainty_um");
-        }
-        csv.push_str(",outside_training_range\n");
-        for i in 0..pred.len() {
-            csv.push_str(&format!(
-                "{},{},{:.4}",
-                data.experiment[i], data.time_min[i], pred[i]
-            ));
-            if let Some(y) = y {
-                csv.push_str(&format!(",{:.4},{:.4}", y[i], y[i] - pred[i]));
-            }
-            if let Some(u) = uncertainty {
-                csv.push_str(&format!(",{u:.4}"));
-            }
-            csv.push_str(&format!(",{}\n", outside[i].join(";")));
-        }
-        match &dest {
-            Some(d) => d.write(csv.as_bytes())?,
-            None => print!("{csv}"),
-        }
+    if opts.output.is_none() && !a.json {
+        print!("{}", outcome.csv());
     }
     Ok(())
-}
-
-struct CvFitter<'a>(&'a Common);
-
-impl Fit for CvFitter<'_> {
-    type Model = ThermalModel;
-    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
-        fit_model(self.0, data, rows)
-    }
 }
 
 fn cv(a: CvArgs) -> Result<(), CliError> {
-    check_common(&a.common)?;
-    let data = load_with_input(
-        &a.common.data,
-        Some(&a.common.target),
-        true,
-        input_of(&a.common),
-    )?;
-    let err = |e| located(&data, &a.common.data, e);
-    let all: Vec<usize> = (0..data.len()).collect();
-    if !a.loo {
-        let folds = forward_folds(&duty_cycle_blocks(&data, &all, &block_spec(&a.common)));
-        if folds.is_empty() {
-            return Err(CliError::usage("forward validation needs at least two blocks (experiments, steps of the --input column, or --block-min shorter than the record)"));
-        }
-        let res = forward_cv(&CvFitter(&a.common), &data, &folds).map_err(err)?;
-        if a.json {
-            let mut doc = serde_json::to_value(&res).map_err(|e| CliError::Internal(e.into()))?;
-            doc["format"] = "mtec.thermal-cv/2".into();
-            doc["protocol"] = "forward".into();
-            doc["folds_worse_than_uncompensated"] =
-                serde_json::to_value(res.folds_worse_than_uncompensated())
-                    .map_err(|e| CliError::Internal(e.into()))?;
-            println!(
-                "{}",
-                serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?
-            );
-        } else {
-            println!("forward validation: fit on every block before, score the next block");
-            for (i, f) in res.folds.iter().enumerate() {
-                println!(
-                    "fold {:<3} train {:.0}–{:.0} min, score {:.0}–{:.0} min  n={:<6} RMSE {:.3} um  max|res| {:.3} um  uncompensated {:.3} um{}",
-                    i + 1,
-                    f.train_from_min,
-                    f.train_to_min,
-                    f.test_from_min,
-                    f.test_to_min,
-                    f.metrics.n,
-                    f.metrics.rmse_um,
-                    f.metrics.max_abs_residual_um,
-                    f.uncompensated_rmse_um,
-                    if f.worse_than_uncompensated() { "  WORSE THAN NO COMPENSATION" } else { "" }
-                );
-            }
-            println!(
-                "pooled RMSE {:.3} um, max|res| {:.3} um; mean fold RMSE {:.3} ± {:.3} um",
-                res.pooled_rmse_um,
-                res.pooled_max_abs_um,
-                res.mean_rmse_um(),
-                res.rmse_std_error_um
-            );
-        }
-        if let Some(w) = worse_warning(&res) {
-            eprintln!("warning: {w}");
-        }
-        return Ok(());
-    }
-    let blocks: Vec<Vec<usize>> = match a.common.block_min {
-        Some(b) if b > 0.0 => time_blocks(&data, b),
-        Some(_) => return Err(CliError::usage("--block-min must be > 0")),
-        None => data
-            .experiments()
-            .iter()
-            .map(|e| rows_of_experiments(&data, std::slice::from_ref(e)))
-            .collect::<Result<_, _>>()
-            .map_err(err)?,
+    let opts = op::CvOptions {
+        data: a.common.data.clone(),
+        target: a.common.target.clone(),
+        model: a.common.model.clone(),
+        fit: a.common.fit_options(),
+        loo: a.loo,
     };
-    if blocks.len() < 2 {
-        return Err(CliError::usage("leave-one-block-out needs at least two blocks (experiments, or --block-min shorter than the record)"));
+    // the warnings follow the report, as they always did
+    let mut obs = mtec_workflow::Collect::default();
+    let outcome = op::cv(&opts, &mut obs)?;
+    if let op::CvOutcome::LeaveOneBlockOut(o) = &outcome {
+        eprintln!("note: {}", o.note);
     }
-    let res = block_cv(&CvFitter(&a.common), &data, &blocks).map_err(err)?;
-    eprintln!("note: leave-one-block-out trains on the future of every block it scores: optimistic for a model that must predict forward (the default forward validation is the honest score)");
     if a.json {
-        let mut doc = serde_json::to_value(&res).map_err(|e| CliError::Internal(e.into()))?;
-        doc["format"] = "mtec.thermal-cv/1".into();
-        doc["protocol"] = "leave-one-block-out (optimistic)".into();
         println!(
             "{}",
-            serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?
+            serde_json::to_string_pretty(&serde_json::to_value(&outcome)?)?
         );
     } else {
-        for (i, m) in res.per_block.iter().enumerate() {
-            println!(
-                "block {:<3} n={:<6} RMSE {:.3} um  max|res| {:.3} um",
-                i + 1,
-                m.n,
-                m.rmse_um,
-                m.max_abs_residual_um
-            );
-        }
-        println!(
-            "pooled RMSE {:.3} um, max|res| {:.3} um (leave-one-block-out: optimistic)",
-            res.pooled_rmse_um, res.pooled_max_abs_um
-        );
+        print!("{outcome}");
     }
+    print_warnings(&obs);
     Ok(())
+}
+
+fn print_warnings(obs: &mtec_workflow::Collect) {
+    for w in &obs.warnings {
+        eprintln!("warning: {w}");
+    }
 }

@@ -139,7 +139,7 @@ fn fit_bpnn(
     dest: &Destination,
     obs: &mut dyn Observer,
 ) -> Result<FitOutcome> {
-    use mtec_nn::{fit_grid, GridFitConfig};
+    use mtec_nn::{fit_grid_monitored, GridFitConfig};
     let grid_path = &opts.grid;
     if hidden == 0 || hidden > 1000 {
         return Err(Error::usage(format!(
@@ -166,10 +166,10 @@ fn fit_bpnn(
     obs.progress(&format!("training a 3-{hidden}-3 BPNN on {n} grid points"));
     let config = GridFitConfig {
         hidden,
-        progress: true,
         ..GridFitConfig::default()
     };
-    let (mut net, report) = fit_grid(&p, &e, &config).map_err(|e| match e {
+    let fitted = fit_grid_monitored(&p, &e, &config, &mut crate::observer::Relay(obs));
+    let (mut net, report) = fitted.map_err(|e| match e {
         mtec_nn::NnError::Data(m) => Error::Input(InputError::file(grid_path, m)),
         other => Error::Internal(anyhow::anyhow!(other)),
     })?;

@@ -6,3 +6,4 @@ pub mod identify_ballbar;
 pub mod identify_lines;
 pub mod iso230_2;
 pub mod map;
+pub mod thermal;

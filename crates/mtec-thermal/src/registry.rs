@@ -1,0 +1,533 @@
+//! The registry of thermal model kinds: which kinds exist, what options each takes and how each
+//! is built from the options of a fit.
+//!
+//! Every kind is a fitter type (its options as plain data, `Serialize`/`Deserialize`) that
+//! implements [`Kind`]; the [`registry!`] list below turns them into [`ModelSpec`], an enum
+//! tagged by the kind's name (`{"model": "ridge", "k": 0.1, ...}`), and [`KINDS`], the table the
+//! command line takes its `--model` values and help from. A new kind is one file (the fitter,
+//! its `Fit` and its `Kind`) plus one line in `registry!`; it fits to one of the stored forms of
+//! [`ThermalModel`] (a new stored form is a new variant there).
+
+use crate::auto::{Auto, AutoFit};
+use crate::model::{ExpAmbient, Fit, Mlr, Ridge, RidgeSelect, ThermalModel};
+use crate::validate::{duty_cycle_blocks, forward_cv, forward_folds, BlockSpec, ForwardCv};
+use crate::{HeatInput, LagSelect, ThermalData, ThermalError};
+use serde::{Deserialize, Serialize};
+
+/// The options of a fit, as `thermal fit` takes them; each kind reads the ones it uses.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct FitOptions {
+    /// Sensor columns to use (all `_c` columns but `ambient_c` when empty).
+    pub sensors: Vec<String>,
+    /// Ridge parameter k (correlation form); `None`: chosen by the kind.
+    pub k: Option<f64>,
+    /// Add a first-order lag of each sensor (linear kinds).
+    pub lag: bool,
+    /// Validation block length, min (`None`: experiments, or the steps of `input`).
+    pub block_min: Option<f64>,
+    /// Largest number of temperature sensors (`None`: the kind's default).
+    pub max_sensors: Option<usize>,
+    /// The heat-source column (spindle speed, rpm).
+    pub input: String,
+    /// exp-ambient: the sensors whose first principal component is ΔT_up.
+    pub up_sensors: Vec<String>,
+    /// exp-ambient: the sensors whose first principal component is ΔT_nut.
+    pub nut_sensors: Vec<String>,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            sensors: Vec::new(),
+            k: None,
+            lag: false,
+            block_min: None,
+            max_sensors: None,
+            input: "spindle_rpm".into(),
+            up_sensors: Vec::new(),
+            nut_sensors: Vec::new(),
+        }
+    }
+}
+
+impl FitOptions {
+    /// The validation blocks the options ask for.
+    pub fn blocks(&self) -> BlockSpec {
+        BlockSpec {
+            block_min: self.block_min,
+            input: Some(self.input.clone()),
+        }
+    }
+
+    /// Whether the options fit together with `kind` (a usage error otherwise, phrased with the
+    /// command-line option names).
+    pub fn check(&self, kind: &KindInfo) -> Result<(), String> {
+        if let Some(b) = self.block_min {
+            if !(b > 0.0 && b.is_finite()) {
+                return Err("--block-min must be a number of minutes > 0".into());
+            }
+        }
+        if self.max_sensors == Some(0) {
+            return Err("--max-sensors must be at least 1".into());
+        }
+        if self.max_sensors.is_some() && !kind.takes_max_sensors {
+            return Err(format!(
+                "--max-sensors goes with --model {}",
+                names_where(|k| k.takes_max_sensors)
+            ));
+        }
+        (kind.check)(self)?;
+        if !self.up_sensors.is_empty() && !kind.takes_sensor_groups {
+            return Err(format!(
+                "--up-sensors and --nut-sensors go with --model {}",
+                names_where(|k| k.takes_sensor_groups)
+            ));
+        }
+        if let Some(k) = self.k {
+            if !(k >= 0.0 && k.is_finite() && kind.takes_k) {
+                return Err(format!(
+                    "--k must be a number ≥ 0 and goes with --model {}",
+                    names_where(|k| k.takes_k)
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The kinds for which `f` holds, as "a or b".
+fn names_where(f: impl Fn(&KindInfo) -> bool) -> String {
+    KINDS
+        .iter()
+        .filter(|k| f(k))
+        .map(|k| k.name)
+        .collect::<Vec<_>>()
+        .join(" or ")
+}
+
+/// A model fitted on training rows, with its forward validation on them.
+#[derive(Debug, Clone)]
+pub struct Validated {
+    pub model: ThermalModel,
+    /// `None`: the training rows hold fewer than two blocks, or the validation failed (said in
+    /// `warnings`).
+    pub validation: Option<ForwardCv>,
+    /// `auto`: every candidate's forward score.
+    pub candidates: Vec<crate::auto::CandidateScore>,
+    /// What the validation found (the model's own warnings are not repeated here).
+    pub warnings: Vec<String>,
+}
+
+/// A thermal model kind: a fitter (its options) that the registry can build and fit.
+pub trait Kind: Sized {
+    /// The `--model` value and the serde tag.
+    const NAME: &'static str;
+    /// One line for `--model`'s help (`""`: none).
+    const HELP: &'static str = "";
+    /// Takes `--k`.
+    const TAKES_K: bool = false;
+    /// Takes `--max-sensors`.
+    const TAKES_MAX_SENSORS: bool = false;
+    /// Takes `--up-sensors`/`--nut-sensors`.
+    const TAKES_SENSOR_GROUPS: bool = false;
+    /// Needs the heat-source column (`FitOptions::input`) in the log.
+    const REQUIRES_INPUT: bool = false;
+    /// A usage check of the options particular to the kind.
+    fn check(_options: &FitOptions) -> Result<(), String> {
+        Ok(())
+    }
+    /// The fitter the options describe (`data` for what the log has, e.g. auto's candidates).
+    fn from_options(options: &FitOptions, data: &ThermalData) -> Result<Self, ThermalError>;
+    /// Fits to the rows `rows` of `data` (the kind's [`Fit`], as the stored form).
+    fn fit_model(&self, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError>;
+    /// Fits on `train` and validates forward on the blocks of `train` (the default fits, then
+    /// refits on every fold; `auto` overrides it with its nested choice).
+    fn fit_validated(
+        &self,
+        data: &ThermalData,
+        train: &[usize],
+        blocks: &BlockSpec,
+    ) -> Result<Validated, ThermalError> {
+        let model = self.fit_model(data, train)?;
+        let (validation, warnings) = validate_forward(&AsModel(self), data, train, blocks);
+        Ok(Validated {
+            model,
+            validation,
+            candidates: Vec::new(),
+            warnings,
+        })
+    }
+}
+
+/// A kind as a fitter of the stored form.
+pub struct AsModel<'a, K>(pub &'a K);
+
+impl<K: Kind> Fit for AsModel<'_, K> {
+    type Model = ThermalModel;
+    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
+        self.0.fit_model(data, rows)
+    }
+}
+
+/// Forward validation of `fitter` on the rows `train` (`None`: fewer than two blocks, or the
+/// validation failed), and the warning that says so.
+pub fn validate_forward<F: Fit<Model = ThermalModel>>(
+    fitter: &F,
+    data: &ThermalData,
+    train: &[usize],
+    blocks: &BlockSpec,
+) -> (Option<ForwardCv>, Vec<String>) {
+    let folds = forward_folds(&duty_cycle_blocks(data, train, blocks));
+    if folds.is_empty() {
+        return (None, vec!["no forward validation: the training rows hold fewer than two blocks, so the model carries no uncertainty (use a longer record, experiments, or --block-min)".into()]);
+    }
+    match forward_cv(fitter, data, &folds) {
+        Ok(v) => (Some(v), Vec::new()),
+        Err(e) => (None, vec![format!("forward validation failed: {e}")]),
+    }
+}
+
+/// What the command line needs to know of a kind.
+#[derive(Debug, Clone, Copy)]
+pub struct KindInfo {
+    pub name: &'static str,
+    pub help: &'static str,
+    pub takes_k: bool,
+    pub takes_max_sensors: bool,
+    pub takes_sensor_groups: bool,
+    pub requires_input: bool,
+    pub check: fn(&FitOptions) -> Result<(), String>,
+}
+
+impl KindInfo {
+    const fn of<K: Kind>() -> KindInfo {
+        KindInfo {
+            name: K::NAME,
+            help: K::HELP,
+            takes_k: K::TAKES_K,
+            takes_max_sensors: K::TAKES_MAX_SENSORS,
+            takes_sensor_groups: K::TAKES_SENSOR_GROUPS,
+            requires_input: K::REQUIRES_INPUT,
+            check: K::check,
+        }
+    }
+}
+
+/// The kind named `name`.
+pub fn kind(name: &str) -> Option<&'static KindInfo> {
+    KINDS.iter().find(|k| k.name == name)
+}
+
+/// The registry: one line per kind, `Variant(FitterType)`; the variant's kebab-case name is the
+/// serde tag and must equal `FitterType::NAME` (a test checks it).
+macro_rules! registry {
+    ($($variant:ident($ty:ty)),* $(,)?) => {
+        /// A thermal model kind with its options, tagged by the kind's name.
+        #[derive(Debug, Clone, Serialize, Deserialize)]
+        #[serde(tag = "model", rename_all = "kebab-case")]
+        pub enum ModelSpec {
+            $($variant($ty)),*
+        }
+
+        /// Every kind, in the order `--model` lists them.
+        pub const KINDS: &[KindInfo] = &[$(KindInfo::of::<$ty>()),*];
+
+        impl ModelSpec {
+            /// The spec of kind `name` built from `options` (`Invalid` for an unknown name or
+            /// options the kind cannot use, e.g. exp-ambient without its two sensors).
+            pub fn from_options(
+                name: &str,
+                options: &FitOptions,
+                data: &ThermalData,
+            ) -> Result<ModelSpec, ThermalError> {
+                $(
+                    if name == <$ty as Kind>::NAME {
+                        return Ok(ModelSpec::$variant(<$ty as Kind>::from_options(options, data)?));
+                    }
+                )*
+                Err(ThermalError::Invalid(format!("no thermal model kind `{name}`")))
+            }
+
+            /// The kind's name.
+            pub fn name(&self) -> &'static str {
+                match self {
+                    $(ModelSpec::$variant(_) => <$ty as Kind>::NAME),*
+                }
+            }
+
+            /// Fits on `train` with forward validation on its blocks.
+            pub fn fit_validated(
+                &self,
+                data: &ThermalData,
+                train: &[usize],
+                blocks: &BlockSpec,
+            ) -> Result<Validated, ThermalError> {
+                match self {
+                    $(ModelSpec::$variant(k) => k.fit_validated(data, train, blocks)),*
+                }
+            }
+        }
+
+        impl Fit for ModelSpec {
+            type Model = ThermalModel;
+            fn fit_rows(
+                &self,
+                data: &ThermalData,
+                rows: &[usize],
+            ) -> Result<ThermalModel, ThermalError> {
+                match self {
+                    $(ModelSpec::$variant(k) => k.fit_model(data, rows)),*
+                }
+            }
+        }
+
+        #[cfg(test)]
+        fn defaults() -> Vec<(&'static str, ModelSpec)> {
+            vec![$((<$ty as Kind>::NAME, ModelSpec::$variant(<$ty>::default()))),*]
+        }
+    };
+}
+
+registry! {
+    Auto(Auto),
+    Mlr(Mlr),
+    Ridge(Ridge),
+    RidgeSelect(RidgeSelect),
+    ExpAmbient(ExpAmbient),
+    LagSelect(LagSelect),
+    HeatInput(HeatInput),
+}
+
+// ---- the kinds of this crate ----
+
+impl Kind for Auto {
+    const NAME: &'static str = "auto";
+    const HELP: &'static str = "Chooses the family by nested forward validation (see `fit --help`)";
+    const TAKES_MAX_SENSORS: bool = true;
+    fn check(o: &FitOptions) -> Result<(), String> {
+        if o.lag || !o.up_sensors.is_empty() {
+            return Err("--model auto chooses lags itself (no --lag) and takes exp-ambient as a candidate only from --sensors UP,NUT".into());
+        }
+        Ok(())
+    }
+    /// exp-ambient is a candidate when the data has its columns and `sensors` names its two
+    /// sensors.
+    fn fit_model(&self, d: &ThermalData, r: &[usize]) -> Result<ThermalModel, ThermalError> {
+        self.fit_rows(d, r)
+    }
+    fn from_options(o: &FitOptions, data: &ThermalData) -> Result<Self, ThermalError> {
+        let exp = data.ambient_c.is_some() && data.position_mm.is_some() && o.sensors.len() == 2;
+        Ok(Auto {
+            sensors: o.sensors.clone(),
+            input: o.input.clone(),
+            max_sensors: o.max_sensors.unwrap_or(crate::auto::DEFAULT_MAX_SENSORS),
+            block_min: o.block_min,
+            exp_ambient: exp.then(|| ExpAmbient {
+                up_sensor: o.sensors[0].clone(),
+                nut_sensor: o.sensors[1].clone(),
+                ..Default::default()
+            }),
+        })
+    }
+    fn fit_validated(
+        &self,
+        data: &ThermalData,
+        train: &[usize],
+        _blocks: &BlockSpec,
+    ) -> Result<Validated, ThermalError> {
+        let AutoFit {
+            model,
+            validation,
+            candidates,
+            ..
+        } = self.fit_auto(data, train)?;
+        Ok(Validated {
+            model,
+            validation: Some(validation),
+            candidates,
+            warnings: Vec::new(),
+        })
+    }
+}
+
+impl Kind for Mlr {
+    const NAME: &'static str = "mlr";
+    fn fit_model(&self, d: &ThermalData, r: &[usize]) -> Result<ThermalModel, ThermalError> {
+        Ok(ThermalModel::Linear(self.fit_rows(d, r)?))
+    }
+    fn from_options(o: &FitOptions, _: &ThermalData) -> Result<Self, ThermalError> {
+        Ok(Mlr {
+            sensors: o.sensors.clone(),
+            lag: o.lag,
+            blocks: o.blocks(),
+        })
+    }
+}
+
+impl Kind for Ridge {
+    const NAME: &'static str = "ridge";
+    const TAKES_K: bool = true;
+    fn fit_model(&self, d: &ThermalData, r: &[usize]) -> Result<ThermalModel, ThermalError> {
+        Ok(ThermalModel::Linear(self.fit_rows(d, r)?))
+    }
+    fn from_options(o: &FitOptions, _: &ThermalData) -> Result<Self, ThermalError> {
+        Ok(Ridge {
+            sensors: o.sensors.clone(),
+            k: o.k,
+            lag: o.lag,
+            blocks: o.blocks(),
+        })
+    }
+}
+
+impl Kind for RidgeSelect {
+    const NAME: &'static str = "ridge-select";
+    fn fit_model(&self, d: &ThermalData, r: &[usize]) -> Result<ThermalModel, ThermalError> {
+        Ok(ThermalModel::Linear(self.fit_rows(d, r)?))
+    }
+    fn from_options(o: &FitOptions, _: &ThermalData) -> Result<Self, ThermalError> {
+        Ok(RidgeSelect {
+            sensors: o.sensors.clone(),
+            options: Default::default(),
+            lag: o.lag,
+        })
+    }
+}
+
+impl Kind for ExpAmbient {
+    const NAME: &'static str = "exp-ambient";
+    const TAKES_SENSOR_GROUPS: bool = true;
+    fn check(o: &FitOptions) -> Result<(), String> {
+        if o.lag {
+            return Err("--lag applies to the linear models, not exp-ambient".into());
+        }
+        Ok(())
+    }
+    fn fit_model(&self, d: &ThermalData, r: &[usize]) -> Result<ThermalModel, ThermalError> {
+        Ok(ThermalModel::ExpAmbient(Box::new(self.fit_rows(d, r)?)))
+    }
+    fn from_options(o: &FitOptions, _: &ThermalData) -> Result<Self, ThermalError> {
+        if !o.up_sensors.is_empty() {
+            return Ok(ExpAmbient {
+                up_sensors: o.up_sensors.clone(),
+                nut_sensors: o.nut_sensors.clone(),
+                ..Default::default()
+            });
+        }
+        let [up, nut] = o.sensors.as_slice() else {
+            return Err(ThermalError::Invalid(
+                "exp-ambient needs --sensors UP,NUT: the upper-bearing sensor, then the ball-screw-nut sensor (or --up-sensors A,B --nut-sensors C,D for sensor groups)".into(),
+            ));
+        };
+        Ok(ExpAmbient {
+            up_sensor: up.clone(),
+            nut_sensor: nut.clone(),
+            ..Default::default()
+        })
+    }
+}
+
+impl Kind for LagSelect {
+    const NAME: &'static str = "lag-select";
+    const TAKES_MAX_SENSORS: bool = true;
+    fn fit_model(&self, d: &ThermalData, r: &[usize]) -> Result<ThermalModel, ThermalError> {
+        Ok(ThermalModel::Linear(self.fit_rows(d, r)?))
+    }
+    fn from_options(o: &FitOptions, _: &ThermalData) -> Result<Self, ThermalError> {
+        Ok(LagSelect {
+            sensors: o.sensors.clone(),
+            max_sensors: o.max_sensors.unwrap_or(3),
+            block_min: o.block_min,
+            input: Some(o.input.clone()),
+        })
+    }
+}
+
+impl Kind for HeatInput {
+    const NAME: &'static str = "heat-input";
+    const REQUIRES_INPUT: bool = true;
+    fn fit_model(&self, d: &ThermalData, r: &[usize]) -> Result<ThermalModel, ThermalError> {
+        Ok(ThermalModel::HeatInput(self.fit_rows(d, r)?))
+    }
+    fn from_options(o: &FitOptions, _: &ThermalData) -> Result<Self, ThermalError> {
+        Ok(HeatInput {
+            input: o.input.clone(),
+            block_min: o.block_min,
+            ..Default::default()
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The serde tag of every kind is its `--model` name, and a spec reads back as itself.
+    #[test]
+    fn tags_are_the_names() {
+        for (name, spec) in defaults() {
+            let v = serde_json::to_value(&spec).unwrap();
+            assert_eq!(v["model"], name);
+            assert_eq!(spec.name(), name);
+            let back: ModelSpec = serde_json::from_value(v.clone()).unwrap();
+            assert_eq!(serde_json::to_value(&back).unwrap(), v);
+        }
+        let names: Vec<&str> = KINDS.iter().map(|k| k.name).collect();
+        assert_eq!(
+            names,
+            [
+                "auto",
+                "mlr",
+                "ridge",
+                "ridge-select",
+                "exp-ambient",
+                "lag-select",
+                "heat-input"
+            ]
+        );
+    }
+
+    /// A spec written by hand takes the kind's defaults for what it leaves out.
+    #[test]
+    fn partial_spec_takes_defaults() {
+        let s: ModelSpec = serde_json::from_str(r#"{"model": "ridge", "k": 0.25}"#).unwrap();
+        match s {
+            ModelSpec::Ridge(r) => {
+                assert_eq!(r.k, Some(0.25));
+                assert!(!r.lag && r.sensors.is_empty());
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// The usage messages name the kinds that take an option, from the registry.
+    #[test]
+    fn option_checks_name_the_kinds() {
+        let mlr = kind("mlr").unwrap();
+        let o = FitOptions {
+            max_sensors: Some(2),
+            ..Default::default()
+        };
+        assert_eq!(
+            o.check(mlr).unwrap_err(),
+            "--max-sensors goes with --model auto or lag-select"
+        );
+        let o = FitOptions {
+            k: Some(0.1),
+            ..Default::default()
+        };
+        assert_eq!(
+            o.check(mlr).unwrap_err(),
+            "--k must be a number ≥ 0 and goes with --model ridge"
+        );
+        assert!(o.check(kind("ridge").unwrap()).is_ok());
+        let o = FitOptions {
+            lag: true,
+            ..Default::default()
+        };
+        assert!(o.check(kind("auto").unwrap()).is_err());
+        assert!(o.check(kind("exp-ambient").unwrap()).is_err());
+        assert!(o.check(mlr).is_ok());
+    }
+}

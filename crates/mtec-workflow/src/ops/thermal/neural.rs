@@ -1,0 +1,425 @@
+//! `thermal fit|predict` with the neural models of `mtec-nn` (cargo feature `neural`):
+//! `cnn-lstm` and `bpnn` on thermal logs with any number of targets.
+//!
+//! The log format, feature resolution and training configuration are
+//! [`mtec_nn::thermal_log`]'s. The model file is the network's own versioned format
+//! (`mtec.cnn-lstm/1`, `mtec.bpnn/1`); this job adds under `provenance` the data file,
+//! `sequence_by`, the split, the metrics and the sampling interval, and [`predict`] reads
+//! `sequence_by`, `rises` and the interval back from there. The training reports its epochs to
+//! the observer ([`Observer::progress`]) and stops after the current epoch, keeping the best
+//! epoch's weights, when [`Observer::stop_requested`] turns true (the file is still written).
+//! candle's thread count is the calling program's to set ([`mtec_nn::threads`]).
+
+use super::PredictOptions;
+use crate::{Error, Observer, Result};
+use mtec_io::{InputError, OutputGuard, Table};
+use mtec_nn::metrics::{channel_metrics, ChannelMetrics};
+use mtec_nn::thermal_log::{self, LoadSpec, NnFitOptions, NnKind};
+use mtec_nn::{
+    train_bpnn_baseline_monitored, train_cnn_lstm_monitored, Bpnn, CnnLstm, CnnLstmReport, NnError,
+    StopReason, ThermalDataset, TrainReport,
+};
+use serde::Serialize;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// Options of [`fit`].
+#[derive(Debug, Clone)]
+pub struct FitOptions {
+    /// Thermal log (CSV).
+    pub data: PathBuf,
+    /// Target columns, comma-separated (`ez_um` or `ez`).
+    pub target: String,
+    /// Sensor columns (every `_c` column but `ambient_c` when empty).
+    pub sensors: Vec<String>,
+    /// Experiments to train on (all when empty).
+    pub train: Vec<String>,
+    /// Experiments to test on (every other one when empty).
+    pub test: Vec<String>,
+    /// Model file to write (JSON; `-`: stdout).
+    pub output: PathBuf,
+    /// The network and its training.
+    pub nn: NnFitOptions,
+}
+
+/// How the network trained.
+#[derive(Debug, Clone, Serialize)]
+#[serde(untagged)]
+pub enum Training {
+    CnnLstm(CnnLstmReport),
+    Bpnn(TrainReport),
+}
+
+impl Training {
+    pub fn stop_reason(&self) -> &StopReason {
+        match self {
+            Training::CnnLstm(r) => &r.stop_reason,
+            Training::Bpnn(r) => &r.stop_reason,
+        }
+    }
+}
+
+/// The trained network (written to `output`) and its scores.
+#[derive(Debug, Clone, Serialize)]
+pub struct FitOutcome {
+    pub output: PathBuf,
+    pub kind: NnKind,
+    /// The model file's format (`mtec.cnn-lstm/1`, `mtec.bpnn/1`).
+    pub format: String,
+    pub train_experiments: Vec<u32>,
+    pub test_experiments: Option<Vec<u32>>,
+    /// One line: the network, its size and how the training ended.
+    pub summary: String,
+    pub training: Training,
+    pub train_metrics: Vec<ChannelMetrics>,
+    pub test_metrics: Option<Vec<ChannelMetrics>>,
+    /// The model file written (JSON).
+    #[serde(skip)]
+    pub model_json: String,
+    pub warnings: Vec<String>,
+}
+
+/// Metrics per channel as a small table (ratio = max|res| / range of the measured values).
+pub fn metrics_table(what: &str, m: &[ChannelMetrics]) -> String {
+    let mut s = format!(
+        "{what}\n  {:<14} {:>6} {:>10} {:>10} {:>10} {:>10} {:>8}\n",
+        "channel", "n", "RMSE", "MAE", "max|res|", "range", "ratio"
+    );
+    for c in m {
+        s.push_str(&format!(
+            "  {:<14} {:>6} {:>10.4} {:>10.4} {:>10.4} {:>10.4} {:>8.3}\n",
+            c.channel, c.n, c.rmse, c.mae, c.max_abs_residual, c.range, c.residual_ratio
+        ));
+    }
+    s
+}
+
+/// The `thermal fit --model cnn-lstm|bpnn` report.
+impl fmt::Display for FitOutcome {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "{}", self.summary)?;
+        write!(f, "{}", metrics_table("train", &self.train_metrics))?;
+        if let Some(m) = &self.test_metrics {
+            write!(f, "{}", metrics_table("test", m))?;
+        }
+        writeln!(f, "wrote {}", self.output.display())
+    }
+}
+
+/// A network error about the file `path`: bad data or model located there, bad options a
+/// usage error, the rest internal.
+fn nn_error(path: &Path, e: NnError) -> Error {
+    match e {
+        NnError::Data(m) | NnError::Model(m) => Error::Input(InputError::file(path, m)),
+        NnError::Input(e) => Error::Input(e),
+        NnError::Config(m) => Error::Usage(m),
+        other => Error::Internal(anyhow::anyhow!(other)),
+    }
+}
+
+fn parse_ids(list: &[String], what: &str) -> Result<Vec<u32>> {
+    list.iter()
+        .map(|s| {
+            s.trim().parse::<u32>().map_err(|_| {
+                Error::usage(format!(
+                    "--{what} takes experiment numbers (e.g. 1,2,4), got `{s}`"
+                ))
+            })
+        })
+        .collect()
+}
+
+/// Trains a CNN-LSTM or a BPNN on the log's training experiments, scores it on both sets and
+/// writes the model file.
+pub fn fit(opts: &FitOptions, obs: &mut dyn Observer) -> Result<FitOutcome> {
+    // where the model goes is settled before any work (an input, a directory: exit 2)
+    let dest = OutputGuard::new(&[&opts.data]).check(&opts.output)?;
+    let nn = &opts.nn;
+    let table = Table::read(&opts.data)?;
+    let cols = thermal_log::resolve_columns(&table, &opts.target, &opts.sensors, nn)
+        .map_err(|e| nn_error(&opts.data, e))?;
+    drop(table);
+    let mut loaded = thermal_log::load(
+        &opts.data,
+        &LoadSpec {
+            features: &cols.features,
+            targets: &cols.targets,
+            sequence_by: cols.sequence_by.as_deref(),
+            need_targets: true,
+            strict_time: nn.kind == NnKind::CnnLstm,
+            trained_interval_min: None,
+        },
+    )
+    .map_err(|e| nn_error(&opts.data, e))?;
+    // the leading sensor features as rises (0: absolute temperatures)
+    let rises = if nn.rises { cols.n_sensors } else { 0 };
+    loaded.data = loaded.data.rises(rises);
+    let train_ids = parse_ids(&opts.train, "train")?;
+    let test_ids = parse_ids(&opts.test, "test")?;
+    if !test_ids.is_empty() && train_ids.is_empty() {
+        return Err(Error::usage("--test needs --train"));
+    }
+    let (train, test) = thermal_log::split_by_experiment(&loaded.data, &train_ids, &test_ids)
+        .map_err(|e| nn_error(&opts.data, e))?;
+    let train_exps: Vec<u32> = train.experiments.iter().map(|e| e.id).collect();
+    let test_exps: Option<Vec<u32>> = test
+        .as_ref()
+        .map(|t| t.experiments.iter().map(|e| e.id).collect());
+    let interval = loaded.interval_min;
+    let provenance = |training: serde_json::Value,
+                      train_m: &[ChannelMetrics],
+                      test_m: Option<&Vec<ChannelMetrics>>| {
+        serde_json::json!({
+            "data": opts.data.display().to_string(),
+            "sequence_by": cols.sequence_by,
+            "rises": rises,
+            "train_experiments": train_exps,
+            "test_experiments": test_exps,
+            "train_metrics": train_m,
+            "test_metrics": test_m,
+            "training": training,
+            "sample_interval_min": interval,
+        })
+    };
+    let err = |e| nn_error(&opts.data, e);
+    let mut monitor = crate::observer::Relay(obs);
+    let (format, summary, training, train_m, test_m, text) = match nn.kind {
+        NnKind::CnnLstm => {
+            let (mut model, report) =
+                train_cnn_lstm_monitored(&train, &nn.cnn_lstm_config(), &mut monitor)
+                    .map_err(err)?;
+            let summary = format!(
+                "CNN-LSTM ({} parameters, window {} rows = {}, {} filters, LSTM {}) on experiments {:?}: {} epochs, best {}, {:.1} s; {}",
+                report.parameters,
+                model.architecture.window,
+                interval
+                    .map(|i| format!("{} min", i * model.architecture.window as f64))
+                    .unwrap_or_else(|| "? min".into()),
+                model.architecture.conv_channels,
+                model.architecture.lstm_hidden,
+                train_exps,
+                report.epochs,
+                report.best_epoch,
+                report.seconds,
+                report.stop_reason
+            );
+            let train_m = model.evaluate(&train).map_err(err)?;
+            let test_m = match &test {
+                Some(t) => Some(model.evaluate(t).map_err(err)?),
+                None => None,
+            };
+            let training = serde_json::json!({"model": model.provenance, "report": report});
+            model.provenance = provenance(training, &train_m, test_m.as_ref());
+            let text = model.to_json();
+            (
+                model.format.clone(),
+                summary,
+                Training::CnnLstm(report),
+                train_m,
+                test_m,
+                text,
+            )
+        }
+        NnKind::Bpnn => {
+            let (mut net, report) =
+                train_bpnn_baseline_monitored(&train, &nn.bpnn_config(), &mut monitor)
+                    .map_err(err)?;
+            let summary = format!(
+                "BPNN {}-{}-{} ({} parameters) on experiments {:?}: {} Levenberg-Marquardt iterations, best {}; {}",
+                net.n_in(),
+                net.n_hidden(),
+                net.n_out(),
+                net.param_count(),
+                train_exps,
+                report.epochs,
+                report.best_epoch,
+                report.stop_reason
+            );
+            let eval = |d: &ThermalDataset| mtec_nn::evaluate_bpnn(&net, d).map_err(err);
+            let train_m = eval(&train)?;
+            let test_m = match &test {
+                Some(t) => Some(eval(t)?),
+                None => None,
+            };
+            let training = serde_json::json!({"model": net.provenance, "report": report});
+            net.provenance = provenance(training, &train_m, test_m.as_ref());
+            let text = net.to_json();
+            (
+                mtec_comp::bpnn::FORMAT.to_string(),
+                summary,
+                Training::Bpnn(report),
+                train_m,
+                test_m,
+                text,
+            )
+        }
+    };
+    dest.write(text.as_bytes())?;
+    Ok(FitOutcome {
+        output: opts.output.clone(),
+        kind: nn.kind,
+        format,
+        train_experiments: train_exps.clone(),
+        test_experiments: test_exps.clone(),
+        summary,
+        training,
+        train_metrics: train_m,
+        test_metrics: test_m,
+        model_json: text,
+        warnings: Vec::new(),
+    })
+}
+
+/// A neural model file, by its `format`.
+#[derive(Debug, Clone)]
+pub enum NnModel {
+    CnnLstm(CnnLstm),
+    Bpnn(Bpnn),
+}
+
+/// Reads `path` as a neural model when its `format` says so (`None`: another model kind).
+pub fn read_model(path: &Path) -> Result<Option<NnModel>> {
+    let Some(format) = super::neural_format(path)? else {
+        return Ok(None);
+    };
+    let text = std::fs::read_to_string(path)?;
+    let bad = |e: NnError| Error::Input(InputError::file(path, e.to_string()));
+    Ok(Some(if format == super::CNN_LSTM_FORMAT {
+        NnModel::CnnLstm(CnnLstm::from_json(&text).map_err(bad)?)
+    } else {
+        NnModel::Bpnn(Bpnn::from_json(&text).map_err(|e| bad(e.into()))?)
+    }))
+}
+
+/// The predictions of a neural model file.
+#[derive(Debug, Clone, Serialize)]
+pub struct Prediction {
+    pub format: String,
+    pub targets: Vec<String>,
+    pub n: usize,
+    /// Per row, one value per target.
+    pub predictions: Vec<Vec<f64>>,
+    /// Per target, when the data hold the targets.
+    pub metrics: Option<Vec<ChannelMetrics>>,
+    /// `experiment,time_min[,<sequence_by>],pred_<t>...[,<t>,res_<t>...]`
+    #[serde(skip)]
+    pub csv: String,
+}
+
+/// The metrics table, when the data hold the targets.
+impl fmt::Display for Prediction {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.metrics {
+            Some(m) => write!(f, "{}", metrics_table("metrics", m)),
+            None => Ok(()),
+        }
+    }
+}
+
+/// `thermal predict` with a neural model file: predictions per row, metrics when the data hold
+/// the targets, the CSV (written to `output` when given).
+pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Prediction> {
+    // where the predictions go is settled before any work (an input, a directory: exit 2)
+    let dest = match &opts.output {
+        Some(p) => Some(OutputGuard::new(&[&opts.data, &opts.model]).check(p)?),
+        None => None,
+    };
+    let model = read_model(&opts.model)?.ok_or_else(|| {
+        Error::Input(InputError::file(
+            &opts.model,
+            "not a neural model file (`format` is not mtec.cnn-lstm/1 or mtec.bpnn/1)",
+        ))
+    })?;
+    let (features, targets, provenance) = match &model {
+        NnModel::CnnLstm(m) => (&m.feature_names, &m.target_names, &m.provenance),
+        NnModel::Bpnn(m) => (&m.input_names, &m.output_names, &m.provenance),
+    };
+    // the sequences of the fit (a BPNN takes rows one by one; its sequences only matter for
+    // where the rises start)
+    let seq_by = provenance
+        .get("sequence_by")
+        .and_then(|v| v.as_str())
+        .map(str::to_string);
+    // the CNN-LSTM's window is rows of the interval it was trained on
+    let trained_interval = provenance
+        .get("sample_interval_min")
+        .and_then(|v| v.as_f64());
+    let data = &opts.data;
+    let mut loaded = thermal_log::load(
+        data,
+        &LoadSpec {
+            features,
+            targets,
+            sequence_by: seq_by.as_deref(),
+            need_targets: false,
+            strict_time: matches!(model, NnModel::CnnLstm(_)),
+            trained_interval_min: trained_interval,
+        },
+    )
+    .map_err(|e| nn_error(data, e))?;
+    // trained on rises of the first k features (`thermal fit --rises`): the same here
+    let rises = provenance
+        .get("rises")
+        .and_then(|v| v.as_u64())
+        .unwrap_or(0) as usize;
+    loaded.data = loaded.data.rises(rises.min(features.len()));
+    let pred: Vec<Vec<f64>> = match &model {
+        NnModel::CnnLstm(m) => m.predict(&loaded.data).map_err(|e| nn_error(data, e))?,
+        NnModel::Bpnn(m) => loaded
+            .data
+            .rows()
+            .0
+            .iter()
+            .map(|r| m.predict(r))
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|e| nn_error(data, e.into()))?,
+    };
+    let meas = loaded.has_targets.then(|| loaded.data.rows().1);
+    let metrics = meas.as_ref().map(|y| channel_metrics(targets, &pred, y));
+    let mut csv = String::from("experiment,time_min");
+    if let Some(c) = &seq_by {
+        csv.push(',');
+        csv.push_str(c);
+    }
+    for t in targets {
+        csv.push_str(&format!(",pred_{t}"));
+    }
+    if meas.is_some() {
+        for t in targets {
+            csv.push_str(&format!(",{t},res_{t}"));
+        }
+    }
+    csv.push('\n');
+    for (i, l) in loaded.labels.iter().enumerate() {
+        csv.push_str(&format!("{},{}", l.experiment, l.time_min));
+        if let Some(s) = l.sequence {
+            csv.push_str(&format!(",{s}"));
+        }
+        for p in &pred[i] {
+            csv.push_str(&format!(",{p:.4}"));
+        }
+        if let Some(y) = &meas {
+            for (p, v) in pred[i].iter().zip(&y[i]) {
+                csv.push_str(&format!(",{v:.4},{:.4}", v - p));
+            }
+        }
+        csv.push('\n');
+    }
+    if let Some(d) = &dest {
+        d.write(csv.as_bytes())?;
+    }
+    Ok(Prediction {
+        format: "mtec.thermal-prediction/1".into(),
+        targets: targets.clone(),
+        n: pred.len(),
+        predictions: pred,
+        metrics,
+        csv,
+    })
+}
+
+/// The format the CLI recognises before it has the network crate is the network's own.
+#[test]
+fn cnn_lstm_format_is_the_networks() {
+    assert_eq!(super::CNN_LSTM_FORMAT, mtec_nn::cnn_lstm::FORMAT);
+}
