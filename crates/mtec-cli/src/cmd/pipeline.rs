@@ -1,4 +1,6 @@
-//! The stages of `mtec run`: each calls one subcommand and turns its result into a report section.
+//! The stages of `mtec run`: each runs one job of `mtec_workflow::ops` in-process, saves its
+//! result as the command's `--json` prints it, and turns it into a report section; the job's
+//! warnings are printed and noted in the section.
 
 use super::run::{
     BallbarStage, CompensationStage, LinesStage, MapStage, Pipeline, SensitivityStage, ThermalStage,
@@ -7,6 +9,9 @@ use crate::error::CliError;
 use mtec_comp::kinematic::KinematicFile;
 use mtec_report::{bar_chart, line_chart, scatter_chart, Section, Series};
 use mtec_sensitivity::error_model::ErrorStatistics;
+use mtec_thermal::model_file::SplitBy;
+use mtec_workflow::ops;
+use mtec_workflow::Collect;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -126,10 +131,13 @@ pub fn iso230_2(p: &mut Pipeline, data: &Path) -> Result<(), CliError> {
     let f = p.path_of(data);
     p.progress_of(&format!("ISO 230-2 statistics of {}", f.display()));
     let name = format!("iso230-2-{}.json", stem(&f));
-    let v = p.json_stage_of(&name, vec!["iso230-2".into(), s(&f), "--json".into()])?;
+    let mut obs = Collect::default();
+    let done = ops::iso230_2::run(&ops::iso230_2::Options::new(&f), &mut obs)?;
+    let v = p.json_result(&name, &format!("{}\n", done.to_json()?))?;
     let sec = p
         .report
         .section(format!("Positioning (ISO 230-2): {}", stem(&f)));
+    warnings(sec, &obs);
     sec.text("Bidirectional positioning accuracy A, repeatability R, reversal B, systematic deviation E and mean reversal per ISO 230-2:2014, from the laser runs.");
     // mean unidirectional deviations with their ±2s bands, from the statistics themselves
     if let Some(targets) = v.get("targets").and_then(Value::as_array) {
@@ -176,6 +184,63 @@ pub fn iso230_2(p: &mut Pipeline, data: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
+/// A job's warnings: on stderr, as the command prints them, and in the report section (a report
+/// never hides what the job warned about).
+fn warnings(sec: &mut Section, obs: &Collect) {
+    for w in &obs.warnings {
+        eprintln!("warning: {w}");
+        sec.note(format!("Warning: {w}"));
+    }
+}
+
+/// `thermal fit` of a regression or (in the `neural` build) a neural model.
+fn fit_thermal(opts: &ops::thermal::FitOptions, obs: &mut Collect) -> Result<(), CliError> {
+    if ops::thermal::is_neural(&opts.model) {
+        return fit_neural(opts, obs);
+    }
+    ops::thermal::fit(opts, obs).map(|_| ())
+}
+
+#[cfg(feature = "neural")]
+fn fit_neural(opts: &ops::thermal::FitOptions, obs: &mut Collect) -> Result<(), CliError> {
+    use mtec_nn::thermal_log::{NnFitOptions, NnKind};
+    let (train, test) = match &opts.split {
+        SplitBy::All => (Vec::new(), Vec::new()),
+        SplitBy::Experiments { train, test } => (train.clone(), test.clone()),
+        SplitBy::Until(_) => {
+            return Err(CliError::usage(
+                "a neural [[thermal]] stage splits by `train`/`test` experiments, not `train_until_min`",
+            ))
+        }
+    };
+    if opts.fit.lag {
+        return Err(CliError::usage(
+            "`lag` goes with the regression models, not a neural [[thermal]] stage",
+        ));
+    }
+    let kind =
+        NnKind::from_name(&opts.model).ok_or_else(|| CliError::usage("not a neural model"))?;
+    let nn = ops::thermal::neural::FitOptions {
+        data: opts.data.clone(),
+        target: opts.target.clone(),
+        sensors: opts.fit.sensors.clone(),
+        train,
+        test,
+        output: opts.output.clone(),
+        nn: NnFitOptions::new(kind),
+    };
+    super::thermal::single_candle_thread();
+    ops::thermal::neural::fit(&nn, obs).map(|_| ())
+}
+
+#[cfg(not(feature = "neural"))]
+fn fit_neural(opts: &ops::thermal::FitOptions, _obs: &mut Collect) -> Result<(), CliError> {
+    Err(mtec_workflow::neural_unavailable(&format!(
+        "a [[thermal]] stage with model = \"{}\"",
+        opts.model
+    )))
+}
+
 fn stem(p: &Path) -> String {
     p.file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -187,25 +252,19 @@ pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> Result<PathBuf
     let data = p.path_of(&l.data);
     p.progress_of("identification of the error elements from the line measurements");
     let errors = p.out.join("identified-errors.json");
-    let mut args = vec![
-        "identify".into(),
-        "lines".into(),
-        "--machine".into(),
-        s(machine),
-        "--data".into(),
-        s(&data),
-        "--json".into(),
-        "-o".into(),
-        s(&errors),
-    ];
+    let mut opts = ops::identify_lines::Options::new(machine, &data);
+    opts.output = Some(errors.clone());
     if let Some(d) = l.degree {
-        args.extend(["--degree".into(), d.to_string()]);
+        opts.degree = d;
     }
-    let v = p.json_stage_of("identify-lines.json", args)?;
+    let mut obs = Collect::default();
+    let done = ops::identify_lines::run(&opts, &mut obs)?;
+    let v = p.json_result("identify-lines.json", &format!("{}\n", done.to_json()?))?;
     p.outputs.push(s(&errors));
     let sec = p
         .report
         .section("Identified geometric errors (line measurements)");
+    warnings(sec, &obs);
     sec.text("Error elements identified by least squares from the laser-interferometer lines; the identifiability report names what the design cannot determine.");
     let mach = crate::inputs::read_machine(machine)?;
     if let Ok(set) = crate::inputs::read_errors(&errors) {
@@ -367,19 +426,18 @@ pub fn circular(p: &mut Pipeline, data: &Path) -> Result<(), CliError> {
     p.progress_of(&format!("circular test {}", f.display()));
     // `circular --out` draws the polar plot the CLI gives; the report shows that same figure
     let dir = p.out.join(format!("circular-{}", stem(&f)));
-    let v = p.json_stage_of(
+    let mut opts = ops::circular::Options::new(&f);
+    opts.out = Some(dir.clone());
+    let mut obs = Collect::default();
+    let done = ops::circular::run(&opts, &mut obs)?;
+    let v = p.json_result(
         &format!("circular-{}.json", stem(&f)),
-        vec![
-            "circular".into(),
-            s(&f),
-            "--json".into(),
-            "--out".into(),
-            s(&dir),
-        ],
+        &format!("{}\n", done.to_json()?),
     )?;
     let sec = p
         .report
         .section(format!("Circular test (ISO 230-4): {}", stem(&f)));
+    warnings(sec, &obs);
     sec.text(format!(
         "Circular deviation G and circular hysteresis H per ISO 230-4 ({} plane, R = {} mm, \
          F = {} mm/min), then the ballbar diagnostics fitted from the trace, ranked by their \
@@ -482,24 +540,19 @@ fn fault_rows(v: &Value) -> Vec<Vec<String>> {
 pub fn ballbar(p: &mut Pipeline, b: &BallbarStage) -> Result<(), CliError> {
     p.progress_of("ballbar identification of the rotary axis");
     let dir = p.out.join("ballbar");
-    let mut args = vec![
-        "identify".into(),
-        "ballbar".into(),
-        "--setup".into(),
-        s(&p.path_of(&b.setup)),
-        "--data".into(),
-        s(&p.path_of(&b.data)),
-        "--out".into(),
-        s(&dir),
-        "--json".into(),
-    ];
-    if let Some(t) = &b.temps {
-        args.extend(["--temps".into(), s(&p.path_of(t))]);
-    }
-    let v = p.json_stage_of("ballbar.json", args)?;
+    let opts = ops::identify_ballbar::Options {
+        setup: p.path_of(&b.setup),
+        data: p.path_of(&b.data),
+        temps: b.temps.as_ref().map(|t| p.path_of(t)),
+        out: Some(dir.clone()),
+    };
+    let mut obs = Collect::default();
+    let done = ops::identify_ballbar::run(&opts, &mut obs)?;
+    let v = p.json_result("ballbar.json", &format!("{}\n", done.to_json()?))?;
     let sec = p
         .report
         .section("Rotary axis: ballbar identification (5 installation modes)");
+    warnings(sec, &obs);
     sec.text("Error motions EXC, EYC, EZC (µm), EAC, EBC (µrad) identified per angle and time from five installation modes, after removal of each mode's mean and first harmonic (set-up errors). ECC is not observable by a ballbar.");
     let mut svgs: Vec<PathBuf> = std::fs::read_dir(&dir)
         .map(|d| {
@@ -532,45 +585,52 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> Result<PathBuf, CliError> 
     p.progress_of(&format!("thermal model of {} ({})", t.target, t.model));
     let tag = format!("{}-{}", stem(&data), t.target);
     let model = p.out.join(format!("thermal-model-{tag}.json"));
-    let mut fit = vec![
-        "thermal".into(),
-        "fit".into(),
-        "--data".into(),
-        s(&data),
-        "--target".into(),
-        t.target.clone(),
-        "--model".into(),
-        t.model.clone(),
-        "-o".into(),
-        s(&model),
-    ];
-    if let (Some(tr), Some(te)) = (&t.train, &t.test) {
-        fit.extend(["--train".into(), tr.clone(), "--test".into(), te.clone()]);
-    } else if let Some(u) = t.train_until_min {
-        fit.extend(["--train-until".into(), u.to_string()]);
-    }
-    if t.lag {
-        fit.push("--lag".into());
-    }
-    if let Some(sensors) = &t.sensors {
-        fit.extend(["--sensors".into(), sensors.join(",")]);
-    }
+    let list = |l: &Option<String>| -> Vec<String> {
+        l.iter()
+            .flat_map(|x| x.split(','))
+            .map(|x| x.trim().to_string())
+            .collect()
+    };
+    let split = match (&t.train, &t.test, t.train_until_min) {
+        (Some(_), Some(_), _) => SplitBy::Experiments {
+            train: list(&t.train),
+            test: list(&t.test),
+        },
+        (_, _, Some(u)) => SplitBy::Until(u),
+        _ => SplitBy::All,
+    };
+    let mut fit = mtec_thermal::FitOptions {
+        sensors: t.sensors.clone().unwrap_or_default(),
+        lag: t.lag,
+        ..Default::default()
+    };
     if let Some(input) = &t.input {
-        fit.extend(["--input".into(), input.clone()]);
+        fit.input = input.clone();
     }
-    super::run::call_checked(&fit)?;
+    let fit = ops::thermal::FitOptions {
+        data: data.clone(),
+        target: t.target.clone(),
+        model: t.model.clone(),
+        fit,
+        split,
+        output: model.clone(),
+    };
+    let mut obs = Collect::default();
+    fit_thermal(&fit, &mut obs)?;
     p.outputs.push(s(&model));
-    let pred = p.json_stage_of(
+    let predict = ops::thermal::PredictOptions {
+        model: model.clone(),
+        data: data.clone(),
+        history: None,
+        output: None,
+    };
+    let done = ops::thermal::predict(&predict, &mut obs)?;
+    let pred = p.json_result(
         &format!("thermal-predict-{tag}.json"),
-        vec![
-            "thermal".into(),
-            "predict".into(),
-            "--model".into(),
-            s(&model),
-            "--data".into(),
-            s(&data),
-            "--json".into(),
-        ],
+        &format!(
+            "{}\n",
+            serde_json::to_string(&serde_json::to_value(&done)?)?
+        ),
     )?;
     let model_json: Value = mtec_io::read_json(&model)?;
     let table = mtec_io::Table::read(&data).ok();
@@ -581,6 +641,7 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> Result<PathBuf, CliError> 
     let sec = p
         .report
         .section(format!("Thermal model: {} from {}", t.target, stem(&data)));
+    warnings(sec, &obs);
     let ridge_trace = super::pipeline_thermal::section(
         sec,
         &model_json,
@@ -611,17 +672,19 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> Result<PathBuf, CliError> 
     }
     if ridge_trace {
         // the model is the ridge-trace selection's: show how the sensors were chosen
-        let sel = p.json_stage_of(
+        let opts = ops::thermal::SelectOptions {
+            data: data.clone(),
+            target: t.target.clone(),
+            sensors: Vec::new(),
+            out: None,
+        };
+        let done = ops::thermal::select(&opts, &mut Collect::default())?;
+        let sel = p.json_result(
             &format!("thermal-select-{tag}.json"),
-            vec![
-                "thermal".into(),
-                "select".into(),
-                "--data".into(),
-                s(&data),
-                "--target".into(),
-                t.target.clone(),
-                "--json".into(),
-            ],
+            &format!(
+                "{}\n",
+                serde_json::to_string_pretty(&serde_json::to_value(&done)?)?
+            ),
         )?;
         let sec = p.report.section(format!(
             "Sensor selection for {}: the ridge trace",
@@ -698,31 +761,19 @@ pub fn map(p: &mut Pipeline, m: &MapStage) -> Result<PathBuf, CliError> {
     let grid = p.path_of(&m.grid);
     p.progress_of("volumetric map (trilinear)");
     let map = p.out.join("map.json");
-    super::run::call_checked(&[
-        "map".into(),
-        "fit".into(),
-        "--grid".into(),
-        s(&grid),
-        "--model".into(),
-        "trilinear".into(),
-        "-o".into(),
-        s(&map),
-    ])?;
+    let mut obs = Collect::default();
+    ops::map::fit(&ops::map::FitOptions::trilinear(&grid, &map), &mut obs)?;
     p.outputs.push(s(&map));
     let mut figures = Vec::new();
     if let Some(check) = &m.check {
         let pts = p.path_of(check);
         let out = p.out.join("map-check.csv");
-        super::run::call_checked(&[
-            "map".into(),
-            "eval".into(),
-            "--map".into(),
-            s(&map),
-            "--points".into(),
-            s(&pts),
-            "-o".into(),
-            s(&out),
-        ])?;
+        let opts = ops::map::EvalOptions {
+            model: map.clone(),
+            points: pts.clone(),
+            out: Some(out.clone()),
+        };
+        ops::map::eval(&opts, &mut obs)?;
         p.outputs.push(s(&out));
         if let (Ok(meas), Ok(pred)) = (mtec_io::Table::read(&pts), mtec_io::Table::read(&out)) {
             for (c, name) in ["ex_um", "ey_um", "ez_um"].iter().zip(["Ex", "Ey", "Ez"]) {
@@ -740,6 +791,7 @@ pub fn map(p: &mut Pipeline, m: &MapStage) -> Result<PathBuf, CliError> {
         }
     }
     let sec = p.report.section("Volumetric error map");
+    warnings(sec, &obs);
     sec.text("A regular grid of measured volumetric errors, interpolated trilinearly (the controller-style compensation baseline).");
     for (svg, cap) in figures {
         sec.figure(svg, cap);
@@ -777,19 +829,13 @@ pub fn compensation(
             ))
         }
     };
+    let mut obs = Collect::default();
     let mut rows = Vec::new();
     for g in &c.gcode {
         let input = p.path_of(g);
         let out = p.out.join(format!("{}-compensated.ngc", stem(&input)));
-        let said = super::run::call_checked(&[
-            "compensate".into(),
-            "gcode".into(),
-            "--model".into(),
-            s(&model),
-            s(&input),
-            "-o".into(),
-            s(&out),
-        ])?;
+        let opts = ops::compensate_gcode::Options::new(&model, &input, &out);
+        let said = ops::compensate_gcode::run(&opts, &mut obs)?.to_string();
         p.outputs.push(s(&out));
         let lines_in = std::fs::read_to_string(&input)
             .map(|t| t.lines().count())
@@ -827,6 +873,7 @@ pub fn compensation(
         tables.push(vec![f.clone(), s(&out), head]);
     }
     let sec = p.report.section("Compensation outputs");
+    warnings(sec, &obs);
     sec.text(format!("Model used: {}. NC programs are rewritten so that every commanded point is corrected (long moves split where the correction changes); controller tables carry the negative of the predicted error.", model.display()));
     if !rows.is_empty() {
         sec.table(

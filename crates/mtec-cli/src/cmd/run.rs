@@ -314,6 +314,13 @@ impl Pipeline {
         Ok(p)
     }
 
+    /// Saves a job's JSON result (`text`, as its command prints it with `--json`) in the output
+    /// folder and returns it parsed.
+    pub fn json_result(&mut self, file: &str, text: &str) -> Result<serde_json::Value, CliError> {
+        self.save(file, text)?;
+        Ok(serde_json::from_str(text)?)
+    }
+
     /// Runs a stage command with --json, saves its JSON, returns it parsed.
     fn json_stage(&mut self, file: &str, args: Vec<String>) -> Result<serde_json::Value, CliError> {
         let text = call(&args).map_err(stage_error)?;

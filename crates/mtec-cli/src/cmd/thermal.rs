@@ -281,7 +281,7 @@ struct CvArgs {
 /// nets (`mtec_nn::threads`). The command sets it before its first candle op, while it has no
 /// other thread.
 #[cfg(feature = "neural")]
-fn single_candle_thread() {
+pub(crate) fn single_candle_thread() {
     if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
         std::env::set_var(var, value);
     }
