@@ -166,6 +166,14 @@ fn fl_thermal_split_example_runs() {
     let [_, _, test_comp] = cli_numbers(&stdout, "test");
     assert!(test_comp.starts_with('-'), "{test_comp}");
     assert!(html.contains("makes the drift worse than no compensation"));
+    // `thermal predict`'s own warning (the 3750 and 5000 rpm runs are outside the training
+    // range), which the stage's job raised in-process, is in the report (issue 18)
+    assert!(
+        html.contains(
+            "Warning: 480 of 1928 rows have inputs outside the training range (spindle_rpm"
+        ),
+        "the prediction's warning is not in the report"
+    );
 }
 
 #[test]
