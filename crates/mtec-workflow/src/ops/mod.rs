@@ -2,6 +2,7 @@
 
 pub mod circular;
 pub mod compensate_gcode;
+pub mod compensate_table;
 pub mod identify_ballbar;
 pub mod identify_lines;
 pub mod iso230_2;
