@@ -3,6 +3,7 @@
 pub mod circular;
 pub mod compensate_gcode;
 pub mod compensate_table;
+pub mod compensate_thermal_offset;
 pub mod identify_ballbar;
 pub mod identify_lines;
 pub mod iso230_2;
