@@ -7,5 +7,6 @@ pub mod compensate_thermal_offset;
 pub mod identify_ballbar;
 pub mod identify_lines;
 pub mod iso230_2;
+pub mod machine;
 pub mod map;
 pub mod thermal;
