@@ -1,10 +1,9 @@
 //! `mtec compensate table`: controller compensation tables from an error model.
 
 use crate::error::CliError;
-use mtec_comp::map::{GridMap, MAP_FORMAT};
-use mtec_comp::table::{self, axis_profile, Axis, TableError};
-use mtec_io::{Destination, InputError, OutputGuard};
-use std::path::{Path, PathBuf};
+use mtec_comp::table;
+use mtec_workflow::ops::compensate_table::{self as op, parse_at, parse_axis, Options, Range};
+use std::path::PathBuf;
 
 pub const HELP: &str = "\
 Writes the compensation table a CNC controller loads, from an error model (a map from
@@ -63,6 +62,19 @@ pub enum Format {
     Fanuc,
     Heidenhain,
     Beckhoff,
+}
+
+impl From<Format> for op::Format {
+    fn from(f: Format) -> Self {
+        match f {
+            Format::Linuxcnc => op::Format::Linuxcnc,
+            Format::SinumerikCec => op::Format::SinumerikCec,
+            Format::SinumerikLec => op::Format::SinumerikLec,
+            Format::Fanuc => op::Format::Fanuc,
+            Format::Heidenhain => op::Format::Heidenhain,
+            Format::Beckhoff => op::Format::Beckhoff,
+        }
+    }
 }
 
 /// `mtec compensate table`.
@@ -145,218 +157,46 @@ pub struct Args {
     out: Option<PathBuf>,
 }
 
+impl Args {
+    /// The job's options; a malformed axis, range or position is a usage error.
+    fn options(self) -> Result<Options, CliError> {
+        let range = |r: &Option<String>| r.as_deref().map(Range::parse).transpose();
+        Ok(Options {
+            axis: parse_axis("--axis", &self.axis)?,
+            output_axis: self
+                .output_axis
+                .as_deref()
+                .map(|s| parse_axis("--output-axis", s))
+                .transpose()?,
+            range: range(&self.range)?,
+            at: self.at.as_deref().map(parse_at).transpose()?,
+            grid: [
+                range(&self.x_range)?,
+                range(&self.y_range)?,
+                range(&self.z_range)?,
+            ],
+            model: self.model,
+            state: self.state,
+            format: self.format.into(),
+            comp_type: self.comp_type,
+            table_index: self.table_index,
+            direction: self.direction,
+            max_points: self.max_points,
+            reference_mm: self.reference_mm,
+            reference_number: self.reference_number,
+            magnification: self.magnification,
+            detection_unit_um: self.detection_unit_um,
+            max_increment: self.max_increment,
+            axis_number: self.axis_number,
+            cma_name: self.cma_name,
+            max_correction_um: self.max_correction_um,
+            out: self.out,
+        })
+    }
+}
+
 pub fn run(a: Args) -> Result<(), CliError> {
-    // the CLI's loader: maps and kinematic models (mtec-comp) and the BPNN, poly and zero models
-    let model = mtec_workflow::state::model_in_state(
-        mtec_comp::load_error_model(&a.model)?,
-        &a.model,
-        a.state.as_deref(),
-        &mut crate::observer::Stderr::default(),
-    )?;
-    let map = load_map_if_grid(&a.model)?;
-    let axis = parse_axis("--axis", &a.axis)?;
-    let output_axis = match &a.output_axis {
-        Some(s) => parse_axis("--output-axis", s)?,
-        None => axis,
-    };
-    if !(a.max_correction_um.is_finite() && a.max_correction_um > 0.0) {
-        return Err(CliError::usage(format!(
-            "--max-correction-um must be a positive number, not {}",
-            a.max_correction_um
-        )));
-    }
-    let provenance = model.describe();
-    let mut guard = OutputGuard::new(&[&a.model]);
-    if let Some(p) = &a.state {
-        guard.add_input(p);
-    }
-    // where the table goes is settled before any work (an input, a directory: exit 2)
-    let dest = match &a.out {
-        Some(p) if a.format == Format::Heidenhain && p.as_os_str() == "-" => {
-            return Err(CliError::usage(
-                "heidenhain writes two files: give -o NAME.COM, not - (the .CMA goes beside it)",
-            ))
-        }
-        Some(p) => guard.check(p)?,
-        None => Destination::Stdout,
-    };
-
-    if a.format == Format::Beckhoff {
-        let mut axes: [Vec<f64>; 3] = match &map {
-            Some(m) => m.axes_mm().clone(),
-            None => Default::default(),
-        };
-        for (k, r) in [&a.x_range, &a.y_range, &a.z_range].iter().enumerate() {
-            if let Some(r) = r {
-                let (from, to, step) = parse_range(r)?;
-                axes[k] = grid_values(from, to, step)?;
-            } else if axes[k].is_empty() {
-                return Err(CliError::usage(
-                    "beckhoff: the model is not a grid map; give --x-range, --y-range and --z-range",
-                ));
-            }
-        }
-        let text = table::beckhoff::write(model.as_ref(), &axes, &provenance, a.max_correction_um)
-            .map_err(|e| table_error(&a.model, e))?;
-        dest.write(text.as_bytes())?;
-        return Ok(());
-    }
-
-    // 1-D tables
-    let (from, to, step) = match &a.range {
-        Some(r) => parse_range(r)?,
-        None => {
-            let m = map.as_ref().ok_or_else(|| {
-                CliError::usage("the model is not a grid map: give --range FROM:TO:STEP")
-            })?;
-            let ax = &m.axes_mm()[axis.index()];
-            if ax.len() < 2 || !m.is_uniform(axis.index()) {
-                return Err(CliError::usage(format!(
-                    "the map's {} values are not equally spaced: give --range FROM:TO:STEP",
-                    axis.letter()
-                )));
-            }
-            (ax[0], ax[ax.len() - 1], ax[1] - ax[0])
-        }
-    };
-    let at = match &a.at {
-        Some(s) => parse_triple(s)?,
-        None => match &map {
-            Some(m) => {
-                let c = |k: usize| {
-                    let ax = &m.axes_mm()[k];
-                    0.5 * (ax[0] + ax[ax.len() - 1])
-                };
-                [c(0), c(1), c(2)]
-            }
-            None => [0.0; 3],
-        },
-    };
-    let profile = axis_profile(model.as_ref(), axis, output_axis, from, to, step, at)
-        .map_err(|e| table_error(&a.model, e))?
-        .with_max_correction_um(a.max_correction_um);
-    let text = match a.format {
-        Format::Linuxcnc => table::linuxcnc::write(&profile, a.comp_type),
-        Format::SinumerikCec => table::sinumerik::write_cec(
-            &profile,
-            &table::sinumerik::CecOptions {
-                table_index: a.table_index,
-                direction: a.direction,
-                max_points: a.max_points,
-                ..Default::default()
-            },
-        ),
-        Format::SinumerikLec => table::sinumerik::write_lec(
-            &profile,
-            &table::sinumerik::LecOptions {
-                max_points: a.max_points,
-                ..Default::default()
-            },
-        ),
-        Format::Fanuc => table::fanuc::write(
-            &profile,
-            &table::fanuc::FanucOptions {
-                axis_number: a.axis_number.unwrap_or(axis.index() as u8 + 1),
-                reference_mm: a.reference_mm,
-                reference_number: a.reference_number,
-                magnification: a.magnification,
-                detection_unit_um: a.detection_unit_um,
-                max_increment: a.max_increment,
-                ..Default::default()
-            },
-        ),
-        Format::Heidenhain => {
-            let out = a.out.as_deref().ok_or_else(|| {
-                CliError::usage(
-                    "heidenhain writes two files: give -o NAME.COM (the .CMA goes beside it)",
-                )
-            })?;
-            let com_name = out
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "TABLE.COM".into());
-            let t = table::heidenhain::write(&profile, &com_name, &a.cma_name)
-                .map_err(|e| table_error(&a.model, e))?;
-            let cma_path = out.with_file_name(&a.cma_name);
-            let cma_dest = guard.check(&cma_path)?;
-            dest.write(t.com.as_bytes())?;
-            cma_dest.write(t.cma.as_bytes())?;
-            eprintln!(
-                "heidenhain: {} and {} from {provenance}",
-                out.display(),
-                cma_path.display()
-            );
-            return Ok(());
-        }
-        Format::Beckhoff => unreachable!("handled above"),
-    }
-    .map_err(|e| table_error(&a.model, e))?;
-    dest.write(text.as_bytes())?;
-    if a.out.is_some() {
-        use clap::ValueEnum;
-        let name = a
-            .format
-            .to_possible_value()
-            .map(|v| v.get_name().to_string())
-            .unwrap_or_default();
-        eprintln!("{name} table from {provenance}");
-    }
+    let done = op::run(&a.options()?, &mut crate::observer::Stderr::default())?;
+    eprint!("{done}");
     Ok(())
-}
-
-fn table_error(model: &Path, e: TableError) -> CliError {
-    match e {
-        TableError::Undefined { .. } | TableError::TooLarge { .. } => {
-            InputError::file(model, e.to_string()).into()
-        }
-        other => CliError::usage(other.to_string()),
-    }
-}
-
-/// The grid map itself when the model file is a map (for its grid as default sampling).
-fn load_map_if_grid(path: &Path) -> Result<Option<GridMap>, InputError> {
-    let text = mtec_io::read_text(path)?;
-    let value: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| mtec_io::json_error(path, &e))?;
-    if mtec_comp::load::model_format(path, &text, &value)? == MAP_FORMAT {
-        Ok(Some(mtec_comp::load::load_map(path)?))
-    } else {
-        Ok(None)
-    }
-}
-
-fn parse_axis(opt: &str, s: &str) -> Result<Axis, CliError> {
-    Axis::parse(s).ok_or_else(|| CliError::usage(format!("{opt} `{s}`: expected X, Y or Z")))
-}
-
-fn parse_range(s: &str) -> Result<(f64, f64, f64), CliError> {
-    let v: Vec<Option<f64>> = s.split(':').map(|p| p.trim().parse::<f64>().ok()).collect();
-    match v.as_slice() {
-        [Some(a), Some(b), Some(c)] if a.is_finite() && b.is_finite() && *c > 0.0 => {
-            Ok((*a, *b, *c))
-        }
-        _ => Err(CliError::usage(format!(
-            "range `{s}`: expected FROM:TO:STEP in mm with FROM < TO and STEP > 0, e.g. 0:500:25"
-        ))),
-    }
-}
-
-fn parse_triple(s: &str) -> Result<[f64; 3], CliError> {
-    let v: Vec<Option<f64>> = s.split(',').map(|p| p.trim().parse::<f64>().ok()).collect();
-    match v.as_slice() {
-        [Some(x), Some(y), Some(z)] => Ok([*x, *y, *z]),
-        _ => Err(CliError::usage(format!(
-            "--at `{s}`: expected X,Y,Z in mm, e.g. 250,150,-100"
-        ))),
-    }
-}
-
-fn grid_values(from: f64, to: f64, step: f64) -> Result<Vec<f64>, CliError> {
-    let n = ((to - from) / step).round();
-    if to <= from || ((to - from) / step - n).abs() > 1e-6 {
-        return Err(CliError::usage(format!(
-            "range {from}:{to}:{step} is not a whole number of steps from FROM up to TO"
-        )));
-    }
-    Ok((0..=n as usize).map(|i| from + step * i as f64).collect())
 }

@@ -1,14 +1,13 @@
 //! `mtec compensate thermal-offset`: the work-offset update (or Siemens temperature-compensation
-//! setting data) for the machine's thermal state now. The logic is in
-//! `mtec_comp::thermal_offset`; this parses and prints.
+//! setting data) for the machine's thermal state now. The job is
+//! `mtec_workflow::ops::compensate_thermal_offset` (the method `mtec_comp::thermal_offset`);
+//! this parses and prints.
 
 use crate::error::CliError;
-use mtec_comp::table::{Axis, DEFAULT_MAX_CORRECTION_UM};
-use mtec_comp::thermal_offset::{
-    self as to, fanuc, linuxcnc, sinumerik, LoadOptions, OffsetError, OffsetModel, OutsidePolicy,
-    RunOptions, SettingOptions, UpdateOptions,
-};
-use mtec_io::{Destination, OutputGuard, Table};
+use mtec_comp::table::DEFAULT_MAX_CORRECTION_UM;
+use mtec_comp::thermal_offset::OutsidePolicy;
+use mtec_workflow::ops::compensate_table::parse_axis;
+use mtec_workflow::ops::compensate_thermal_offset::{self as op, parse_travel, Options};
 use std::path::PathBuf;
 
 pub const HELP: &str = "\
@@ -66,6 +65,18 @@ pub enum Format {
     FanucMacro,
     Sinumerik,
     SinumerikSd,
+}
+
+impl From<Format> for op::Format {
+    fn from(f: Format) -> Self {
+        match f {
+            Format::G10 => op::Format::G10,
+            Format::Fanuc => op::Format::Fanuc,
+            Format::FanucMacro => op::Format::FanucMacro,
+            Format::Sinumerik => op::Format::Sinumerik,
+            Format::SinumerikSd => op::Format::SinumerikSd,
+        }
+    }
 }
 
 /// Policy outside the training envelope.
@@ -139,167 +150,41 @@ pub struct Args {
     out: Option<PathBuf>,
 }
 
-fn lib_error(e: OffsetError) -> CliError {
-    match e {
-        OffsetError::Input(i) => CliError::Input(i),
-        OffsetError::Usage(m) => CliError::Usage(m),
-    }
-}
-
-/// Options given that the format does not use are refused, not silently ignored.
-fn check_options(a: &Args) -> Result<(), CliError> {
-    use Format::*;
-    let f = a.format;
-    let rules: [(&str, bool, bool); 6] = [
-        (
-            "--base-mm",
-            a.base_mm.is_some(),
-            matches!(f, G10 | Fanuc | FanucMacro),
-        ),
-        ("--at-mm", a.at_mm.is_some(), f != SinumerikSd),
-        ("--axis-number", a.axis_number.is_some(), f == FanucMacro),
-        ("--machine-axis", a.machine_axis.is_some(), f == SinumerikSd),
-        ("--travel-mm", a.travel_mm.is_some(), f == SinumerikSd),
-        (
-            "--zeroed-at-min",
-            a.zeroed_at_min.is_some(),
-            f != SinumerikSd,
-        ),
-    ];
-    for (flag, given, applies) in rules {
-        if given && !applies {
-            use clap::ValueEnum;
-            let name = f
-                .to_possible_value()
-                .map(|v| v.get_name().to_string())
-                .unwrap_or_default();
-            return Err(CliError::usage(format!(
-                "{flag} does not apply to --format {name} (see --help)"
-            )));
-        }
-    }
-    if matches!(f, G10 | Fanuc | FanucMacro) && a.base_mm.is_none() {
-        return Err(CliError::usage(
-            "--base-mm is required: the offset's value with no drift (or when it was set, with --zeroed-at-min); the line sets the offset to base + update",
-        ));
-    }
-    Ok(())
-}
-
-fn parse_travel(s: &str) -> Result<[f64; 2], CliError> {
-    let v: Vec<Option<f64>> = s.split(':').map(|p| p.trim().parse::<f64>().ok()).collect();
-    match v.as_slice() {
-        [Some(a), Some(b)] => Ok([*a, *b]),
-        _ => Err(CliError::usage(format!(
-            "--travel-mm `{s}`: expected FROM:TO in mm, e.g. -500:0"
-        ))),
+impl Args {
+    /// The job's options; a malformed axis or travel is a usage error.
+    fn options(self) -> Result<Options, CliError> {
+        Ok(Options {
+            axis: parse_axis("--axis", &self.axis)?,
+            travel_mm: self.travel_mm.as_deref().map(parse_travel).transpose()?,
+            model: self.model,
+            temps: self.temps,
+            format: self.format.into(),
+            offset: self.offset,
+            base_mm: self.base_mm,
+            at_mm: self.at_mm,
+            position_origin_mm: self.position_origin_mm,
+            zeroed_at_min: self.zeroed_at_min,
+            starts_at_rest: self.starts_at_rest,
+            outside: match self.outside {
+                Outside::Refuse => OutsidePolicy::Refuse,
+                Outside::Fade => OutsidePolicy::Fade,
+            },
+            max_correction_um: self.max_correction_um,
+            training: self.training,
+            sign: self.sign,
+            axis_number: self.axis_number,
+            machine_axis: self.machine_axis,
+            comp_add_velo_factor: self.comp_add_velo_factor,
+            out: self.out,
+        })
     }
 }
 
 pub fn run(a: Args) -> Result<(), CliError> {
-    check_options(&a)?;
-    let axis = Axis::parse(&a.axis)
-        .ok_or_else(|| CliError::usage(format!("--axis `{}`: expected X, Y or Z", a.axis)))?;
-    let mut inputs = vec![a.model.clone(), a.temps.clone()];
-    inputs.extend(a.training.clone());
-    let dest = match &a.out {
-        Some(p) => OutputGuard::new(&inputs).check(p)?,
-        None => Destination::Stdout,
-    };
-    let mut model = OffsetModel::load(
-        &a.model,
-        LoadOptions {
-            axis,
-            sign: a.sign,
-            training: a.training.as_deref(),
-        },
-    )
-    .map_err(lib_error)?;
-    let log = Table::read(&a.temps)?;
-    let run = to::run_log(
-        &mut model,
-        &log,
-        RunOptions {
-            starts_at_rest: a.starts_at_rest,
-            zeroed_at_min: a.zeroed_at_min,
-        },
-    )
-    .map_err(lib_error)?;
-    let update_opts = UpdateOptions {
-        origin_mm: a.position_origin_mm,
-        outside: match a.outside {
-            Outside::Refuse => OutsidePolicy::Refuse,
-            Outside::Fade => OutsidePolicy::Fade,
-        },
-        max_correction_um: a.max_correction_um,
-    };
-    let header = to::provenance(&run, &log, model.source());
-    let (text, summary) = if a.format == Format::SinumerikSd {
-        let travel = a.travel_mm.as_deref().map(parse_travel).transpose()?;
-        let s = to::temp_comp_setting(
-            &run,
-            &log,
-            axis,
-            SettingOptions {
-                update: update_opts,
-                travel_mm: travel,
-                max_slope: a.comp_add_velo_factor,
-            },
-        )
-        .map_err(lib_error)?;
-        let name = a
-            .machine_axis
-            .clone()
-            .unwrap_or_else(|| format!("AX{}", axis.index() + 1));
-        let text = sinumerik::write_temp_comp(&s, &name, &header).map_err(lib_error)?;
-        let summary = format!(
-            "{} temperature compensation: K0 {:+.3} um at P0 {} mm, tan(beta) {:.4e}, weight {}",
-            axis.letter(),
-            s.k0_mm * 1e3,
-            s.p0_mm,
-            s.tan_beta,
-            s.weight
-        );
-        (text, summary)
-    } else {
-        let u = to::offset_update(&run, &log, axis, a.at_mm, update_opts).map_err(lib_error)?;
-        let base = a.base_mm.unwrap_or(0.0);
-        let text = match a.format {
-            Format::G10 => linuxcnc::write(&u, a.offset, base, &header),
-            Format::Fanuc => fanuc::write_g10(&u, a.offset, base, &header),
-            Format::FanucMacro => fanuc::write_macro(
-                &u,
-                a.offset,
-                a.axis_number.unwrap_or(axis.index() as u32 + 1),
-                base,
-                &header,
-            ),
-            Format::Sinumerik => sinumerik::write_frame(&u, a.offset, &header),
-            Format::SinumerikSd => unreachable!("handled above"),
-        }
-        .map_err(lib_error)?;
-        let summary = format!(
-            "{} offset update {:+.3} um (drift {:+.3} um, weight {})",
-            axis.letter(),
-            u.correction_um,
-            u.drift_um,
-            u.weight
-        );
-        (text, summary)
-    };
-    dest.write(text.as_bytes())?;
-    eprintln!(
-        "thermal-offset: {summary} at line {} ({} min) of {}",
-        run.now.line,
-        run.now.time_min,
-        a.temps.display()
-    );
-    if run.earlier_outside > 0 {
-        eprintln!(
-            "note: {} earlier row(s) of {} were outside the training envelope; the model's filters carry their history",
-            run.earlier_outside,
-            a.temps.display()
-        );
+    let done = op::run(&a.options()?, &mut crate::observer::Stderr::default())?;
+    eprint!("{done}");
+    for n in &done.notes {
+        eprintln!("note: {n}");
     }
     Ok(())
 }

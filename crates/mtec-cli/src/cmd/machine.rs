@@ -1,11 +1,7 @@
 //! `mtec machine build|replay`: the machine error model with a state (`mtec.machine-error/1`).
 
 use crate::error::CliError;
-use mtec_comp::machine::Fade;
-use mtec_comp::machine_build::{self, BuildRequest, PartRequest};
-use mtec_comp::{replay, Compensator, CorrectionOptions};
-use mtec_io::{OutputGuard, Table};
-use std::io::Write;
+use mtec_workflow::ops::machine::{self, BuildOptions, Part, ReplayOptions};
 use std::path::PathBuf;
 
 const BUILD_HELP: &str = "\
@@ -134,153 +130,47 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
 }
 
-/// `AXIS=MODEL[,sign=±1]`.
-fn parse_part(s: &str, guards: &[String]) -> Result<PartRequest, CliError> {
-    let bad = |why: &str| {
-        CliError::usage(format!(
-            "--thermal `{s}`: {why}; expected AXIS=MODEL.json[,sign=-1], e.g. z=dz.json"
-        ))
-    };
-    let (axis, rest) = s.split_once('=').ok_or_else(|| bad("no `=`"))?;
-    let axis = axis.trim().to_lowercase();
-    if !["x", "y", "z"].contains(&axis.as_str()) {
-        return Err(bad("the axis is x, y or z"));
-    }
-    let mut it = rest.split(',');
-    let model = PathBuf::from(it.next().unwrap_or_default().trim());
-    if model.as_os_str().is_empty() {
-        return Err(bad("no model file"));
-    }
-    let mut sign = 1.0;
-    for opt in it {
-        match opt.trim().split_once('=') {
-            Some(("sign", "1" | "+1")) => sign = 1.0,
-            Some(("sign", "-1")) => sign = -1.0,
-            _ => return Err(bad(&format!("`{opt}` is not sign=1 or sign=-1"))),
-        }
-    }
-    Ok(PartRequest {
-        axis,
-        model,
-        sign,
-        guards: guards.to_vec(),
-    })
-}
-
 fn build(a: BuildArgs) -> Result<(), CliError> {
-    let parts: Vec<PartRequest> = a
-        .thermal
-        .iter()
-        .map(|s| parse_part(s, &a.guard))
-        .collect::<Result<_, _>>()?;
-    if parts.is_empty() && a.geometric.is_none() {
-        return Err(CliError::usage(
-            "give --geometric, --thermal or both: the machine model sums them",
-        ));
-    }
-    if !a.guard.is_empty() && parts.is_empty() {
-        return Err(CliError::usage("--guard goes with --thermal"));
-    }
-    let mut inputs: Vec<PathBuf> = parts.iter().map(|p| p.model.clone()).collect();
-    inputs.extend(a.geometric.clone());
-    inputs.extend(a.data.clone());
-    let dest = OutputGuard::new(&inputs).check(&a.output)?;
-    let data = a.data.as_deref().map(Table::read).transpose()?;
-    let file = machine_build::build(&BuildRequest {
-        geometric: a.geometric.as_deref(),
-        parts: &parts,
-        data: data.as_ref(),
-        fade: Fade {
-            temperature_c: a.fade_c,
-            other_fraction: a.fade_other,
-        },
-        output: &a.output,
-    })?;
-    dest.write(machine_build::to_json(&file).as_bytes())?;
-    let mut say = super::messages(&dest);
-    if let Some(g) = &file.geometric {
-        let _ = writeln!(say, "geometric: {g}");
-    }
-    for p in &file.thermal {
-        let ranges: Vec<String> = p
-            .envelope
+    let opts = BuildOptions {
+        thermal: a
+            .thermal
             .iter()
-            .map(|(k, [lo, hi])| format!("{k} [{lo}, {hi}]"))
-            .collect();
-        let _ = writeln!(
-            say,
-            "thermal {} (sign {:+}): {}; envelope {}",
-            p.axis,
-            p.sign,
-            p.model,
-            ranges.join(", ")
-        );
+            .map(|s| Part::parse(s))
+            .collect::<Result<_, _>>()?,
+        geometric: a.geometric,
+        data: a.data,
+        guard: a.guard,
+        fade_c: a.fade_c,
+        fade_other: a.fade_other,
+        output: a.output,
+    };
+    let done = machine::build(&opts, &mut crate::observer::Stderr::default())?;
+    // the summary goes to stdout unless the model itself does (-o -)
+    if opts.output.as_os_str() == "-" {
+        eprint!("{done}");
+        Ok(())
+    } else {
+        super::emit(&done.to_string())
     }
-    let _ = writeln!(say, "wrote {}", a.output.display());
-    Ok(())
 }
 
 fn replay_day(a: ReplayArgs) -> Result<(), CliError> {
-    let dest = match &a.output {
-        Some(p) => Some(OutputGuard::new(&[&a.model, &a.state, &a.probes]).check(p)?),
-        None => None,
+    let opts = ReplayOptions {
+        model: a.model,
+        state: a.state,
+        probes: a.probes,
+        output: a.output,
     };
-    let model = mtec_comp::load_error_model(&a.model)?;
-    let mut comp = Compensator::new(model, CorrectionOptions::default());
-    let state = Table::read(&a.state)?;
-    let probes = Table::read(&a.probes)?;
-    let (samples, summary) = replay::replay(&mut comp, &state, &probes)?;
-    let provenance = format!(
-        "{}; state {}; probes {}",
-        comp.describe(),
-        a.state.display(),
-        a.probes.display()
-    );
-    if let Some(d) = &dest {
-        d.write(replay::to_csv(&samples, &provenance).as_bytes())?;
-    }
+    let done = machine::replay(&opts, &mut crate::observer::Stderr::default())?;
     if a.json {
-        let mut doc = serde_json::to_value(&summary).map_err(|e| CliError::Internal(e.into()))?;
-        doc["format"] = "mtec.machine-replay/1".into();
-        doc["model"] = comp.describe().into();
-        doc["state_inputs"] = comp.state_inputs().into();
+        // through a JSON value, as before: the keys in the order the command always printed
+        let doc = serde_json::to_value(&done).map_err(|e| CliError::Internal(e.into()))?;
         println!(
             "{}",
             serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?
         );
-        return Ok(());
-    }
-    println!("{}", comp.describe());
-    println!(
-        "{} probe readings, {} state readings",
-        summary.readings, summary.state_rows
-    );
-    println!(
-        "  {:<7} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}",
-        "", "RMS before", "RMS after", "max before", "max after", "comp. rate", "worst"
-    );
-    for (name, r) in [
-        ("X", &summary.x),
-        ("Y", &summary.y),
-        ("Z", &summary.z),
-        ("vector", &summary.vector),
-    ] {
-        println!(
-            "  {name:<7} {:>9.3} um {:>9.3} um {:>9.3} um {:>9.3} um {:>10.1} % {:>10.1} %",
-            r.rms_before_um,
-            r.rms_after_um,
-            r.max_before_um,
-            r.max_after_um,
-            100.0 * r.compensation_rate,
-            100.0 * r.worst_reduction
-        );
-    }
-    println!(
-        "  readings made worse: {} (largest |e| increase {:.3} um); taken with the thermal part faded: {} (smallest weight {:.3})",
-        summary.worse, summary.largest_worsening_um.max(0.0), summary.faded, summary.min_thermal_weight
-    );
-    if let Some(o) = &a.output {
-        println!("wrote {}", o.display());
+    } else {
+        print!("{done}");
     }
     Ok(())
 }

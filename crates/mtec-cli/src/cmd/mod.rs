@@ -24,16 +24,6 @@ pub mod pipeline;
 pub mod pipeline_thermal;
 pub mod run;
 
-/// Where a command's report lines go: stdout, or stderr when the output file itself streams to
-/// stdout (`-o -`), so the two never mix. Write errors (a closed pipe) are the caller's to ignore.
-pub(crate) fn messages(dest: &mtec_io::Destination) -> Box<dyn std::io::Write> {
-    if dest.is_stdout() {
-        Box::new(std::io::stderr())
-    } else {
-        Box::new(std::io::stdout())
-    }
-}
-
 /// Writes a report to stdout; a reader that closed the pipe early (`| head`) is not an error.
 pub(crate) fn emit(text: &str) -> Result<(), crate::error::CliError> {
     use std::io::Write as _;

@@ -2,8 +2,11 @@
 
 pub mod circular;
 pub mod compensate_gcode;
+pub mod compensate_table;
+pub mod compensate_thermal_offset;
 pub mod identify_ballbar;
 pub mod identify_lines;
 pub mod iso230_2;
+pub mod machine;
 pub mod map;
 pub mod thermal;

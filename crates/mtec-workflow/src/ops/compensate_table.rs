@@ -1,0 +1,415 @@
+//! `compensate table`: the compensation table a CNC controller loads, from an error model.
+
+use crate::{Error, Observer, Result};
+use mtec_comp::map::{GridMap, MAP_FORMAT};
+use mtec_comp::table::{self, axis_profile, Axis, TableError};
+use mtec_io::{Destination, InputError, OutputGuard};
+use serde::Serialize;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A controller's table format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Format {
+    /// LinuxCNC `[JOINT_n] COMP_FILE`: `nominal forward reverse` triplets.
+    Linuxcnc,
+    /// Siemens 840D sag / cross-axis table (`$AN_CEC...`).
+    SinumerikCec,
+    /// Siemens 840D leadscrew error table (`$AA_ENC_COMP...`).
+    SinumerikLec,
+    /// FANUC pitch error tape.
+    Fanuc,
+    /// HEIDENHAIN nonlinear axis error compensation: a .COM table and its .CMA assignment.
+    Heidenhain,
+    /// Beckhoff TwinCAT volumetric compensation (ISG CSV).
+    Beckhoff,
+}
+
+impl Format {
+    /// The name the command line gives it (`sinumerik-cec`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Linuxcnc => "linuxcnc",
+            Format::SinumerikCec => "sinumerik-cec",
+            Format::SinumerikLec => "sinumerik-lec",
+            Format::Fanuc => "fanuc",
+            Format::Heidenhain => "heidenhain",
+            Format::Beckhoff => "beckhoff",
+        }
+    }
+}
+
+/// Positions FROM:TO:STEP along an axis, in mm.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Range {
+    /// First position (mm).
+    pub from: f64,
+    /// Last position (mm).
+    pub to: f64,
+    /// Distance between positions (mm, > 0).
+    pub step: f64,
+}
+
+impl Range {
+    /// Parses `FROM:TO:STEP` (finite ends, a positive step); a usage error otherwise.
+    pub fn parse(s: &str) -> Result<Range> {
+        let v: Vec<Option<f64>> = s.split(':').map(|p| p.trim().parse::<f64>().ok()).collect();
+        match v.as_slice() {
+            [Some(a), Some(b), Some(c)] if a.is_finite() && b.is_finite() && *c > 0.0 => {
+                Ok(Range {
+                    from: *a,
+                    to: *b,
+                    step: *c,
+                })
+            }
+            _ => Err(Error::usage(format!(
+                "range `{s}`: expected FROM:TO:STEP in mm with FROM < TO and STEP > 0, e.g. 0:500:25"
+            ))),
+        }
+    }
+
+    /// The positions FROM, FROM + STEP, ..., TO; refused unless TO is a whole number of steps
+    /// above FROM.
+    pub fn values(&self) -> Result<Vec<f64>> {
+        let Range { from, to, step } = *self;
+        let n = ((to - from) / step).round();
+        if to <= from || ((to - from) / step - n).abs() > 1e-6 {
+            return Err(Error::usage(format!(
+                "range {from}:{to}:{step} is not a whole number of steps from FROM up to TO"
+            )));
+        }
+        Ok((0..=n as usize).map(|i| from + step * i as f64).collect())
+    }
+}
+
+/// Parses an axis option (`X`, `Y`, `Z`, either case); `opt` names it in the usage error.
+pub fn parse_axis(opt: &str, s: &str) -> Result<Axis> {
+    Axis::parse(s).ok_or_else(|| Error::usage(format!("{opt} `{s}`: expected X, Y or Z")))
+}
+
+/// Parses `--at X,Y,Z` (mm).
+pub fn parse_at(s: &str) -> Result<[f64; 3]> {
+    let v: Vec<Option<f64>> = s.split(',').map(|p| p.trim().parse::<f64>().ok()).collect();
+    match v.as_slice() {
+        [Some(x), Some(y), Some(z)] => Ok([*x, *y, *z]),
+        _ => Err(Error::usage(format!(
+            "--at `{s}`: expected X,Y,Z in mm, e.g. 250,150,-100"
+        ))),
+    }
+}
+
+/// Options of [`run`].
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Any model file mtec reads (`mtec_comp::load_error_model`).
+    pub model: PathBuf,
+    /// State log of a model with a state: the table is for the state after its last row.
+    pub state: Option<PathBuf>,
+    pub format: Format,
+    /// The axis along which a 1-D table runs (input / base axis).
+    pub axis: Axis,
+    /// The compensated axis of cross-axis tables (sinumerik-cec, heidenhain); `None`: `axis`.
+    pub output_axis: Option<Axis>,
+    /// Table positions along `axis` (mm); `None`: the map's grid along it.
+    pub range: Option<Range>,
+    /// Position of the other axes (mm); `None`: the centre of the map's grid box, or 0,0,0.
+    pub at: Option<[f64; 3]>,
+    /// LinuxCNC COMP_FILE_TYPE: 1 (offsets) or 0 (actual positions).
+    pub comp_type: u8,
+    /// Siemens CEC table index t.
+    pub table_index: usize,
+    /// Siemens CEC _DIRECTION: 0 both, 1 positive only, -1 negative only.
+    pub direction: i8,
+    /// Largest number of points the controller is configured for (Siemens MD18342 / MD38000).
+    pub max_points: Option<usize>,
+    /// FANUC: machine position of the reference point (mm).
+    pub reference_mm: f64,
+    /// FANUC parameter 3620: compensation point number of the reference position.
+    pub reference_number: u32,
+    /// FANUC parameter 3623: magnification.
+    pub magnification: u32,
+    /// FANUC detection unit (um).
+    pub detection_unit_um: f64,
+    /// FANUC largest |value| per compensation point (detection units).
+    pub max_increment: i64,
+    /// FANUC axis number in the parameter tape; `None`: X=1, Y=2, Z=3.
+    pub axis_number: Option<u8>,
+    /// HEIDENHAIN assignment table name, written beside the .COM file.
+    pub cma_name: String,
+    /// Beckhoff grid along X, Y, Z (mm); `None`: the map's grid along that axis.
+    pub grid: [Option<Range>; 3],
+    /// Refuse the table if a correction exceeds this (um; beckhoff: the vector's length).
+    pub max_correction_um: f64,
+    /// The table file; `None` or `-`: stdout (heidenhain needs a file).
+    pub out: Option<PathBuf>,
+}
+
+impl Options {
+    /// A `format` table of `model` along X written to `out`, every other option at the
+    /// command's default.
+    pub fn new(model: impl Into<PathBuf>, format: Format, out: Option<PathBuf>) -> Self {
+        Options {
+            model: model.into(),
+            state: None,
+            format,
+            axis: Axis::X,
+            output_axis: None,
+            range: None,
+            at: None,
+            comp_type: 1,
+            table_index: 0,
+            direction: 0,
+            max_points: None,
+            reference_mm: 0.0,
+            reference_number: 0,
+            magnification: 1,
+            detection_unit_um: 1.0,
+            max_increment: 127,
+            axis_number: None,
+            cma_name: "config.cma".into(),
+            grid: [None; 3],
+            max_correction_um: table::DEFAULT_MAX_CORRECTION_UM,
+            out,
+        }
+    }
+}
+
+/// What [`run`] did.
+#[derive(Debug, Clone, Serialize)]
+pub struct Outcome {
+    pub format: Format,
+    /// The model as the table's provenance names it (with its state, if any).
+    pub provenance: String,
+    /// Table points (1-D) or grid nodes (beckhoff).
+    pub points: usize,
+    /// The table file (`None`: stdout).
+    pub out: Option<PathBuf>,
+    /// HEIDENHAIN's assignment table, written beside the .COM file.
+    pub cma: Option<PathBuf>,
+    /// Every warning, as sent to the observer.
+    pub warnings: Vec<String>,
+}
+
+impl fmt::Display for Outcome {
+    /// The line the command prints on stderr: which table from which model (nothing for a
+    /// table on stdout, or a beckhoff table).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match (&self.out, &self.cma) {
+            (Some(out), Some(cma)) => writeln!(
+                f,
+                "heidenhain: {} and {} from {}",
+                out.display(),
+                cma.display(),
+                self.provenance
+            ),
+            (Some(_), None) if self.format != Format::Beckhoff => {
+                writeln!(f, "{} table from {}", self.format.name(), self.provenance)
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+/// An observer that keeps the warnings it passes on.
+struct Keep<'a> {
+    obs: &'a mut dyn Observer,
+    warnings: Vec<String>,
+}
+
+impl Observer for Keep<'_> {
+    fn progress(&mut self, what: &str) {
+        self.obs.progress(what);
+    }
+    fn warning(&mut self, what: &str) {
+        self.warnings.push(what.to_string());
+        self.obs.warning(what);
+    }
+    fn stop_requested(&self) -> bool {
+        self.obs.stop_requested()
+    }
+}
+
+/// Samples the model and writes the table. The output is checked (not an input, not a
+/// directory) before any table is computed; every value is checked against the format's limits
+/// and `max_correction_um` before anything is written.
+pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
+    let mut keep = Keep {
+        obs,
+        warnings: Vec::new(),
+    };
+    let model = crate::state::model_in_state(
+        mtec_comp::load_error_model(&opts.model)?,
+        &opts.model,
+        opts.state.as_deref(),
+        &mut keep,
+    )?;
+    let warnings = keep.warnings;
+    let map = load_map_if_grid(&opts.model)?;
+    let axis = opts.axis;
+    let output_axis = opts.output_axis.unwrap_or(axis);
+    if !(opts.max_correction_um.is_finite() && opts.max_correction_um > 0.0) {
+        return Err(Error::usage(format!(
+            "--max-correction-um must be a positive number, not {}",
+            opts.max_correction_um
+        )));
+    }
+    let provenance = model.describe();
+    let mut guard = OutputGuard::new(&[&opts.model]);
+    if let Some(p) = &opts.state {
+        guard.add_input(p);
+    }
+    // where the table goes is settled before any work (an input, a directory: exit 2)
+    let dest = match &opts.out {
+        Some(p) if opts.format == Format::Heidenhain && p.as_os_str() == "-" => {
+            return Err(Error::usage(
+                "heidenhain writes two files: give -o NAME.COM, not - (the .CMA goes beside it)",
+            ))
+        }
+        Some(p) => guard.check(p)?,
+        None => Destination::Stdout,
+    };
+    let done = |points: usize, cma: Option<PathBuf>| Outcome {
+        format: opts.format,
+        provenance: provenance.clone(),
+        points,
+        out: opts.out.clone(),
+        cma,
+        warnings: warnings.clone(),
+    };
+
+    if opts.format == Format::Beckhoff {
+        let mut axes: [Vec<f64>; 3] = match &map {
+            Some(m) => m.axes_mm().clone(),
+            None => Default::default(),
+        };
+        for (k, r) in opts.grid.iter().enumerate() {
+            if let Some(r) = r {
+                axes[k] = r.values()?;
+            } else if axes[k].is_empty() {
+                return Err(Error::usage(
+                    "beckhoff: the model is not a grid map; give --x-range, --y-range and --z-range",
+                ));
+            }
+        }
+        let text =
+            table::beckhoff::write(model.as_ref(), &axes, &provenance, opts.max_correction_um)
+                .map_err(|e| table_error(&opts.model, e))?;
+        dest.write(text.as_bytes())?;
+        return Ok(done(axes.iter().map(Vec::len).product(), None));
+    }
+
+    // 1-D tables
+    let Range { from, to, step } = match opts.range {
+        Some(r) => r,
+        None => {
+            let m = map.as_ref().ok_or_else(|| {
+                Error::usage("the model is not a grid map: give --range FROM:TO:STEP")
+            })?;
+            let ax = &m.axes_mm()[axis.index()];
+            if ax.len() < 2 || !m.is_uniform(axis.index()) {
+                return Err(Error::usage(format!(
+                    "the map's {} values are not equally spaced: give --range FROM:TO:STEP",
+                    axis.letter()
+                )));
+            }
+            Range {
+                from: ax[0],
+                to: ax[ax.len() - 1],
+                step: ax[1] - ax[0],
+            }
+        }
+    };
+    let at = match (opts.at, &map) {
+        (Some(at), _) => at,
+        // the centre of the map's grid box
+        (None, Some(m)) => {
+            let c = |k: usize| {
+                let ax = &m.axes_mm()[k];
+                0.5 * (ax[0] + ax[ax.len() - 1])
+            };
+            [c(0), c(1), c(2)]
+        }
+        (None, None) => [0.0; 3],
+    };
+    let profile = axis_profile(model.as_ref(), axis, output_axis, from, to, step, at)
+        .map_err(|e| table_error(&opts.model, e))?
+        .with_max_correction_um(opts.max_correction_um);
+    let points = profile.comp_um.len();
+    let text = match opts.format {
+        Format::Linuxcnc => table::linuxcnc::write(&profile, opts.comp_type),
+        Format::SinumerikCec => table::sinumerik::write_cec(
+            &profile,
+            &table::sinumerik::CecOptions {
+                table_index: opts.table_index,
+                direction: opts.direction,
+                max_points: opts.max_points,
+                ..Default::default()
+            },
+        ),
+        Format::SinumerikLec => table::sinumerik::write_lec(
+            &profile,
+            &table::sinumerik::LecOptions {
+                max_points: opts.max_points,
+                ..Default::default()
+            },
+        ),
+        Format::Fanuc => table::fanuc::write(
+            &profile,
+            &table::fanuc::FanucOptions {
+                axis_number: opts.axis_number.unwrap_or(axis.index() as u8 + 1),
+                reference_mm: opts.reference_mm,
+                reference_number: opts.reference_number,
+                magnification: opts.magnification,
+                detection_unit_um: opts.detection_unit_um,
+                max_increment: opts.max_increment,
+                ..Default::default()
+            },
+        ),
+        Format::Heidenhain => {
+            let out = opts.out.as_deref().ok_or_else(|| {
+                Error::usage(
+                    "heidenhain writes two files: give -o NAME.COM (the .CMA goes beside it)",
+                )
+            })?;
+            let com_name = out
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "TABLE.COM".into());
+            let t = table::heidenhain::write(&profile, &com_name, &opts.cma_name)
+                .map_err(|e| table_error(&opts.model, e))?;
+            let cma_path = out.with_file_name(&opts.cma_name);
+            let cma_dest = guard.check(&cma_path)?;
+            dest.write(t.com.as_bytes())?;
+            cma_dest.write(t.cma.as_bytes())?;
+            return Ok(done(points, Some(cma_path)));
+        }
+        Format::Beckhoff => unreachable!("handled above"),
+    }
+    .map_err(|e| table_error(&opts.model, e))?;
+    dest.write(text.as_bytes())?;
+    Ok(done(points, None))
+}
+
+/// A value the model cannot give or a correction too large is the model file's fault; a table
+/// the options make impossible is a usage error.
+fn table_error(model: &Path, e: TableError) -> Error {
+    match e {
+        TableError::Undefined { .. } | TableError::TooLarge { .. } => {
+            InputError::file(model, e.to_string()).into()
+        }
+        other => Error::usage(other.to_string()),
+    }
+}
+
+/// The grid map itself when the model file is a map (for its grid as default sampling).
+fn load_map_if_grid(path: &Path) -> std::result::Result<Option<GridMap>, InputError> {
+    let text = mtec_io::read_text(path)?;
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| mtec_io::json_error(path, &e))?;
+    if mtec_comp::load::model_format(path, &text, &value)? == MAP_FORMAT {
+        Ok(Some(mtec_comp::load::load_map(path)?))
+    } else {
+        Ok(None)
+    }
+}
