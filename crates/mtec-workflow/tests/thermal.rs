@@ -105,9 +105,13 @@ fn fit_and_predict_agree_with_the_model_evaluated_by_hand() {
         &mut Collect::default(),
     )
     .unwrap();
-    let op::PredictOutcome::Regression(p) = p else {
+    // without the `neural` feature the enum has this one variant
+    #[allow(irrefutable_let_patterns)]
+    let op::PredictOutcome::Regression(p) = p
+    else {
         panic!("a regression model file")
     };
+    assert_eq!(p.predictions.len(), pred.len());
     for (a, b) in p.predictions.iter().zip(&pred) {
         assert!((a - b).abs() < 1e-9, "{a} vs {b}");
     }

@@ -1,11 +1,13 @@
 //! The `[machine_model]` and `[[replay]]` stages of `mtec run`: the thermal models of the
 //! project's [[thermal]] stages become one machine error model (`mtec machine build`), and
 //! recorded days are compensated through the real-time path (`mtec machine replay`), reported
-//! as the error at the tool tip before and after over time.
+//! as the error at the tool tip before and after over time. Both run `mtec_workflow::ops::machine`
+//! in-process.
 
 use super::run::{MachineModelStage, Pipeline, ReplayStage};
 use crate::error::CliError;
 use mtec_report::{line_chart, Series};
+use mtec_workflow::ops::machine;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -22,23 +24,13 @@ pub fn build(
 ) -> Result<PathBuf, CliError> {
     p.progress_of("machine error model (geometric + thermal, with training envelopes)");
     let out = p.out.join("machine.json");
-    let mut args = vec![
-        "machine".into(),
-        "build".into(),
-        "--data".into(),
-        s(&p.path_of(&m.data)),
-        "-o".into(),
-        s(&out),
-    ];
     let geometric = m
         .geometric
         .as_ref()
         .map(|g| p.path_of(g))
         .or(map.map(Path::to_path_buf));
-    if let Some(g) = &geometric {
-        args.extend(["--geometric".into(), s(g)]);
-    }
     let mut rows = Vec::new();
+    let mut parts = Vec::new();
     for part in &m.parts {
         // run.rs checked that exactly one [[thermal]] stage has this target
         let Some((_, model)) = thermal_models.iter().find(|(t, _)| *t == part.target) else {
@@ -47,11 +39,13 @@ pub fn build(
                 part.target
             )));
         };
+        // as `--thermal AXIS=MODEL[,sign=-1]` reads it: the axis x, y or z
         let sign = if part.sign < 0.0 { ",sign=-1" } else { "" };
-        args.extend([
-            "--thermal".into(),
-            format!("{}={}{sign}", part.axis, s(model)),
-        ]);
+        parts.push(machine::Part::parse(&format!(
+            "{}={}{sign}",
+            part.axis,
+            s(model)
+        ))?);
         rows.push(vec![
             part.axis.to_uppercase(),
             part.target.clone(),
@@ -59,13 +53,13 @@ pub fn build(
             s(model),
         ]);
     }
-    if !m.guard.is_empty() {
-        args.extend(["--guard".into(), m.guard.join(",")]);
-    }
+    let mut opts = machine::BuildOptions::new(geometric.clone(), parts, &out);
+    opts.data = Some(p.path_of(&m.data));
+    opts.guard = m.guard.clone();
     if let Some(f) = m.fade_c {
-        args.extend(["--fade-c".into(), f.to_string()]);
+        opts.fade_c = f;
     }
-    super::run::call_checked(&args)?;
+    machine::build(&opts, &mut mtec_workflow::Collect::default())?;
     p.outputs.push(s(&out));
     let file: Value = mtec_io::read_json(&out)?;
     let sec = p.report.section("Machine error model with a state");
@@ -134,21 +128,17 @@ pub fn replay(p: &mut Pipeline, r: &ReplayStage, built: Option<&Path>) -> Result
     };
     let tag = stem(&r.probes);
     let csv = p.out.join(format!("replay-{tag}.csv"));
-    let v = p.json_stage_of(
+    let opts = machine::ReplayOptions {
+        model,
+        state: p.path_of(&r.state),
+        probes: p.path_of(&r.probes),
+        output: Some(csv.clone()),
+    };
+    let done = machine::replay(&opts, &mut mtec_workflow::Collect::default())?;
+    let doc = serde_json::to_value(&done)?;
+    let v = p.json_result(
         &format!("replay-{tag}.json"),
-        vec![
-            "machine".into(),
-            "replay".into(),
-            "--model".into(),
-            s(&model),
-            "--state".into(),
-            s(&p.path_of(&r.state)),
-            "--probes".into(),
-            s(&p.path_of(&r.probes)),
-            "-o".into(),
-            s(&csv),
-            "--json".into(),
-        ],
+        &format!("{}\n", serde_json::to_string_pretty(&doc)?),
     )?;
     p.outputs.push(s(&csv));
     let sec = p.report.section(format!("Compensation replay: {name}"));

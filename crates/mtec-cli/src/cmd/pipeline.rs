@@ -853,16 +853,18 @@ pub fn compensation(
     let mut tables = Vec::new();
     for f in &c.tables {
         let out = p.out.join(format!("comp-{f}.txt"));
-        super::run::call_checked(&[
-            "compensate".into(),
-            "table".into(),
-            "--model".into(),
-            s(&model),
-            "--format".into(),
-            f.clone(),
-            "-o".into(),
-            s(&out),
-        ])?;
+        let format = ops::compensate_table::Format::from_name(f).ok_or_else(|| {
+            let names: Vec<&str> = ops::compensate_table::Format::ALL
+                .iter()
+                .map(|f| f.name())
+                .collect();
+            CliError::usage(format!(
+                "[compensation] tables: no format `{f}`; the formats are {}",
+                names.join(", ")
+            ))
+        })?;
+        let opts = ops::compensate_table::Options::new(&model, format, Some(out.clone()));
+        ops::compensate_table::run(&opts, &mut obs)?;
         p.outputs.push(s(&out));
         let head: String = std::fs::read_to_string(&out)
             .unwrap_or_default()

@@ -272,11 +272,6 @@ pub struct Pipeline {
     steps: usize,
 }
 
-/// Runs a stage command and returns its stdout, mapping failure to the stage's exit code.
-pub fn call_checked(args: &[String]) -> Result<String, CliError> {
-    call(args).map_err(stage_error)
-}
-
 impl Pipeline {
     pub fn path_of(&self, p: &Path) -> PathBuf {
         self.path(p)

@@ -28,6 +28,21 @@ pub enum Format {
 
 impl Format {
     /// The name the command line gives it (`sinumerik-cec`, ...).
+    /// Every format, in the order the command lists them.
+    pub const ALL: [Format; 6] = [
+        Format::Linuxcnc,
+        Format::SinumerikCec,
+        Format::SinumerikLec,
+        Format::Fanuc,
+        Format::Heidenhain,
+        Format::Beckhoff,
+    ];
+
+    /// The format named `name` (`linuxcnc`, `sinumerik-cec`, ...).
+    pub fn from_name(name: &str) -> Option<Format> {
+        Format::ALL.into_iter().find(|f| f.name() == name)
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Format::Linuxcnc => "linuxcnc",
