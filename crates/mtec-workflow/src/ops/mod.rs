@@ -6,4 +6,5 @@ pub mod identify_ballbar;
 pub mod identify_lines;
 pub mod iso230_2;
 pub mod map;
+pub mod sensitivity;
 pub mod thermal;
