@@ -8,3 +8,4 @@ pub mod iso230_2;
 pub mod map;
 pub mod sensitivity;
 pub mod thermal;
+pub mod volumetric;
