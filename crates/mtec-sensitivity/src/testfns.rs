@@ -1,8 +1,10 @@
 //! Standard test functions with analytic sensitivity indices, shipped next to the methods (as
 //! SALib does) and used by the tests, the benchmarks and `mtec sensitivity --function`.
 
-use crate::problem::{Model, Problem};
-use crate::Distribution;
+use crate::error_model::Method;
+use crate::problem::{evaluate, Model, Problem};
+use crate::{efast, morris, sobol, Distribution, SensitivityError};
+use serde::Serialize;
 use std::f64::consts::PI;
 
 /// A test function: its problem, its model, and its exact indices.
@@ -196,3 +198,83 @@ pub fn by_name(name: &str) -> Option<Box<dyn TestFunction>> {
 
 /// Names accepted by [`by_name`].
 pub const NAMES: [&str; 3] = ["ishigami", "sobol-g", "linear"];
+
+/// The indices of a test function estimated by one method (`mtec sensitivity --function`):
+/// S1 and ST (with intervals when the method gives them) for EFAST and Sobol, μ, μ* and σ for
+/// Morris, one entry per input of the function's problem.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FunctionIndices {
+    /// `efast`, `sobol` or `morris`.
+    pub method: String,
+    /// Model evaluations of the design.
+    pub evaluations: usize,
+    #[serde(rename = "S1", skip_serializing_if = "Option::is_none")]
+    pub s1: Option<Vec<f64>>,
+    #[serde(rename = "ST", skip_serializing_if = "Option::is_none")]
+    pub st: Option<Vec<f64>>,
+    /// Confidence half-widths of S1 and ST: both or neither.
+    #[serde(rename = "S1_conf", skip_serializing_if = "Option::is_none")]
+    pub s1_conf: Option<Vec<f64>>,
+    #[serde(rename = "ST_conf", skip_serializing_if = "Option::is_none")]
+    pub st_conf: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mu: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mu_star: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<Vec<f64>>,
+}
+
+/// Draws the method's design over the function's problem (seed `seed`), evaluates the function
+/// and estimates its indices.
+pub fn analyze(
+    f: &dyn TestFunction,
+    method: &Method,
+    seed: u64,
+) -> Result<FunctionIndices, SensitivityError> {
+    let problem = f.problem();
+    let mut r = FunctionIndices {
+        method: method.name().to_string(),
+        evaluations: 0,
+        s1: None,
+        st: None,
+        s1_conf: None,
+        st_conf: None,
+        mu: None,
+        mu_star: None,
+        sigma: None,
+    };
+    let (s1, st, conf) = match method {
+        Method::Efast(s) => {
+            let x = efast::sample(&problem, s, seed)?;
+            let y = evaluate(f, &x).remove(0);
+            let ix = efast::analyze(&problem.names, &y, s.m, s.resamples)?;
+            r.evaluations = x.n_rows;
+            (ix.s1, ix.st, ix.s1_conf.zip(ix.st_conf))
+        }
+        Method::Sobol { n, bootstrap } => {
+            let x = sobol::sample(&problem, *n, seed)?;
+            let y = evaluate(f, &x).remove(0);
+            let ix = sobol::analyze(&problem.names, &y, bootstrap)?.indices;
+            r.evaluations = x.n_rows;
+            (ix.s1, ix.st, ix.s1_conf.zip(ix.st_conf))
+        }
+        Method::Morris(s) => {
+            let d = morris::sample(&problem, s, seed)?;
+            let y = evaluate(f, &d.samples).remove(0);
+            let ix = morris::analyze(&problem.names, &d, &y)?;
+            r.evaluations = d.samples.n_rows;
+            r.mu = Some(ix.mu);
+            r.mu_star = Some(ix.mu_star);
+            r.sigma = Some(ix.sigma);
+            return Ok(r);
+        }
+    };
+    r.s1 = Some(s1);
+    r.st = Some(st);
+    if let Some((a, b)) = conf {
+        r.s1_conf = Some(a);
+        r.st_conf = Some(b);
+    }
+    Ok(r)
+}

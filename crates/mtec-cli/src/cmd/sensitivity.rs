@@ -2,16 +2,7 @@
 //! (EFAST, Sobol or Morris), or of a standard test function.
 
 use crate::error::CliError;
-use crate::inputs::{read_machine, read_poses};
-use mtec_io::InputError;
-use mtec_sensitivity::efast::EfastSettings;
-use mtec_sensitivity::error_model::{
-    self, ErrorModelProblem, ErrorModelReport, ErrorStatistics, Method,
-};
-use mtec_sensitivity::morris::MorrisSettings;
-use mtec_sensitivity::sobol::Bootstrap;
-use mtec_sensitivity::{efast, evaluate, morris, sobol, testfns};
-use std::fmt::Write;
+use mtec_workflow::ops::sensitivity::{self as op, MethodKind, Options};
 use std::path::PathBuf;
 
 const LONG: &str = "\
@@ -120,381 +111,42 @@ pub enum MethodArg {
     Morris,
 }
 
-fn method(args: &Args) -> Method {
-    match args.method {
-        MethodArg::Efast => Method::Efast(EfastSettings {
-            n: args.samples.unwrap_or(1200),
-            m: args.interference,
-            resamples: args.resamples,
-        }),
-        MethodArg::Sobol => Method::Sobol {
-            n: args.samples.unwrap_or(1024),
-            bootstrap: Bootstrap {
-                resamples: args.bootstrap,
-                confidence: 0.95,
-                seed: args.seed,
-            },
-        },
-        MethodArg::Morris => Method::Morris(MorrisSettings {
-            trajectories: args.samples.unwrap_or(100),
-            levels: args.levels,
-        }),
+impl From<MethodArg> for MethodKind {
+    fn from(m: MethodArg) -> Self {
+        match m {
+            MethodArg::Efast => MethodKind::Efast,
+            MethodArg::Sobol => MethodKind::Sobol,
+            MethodArg::Morris => MethodKind::Morris,
+        }
     }
 }
 
-/// Writes to stdout; a closed pipe (`| head`) ends the output quietly instead of panicking.
-fn emit(text: &str) -> Result<(), CliError> {
-    use std::io::Write as _;
-    match std::io::stdout().lock().write_all(text.as_bytes()) {
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
-        r => r.map_err(CliError::from),
+impl Args {
+    fn options(&self) -> Options {
+        Options {
+            machine: self.machine.clone(),
+            stats: self.stats.clone(),
+            function: self.function.clone(),
+            method: self.method.into(),
+            samples: self.samples,
+            interference: self.interference,
+            resamples: self.resamples,
+            levels: self.levels,
+            bootstrap: self.bootstrap,
+            seed: self.seed,
+            at: self.at.clone(),
+            points: self.points.clone(),
+            target_um: self.target_um,
+            coverage: self.coverage,
+        }
     }
-}
-
-fn to_json(v: &serde_json::Value) -> Result<String, CliError> {
-    serde_json::to_string_pretty(v).map_err(|e| CliError::Internal(e.into()))
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    if let Some(name) = args.function.clone() {
-        return run_function(&args, &name);
-    }
-    let (Some(machine_path), Some(stats_path)) = (args.machine.clone(), args.stats.clone()) else {
-        return Err(CliError::usage(
-            "give --machine M.toml --stats STATS.csv (or --function ishigami|sobol-g|linear)",
-        ));
-    };
-    let machine = read_machine(&machine_path)?;
-    let stats = ErrorStatistics::read(&stats_path)?;
-    let poses = match (&args.at, &args.points) {
-        (Some(at), None) => {
-            if at.len() != machine.axes.len() {
-                return Err(CliError::usage(format!(
-                    "--at has {} values but the machine has {} axes ({})",
-                    at.len(),
-                    machine.axes.len(),
-                    machine
-                        .axes
-                        .iter()
-                        .map(|a| a.letter().to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )));
-            }
-            for (v, a) in at.iter().zip(&machine.axes) {
-                let [lo, hi] = machine.travel(*a);
-                if !(v.is_finite() && *v >= lo && *v <= hi) {
-                    return Err(CliError::usage(format!(
-                        "--at: {a} = {v} is outside the travel [{lo}, {hi}]"
-                    )));
-                }
-            }
-            vec![at.clone()]
-        }
-        (None, Some(p)) => read_poses(p, &machine)?,
-        _ => {
-            return Err(CliError::usage(
-                "give the pose with --at x,y,z or several with --points P.csv",
-            ))
-        }
-    };
-    let emp = ErrorModelProblem::new(&machine, &stats, &poses)
-        .map_err(|e| InputError::file(&stats_path, e.to_string()))?;
-    let report = error_model::analyze(
-        &emp,
-        &method(&args),
-        args.seed,
-        args.target_um,
-        args.coverage,
-    )
-    .map_err(|e| CliError::usage(e.to_string()))?;
+    let outcome = op::run(&args.options(), &mut crate::observer::Stderr::default())?;
     if args.json {
-        let mut v = serde_json::to_value(&report).map_err(|e| CliError::Internal(e.into()))?;
-        let obj = v.as_object_mut().expect("report is an object");
-        obj.insert("format".into(), "mtec.sensitivity/1".into());
-        obj.insert("machine".into(), machine.name.clone().into());
-        if poses.len() == 1 {
-            obj.insert("at".into(), serde_json::json!(poses[0]));
-            // The linear model itself, so that the numbers can be checked elsewhere.
-            let coeffs: serde_json::Map<String, serde_json::Value> = emp
-                .problem
-                .names
-                .iter()
-                .zip(&emp.model.coefficients()[0])
-                .map(|(n, c)| (n.clone(), serde_json::json!(c)))
-                .collect();
-            obj.insert("coefficients_um_per_unit".into(), coeffs.into());
-        }
-        emit(&(to_json(&v)? + "\n"))?;
+        super::emit(&format!("{}\n", outcome.to_json()?))
     } else {
-        emit(&text_report(&report))?;
-    }
-    Ok(())
-}
-
-fn text_report(r: &ErrorModelReport) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "{} sensitivity of the first-order volumetric error: {} inputs, {} point(s), {} model evaluations",
-        r.method.to_uppercase(),
-        r.inputs.len(),
-        r.points,
-        r.evaluations
-    );
-    if !r.fixed.is_empty() {
-        let _ = writeln!(s, "fixed at their mean (std 0): {}", r.fixed.join(" "));
-    }
-    let morris = r.outputs[0].mu_star.is_some();
-    let _ = write!(s, "\n{:<8}", "element");
-    for o in &r.outputs {
-        if morris {
-            let _ = write!(
-                s,
-                " {:>9} {:>9}",
-                format!("mu*_{}", o.output),
-                format!("sig_{}", o.output)
-            );
-        } else {
-            let _ = write!(
-                s,
-                " {:>8} {:>8}",
-                format!("S1_{}", o.output),
-                format!("ST_{}", o.output)
-            );
-        }
-    }
-    s.push('\n');
-    for (i, n) in r.inputs.iter().enumerate() {
-        let _ = write!(s, "{n:<8}");
-        for o in &r.outputs {
-            let (a, b) = if morris {
-                (o.mu_star.as_ref().unwrap()[i], o.sigma.as_ref().unwrap()[i])
-            } else {
-                (o.s1.as_ref().unwrap()[i], o.st.as_ref().unwrap()[i])
-            };
-            if morris {
-                let _ = write!(s, " {a:>9.3} {b:>9.3}");
-            } else {
-                let _ = write!(s, " {a:>8.4} {b:>8.4}");
-            }
-        }
-        s.push('\n');
-    }
-    let what = if morris { "mu* of |E|" } else { "S1 of |E|" };
-    let _ = writeln!(s, "\nkey errors ({what}):");
-    for k in r.key_errors.iter().take(8) {
-        let _ = writeln!(s, "  {:<6} {:.4}", k.element, k.value);
-    }
-    let what = if morris {
-        "sigma of |E|"
-    } else {
-        "ST - S1 of |E| >= 0.03"
-    };
-    let _ = writeln!(s, "coupled errors ({what}):");
-    if r.coupled_errors.is_empty() {
-        let _ = writeln!(s, "  none");
-    }
-    for k in r.coupled_errors.iter().take(8) {
-        let _ = writeln!(s, "  {:<6} {:.4}", k.element, k.value);
-    }
-    if let Some(t) = &r.tolerance {
-        let _ = writeln!(
-            s,
-            "\ntolerance allocation: target {} um at k = {} (now k*sigma of Ex, Ey, Ez = {:.2}, {:.2}, {:.2} um)",
-            t.target_um, t.coverage_factor, t.current_expanded_um[0], t.current_expanded_um[1], t.current_expanded_um[2]
-        );
-        let _ = writeln!(
-            s,
-            "{:<8} {:>5} {:>12} {:>12} {:>8} {:>8}",
-            "element", "unit", "std now", "std allowed", "binds", "ratio"
-        );
-        for row in &t.rows {
-            match (row.allowed_std, &row.binding_output, row.ratio) {
-                (Some(a), Some(b), Some(q)) => {
-                    let _ = writeln!(
-                        s,
-                        "{:<8} {:>5} {:>12.3} {:>12.3} {:>8} {:>8.3}{}",
-                        row.element,
-                        row.unit,
-                        row.current_std,
-                        a,
-                        b,
-                        q,
-                        if q > 1.0 { "  tighten" } else { "" }
-                    );
-                }
-                _ => {
-                    let _ = writeln!(
-                        s,
-                        "{:<8} {:>5} {:>12.3} {:>12} {:>8} {:>8}",
-                        row.element, row.unit, row.current_std, "no limit", "-", "-"
-                    );
-                }
-            }
-        }
-    }
-    s
-}
-
-fn run_function(args: &Args, name: &str) -> Result<(), CliError> {
-    let f = testfns::by_name(name).ok_or_else(|| {
-        CliError::usage(format!(
-            "unknown test function `{name}`; choose one of: {}",
-            testfns::NAMES.join(", ")
-        ))
-    })?;
-    let problem = f.problem();
-    let bad = |e: mtec_sensitivity::SensitivityError| CliError::usage(e.to_string());
-    let mut out = serde_json::Map::new();
-    out.insert("format".into(), "mtec.sensitivity/1".into());
-    out.insert("function".into(), name.into());
-    out.insert("inputs".into(), serde_json::json!(problem.names));
-    match method(args) {
-        Method::Efast(s) => {
-            let x = efast::sample(&problem, &s, args.seed).map_err(bad)?;
-            let y = evaluate(f.as_ref(), &x).remove(0);
-            let ix = efast::analyze(&problem.names, &y, s.m, s.resamples).map_err(bad)?;
-            out.insert("method".into(), "efast".into());
-            out.insert("evaluations".into(), x.n_rows.into());
-            out.insert("S1".into(), serde_json::json!(ix.s1));
-            out.insert("ST".into(), serde_json::json!(ix.st));
-            if let (Some(a), Some(b)) = (ix.s1_conf, ix.st_conf) {
-                out.insert("S1_conf".into(), serde_json::json!(a));
-                out.insert("ST_conf".into(), serde_json::json!(b));
-            }
-        }
-        Method::Sobol { n, bootstrap } => {
-            let x = sobol::sample(&problem, n, args.seed).map_err(bad)?;
-            let y = evaluate(f.as_ref(), &x).remove(0);
-            let r = sobol::analyze(&problem.names, &y, &bootstrap).map_err(bad)?;
-            out.insert("method".into(), "sobol".into());
-            out.insert("evaluations".into(), x.n_rows.into());
-            out.insert("S1".into(), serde_json::json!(r.indices.s1));
-            out.insert("ST".into(), serde_json::json!(r.indices.st));
-            if let (Some(a), Some(b)) = (r.indices.s1_conf, r.indices.st_conf) {
-                out.insert("S1_conf".into(), serde_json::json!(a));
-                out.insert("ST_conf".into(), serde_json::json!(b));
-            }
-        }
-        Method::Morris(s) => {
-            let d = morris::sample(&problem, &s, args.seed).map_err(bad)?;
-            let y = evaluate(f.as_ref(), &d.samples).remove(0);
-            let r = morris::analyze(&problem.names, &d, &y).map_err(bad)?;
-            out.insert("method".into(), "morris".into());
-            out.insert("evaluations".into(), d.samples.n_rows.into());
-            out.insert("mu".into(), serde_json::json!(r.mu));
-            out.insert("mu_star".into(), serde_json::json!(r.mu_star));
-            out.insert("sigma".into(), serde_json::json!(r.sigma));
-        }
-    }
-    out.insert(
-        "analytic".into(),
-        serde_json::json!({ "S1": f.analytic_s1(), "ST": f.analytic_st() }),
-    );
-    if args.json {
-        emit(&(to_json(&serde_json::Value::Object(out))? + "\n"))?;
-        return Ok(());
-    }
-    let mut s = format!(
-        "{} of the {name} function ({} model evaluations)\n",
-        out["method"].as_str().unwrap_or("").to_uppercase(),
-        out["evaluations"]
-    );
-    let cols: Vec<&str> = if out.contains_key("S1") {
-        vec!["S1", "ST"]
-    } else {
-        vec!["mu_star", "sigma"]
-    };
-    let _ = writeln!(
-        s,
-        "{:<6} {:>10} {:>10} {:>10} {:>10}",
-        "input", cols[0], cols[1], "S1 exact", "ST exact"
-    );
-    let (a1, at) = (f.analytic_s1(), f.analytic_st());
-    for (i, n) in problem.names.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "{n:<6} {:>10.4} {:>10.4} {:>10.4} {:>10.4}",
-            out[cols[0]][i].as_f64().unwrap_or(f64::NAN),
-            out[cols[1]][i].as_f64().unwrap_or(f64::NAN),
-            a1[i],
-            at[i]
-        );
-    }
-    emit(&s)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use clap::Parser;
-
-    #[derive(Parser)]
-    struct Cli {
-        #[command(flatten)]
-        args: Args,
-    }
-
-    fn args(extra: &[&str]) -> Args {
-        let mut v = vec!["mtec-sensitivity"];
-        v.extend_from_slice(extra);
-        Cli::try_parse_from(v).expect("valid command line").args
-    }
-
-    fn files(stats: &str) -> (tempfile::TempDir, String, String) {
-        let dir = tempfile::tempdir().unwrap();
-        let m = dir.path().join("m.toml");
-        std::fs::write(
-            &m,
-            "chain = \"WXYFZT\"\ntool_offset_mm = [0, 0, 100]\n[axes.X]\ntravel = [0, 600]\n[axes.Y]\ntravel = [0, 800]\n[axes.Z]\ntravel = [0, 300]\n",
-        )
-        .unwrap();
-        let s = dir.path().join("stats.csv");
-        std::fs::write(&s, stats).unwrap();
-        let (m, s) = (m.display().to_string(), s.display().to_string());
-        (dir, m, s)
-    }
-
-    #[test]
-    fn bad_inputs_are_usage_or_located_input_errors() {
-        let good = "element,mean,std,unit\nEXX,1,2,um\nECX,0,5,urad\n";
-        let (_d, m, s) = files(good);
-        // wrong number of --at values, and a pose outside the travel: usage errors (exit 2)
-        let e = run(args(&["--machine", &m, "--stats", &s, "--at", "1,2"])).unwrap_err();
-        assert!(
-            matches!(e, CliError::Usage(ref t) if t.contains("3 axes")),
-            "{e}"
-        );
-        let e = run(args(&["--machine", &m, "--stats", &s, "--at", "1,2,400"])).unwrap_err();
-        assert!(
-            matches!(e, CliError::Usage(ref t) if t.contains("outside the travel")),
-            "{e}"
-        );
-        // no pose at all
-        let e = run(args(&["--machine", &m, "--stats", &s])).unwrap_err();
-        assert!(matches!(e, CliError::Usage(_)), "{e}");
-        // a unit that does not fit the element: located at line 3, column 4
-        let (_d2, m2, s2) = files("element,mean,std,unit\nEXX,1,2,um\nECX,0,5,um\n");
-        let e = run(args(&["--machine", &m2, "--stats", &s2, "--at", "1,2,3"])).unwrap_err();
-        match e {
-            CliError::Input(i) => assert_eq!((i.line, i.column), (Some(3), Some(4))),
-            other => panic!("{other}"),
-        }
-        // unknown test function
-        let e = run(args(&["--function", "rosenbrock"])).unwrap_err();
-        assert!(matches!(e, CliError::Usage(_)));
-        // a good run succeeds
-        run(args(&[
-            "--machine",
-            &m,
-            "--stats",
-            &s,
-            "--at",
-            "100,200,50",
-            "--samples",
-            "300",
-        ]))
-        .unwrap();
+        super::emit(&outcome.to_string())
     }
 }

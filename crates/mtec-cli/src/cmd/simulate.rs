@@ -1,7 +1,7 @@
 //! `mtec simulate SCENARIO --out DIR [--seed N]`: write a scenario's measurement files and truth.
 
 use crate::error::CliError;
-use mtec_io::write_output;
+use mtec_workflow::ops::simulate::{self as op, Options, SCENARIOS};
 use std::path::PathBuf;
 
 const LONG: &str = "\
@@ -42,32 +42,23 @@ pub struct Args {
 
 fn scenario_list() -> String {
     let mut s = String::from("Scenarios:\n");
-    for (name, what) in mtec_sim::SCENARIOS {
+    for (name, what) in SCENARIOS {
         s.push_str(&format!("  {name:<18} {what}\n"));
     }
     s
 }
 
+impl Args {
+    fn options(&self) -> Options {
+        Options {
+            scenario: self.scenario.clone(),
+            out: self.out.clone(),
+            seed: self.seed,
+        }
+    }
+}
+
 pub fn run(args: Args) -> Result<(), CliError> {
-    let output = mtec_sim::run_scenario(&args.scenario, args.seed)
-        .map_err(|e| CliError::usage(e.to_string()))?;
-    let dir = args
-        .out
-        .unwrap_or_else(|| PathBuf::from(format!("{}-seed{}", args.scenario, args.seed)));
-    for f in &output.files {
-        write_output(&dir.join(&f.name), f.contents.as_bytes())?;
-    }
-    let truth =
-        serde_json::to_string_pretty(&output.truth).map_err(|e| CliError::Internal(e.into()))?;
-    write_output(&dir.join("truth.json"), truth.as_bytes())?;
-    println!(
-        "{}: wrote {} files and truth.json to {}",
-        args.scenario,
-        output.files.len(),
-        dir.display()
-    );
-    for f in &output.files {
-        println!("  {}", dir.join(&f.name).display());
-    }
-    Ok(())
+    let outcome = op::run(&args.options(), &mut crate::observer::Stderr::default())?;
+    super::emit(&outcome.to_string())
 }

@@ -1,9 +1,7 @@
 //! `mtec volumetric`: volumetric error of the tool tip at commanded points.
 
 use crate::error::CliError;
-use crate::inputs::{read_errors, read_machine, read_poses};
-use mtec_model::{Formalism, Order, VolumetricModel};
-use std::fmt::Write;
+use mtec_workflow::ops::volumetric::{self as op, Options};
 use std::path::PathBuf;
 
 const LONG: &str = "\
@@ -63,76 +61,33 @@ pub enum Form {
     PoeFirst,
 }
 
-pub fn run(args: Args) -> Result<(), CliError> {
-    let machine = read_machine(&args.machine)?;
-    let errors = read_errors(&args.errors)?;
-    let poses = read_poses(&args.points, &machine)?;
-    let (f, o) = match args.form {
-        Form::HtmExact => (Formalism::Htm, Order::Exact),
-        Form::HtmFirst => (Formalism::Htm, Order::FirstOrder),
-        Form::PoeExact => (Formalism::Poe, Order::Exact),
-        Form::PoeFirst => (Formalism::Poe, Order::FirstOrder),
-    };
-    let vm = VolumetricModel::new(&machine, &errors);
-    let rotary = machine.axes.iter().any(|a| a.is_rotary());
-    let names: Vec<String> = machine
-        .axes
-        .iter()
-        .map(|a| crate::inputs::pose_column(*a))
-        .collect();
-    if args.json {
-        let rows: Vec<serde_json::Value> = poses
-            .iter()
-            .map(|q| {
-                let v = vm.error(q, f, o);
-                let mut obj = serde_json::Map::new();
-                for (n, x) in names.iter().zip(q) {
-                    obj.insert(n.clone(), (*x).into());
-                }
-                obj.insert("ex_um".into(), v.position_um[0].into());
-                obj.insert("ey_um".into(), v.position_um[1].into());
-                obj.insert("ez_um".into(), v.position_um[2].into());
-                if rotary {
-                    obj.insert(
-                        "orientation_urad".into(),
-                        serde_json::json!(v.orientation_urad),
-                    );
-                }
-                serde_json::Value::Object(obj)
-            })
-            .collect();
-        let out = serde_json::json!({ "format": "mtec.volumetric/1", "form": format!("{:?}", args.form), "points": rows });
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&out).map_err(|e| CliError::Internal(e.into()))?
-        );
-        return Ok(());
-    }
-    let mut out = names.join(",") + ",ex_um,ey_um,ez_um";
-    if rotary {
-        out.push_str(",eax_urad,eay_urad,eaz_urad");
-    }
-    out.push('\n');
-    for q in &poses {
-        let v = vm.error(q, f, o);
-        let cols: Vec<String> = q.iter().map(|x| format!("{x}")).collect();
-        let _ = write!(
-            out,
-            "{},{:.4},{:.4},{:.4}",
-            cols.join(","),
-            v.position_um[0],
-            v.position_um[1],
-            v.position_um[2]
-        );
-        if rotary {
-            let _ = write!(
-                out,
-                ",{:.3},{:.3},{:.3}",
-                v.orientation_urad[0], v.orientation_urad[1], v.orientation_urad[2]
-            );
+impl From<Form> for op::Form {
+    fn from(f: Form) -> Self {
+        match f {
+            Form::HtmExact => op::Form::HtmExact,
+            Form::HtmFirst => op::Form::HtmFirst,
+            Form::PoeExact => op::Form::PoeExact,
+            Form::PoeFirst => op::Form::PoeFirst,
         }
-        out.push('\n');
     }
-    print!("{out}");
-    Ok(())
+}
+
+impl Args {
+    fn options(&self) -> Options {
+        Options {
+            machine: self.machine.clone(),
+            errors: self.errors.clone(),
+            points: self.points.clone(),
+            form: self.form.into(),
+        }
+    }
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    let outcome = op::run(&args.options(), &mut crate::observer::Stderr::default())?;
+    if args.json {
+        super::emit(&format!("{}\n", outcome.to_json()?))
+    } else {
+        super::emit(&outcome.to_string())
+    }
 }

@@ -9,4 +9,7 @@ pub mod identify_lines;
 pub mod iso230_2;
 pub mod machine;
 pub mod map;
+pub mod sensitivity;
+pub mod simulate;
 pub mod thermal;
+pub mod volumetric;

@@ -1,0 +1,442 @@
+//! Global sensitivity of a machine's volumetric error to its error elements (EFAST, Sobol or
+//! Morris, `mtec_sensitivity::error_model`), or of a standard test function
+//! (`mtec_sensitivity::testfns`). The job of `mtec sensitivity`.
+
+use crate::inputs::{read_machine, read_poses};
+use crate::{Error, Observer, Result};
+use mtec_io::InputError;
+use mtec_sensitivity::efast::EfastSettings;
+use mtec_sensitivity::error_model::{self, ErrorModelProblem, ErrorModelReport, ErrorStatistics};
+use mtec_sensitivity::morris::MorrisSettings;
+use mtec_sensitivity::sobol::Bootstrap;
+use mtec_sensitivity::testfns::{self, FunctionIndices};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::PathBuf;
+
+pub use mtec_sensitivity::error_model::Method;
+
+/// The format tag of the outcome.
+pub const FORMAT: &str = "mtec.sensitivity/1";
+
+/// The sensitivity method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MethodKind {
+    /// Extended FAST (the source method).
+    Efast,
+    /// Sobol (Saltelli / Jansen estimators) with bootstrap intervals.
+    Sobol,
+    /// Morris elementary effects (μ*, σ instead of S1, ST).
+    Morris,
+}
+
+impl MethodKind {
+    /// `efast`, `sobol` or `morris`.
+    pub fn from_name(name: &str) -> Option<MethodKind> {
+        match name {
+            "efast" => Some(MethodKind::Efast),
+            "sobol" => Some(MethodKind::Sobol),
+            "morris" => Some(MethodKind::Morris),
+            _ => None,
+        }
+    }
+}
+
+/// What to analyse and how.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Machine description (TOML); with `stats`.
+    pub machine: Option<PathBuf>,
+    /// Error statistics (CSV `element,mean,std,unit`; µm or µrad).
+    pub stats: Option<PathBuf>,
+    /// A standard test function instead of a machine: `ishigami`, `sobol-g`, `linear`.
+    pub function: Option<String>,
+    /// The method.
+    pub method: MethodKind,
+    /// Design size: EFAST points per curve (`None`: 1200), Sobol base points (1024), Morris
+    /// trajectories (100).
+    pub samples: Option<usize>,
+    /// EFAST interference factor M.
+    pub interference: usize,
+    /// EFAST repetitions of the search curves with new random phases.
+    pub resamples: usize,
+    /// Morris grid levels (even).
+    pub levels: usize,
+    /// Sobol bootstrap replicates.
+    pub bootstrap: usize,
+    /// Random seed of the design.
+    pub seed: u64,
+    /// One pose in the machine's axis order (mm, deg).
+    pub at: Option<Vec<f64>>,
+    /// Several poses (CSV with `x_mm`, `y_mm`, `z_mm`, ... columns); indices are aggregated.
+    pub points: Option<PathBuf>,
+    /// Target accuracy of Ex, Ey, Ez for the tolerance allocation (µm).
+    pub target_um: f64,
+    /// Coverage factor k: the target bounds k·σ of each axis.
+    pub coverage: f64,
+}
+
+impl Options {
+    /// The defaults of `mtec sensitivity` (EFAST, seed 1, 25 µm at k = 2), no subject yet.
+    pub fn new() -> Options {
+        Options {
+            machine: None,
+            stats: None,
+            function: None,
+            method: MethodKind::Efast,
+            samples: None,
+            interference: 4,
+            resamples: 1,
+            levels: 4,
+            bootstrap: 100,
+            seed: 1,
+            at: None,
+            points: None,
+            target_um: 25.0,
+            coverage: 2.0,
+        }
+    }
+
+    /// A machine's error elements from their statistics.
+    pub fn machine(machine: impl Into<PathBuf>, stats: impl Into<PathBuf>) -> Options {
+        Options {
+            machine: Some(machine.into()),
+            stats: Some(stats.into()),
+            ..Options::new()
+        }
+    }
+
+    /// A standard test function by name.
+    pub fn function(name: impl Into<String>) -> Options {
+        Options {
+            function: Some(name.into()),
+            ..Options::new()
+        }
+    }
+
+    /// The method with its design settings.
+    pub fn method(&self) -> Method {
+        match self.method {
+            MethodKind::Efast => Method::Efast(EfastSettings {
+                n: self.samples.unwrap_or(1200),
+                m: self.interference,
+                resamples: self.resamples,
+            }),
+            MethodKind::Sobol => Method::Sobol {
+                n: self.samples.unwrap_or(1024),
+                bootstrap: Bootstrap {
+                    resamples: self.bootstrap,
+                    confidence: 0.95,
+                    seed: self.seed,
+                },
+            },
+            MethodKind::Morris => Method::Morris(MorrisSettings {
+                trajectories: self.samples.unwrap_or(100),
+                levels: self.levels,
+            }),
+        }
+    }
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options::new()
+    }
+}
+
+/// The sensitivity of a machine's volumetric error (`mtec.sensitivity/1`).
+#[derive(Debug, Clone, Serialize)]
+pub struct MachineOutcome {
+    /// `mtec.sensitivity/1`.
+    pub format: String,
+    /// The machine's name.
+    pub machine: String,
+    /// Indices, key and coupled errors, tolerance allocation.
+    #[serde(flatten)]
+    pub report: ErrorModelReport,
+    /// The pose, when there is one (mm, deg).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub at: Option<Vec<f64>>,
+    /// At one pose, the linear model itself: [∂Ex, ∂Ey, ∂Ez] per input (µm per µm or per µrad),
+    /// so that the numbers can be checked elsewhere.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coefficients_um_per_unit: Option<BTreeMap<String, [f64; 3]>>,
+}
+
+/// The exact indices of a test function.
+#[derive(Debug, Clone, Serialize)]
+pub struct Analytic {
+    #[serde(rename = "S1")]
+    pub s1: Vec<f64>,
+    #[serde(rename = "ST")]
+    pub st: Vec<f64>,
+}
+
+/// The indices of a test function beside its exact ones (`mtec.sensitivity/1`).
+#[derive(Debug, Clone, Serialize)]
+pub struct FunctionOutcome {
+    /// `mtec.sensitivity/1`.
+    pub format: String,
+    /// The function's name as given.
+    pub function: String,
+    /// Its inputs.
+    pub inputs: Vec<String>,
+    /// The estimates.
+    #[serde(flatten)]
+    pub indices: FunctionIndices,
+    /// The exact indices.
+    pub analytic: Analytic,
+}
+
+/// The result: a machine's or a test function's sensitivity.
+#[derive(Debug, Clone, Serialize)]
+#[serde(untagged)]
+pub enum Outcome {
+    Machine(MachineOutcome),
+    Function(FunctionOutcome),
+}
+
+impl Outcome {
+    /// The outcome as the pretty JSON text `mtec sensitivity --json` prints (keys sorted).
+    pub fn to_json(&self) -> Result<String> {
+        Ok(serde_json::to_string_pretty(&serde_json::to_value(self)?)?)
+    }
+}
+
+/// Analyses the machine (`machine` and `stats`) or the test function (`function`).
+pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
+    if let Some(name) = &opts.function {
+        return function(opts, name).map(Outcome::Function);
+    }
+    let (Some(machine_path), Some(stats_path)) = (&opts.machine, &opts.stats) else {
+        return Err(Error::usage(
+            "give --machine M.toml --stats STATS.csv (or --function ishigami|sobol-g|linear)",
+        ));
+    };
+    let machine = read_machine(machine_path)?;
+    let stats = ErrorStatistics::read(stats_path)?;
+    let poses = match (&opts.at, &opts.points) {
+        (Some(at), None) => {
+            if at.len() != machine.axes.len() {
+                return Err(Error::usage(format!(
+                    "--at has {} values but the machine has {} axes ({})",
+                    at.len(),
+                    machine.axes.len(),
+                    machine
+                        .axes
+                        .iter()
+                        .map(|a| a.letter().to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )));
+            }
+            for (v, a) in at.iter().zip(&machine.axes) {
+                let [lo, hi] = machine.travel(*a);
+                if !(v.is_finite() && *v >= lo && *v <= hi) {
+                    return Err(Error::usage(format!(
+                        "--at: {a} = {v} is outside the travel [{lo}, {hi}]"
+                    )));
+                }
+            }
+            vec![at.clone()]
+        }
+        (None, Some(p)) => read_poses(p, &machine)?,
+        _ => {
+            return Err(Error::usage(
+                "give the pose with --at x,y,z or several with --points P.csv",
+            ))
+        }
+    };
+    let emp = ErrorModelProblem::new(&machine, &stats, &poses)
+        .map_err(|e| InputError::file(stats_path, e.to_string()))?;
+    let report = error_model::analyze(
+        &emp,
+        &opts.method(),
+        opts.seed,
+        opts.target_um,
+        opts.coverage,
+    )
+    .map_err(|e| Error::usage(e.to_string()))?;
+    let one = poses.len() == 1;
+    Ok(Outcome::Machine(MachineOutcome {
+        format: FORMAT.into(),
+        machine: machine.name.clone(),
+        report,
+        at: one.then(|| poses[0].clone()),
+        coefficients_um_per_unit: one.then(|| {
+            emp.problem
+                .names
+                .iter()
+                .cloned()
+                .zip(emp.model.coefficients()[0].iter().copied())
+                .collect()
+        }),
+    }))
+}
+
+fn function(opts: &Options, name: &str) -> Result<FunctionOutcome> {
+    let f = testfns::by_name(name).ok_or_else(|| {
+        Error::usage(format!(
+            "unknown test function `{name}`; choose one of: {}",
+            testfns::NAMES.join(", ")
+        ))
+    })?;
+    let indices = testfns::analyze(f.as_ref(), &opts.method(), opts.seed)
+        .map_err(|e| Error::usage(e.to_string()))?;
+    Ok(FunctionOutcome {
+        format: FORMAT.into(),
+        function: name.into(),
+        inputs: f.problem().names,
+        indices,
+        analytic: Analytic {
+            s1: f.analytic_s1(),
+            st: f.analytic_st(),
+        },
+    })
+}
+
+impl fmt::Display for Outcome {
+    fn fmt(&self, o: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Outcome::Machine(m) => m.fmt(o),
+            Outcome::Function(f) => f.fmt(o),
+        }
+    }
+}
+
+impl fmt::Display for MachineOutcome {
+    fn fmt(&self, s: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let r = &self.report;
+        writeln!(
+            s,
+            "{} sensitivity of the first-order volumetric error: {} inputs, {} point(s), {} model evaluations",
+            r.method.to_uppercase(),
+            r.inputs.len(),
+            r.points,
+            r.evaluations
+        )?;
+        if !r.fixed.is_empty() {
+            writeln!(s, "fixed at their mean (std 0): {}", r.fixed.join(" "))?;
+        }
+        let morris = r.outputs.first().is_some_and(|o| o.mu_star.is_some());
+        write!(s, "\n{:<8}", "element")?;
+        for o in &r.outputs {
+            if morris {
+                write!(
+                    s,
+                    " {:>9} {:>9}",
+                    format!("mu*_{}", o.output),
+                    format!("sig_{}", o.output)
+                )?;
+            } else {
+                write!(
+                    s,
+                    " {:>8} {:>8}",
+                    format!("S1_{}", o.output),
+                    format!("ST_{}", o.output)
+                )?;
+            }
+        }
+        writeln!(s)?;
+        let at = |v: &Option<Vec<f64>>, i: usize| v.as_ref().map_or(f64::NAN, |v| v[i]);
+        for (i, n) in r.inputs.iter().enumerate() {
+            write!(s, "{n:<8}")?;
+            for o in &r.outputs {
+                if morris {
+                    write!(s, " {:>9.3} {:>9.3}", at(&o.mu_star, i), at(&o.sigma, i))?;
+                } else {
+                    write!(s, " {:>8.4} {:>8.4}", at(&o.s1, i), at(&o.st, i))?;
+                }
+            }
+            writeln!(s)?;
+        }
+        let what = if morris { "mu* of |E|" } else { "S1 of |E|" };
+        writeln!(s, "\nkey errors ({what}):")?;
+        for k in r.key_errors.iter().take(8) {
+            writeln!(s, "  {:<6} {:.4}", k.element, k.value)?;
+        }
+        let what = if morris {
+            "sigma of |E|"
+        } else {
+            "ST - S1 of |E| >= 0.03"
+        };
+        writeln!(s, "coupled errors ({what}):")?;
+        if r.coupled_errors.is_empty() {
+            writeln!(s, "  none")?;
+        }
+        for k in r.coupled_errors.iter().take(8) {
+            writeln!(s, "  {:<6} {:.4}", k.element, k.value)?;
+        }
+        if let Some(t) = &r.tolerance {
+            writeln!(
+                s,
+                "\ntolerance allocation: target {} um at k = {} (now k*sigma of Ex, Ey, Ez = {:.2}, {:.2}, {:.2} um)",
+                t.target_um, t.coverage_factor, t.current_expanded_um[0], t.current_expanded_um[1], t.current_expanded_um[2]
+            )?;
+            writeln!(
+                s,
+                "{:<8} {:>5} {:>12} {:>12} {:>8} {:>8}",
+                "element", "unit", "std now", "std allowed", "binds", "ratio"
+            )?;
+            for row in &t.rows {
+                match (row.allowed_std, &row.binding_output, row.ratio) {
+                    (Some(a), Some(b), Some(q)) => writeln!(
+                        s,
+                        "{:<8} {:>5} {:>12.3} {:>12.3} {:>8} {:>8.3}{}",
+                        row.element,
+                        row.unit,
+                        row.current_std,
+                        a,
+                        b,
+                        q,
+                        if q > 1.0 { "  tighten" } else { "" }
+                    )?,
+                    _ => writeln!(
+                        s,
+                        "{:<8} {:>5} {:>12.3} {:>12} {:>8} {:>8}",
+                        row.element, row.unit, row.current_std, "no limit", "-", "-"
+                    )?,
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Display for FunctionOutcome {
+    fn fmt(&self, s: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let ix = &self.indices;
+        writeln!(
+            s,
+            "{} of the {} function ({} model evaluations)",
+            ix.method.to_uppercase(),
+            self.function,
+            ix.evaluations
+        )?;
+        let none = Vec::new();
+        let (names, a, b) = if ix.s1.is_some() {
+            (["S1", "ST"], &ix.s1, &ix.st)
+        } else {
+            (["mu_star", "sigma"], &ix.mu_star, &ix.sigma)
+        };
+        let (a, b) = (a.as_ref().unwrap_or(&none), b.as_ref().unwrap_or(&none));
+        let value = |v: &Vec<f64>, i: usize| v.get(i).copied().unwrap_or(f64::NAN);
+        writeln!(
+            s,
+            "{:<6} {:>10} {:>10} {:>10} {:>10}",
+            "input", names[0], names[1], "S1 exact", "ST exact"
+        )?;
+        for (i, n) in self.inputs.iter().enumerate() {
+            writeln!(
+                s,
+                "{n:<6} {:>10.4} {:>10.4} {:>10.4} {:>10.4}",
+                value(a, i),
+                value(b, i),
+                value(&self.analytic.s1, i),
+                value(&self.analytic.st, i)
+            )?;
+        }
+        Ok(())
+    }
+}
