@@ -183,3 +183,30 @@ fn fl_thermal_full_example_runs() {
         &["Thermal model: ch1_um", "Thermal model: ch2_um"],
     );
 }
+
+/// A stage that fails ends the run with its located error and exit code 2, and the report is
+/// still written with the failure as its last section (issue 18: a failed stage is shown as
+/// failed in the report and in the exit code).
+#[test]
+fn a_failed_stage_is_in_the_report_and_the_exit_code() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_mtec"))
+        .arg("run")
+        .arg(root.join("tests/bad-input/project-stage-bad-csv/project.toml"))
+        .arg("--out")
+        .arg(tmp.path())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let located = "runs.csv:5:4: `deviation_um` is `NaN`: not a finite number";
+    assert!(stderr.contains(located), "{stderr}");
+    let html = std::fs::read_to_string(tmp.path().join("report.html")).expect("report.html");
+    let last = html.rsplit("<section").next().unwrap();
+    assert!(
+        last.contains("<h2>FAILED: ISO 230-2 statistics of"),
+        "the last section is not the failed stage: {last}"
+    );
+    assert!(last.contains("`deviation_um` is `NaN`"), "{last}");
+}

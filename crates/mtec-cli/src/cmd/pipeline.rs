@@ -368,25 +368,27 @@ pub fn sensitivity(
     }
     let points = p.out.join("sensitivity-points.csv");
     mtec_io::write_output(&points, pts.as_bytes())?;
-    let mut args = vec![
-        "sensitivity".into(),
-        "--machine".into(),
-        s(machine),
-        "--stats".into(),
-        s(&stats),
-        "--points".into(),
-        s(&points),
-        "--method".into(),
-        st.method.clone(),
-        "--json".into(),
-    ];
-    if let Some(n) = st.samples {
-        args.extend(["--samples".into(), n.to_string()]);
-    }
-    let v = p.json_stage_of("sensitivity.json", args)?;
+    let method = ops::sensitivity::MethodKind::from_name(&st.method).ok_or_else(|| {
+        CliError::usage(format!(
+            "[sensitivity] method `{}`: expected efast, sobol or morris",
+            st.method
+        ))
+    })?;
+    let opts = ops::sensitivity::Options {
+        machine: Some(machine.to_path_buf()),
+        stats: Some(stats),
+        method,
+        samples: st.samples,
+        points: Some(points),
+        ..ops::sensitivity::Options::new()
+    };
+    let mut obs = Collect::default();
+    let done = ops::sensitivity::run(&opts, &mut obs)?;
+    let v = p.json_result("sensitivity.json", &format!("{}\n", done.to_json()?))?;
     let sec = p
         .report
         .section("Global sensitivity of the volumetric error");
+    warnings(sec, &obs);
     sec.text("First-order index S1 (key errors) and total index ST (ST − S1: coupling) of each error element for the volumetric error, inputs drawn from the statistics of the error functions.");
     // `outputs`: one record per output (Ex, Ey, Ez, |E|) with S1 and ST per input
     if let (Some(inputs), Some(outputs)) = (

@@ -1,10 +1,10 @@
 //! `mtec run PROJECT.toml`: the whole pipeline a project file asks for, with an HTML report.
 //!
-//! Each stage runs the same subcommand a user would type (this binary, as a child process, with
-//! `--json`), so a project exercises exactly the command-line paths; its JSON result is saved in
-//! the output folder and turned into a report section (tables of its numbers, plots). A stage
-//! that fails stops the run with that stage's message and exit code: a report never hides a
-//! failed analysis.
+//! Each stage runs the job of the subcommand a user would type, in-process
+//! (`mtec_workflow::ops`); its result is saved in the output folder as the command prints it
+//! with `--json` and turned into a report section (tables of its numbers, plots). A stage that
+//! fails stops the run with that stage's message and exit code: a report never hides a failed
+//! analysis.
 //!
 //! Project file (paths relative to the project file):
 //! ```toml
@@ -44,16 +44,15 @@ use mtec_io::{InputError, OutputGuard};
 use mtec_report::Report;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 const LONG: &str = "\
 Run the whole pipeline of a project file and write report.html.
 
 The project file (TOML; docs/formats.md, \"Project TOML\") names the machine and the
 measurement files, and which analyses, models and compensation outputs to produce; paths in it
-are relative to it. Each stage runs the subcommand a user would type and keeps its JSON result
-in the output folder; a stage that fails stops the run with its message and exit code. `mtec
-demo` writes a complete project to start from.";
+are relative to it. Each stage runs the job of the subcommand a user would type and keeps its
+JSON result in the output folder; a stage that fails stops the run with its message and exit
+code. `mtec demo` writes a complete project to start from.";
 
 const EXAMPLES: &str = crate::help::examples!(
     "  # positioning runs of an axis and a spindle's thermal log
@@ -226,36 +225,6 @@ pub struct CompensationStage {
     pub tables: Vec<String>,
 }
 
-/// A failed stage: its command line and what it said.
-struct StageError {
-    code: i32,
-    message: String,
-}
-
-/// Runs `mtec <args>` (this binary) and returns its stdout.
-fn call(args: &[String]) -> Result<String, StageError> {
-    let exe = std::env::current_exe().map_err(|e| StageError {
-        code: 1,
-        message: e.to_string(),
-    })?;
-    let out = Command::new(exe)
-        .args(args)
-        .output()
-        .map_err(|e| StageError {
-            code: 1,
-            message: e.to_string(),
-        })?;
-    if out.status.success() {
-        Ok(String::from_utf8_lossy(&out.stdout).into_owned())
-    } else {
-        let stderr = String::from_utf8_lossy(&out.stderr).trim().to_string();
-        Err(StageError {
-            code: out.status.code().unwrap_or(1),
-            message: format!("`mtec {}` failed: {stderr}", args.join(" ")),
-        })
-    }
-}
-
 fn s(p: &Path) -> String {
     p.display().to_string()
 }
@@ -270,6 +239,8 @@ pub struct Pipeline {
     guard: OutputGuard,
     step: usize,
     steps: usize,
+    /// The stage running now (its progress line).
+    current: String,
 }
 
 impl Pipeline {
@@ -279,14 +250,6 @@ impl Pipeline {
     pub fn progress_of(&mut self, what: &str) {
         self.progress(what)
     }
-    pub fn json_stage_of(
-        &mut self,
-        file: &str,
-        args: Vec<String>,
-    ) -> Result<serde_json::Value, CliError> {
-        self.json_stage(file, args)
-    }
-
     fn path(&self, p: &Path) -> PathBuf {
         if p.is_absolute() {
             p.to_path_buf()
@@ -297,6 +260,7 @@ impl Pipeline {
 
     fn progress(&mut self, what: &str) {
         self.step += 1;
+        self.current = what.to_string();
         if !self.quiet {
             eprintln!("[{}/{}] {what}", self.step, self.steps);
         }
@@ -314,26 +278,6 @@ impl Pipeline {
     pub fn json_result(&mut self, file: &str, text: &str) -> Result<serde_json::Value, CliError> {
         self.save(file, text)?;
         Ok(serde_json::from_str(text)?)
-    }
-
-    /// Runs a stage command with --json, saves its JSON, returns it parsed.
-    fn json_stage(&mut self, file: &str, args: Vec<String>) -> Result<serde_json::Value, CliError> {
-        let text = call(&args).map_err(stage_error)?;
-        self.save(file, &text)?;
-        serde_json::from_str(&text).map_err(|e| {
-            CliError::Internal(anyhow::anyhow!(
-                "`mtec {}` printed no JSON: {e}",
-                args.join(" ")
-            ))
-        })
-    }
-}
-
-fn stage_error(e: StageError) -> CliError {
-    if e.code == 2 {
-        CliError::Usage(e.message)
-    } else {
-        CliError::Internal(anyhow::anyhow!(e.message))
     }
 }
 
@@ -425,6 +369,7 @@ pub fn run_project_with(
         guard: OutputGuard::default(),
         step: 0,
         steps,
+        current: String::new(),
     };
     // every file the project names is an input that no output may overwrite
     let check = |f: &Path, what: &str| -> Result<PathBuf, InputError> {
@@ -518,54 +463,72 @@ pub fn run_project_with(
     p.guard = OutputGuard::new(&inputs);
     std::fs::create_dir_all(out)?;
 
-    crate::cmd::pipeline::machine_section(&mut p, machine.as_deref())?;
-    for st in &project.iso230_2 {
-        crate::cmd::pipeline::iso230_2(&mut p, &st.data)?;
+    // a stage that fails ends the run: the report is still written, with the failure as its
+    // last section, and the run exits with the stage's error (a report never hides it)
+    let ran = (|| -> Result<(), CliError> {
+        crate::cmd::pipeline::machine_section(&mut p, machine.as_deref())?;
+        for st in &project.iso230_2 {
+            crate::cmd::pipeline::iso230_2(&mut p, &st.data)?;
+        }
+        let mut identified: Option<PathBuf> = None;
+        if let (Some(l), Some(m)) = (&project.lines, &machine) {
+            identified = Some(crate::cmd::pipeline::lines(&mut p, m, l)?);
+        }
+        if let (Some(st), Some(m)) = (&project.sensitivity, &machine) {
+            crate::cmd::pipeline::sensitivity(&mut p, m, st, identified.as_deref())?;
+        }
+        for st in &project.circular {
+            crate::cmd::pipeline::circular(&mut p, &st.data)?;
+        }
+        if let Some(b) = &project.ballbar {
+            crate::cmd::pipeline::ballbar(&mut p, b)?;
+        }
+        let mut thermal_models = Vec::new();
+        for t in &project.thermal {
+            thermal_models.push((t.target.clone(), crate::cmd::pipeline::thermal(&mut p, t)?));
+        }
+        let mut map: Option<PathBuf> = None;
+        if let Some(m) = &project.map {
+            map = Some(crate::cmd::pipeline::map(&mut p, m)?);
+        }
+        if let Some(c) = &project.compensation {
+            crate::cmd::pipeline::compensation(
+                &mut p,
+                c,
+                map.as_deref(),
+                machine.as_deref(),
+                identified.as_deref(),
+            )?;
+        }
+        let mut machine_model: Option<PathBuf> = None;
+        if let Some(m) = &project.machine_model {
+            machine_model = Some(crate::cmd::machine_stage::build(
+                &mut p,
+                m,
+                &thermal_models,
+                map.as_deref(),
+            )?);
+        }
+        for r in &project.replay {
+            crate::cmd::machine_stage::replay(&mut p, r, machine_model.as_deref())?;
+        }
+        extra(&mut p)
+    })();
+    if let Err(e) = &ran {
+        let stage = p.current.clone();
+        let sec = p.report.section(format!("FAILED: {stage}"));
+        sec.note(format!(
+            "This stage failed, so the run stopped here and the stages after it did not run: {e}"
+        ));
     }
-    let mut identified: Option<PathBuf> = None;
-    if let (Some(l), Some(m)) = (&project.lines, &machine) {
-        identified = Some(crate::cmd::pipeline::lines(&mut p, m, l)?);
-    }
-    if let (Some(st), Some(m)) = (&project.sensitivity, &machine) {
-        crate::cmd::pipeline::sensitivity(&mut p, m, st, identified.as_deref())?;
-    }
-    for st in &project.circular {
-        crate::cmd::pipeline::circular(&mut p, &st.data)?;
-    }
-    if let Some(b) = &project.ballbar {
-        crate::cmd::pipeline::ballbar(&mut p, b)?;
-    }
-    let mut thermal_models = Vec::new();
-    for t in &project.thermal {
-        thermal_models.push((t.target.clone(), crate::cmd::pipeline::thermal(&mut p, t)?));
-    }
-    let mut map: Option<PathBuf> = None;
-    if let Some(m) = &project.map {
-        map = Some(crate::cmd::pipeline::map(&mut p, m)?);
-    }
-    if let Some(c) = &project.compensation {
-        crate::cmd::pipeline::compensation(
-            &mut p,
-            c,
-            map.as_deref(),
-            machine.as_deref(),
-            identified.as_deref(),
-        )?;
-    }
-    let mut machine_model: Option<PathBuf> = None;
-    if let Some(m) = &project.machine_model {
-        machine_model = Some(crate::cmd::machine_stage::build(
-            &mut p,
-            m,
-            &thermal_models,
-            map.as_deref(),
-        )?);
-    }
-    for r in &project.replay {
-        crate::cmd::machine_stage::replay(&mut p, r, machine_model.as_deref())?;
-    }
-    extra(&mut p)?;
     let html = p.report.to_html();
     let report = p.save("report.html", &html)?;
+    if ran.is_err() {
+        eprintln!(
+            "report, with the failed stage as its last section: {}",
+            report.display()
+        );
+    }
+    ran?;
     Ok(report)
 }
