@@ -18,6 +18,7 @@ pub mod error;
 pub mod inputs;
 pub mod observer;
 pub mod ops;
+pub mod project;
 pub mod rs274;
 pub mod state;
 

@@ -3,6 +3,7 @@
 use crate::error::CliError;
 use mtec_comp::{command_for_target, CorrectionOptions};
 use mtec_model::{Formalism, Order, VolumetricModel};
+use mtec_workflow::project;
 use rand::{Rng, SeedableRng};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -111,16 +112,16 @@ pub fn run(args: Args) -> Result<(), CliError> {
     project.push_str("[compensation]\ngcode = [\"part.ngc\"]\ntables = [\"linuxcnc\"]\n");
     write(&data, "project.toml", &project)?;
     let project_path = data.join("project.toml");
-    let parsed: super::run::Project = mtec_io::read_toml(&project_path)?;
-    let report = super::run::run_project_with(
-        &parsed,
-        &project_path,
-        &data,
-        &args.out,
-        args.quiet,
-        "mtec demo",
-        |p| compensation_rate_section(p, &data, args.seed),
-    )?;
+    let opts = project::RunOptions {
+        project: project_path,
+        out: Some(args.out.clone()),
+        title: Some("mtec demo".into()),
+    };
+    let mut obs = crate::observer::Stderr { quiet: args.quiet };
+    let report = project::run_with(&opts, &mut obs, |p| {
+        compensation_rate_section(p, &data, args.seed)
+    })?
+    .report;
     println!("report: {}", report.display());
     Ok(())
 }
@@ -129,7 +130,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
 /// 1000 random workspace points, where "after" is the true error when the machine is commanded
 /// to the corrected point (the map model's correction), measured against the truth.
 fn compensation_rate_section(
-    p: &mut super::run::Pipeline,
+    p: &mut project::Pipeline,
     data: &Path,
     seed: u64,
 ) -> Result<(), CliError> {

@@ -8,7 +8,6 @@ pub mod identify_ballbar;
 pub mod identify_lines;
 pub mod iso230_2;
 pub mod machine;
-pub mod machine_stage;
 pub mod map;
 pub mod neural;
 pub mod sensitivity;
@@ -20,8 +19,6 @@ pub mod volumetric;
 
 pub mod compensate;
 pub mod demo;
-pub mod pipeline;
-pub mod pipeline_thermal;
 pub mod run;
 
 /// Writes a report to stdout; a reader that closed the pipe early (`| head`) is not an error.

@@ -1,13 +1,13 @@
 //! The `[machine_model]` and `[[replay]]` stages of `mtec run`: the thermal models of the
 //! project's [[thermal]] stages become one machine error model (`mtec machine build`), and
 //! recorded days are compensated through the real-time path (`mtec machine replay`), reported
-//! as the error at the tool tip before and after over time. Both run `mtec_workflow::ops::machine`
+//! as the error at the tool tip before and after over time. Both run `crate::ops::machine`
 //! in-process.
 
-use super::run::{MachineModelStage, Pipeline, ReplayStage};
-use crate::error::CliError;
+use super::{MachineModelStage, Pipeline, ReplayStage};
+use crate::ops::machine;
+use crate::Error;
 use mtec_report::{line_chart, Series};
-use mtec_workflow::ops::machine;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -21,7 +21,7 @@ pub fn build(
     m: &MachineModelStage,
     thermal_models: &[(String, PathBuf)],
     map: Option<&Path>,
-) -> Result<PathBuf, CliError> {
+) -> crate::Result<PathBuf> {
     p.progress_of("machine error model (geometric + thermal, with training envelopes)");
     let out = p.out.join("machine.json");
     let geometric = m
@@ -34,7 +34,7 @@ pub fn build(
     for part in &m.parts {
         // run.rs checked that exactly one [[thermal]] stage has this target
         let Some((_, model)) = thermal_models.iter().find(|(t, _)| *t == part.target) else {
-            return Err(CliError::usage(format!(
+            return Err(Error::usage(format!(
                 "[machine_model] part `{}`: no [[thermal]] stage has this target",
                 part.target
             )));
@@ -59,7 +59,7 @@ pub fn build(
     if let Some(f) = m.fade_c {
         opts.fade_c = f;
     }
-    machine::build(&opts, &mut mtec_workflow::Collect::default())?;
+    machine::build(&opts, &mut crate::Collect::default())?;
     p.outputs.push(s(&out));
     let file: Value = mtec_io::read_json(&out)?;
     let sec = p.report.section("Machine error model with a state");
@@ -110,7 +110,7 @@ fn column(t: &mtec_io::Table, name: &str) -> Vec<f64> {
 }
 
 /// Compensates a recorded day and reports it.
-pub fn replay(p: &mut Pipeline, r: &ReplayStage, built: Option<&Path>) -> Result<(), CliError> {
+pub fn replay(p: &mut Pipeline, r: &ReplayStage, built: Option<&Path>) -> crate::Result<()> {
     let name = if r.name.is_empty() {
         stem(&r.state)
     } else {
@@ -121,7 +121,7 @@ pub fn replay(p: &mut Pipeline, r: &ReplayStage, built: Option<&Path>) -> Result
         (Some(m), _) => p.path_of(m),
         (None, Some(b)) => b.to_path_buf(),
         (None, None) => {
-            return Err(CliError::usage(
+            return Err(Error::usage(
                 "[[replay]] needs `model` or a [machine_model] stage",
             ))
         }
@@ -134,7 +134,7 @@ pub fn replay(p: &mut Pipeline, r: &ReplayStage, built: Option<&Path>) -> Result
         probes: p.path_of(&r.probes),
         output: Some(csv.clone()),
     };
-    let done = machine::replay(&opts, &mut mtec_workflow::Collect::default())?;
+    let done = machine::replay(&opts, &mut crate::Collect::default())?;
     let doc = serde_json::to_value(&done)?;
     let v = p.json_result(
         &format!("replay-{tag}.json"),
@@ -170,7 +170,7 @@ pub fn replay(p: &mut Pipeline, r: &ReplayStage, built: Option<&Path>) -> Result
         ],
         rows,
     );
-    let n = |k: &str| v.get(k).map(super::pipeline::fmt_value).unwrap_or_default();
+    let n = |k: &str| v.get(k).map(super::stages::fmt_value).unwrap_or_default();
     sec.text(format!(
         "{} probe readings; {} made worse by the compensation (largest increase of |e| {} µm); {} taken with the thermal part faded (smallest weight {}).",
         n("readings"),

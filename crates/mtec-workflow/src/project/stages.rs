@@ -1,17 +1,17 @@
-//! The stages of `mtec run`: each runs one job of `mtec_workflow::ops` in-process, saves its
+//! The stages of a project run: each runs one job of `crate::ops` in-process, saves its
 //! result as the command's `--json` prints it, and turns it into a report section; the job's
-//! warnings are printed and noted in the section.
+//! warnings go to the run's observer and are noted in the section.
 
-use super::run::{
+use super::{
     BallbarStage, CompensationStage, LinesStage, MapStage, Pipeline, SensitivityStage, ThermalStage,
 };
-use crate::error::CliError;
+use crate::ops;
+use crate::Collect;
+use crate::Error;
 use mtec_comp::kinematic::KinematicFile;
 use mtec_report::{bar_chart, line_chart, scatter_chart, Section, Series};
 use mtec_sensitivity::error_model::ErrorStatistics;
 use mtec_thermal::model_file::SplitBy;
-use mtec_workflow::ops;
-use mtec_workflow::Collect;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -98,7 +98,7 @@ pub fn json_tables(sec: &mut Section, v: &Value, depth: usize) {
 }
 
 /// Machine summary.
-pub fn machine_section(p: &mut Pipeline, machine: Option<&Path>) -> Result<(), CliError> {
+pub fn machine_section(p: &mut Pipeline, machine: Option<&Path>) -> crate::Result<()> {
     let Some(m) = machine else { return Ok(()) };
     let mach = crate::inputs::read_machine(m)?;
     let sec = p.report.section("Machine");
@@ -127,7 +127,7 @@ pub fn machine_section(p: &mut Pipeline, machine: Option<&Path>) -> Result<(), C
 }
 
 /// ISO 230-2 positioning statistics.
-pub fn iso230_2(p: &mut Pipeline, data: &Path) -> Result<(), CliError> {
+pub fn iso230_2(p: &mut Pipeline, data: &Path) -> crate::Result<()> {
     let f = p.path_of(data);
     p.progress_of(&format!("ISO 230-2 statistics of {}", f.display()));
     let name = format!("iso230-2-{}.json", stem(&f));
@@ -137,7 +137,7 @@ pub fn iso230_2(p: &mut Pipeline, data: &Path) -> Result<(), CliError> {
     let sec = p
         .report
         .section(format!("Positioning (ISO 230-2): {}", stem(&f)));
-    warnings(sec, &obs);
+    warnings(sec, &obs, &mut *p.obs);
     sec.text("Bidirectional positioning accuracy A, repeatability R, reversal B, systematic deviation E and mean reversal per ISO 230-2:2014, from the laser runs.");
     // mean unidirectional deviations with their ±2s bands, from the statistics themselves
     if let Some(targets) = v.get("targets").and_then(Value::as_array) {
@@ -184,17 +184,17 @@ pub fn iso230_2(p: &mut Pipeline, data: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
-/// A job's warnings: on stderr, as the command prints them, and in the report section (a report
-/// never hides what the job warned about).
-fn warnings(sec: &mut Section, obs: &Collect) {
+/// A job's warnings: to the run's observer, and in the report section (a report never hides
+/// what the job warned about).
+fn warnings(sec: &mut Section, obs: &Collect, to: &mut dyn crate::Observer) {
     for w in &obs.warnings {
-        eprintln!("warning: {w}");
+        to.warning(w);
         sec.note(format!("Warning: {w}"));
     }
 }
 
 /// `thermal fit` of a regression or (in the `neural` build) a neural model.
-fn fit_thermal(opts: &ops::thermal::FitOptions, obs: &mut Collect) -> Result<(), CliError> {
+fn fit_thermal(opts: &ops::thermal::FitOptions, obs: &mut Collect) -> crate::Result<()> {
     if ops::thermal::is_neural(&opts.model) {
         return fit_neural(opts, obs);
     }
@@ -202,24 +202,23 @@ fn fit_thermal(opts: &ops::thermal::FitOptions, obs: &mut Collect) -> Result<(),
 }
 
 #[cfg(feature = "neural")]
-fn fit_neural(opts: &ops::thermal::FitOptions, obs: &mut Collect) -> Result<(), CliError> {
+fn fit_neural(opts: &ops::thermal::FitOptions, obs: &mut Collect) -> crate::Result<()> {
     use mtec_nn::thermal_log::{NnFitOptions, NnKind};
     let (train, test) = match &opts.split {
         SplitBy::All => (Vec::new(), Vec::new()),
         SplitBy::Experiments { train, test } => (train.clone(), test.clone()),
         SplitBy::Until(_) => {
-            return Err(CliError::usage(
+            return Err(Error::usage(
                 "a neural [[thermal]] stage splits by `train`/`test` experiments, not `train_until_min`",
             ))
         }
     };
     if opts.fit.lag {
-        return Err(CliError::usage(
+        return Err(Error::usage(
             "`lag` goes with the regression models, not a neural [[thermal]] stage",
         ));
     }
-    let kind =
-        NnKind::from_name(&opts.model).ok_or_else(|| CliError::usage("not a neural model"))?;
+    let kind = NnKind::from_name(&opts.model).ok_or_else(|| Error::usage("not a neural model"))?;
     let nn = ops::thermal::neural::FitOptions {
         data: opts.data.clone(),
         target: opts.target.clone(),
@@ -229,13 +228,12 @@ fn fit_neural(opts: &ops::thermal::FitOptions, obs: &mut Collect) -> Result<(), 
         output: opts.output.clone(),
         nn: NnFitOptions::new(kind),
     };
-    super::thermal::single_candle_thread();
     ops::thermal::neural::fit(&nn, obs).map(|_| ())
 }
 
 #[cfg(not(feature = "neural"))]
-fn fit_neural(opts: &ops::thermal::FitOptions, _obs: &mut Collect) -> Result<(), CliError> {
-    Err(mtec_workflow::neural_unavailable(&format!(
+fn fit_neural(opts: &ops::thermal::FitOptions, _obs: &mut Collect) -> crate::Result<()> {
+    Err(crate::neural_unavailable(&format!(
         "a [[thermal]] stage with model = \"{}\"",
         opts.model
     )))
@@ -248,7 +246,7 @@ fn stem(p: &Path) -> String {
 }
 
 /// Line-set identification; returns the identified errors file.
-pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> Result<PathBuf, CliError> {
+pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> crate::Result<PathBuf> {
     let data = p.path_of(&l.data);
     p.progress_of("identification of the error elements from the line measurements");
     let errors = p.out.join("identified-errors.json");
@@ -264,7 +262,7 @@ pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> Result<PathBuf
     let sec = p
         .report
         .section("Identified geometric errors (line measurements)");
-    warnings(sec, &obs);
+    warnings(sec, &obs, &mut *p.obs);
     sec.text("Error elements identified by least squares from the laser-interferometer lines; the identifiability report names what the design cannot determine.");
     let mach = crate::inputs::read_machine(machine)?;
     if let Ok(set) = crate::inputs::read_errors(&errors) {
@@ -314,7 +312,7 @@ pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> Result<PathBuf
 
 /// Writes error statistics (element, mean, std over the travel) of an error set for sensitivity
 /// (the library's [`ErrorStatistics::of_identified`], as `identify lines --stats` writes them).
-fn stats_from_errors(machine: &Path, errors: &Path, out: &Path) -> Result<(), CliError> {
+fn stats_from_errors(machine: &Path, errors: &Path, out: &Path) -> crate::Result<()> {
     let mach = crate::inputs::read_machine(machine)?;
     let set = crate::inputs::read_errors(errors)?;
     let stats = ErrorStatistics::of_identified(&set, &mach);
@@ -328,7 +326,7 @@ pub fn sensitivity(
     machine: &Path,
     st: &SensitivityStage,
     identified: Option<&Path>,
-) -> Result<(), CliError> {
+) -> crate::Result<()> {
     p.progress_of(&format!("global sensitivity ({})", st.method));
     let stats = match (&st.stats, identified) {
         (Some(f), _) => p.path_of(f),
@@ -338,7 +336,7 @@ pub fn sensitivity(
             p.outputs.push(s(&f));
             f
         }
-        (None, None) => return Err(CliError::usage("[sensitivity] needs `stats` or a [lines] stage whose identified errors give the statistics")),
+        (None, None) => return Err(Error::usage("[sensitivity] needs `stats` or a [lines] stage whose identified errors give the statistics")),
     };
     // indices aggregated over a 3 × 3 × 3 grid of the workspace
     let mach = crate::inputs::read_machine(machine)?;
@@ -369,7 +367,7 @@ pub fn sensitivity(
     let points = p.out.join("sensitivity-points.csv");
     mtec_io::write_output(&points, pts.as_bytes())?;
     let method = ops::sensitivity::MethodKind::from_name(&st.method).ok_or_else(|| {
-        CliError::usage(format!(
+        Error::usage(format!(
             "[sensitivity] method `{}`: expected efast, sobol or morris",
             st.method
         ))
@@ -388,7 +386,7 @@ pub fn sensitivity(
     let sec = p
         .report
         .section("Global sensitivity of the volumetric error");
-    warnings(sec, &obs);
+    warnings(sec, &obs, &mut *p.obs);
     sec.text("First-order index S1 (key errors) and total index ST (ST − S1: coupling) of each error element for the volumetric error, inputs drawn from the statistics of the error functions.");
     // `outputs`: one record per output (Ex, Ey, Ez, |E|) with S1 and ST per input
     if let (Some(inputs), Some(outputs)) = (
@@ -423,7 +421,7 @@ pub fn sensitivity(
 }
 
 /// ISO 230-4 circular test.
-pub fn circular(p: &mut Pipeline, data: &Path) -> Result<(), CliError> {
+pub fn circular(p: &mut Pipeline, data: &Path) -> crate::Result<()> {
     let f = p.path_of(data);
     p.progress_of(&format!("circular test {}", f.display()));
     // `circular --out` draws the polar plot the CLI gives; the report shows that same figure
@@ -439,7 +437,7 @@ pub fn circular(p: &mut Pipeline, data: &Path) -> Result<(), CliError> {
     let sec = p
         .report
         .section(format!("Circular test (ISO 230-4): {}", stem(&f)));
-    warnings(sec, &obs);
+    warnings(sec, &obs, &mut *p.obs);
     sec.text(format!(
         "Circular deviation G and circular hysteresis H per ISO 230-4 ({} plane, R = {} mm, \
          F = {} mm/min), then the ballbar diagnostics fitted from the trace, ranked by their \
@@ -539,7 +537,7 @@ fn fault_rows(v: &Value) -> Vec<Vec<String>> {
 }
 
 /// Ballbar identification of rotary-axis error motions.
-pub fn ballbar(p: &mut Pipeline, b: &BallbarStage) -> Result<(), CliError> {
+pub fn ballbar(p: &mut Pipeline, b: &BallbarStage) -> crate::Result<()> {
     p.progress_of("ballbar identification of the rotary axis");
     let dir = p.out.join("ballbar");
     let opts = ops::identify_ballbar::Options {
@@ -554,7 +552,7 @@ pub fn ballbar(p: &mut Pipeline, b: &BallbarStage) -> Result<(), CliError> {
     let sec = p
         .report
         .section("Rotary axis: ballbar identification (5 installation modes)");
-    warnings(sec, &obs);
+    warnings(sec, &obs, &mut *p.obs);
     sec.text("Error motions EXC, EYC, EZC (µm), EAC, EBC (µrad) identified per angle and time from five installation modes, after removal of each mode's mean and first harmonic (set-up errors). ECC is not observable by a ballbar.");
     let mut svgs: Vec<PathBuf> = std::fs::read_dir(&dir)
         .map(|d| {
@@ -582,7 +580,7 @@ pub fn ballbar(p: &mut Pipeline, b: &BallbarStage) -> Result<(), CliError> {
 }
 
 /// A thermal model: sensor selection, fit, prediction; returns the model file.
-pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> Result<PathBuf, CliError> {
+pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> crate::Result<PathBuf> {
     let data = p.path_of(&t.data);
     p.progress_of(&format!("thermal model of {} ({})", t.target, t.model));
     let tag = format!("{}-{}", stem(&data), t.target);
@@ -643,8 +641,8 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> Result<PathBuf, CliError> 
     let sec = p
         .report
         .section(format!("Thermal model: {} from {}", t.target, stem(&data)));
-    warnings(sec, &obs);
-    let ridge_trace = super::pipeline_thermal::section(
+    warnings(sec, &obs, &mut *p.obs);
+    let ridge_trace = super::thermal_section::section(
         sec,
         &model_json,
         table.as_ref(),
@@ -759,7 +757,7 @@ fn ridge_trace_series(sel: &Value) -> Option<Vec<Series>> {
 }
 
 /// A volumetric map from a grid; returns the map file.
-pub fn map(p: &mut Pipeline, m: &MapStage) -> Result<PathBuf, CliError> {
+pub fn map(p: &mut Pipeline, m: &MapStage) -> crate::Result<PathBuf> {
     let grid = p.path_of(&m.grid);
     p.progress_of("volumetric map (trilinear)");
     let map = p.out.join("map.json");
@@ -793,7 +791,7 @@ pub fn map(p: &mut Pipeline, m: &MapStage) -> Result<PathBuf, CliError> {
         }
     }
     let sec = p.report.section("Volumetric error map");
-    warnings(sec, &obs);
+    warnings(sec, &obs, &mut *p.obs);
     sec.text("A regular grid of measured volumetric errors, interpolated trilinearly (the controller-style compensation baseline).");
     for (svg, cap) in figures {
         sec.figure(svg, cap);
@@ -808,7 +806,7 @@ pub fn compensation(
     map: Option<&Path>,
     machine: Option<&Path>,
     identified: Option<&Path>,
-) -> Result<(), CliError> {
+) -> crate::Result<()> {
     p.progress_of("compensation outputs");
     // the model: the map if there is one, else the identified kinematic model
     let model = match (map, machine, identified) {
@@ -819,14 +817,14 @@ pub fn compensation(
             let f = p.out.join("kinematic-model.json");
             // the same file `identify lines --kinematic-model` writes
             let doc = KinematicFile::new(&machine, &set)
-                .map_err(|m| CliError::Input(mtec_io::InputError::file(mach, m)))?;
-            let text = doc.to_json().map_err(|e| CliError::Internal(e.into()))?;
+                .map_err(|m| Error::Input(mtec_io::InputError::file(mach, m)))?;
+            let text = doc.to_json().map_err(|e| Error::Internal(e.into()))?;
             mtec_io::write_output(&f, text.as_bytes())?;
             p.outputs.push(s(&f));
             f
         }
         _ => {
-            return Err(CliError::usage(
+            return Err(Error::usage(
                 "[compensation] needs a [map] stage or a machine with a [lines] stage",
             ))
         }
@@ -860,7 +858,7 @@ pub fn compensation(
                 .iter()
                 .map(|f| f.name())
                 .collect();
-            CliError::usage(format!(
+            Error::usage(format!(
                 "[compensation] tables: no format `{f}`; the formats are {}",
                 names.join(", ")
             ))
@@ -877,7 +875,7 @@ pub fn compensation(
         tables.push(vec![f.clone(), s(&out), head]);
     }
     let sec = p.report.section("Compensation outputs");
-    warnings(sec, &obs);
+    warnings(sec, &obs, &mut *p.obs);
     sec.text(format!("Model used: {}. NC programs are rewritten so that every commanded point is corrected (long moves split where the correction changes); controller tables carry the negative of the predicted error.", model.display()));
     if !rows.is_empty() {
         sec.table(
