@@ -210,3 +210,64 @@ fn a_failed_stage_is_in_the_report_and_the_exit_code() {
     );
     assert!(last.contains("`deviation_um` is `NaN`"), "{last}");
 }
+
+/// Every file under `dir`, by its path relative to `dir`.
+fn files(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    let mut out = std::collections::BTreeMap::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                todo.push(p);
+            } else {
+                let rel = p.strip_prefix(dir).unwrap().display().to_string();
+                out.insert(rel, std::fs::read(&p).unwrap());
+            }
+        }
+    }
+    out
+}
+
+/// The same project run by the library in-process (`mtec_workflow::project::run`, what a Rust
+/// program calls) and by `mtec run` writes the same files byte for byte (issue 18; the Python
+/// module's run is compared with `mtec run` in crates/mtec-py/python/tests/test_workflow.py).
+#[test]
+fn a_project_from_rust_writes_the_clis_files() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let project = root.join("examples/vmc/project.toml");
+    let tmp = tempfile::tempdir().unwrap();
+    let (lib, cli) = (tmp.path().join("lib"), tmp.path().join("cli"));
+    let mut opts = mtec_workflow::project::RunOptions::new(&project);
+    opts.out = Some(lib.clone());
+    let done = mtec_workflow::project::run(&opts, &mut mtec_workflow::Silent).unwrap();
+    assert_eq!(done.report, lib.join("report.html"));
+    let out = Command::new(env!("CARGO_BIN_EXE_mtec"))
+        .arg("run")
+        .arg(&project)
+        .arg("--out")
+        .arg(&cli)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (a, b) = (files(&lib), files(&cli));
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+    assert!(a.contains_key("map.json") && a.contains_key("thermal-model-thermal-radial_um.json"));
+    for (name, bytes) in &a {
+        if name == "report.html" {
+            // the report names its output folder; otherwise the same page
+            let unify = |x: &[u8], dir: &str| String::from_utf8_lossy(x).replace(dir, "OUT");
+            assert_eq!(
+                unify(bytes, &lib.display().to_string()),
+                unify(&b[name], &cli.display().to_string())
+            );
+        } else {
+            assert!(*bytes == b[name], "{name} differs");
+        }
+    }
+}

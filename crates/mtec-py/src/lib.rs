@@ -13,7 +13,7 @@
 //!   `RuntimeError`.
 //! - Long numerical work runs without the GIL.
 //!
-//! The pipeline from a project file (`mtec_workflow`) goes into [`workflow`] when it lands.
+//! The pipeline from a project file (`mtec_workflow::project`) is [`workflow`]: `run_project`.
 
 mod columns;
 mod comp;
@@ -44,5 +44,6 @@ fn _mtec(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(comp::map_eval, m)?)?;
     m.add_function(wrap_pyfunction!(comp::compensate_gcode, m)?)?;
     m.add_function(wrap_pyfunction!(sim::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(workflow::run_project, m)?)?;
     Ok(())
 }

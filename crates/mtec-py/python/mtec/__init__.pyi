@@ -112,3 +112,6 @@ def compensate_gcode(
 
 def simulate(scenario: str, out: PathLike, seed: int = 1) -> dict[str, str]:
     """Writes a scenario's simulated measurement files and truth.json into `out`."""
+
+def run_project(project: PathLike, out: Optional[PathLike] = None) -> dict[str, Any]:
+    """Runs a project file's whole pipeline in-process and writes report.html (`mtec run`)."""

@@ -1,0 +1,46 @@
+"""`mtec.run_project` against `mtec run` on the same project: the same files, byte for byte."""
+
+from pathlib import Path
+
+import pytest
+
+import mtec
+from conftest import EXAMPLES
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {
+        str(p.relative_to(folder)): p.read_bytes()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file()
+    }
+
+
+def test_project_from_python_writes_the_clis_files(cli, tmp_path):
+    project = EXAMPLES / "vmc" / "project.toml"
+    ours, theirs = tmp_path / "py", tmp_path / "cli"
+    r = mtec.run_project(project, out=ours)
+    cli.run("run", project, "--out", theirs, "--quiet")
+    a, b = _files(ours), _files(theirs)
+    assert sorted(a) == sorted(b)
+    # model files, tables, corrected programs, every stage's JSON: byte-identical
+    for name in a:
+        if name != "report.html":
+            assert a[name] == b[name], name
+    # the report names its output folder; otherwise the same page with the same numbers
+    assert a["report.html"].replace(b"/py/", b"/X/") == b["report.html"].replace(b"/cli/", b"/X/")
+    assert r["format"] == "mtec.run/1" and Path(r["report"]) == ours / "report.html"
+    assert {str(Path(o).relative_to(ours)) for o in r["outputs"]} <= set(a)
+    assert "thermal-model-thermal-radial_um.json" in a and "map.json" in a
+
+
+def test_a_failed_stage_raises_located_and_keeps_the_report(tmp_path):
+    (tmp_path / "runs.csv").write_text(
+        "target_mm,run,direction,deviation_um\n0,1,+,1.0\n100,1,+,nan\n"
+    )
+    (tmp_path / "p.toml").write_text('[[iso230_2]]\ndata = "runs.csv"\n')
+    with pytest.raises(mtec.InputError) as e:
+        mtec.run_project(tmp_path / "p.toml", out=tmp_path / "out")
+    assert e.value.file.endswith("runs.csv") and (e.value.line, e.value.column) == (3, 4)
+    html = (tmp_path / "out" / "report.html").read_text()
+    assert "<h2>FAILED: ISO 230-2 statistics of" in html.rsplit("<section", 1)[1]
