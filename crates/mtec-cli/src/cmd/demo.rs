@@ -1,12 +1,10 @@
 //! `mtec demo`: simulate a machine, run the whole pipeline on it, write the report.
 
+//! The run is `mtec_workflow::project::demo`.
+
 use crate::error::CliError;
-use mtec_comp::{command_for_target, CorrectionOptions};
-use mtec_model::{Formalism, Order, VolumetricModel};
-use mtec_workflow::project;
-use rand::{Rng, SeedableRng};
-use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use mtec_workflow::project::demo;
+use std::path::PathBuf;
 
 const LONG: &str = "\
 Simulate a machine (geometry, thermal, rotary axis), run the whole pipeline, write the report.
@@ -43,146 +41,12 @@ pub struct Args {
     pub quiet: bool,
 }
 
-/// The demo's NC program: a rectangular pocket contour and a drilled pattern inside the travel.
-const DEMO_GCODE: &str = "%
-(mtec demo part: contour and hole pattern, mm)
-G21 G90 G17
-G0 Z250
-G0 X50 Y50
-G1 Z200 F500
-G1 X550 Y50 F1200
-G1 X550 Y750
-G1 X50 Y750
-G1 X50 Y50
-G0 Z250
-G0 X300 Y400
-G1 Z180 F300
-G0 Z250
-M30
-%
-";
-
-fn write(dir: &Path, name: &str, text: &str) -> Result<(), CliError> {
-    mtec_io::write_output(&dir.join(name), text.as_bytes())?;
-    Ok(())
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
-    let data = args.out.join("data");
-    let mut project = String::from("name = \"mtec demo: simulated vertical machining centre\"\n");
-    let say = |m: &str| {
-        if !args.quiet {
-            eprintln!("{m}");
-        }
+    let opts = demo::Options {
+        out: args.out,
+        seed: args.seed,
     };
-    say("simulating the virtual machine ...");
-    for sc in [
-        "vmc-9line",
-        "volumetric-grid",
-        "dbb-rotary",
-        "spindle-sensors",
-        "feed-axis-ambient",
-        "iso230-2",
-        "circular-test",
-    ] {
-        let Ok(o) = mtec_sim::run_scenario(sc, args.seed) else {
-            continue;
-        };
-        let dir = data.join(sc);
-        for f in &o.files {
-            write(&dir, &f.name, &f.contents)?;
-        }
-        write(
-            &dir,
-            "truth.json",
-            &serde_json::to_string_pretty(&o.truth).unwrap_or_default(),
-        )?;
-    }
-    write(&data, "part.ngc", DEMO_GCODE)?;
-    project.push_str("machine = \"vmc-9line/machine.toml\"\n");
-    project.push_str("[[iso230_2]]\ndata = \"iso230-2/iso230-2.csv\"\n");
-    project
-        .push_str("[lines]\ndata = \"vmc-9line/lines.csv\"\n[sensitivity]\nmethod = \"efast\"\n");
-    project.push_str("[[circular]]\ndata = \"circular-test/circular.csv\"\n");
-    project.push_str("[ballbar]\nsetup = \"dbb-rotary/setup.toml\"\ndata = \"dbb-rotary/dbb.csv\"\ntemps = \"dbb-rotary/temps.csv\"\n");
-    project.push_str("[[thermal]]\ndata = \"spindle-sensors/thermal.csv\"\ntarget = \"radial_um\"\nmodel = \"ridge-select\"\n");
-    project.push_str(
-        "[map]\ngrid = \"volumetric-grid/grid.csv\"\ncheck = \"volumetric-grid/diagonals.csv\"\n",
-    );
-    project.push_str("[compensation]\ngcode = [\"part.ngc\"]\ntables = [\"linuxcnc\"]\n");
-    write(&data, "project.toml", &project)?;
-    let project_path = data.join("project.toml");
-    let opts = project::RunOptions {
-        project: project_path,
-        out: Some(args.out.clone()),
-        title: Some("mtec demo".into()),
-    };
-    let mut obs = crate::observer::Stderr { quiet: args.quiet };
-    let report = project::run_with(&opts, &mut obs, |p| {
-        compensation_rate_section(p, &data, args.seed)
-    })?
-    .report;
-    println!("report: {}", report.display());
-    Ok(())
-}
-
-/// Compensation rate on the virtual machine: 1 − RMS(error after)/RMS(error before) per axis at
-/// 1000 random workspace points, where "after" is the true error when the machine is commanded
-/// to the corrected point (the map model's correction), measured against the truth.
-fn compensation_rate_section(
-    p: &mut project::Pipeline,
-    data: &Path,
-    seed: u64,
-) -> Result<(), CliError> {
-    let map_path = p.out.join("map.json");
-    let truth_path = data.join("volumetric-grid/truth.json");
-    let machine = crate::inputs::read_machine(&data.join("volumetric-grid/machine.toml"))?;
-    let truth = crate::inputs::read_errors(&truth_path)?;
-    let vm = VolumetricModel::new(&machine, &truth);
-    let model = mtec_comp::load_error_model(&map_path)?;
-    let mut rng = rand::rngs::StdRng::seed_from_u64(seed ^ 0xc0de);
-    let tr: Vec<[f64; 2]> = machine.axes.iter().map(|a| machine.travel(*a)).collect();
-    let (mut before, mut after) = ([0.0; 3], [0.0; 3]);
-    let n = 1000;
-    let opts = CorrectionOptions::default();
-    for _ in 0..n {
-        // stay 5 mm inside the travel so the corrected command is inside too
-        let t: [f64; 3] = [0, 1, 2].map(|i| rng.random_range(tr[i][0] + 5.0..tr[i][1] - 5.0));
-        let e0 = vm.error(&t, Formalism::Htm, Order::Exact).position_um;
-        let cmd = command_for_target(model.as_ref(), t, &opts)
-            .map_err(|e| CliError::Internal(anyhow::anyhow!("correction failed: {e}")))?;
-        let e1 = vm.error(&cmd, Formalism::Htm, Order::Exact).position_um;
-        for i in 0..3 {
-            // where the tool lands relative to the target
-            let landed = (cmd[i] - t[i]) * 1e3 + e1[i];
-            before[i] += e0[i] * e0[i];
-            after[i] += landed * landed;
-        }
-    }
-    let rms = |v: f64| (v / n as f64).sqrt();
-    let mut rows = Vec::new();
-    let mut csv = String::from("axis,rms_before_um,rms_after_um,compensation_rate\n");
-    for (i, a) in ["X", "Y", "Z"].iter().enumerate() {
-        let (b, af) = (rms(before[i]), rms(after[i]));
-        rows.push(vec![
-            a.to_string(),
-            format!("{b:.2}"),
-            format!("{af:.2}"),
-            format!("{:.1} %", 100.0 * (1.0 - af / b)),
-        ]);
-        let _ = writeln!(csv, "{a},{b:.4},{af:.4},{:.4}", 1.0 - af / b);
-    }
-    let (b, af) = (rms(before.iter().sum()), rms(after.iter().sum()));
-    rows.push(vec![
-        "volumetric".into(),
-        format!("{b:.2}"),
-        format!("{af:.2}"),
-        format!("{:.1} %", 100.0 * (1.0 - af / b)),
-    ]);
-    let _ = writeln!(csv, "volumetric,{b:.4},{af:.4},{:.4}", 1.0 - af / b);
-    mtec_io::write_output(&p.out.join("compensation-rate.csv"), csv.as_bytes())?;
-    let sec = p.report.section("Compensation rate on the virtual machine");
-    sec.text(format!("The machine commanded to 1000 random points with and without the map's correction; errors measured against the simulation's truth ({}). Rate = 1 − RMS after / RMS before.", model.describe()));
-    sec.table(&["axis", "RMS before (µm)", "RMS after (µm)", "rate"], rows);
+    let done = demo::run(&opts, &mut crate::observer::Stderr { quiet: args.quiet })?;
+    println!("report: {}", done.report.display());
     Ok(())
 }

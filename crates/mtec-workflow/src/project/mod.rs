@@ -40,6 +40,7 @@
 //! probes = "day-probes.csv"
 //! ```
 
+pub mod demo;
 mod machine_stage;
 mod stages;
 mod thermal_section;
