@@ -4,7 +4,8 @@
 //! as the error at the tool tip before and after over time. Both run `crate::ops::machine`
 //! in-process.
 
-use super::{MachineModelStage, Pipeline, ReplayStage};
+use super::pipeline::Pipeline;
+use super::spec::{MachineModelStage, ReplayStage};
 use crate::ops::machine;
 use crate::Error;
 use mtec_report::{line_chart, Series};

@@ -2,8 +2,9 @@
 //! result as the command's `--json` prints it, and turns it into a report section; the job's
 //! warnings go to the run's observer and are noted in the section.
 
-use super::{
-    BallbarStage, CompensationStage, LinesStage, MapStage, Pipeline, SensitivityStage, ThermalStage,
+use super::pipeline::Pipeline;
+use super::spec::{
+    BallbarStage, CompensationStage, LinesStage, MapStage, SensitivityStage, ThermalStage,
 };
 use crate::ops;
 use crate::Collect;

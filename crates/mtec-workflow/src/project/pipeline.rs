@@ -1,0 +1,63 @@
+//! The state a project run's stages share: the folders, the observer, the report being built,
+//! the files written.
+
+use crate::{Observer, Result};
+use mtec_io::OutputGuard;
+use mtec_report::Report;
+use std::path::{Path, PathBuf};
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+/// The pipeline state shared by the stages.
+pub struct Pipeline<'o> {
+    pub base: PathBuf,
+    pub out: PathBuf,
+    /// Progress (`[i/n] stage`) and every job's warnings.
+    pub obs: &'o mut dyn Observer,
+    pub report: Report,
+    pub outputs: Vec<String>,
+    pub(super) guard: OutputGuard,
+    pub(super) step: usize,
+    pub(super) steps: usize,
+    /// The stage running now (its progress line).
+    pub(super) current: String,
+}
+
+impl Pipeline<'_> {
+    pub fn path_of(&self, p: &Path) -> PathBuf {
+        self.path(p)
+    }
+    pub fn progress_of(&mut self, what: &str) {
+        self.progress(what)
+    }
+    fn path(&self, p: &Path) -> PathBuf {
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            self.base.join(p)
+        }
+    }
+
+    fn progress(&mut self, what: &str) {
+        self.step += 1;
+        self.current = what.to_string();
+        self.obs
+            .progress(&format!("[{}/{}] {what}", self.step, self.steps));
+    }
+
+    pub(super) fn save(&mut self, name: &str, text: &str) -> Result<PathBuf> {
+        let p = self.out.join(name);
+        self.guard.write(&p, text.as_bytes())?;
+        self.outputs.push(s(&p));
+        Ok(p)
+    }
+
+    /// Saves a job's JSON result (`text`, as its command prints it with `--json`) in the output
+    /// folder and returns it parsed.
+    pub fn json_result(&mut self, file: &str, text: &str) -> Result<serde_json::Value> {
+        self.save(file, text)?;
+        Ok(serde_json::from_str(text)?)
+    }
+}
