@@ -4,7 +4,9 @@
 //! Candidates: `mlr`, `ridge`, `lagged-ridge` and `dynamic` ([`crate::stepwise`]: forward
 //! selection of at most `max_sensors` temperature sensors, the heat input not counted),
 //! `heat-input` ([`crate::heat_input`]) when the data has the input column, and `exp-ambient`
-//! when the caller supplies its fitter (its columns exist). Neural models are never candidates.
+//! when the caller supplies its fitter (its columns exist), and every kind of the registry that
+//! offers itself ([`crate::registry::Kind::auto_candidate`]: `pls`). Neural models are never
+//! candidates.
 //!
 //! 1. Forward folds of the training rows ([`crate::validate::forward_folds_of`]).
 //! 2. Each candidate is fitted on each fold's training rows, with every choice it makes
@@ -15,7 +17,8 @@
 //! 4. One-standard-error rule (Hastie, Tibshirani & Friedman, *Elements of Statistical
 //!    Learning*, 2nd ed., §7.10.1): among the rest, the simplest candidate whose mean fold RMSE
 //!    is within one standard error (sd of its fold RMSEs / √folds) of the best mean.
-//!    Simplicity order: mlr, ridge, heat-input, lagged-ridge, dynamic, exp-ambient.
+//!    Simplicity order: mlr, ridge and pls, heat-input, lagged-ridge, dynamic, exp-ambient (a
+//!    tie in rank goes to the lower mean).
 //! 5. The chosen candidate is refitted on every training row (its choices made again there).
 
 use crate::data::ThermalData;
@@ -93,6 +96,8 @@ enum Candidate {
     Stepwise(Stepwise),
     HeatInput(HeatInput),
     ExpAmbient(ExpAmbient),
+    /// A kind of the registry that is an auto candidate ([`crate::registry::Kind::auto_candidate`]).
+    Registered(Box<dyn Fit<Model = ThermalModel>>),
 }
 
 impl Fit for Candidate {
@@ -102,6 +107,7 @@ impl Fit for Candidate {
             Candidate::Stepwise(s) => ThermalModel::Linear(s.fit_rows(data, rows)?),
             Candidate::HeatInput(h) => ThermalModel::HeatInput(h.fit_rows(data, rows)?),
             Candidate::ExpAmbient(e) => ThermalModel::ExpAmbient(Box::new(e.fit_rows(data, rows)?)),
+            Candidate::Registered(f) => f.fit_rows(data, rows)?,
         })
     }
 }
@@ -149,6 +155,12 @@ impl Auto {
         }
         if let Some(e) = &self.exp_ambient {
             out.push(("exp-ambient".into(), 5, Candidate::ExpAmbient(e.clone())));
+        }
+        // every kind of the registry that offers itself as a candidate
+        for k in crate::registry::KINDS {
+            if let Some((rank, fitter)) = (k.auto)(self, data) {
+                out.push((k.name.to_string(), rank, Candidate::Registered(fitter)));
+            }
         }
         out
     }

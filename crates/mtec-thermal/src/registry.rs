@@ -141,6 +141,13 @@ pub trait Kind: Sized {
     fn from_options(options: &FitOptions, data: &ThermalData) -> Result<Self, ThermalError>;
     /// Fits to the rows `rows` of `data` (the kind's [`Fit`], as the stored form).
     fn fit_model(&self, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError>;
+    /// `auto`'s candidate of this kind, built from auto's options: its simplicity rank for the
+    /// one-standard-error rule (auto's own families rank 0 mlr, 1 ridge, 2 heat-input,
+    /// 3 lagged-ridge, 4 dynamic, 5 exp-ambient) and the fitter; `None` (the default): not a
+    /// candidate, or the data lack what it needs.
+    fn auto_candidate(_auto: &Auto, _data: &ThermalData) -> Option<(usize, Self)> {
+        None
+    }
     /// Fits on `train` and validates forward on the blocks of `train` (the default fits, then
     /// refits on every fold; `auto` overrides it with its nested choice).
     fn fit_validated(
@@ -162,6 +169,26 @@ pub trait Kind: Sized {
 
 /// A kind as a fitter of the stored form.
 pub struct AsModel<'a, K>(pub &'a K);
+
+/// A kind's fitter, owned, as a fitter of the stored form (`auto`'s registered candidates).
+pub struct Owned<K>(pub K);
+
+impl<K: Kind> Fit for Owned<K> {
+    type Model = ThermalModel;
+    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
+        self.0.fit_model(data, rows)
+    }
+}
+
+/// A registered kind's `auto` candidate: its rank and its fitter.
+pub type AutoCandidate = (usize, Box<dyn Fit<Model = ThermalModel>>);
+
+fn auto_candidate_of<K: Kind + 'static>(auto: &Auto, data: &ThermalData) -> Option<AutoCandidate> {
+    K::auto_candidate(auto, data).map(|(rank, k)| {
+        let fitter: Box<dyn Fit<Model = ThermalModel>> = Box::new(Owned(k));
+        (rank, fitter)
+    })
+}
 
 impl<K: Kind> Fit for AsModel<'_, K> {
     type Model = ThermalModel;
@@ -198,10 +225,12 @@ pub struct KindInfo {
     pub takes_sensor_groups: bool,
     pub requires_input: bool,
     pub check: fn(&FitOptions) -> Result<(), String>,
+    /// The kind as an `auto` candidate ([`Kind::auto_candidate`]).
+    pub auto: fn(&Auto, &ThermalData) -> Option<AutoCandidate>,
 }
 
 impl KindInfo {
-    const fn of<K: Kind>() -> KindInfo {
+    const fn of<K: Kind + 'static>() -> KindInfo {
         KindInfo {
             name: K::NAME,
             help: K::HELP,
@@ -210,6 +239,7 @@ impl KindInfo {
             takes_sensor_groups: K::TAKES_SENSOR_GROUPS,
             requires_input: K::REQUIRES_INPUT,
             check: K::check,
+            auto: auto_candidate_of::<K>,
         }
     }
 }
