@@ -37,6 +37,7 @@ pub mod metrics;
 pub mod model;
 pub mod model_file;
 pub mod plot;
+pub mod pls;
 pub mod registry;
 pub mod select;
 pub mod stepwise;

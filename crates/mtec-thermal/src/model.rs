@@ -54,6 +54,8 @@ pub enum LinearMethod {
     LaggedRidge,
     /// Lagged ridge plus lagged heat inputs (spindle power with switched time constants).
     Dynamic,
+    /// Partial least squares on the sensors ([`crate::pls`]).
+    Pls,
 }
 
 /// Standardisation kept with a ridge model (its standardised equation is in these units).

@@ -327,6 +327,7 @@ registry! {
     ExpAmbient(ExpAmbient),
     LagSelect(LagSelect),
     HeatInput(HeatInput),
+    Pls(crate::pls::Pls),
 }
 
 // ---- the kinds of this crate ----

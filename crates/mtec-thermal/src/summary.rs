@@ -34,6 +34,7 @@ fn method_name(m: LinearMethod) -> &'static str {
         LinearMethod::LagSelect => "lag-select",
         LinearMethod::LaggedRidge => "lagged-ridge",
         LinearMethod::Dynamic => "dynamic",
+        LinearMethod::Pls => "pls",
     }
 }
 
@@ -53,6 +54,7 @@ fn method_words(m: LinearMethod) -> &'static str {
             "ridge regression on forward-selected temperatures, their first-order lags and the \
              lagged heat input"
         }
+        LinearMethod::Pls => "partial least squares on the sensors (latent components)",
     }
 }
 

@@ -48,8 +48,10 @@ def test_ridge_with_fixed_k_is_the_augmented_least_squares():
         ("heat-input", [], {}),
         # a registry kind the module has no code of its own for (issue 18)
         ("ridge-select", ["--sensors", ",".join(SENSORS)], {"sensors": SENSORS}),
+        # a kind added as one file and one registry line (mtec-thermal/src/pls.rs)
+        ("pls", ["--sensors", ",".join(SENSORS)], {"sensors": SENSORS}),
     ],
-    ids=["mlr", "ridge-lag", "heat-input", "ridge-select"],
+    ids=["mlr", "ridge-lag", "heat-input", "ridge-select", "pls"],
 )
 def test_model_file_and_predictions_are_the_clis(cli, tmp_path, args):
     model, cli_args, kwargs = args
