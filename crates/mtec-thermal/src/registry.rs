@@ -514,7 +514,8 @@ mod tests {
                 "ridge-select",
                 "exp-ambient",
                 "lag-select",
-                "heat-input"
+                "heat-input",
+                "pls"
             ]
         );
     }
