@@ -169,7 +169,11 @@ fn auto_recovers_the_dynamics_and_predicts_an_unseen_duty_cycle() {
     assert!(fit.candidates.iter().filter(|c| c.chosen).count() == 1);
     assert!(fit.candidates.iter().any(|c| c.family == "dynamic"));
     // a kind of the registry that offers itself (pls.rs) is scored like auto's own families
-    let pls = fit.candidates.iter().find(|c| c.family == "pls").expect("pls is a candidate");
+    let pls = fit
+        .candidates
+        .iter()
+        .find(|c| c.family == "pls")
+        .expect("pls is a candidate");
     assert!(pls.forward.is_some() || pls.error.is_some());
     let chosen = fit.candidates.iter().find(|c| c.chosen).unwrap();
     assert!(chosen.eligible());
