@@ -4,17 +4,13 @@
 //! as the error at the tool tip before and after over time. Both run `crate::ops::machine`
 //! in-process.
 
-use super::pipeline::Pipeline;
+use super::pipeline::{s, Pipeline};
 use super::spec::{MachineModelStage, ReplayStage};
 use crate::ops::machine;
 use crate::Error;
 use mtec_report::{line_chart, Series};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-
-fn s(p: &Path) -> String {
-    p.display().to_string()
-}
 
 /// Builds the machine model; returns its file.
 pub fn build(

@@ -6,7 +6,8 @@ use mtec_io::OutputGuard;
 use mtec_report::Report;
 use std::path::{Path, PathBuf};
 
-fn s(p: &Path) -> String {
+/// A path as the report and the list of outputs write it.
+pub(super) fn s(p: &Path) -> String {
     p.display().to_string()
 }
 
@@ -26,13 +27,8 @@ pub struct Pipeline<'o> {
 }
 
 impl Pipeline<'_> {
+    /// A path of the project file, relative to the project's folder.
     pub fn path_of(&self, p: &Path) -> PathBuf {
-        self.path(p)
-    }
-    pub fn progress_of(&mut self, what: &str) {
-        self.progress(what)
-    }
-    fn path(&self, p: &Path) -> PathBuf {
         if p.is_absolute() {
             p.to_path_buf()
         } else {
@@ -40,7 +36,8 @@ impl Pipeline<'_> {
         }
     }
 
-    fn progress(&mut self, what: &str) {
+    /// The next stage starts: `[i/n] what` to the observer.
+    pub fn progress_of(&mut self, what: &str) {
         self.step += 1;
         self.current = what.to_string();
         self.obs

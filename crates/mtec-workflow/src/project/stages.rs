@@ -2,7 +2,7 @@
 //! result as the command's `--json` prints it, and turns it into a report section; the job's
 //! warnings go to the run's observer and are noted in the section.
 
-use super::pipeline::Pipeline;
+use super::pipeline::{s, Pipeline};
 use super::spec::{
     BallbarStage, CompensationStage, LinesStage, MapStage, SensitivityStage, ThermalStage,
 };
@@ -15,10 +15,6 @@ use mtec_sensitivity::error_model::ErrorStatistics;
 use mtec_thermal::model_file::SplitBy;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-
-fn s(p: &Path) -> String {
-    p.display().to_string()
-}
 
 /// A JSON value as report text (numbers rounded to a readable precision).
 pub fn fmt_value(v: &Value) -> String {
