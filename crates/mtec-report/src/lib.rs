@@ -6,6 +6,7 @@
 
 pub mod html;
 pub mod plot;
+pub mod ridge_trace;
 pub mod rotary;
 
 pub use html::{Report, Section};

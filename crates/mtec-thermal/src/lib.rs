@@ -36,7 +36,6 @@ pub mod linear;
 pub mod metrics;
 pub mod model;
 pub mod model_file;
-pub mod plot;
 pub mod pls;
 pub mod registry;
 pub mod select;

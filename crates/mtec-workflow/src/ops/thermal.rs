@@ -179,7 +179,12 @@ pub fn select(opts: &SelectOptions, obs: &mut dyn Observer) -> Result<SelectOutc
         std::fs::create_dir_all(dir)?;
         let sel = &outcome.selection;
         guard.write(&dir.join("ridge_trace.csv"), sel.trace.to_csv().as_bytes())?;
-        let svg = mtec_thermal::plot::ridge_trace_svg(&sel.trace, sel.k)
+        let trace = mtec_report::ridge_trace::RidgeTrace {
+            sensors: &sel.trace.sensors,
+            k: &sel.trace.k,
+            coefficients: &sel.trace.coefficients,
+        };
+        let svg = mtec_report::ridge_trace::ridge_trace_svg(&trace, sel.k)
             .map_err(|e| Error::Internal(anyhow::anyhow!("plot: {e}")))?;
         guard.write(&dir.join("ridge_trace.svg"), svg.as_bytes())?;
         guard.write(

@@ -1,8 +1,16 @@
 //! The ridge-trace plot (SVG, drawn with plotters): standardised coefficient of each sensor
-//! against k on a log axis, with the chosen k marked.
+//! against k on a log axis, with the chosen k marked (Hoerl & Kennard 1970, the trace of
+//! `mtec_thermal::select::RidgeTrace`).
 
-use crate::select::RidgeTrace;
 use plotters::prelude::*;
+
+/// A ridge trace as plain numbers: `coefficients[i][j]` is sensor j's standardised coefficient
+/// at `k[i]`.
+pub struct RidgeTrace<'a> {
+    pub sensors: &'a [String],
+    pub k: &'a [f64],
+    pub coefficients: &'a [Vec<f64>],
+}
 
 /// Renders the trace (k > 0 only; k = 0 cannot sit on a log axis) as SVG text.
 pub fn ridge_trace_svg(trace: &RidgeTrace, chosen_k: f64) -> Result<String, String> {
