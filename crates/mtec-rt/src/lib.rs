@@ -6,8 +6,8 @@
 //! the real-time loop; `mtec_rt_correction(handle, x, y, z, out_um)` then returns the correction
 //! (µm, to add to the X, Y, Z axis commands) that makes the tool reach (x, y, z) mm, without
 //! allocating, locking or blocking; `mtec_rt_free(handle)` releases it. The header is
-//! `include/mtec_rt.h` (hand-written, kept in step with this file; a test compiles a C program
-//! against it).
+//! `include/mtec_rt.h`, generated from this file by cbindgen (`cbindgen.toml`; `tests/header.rs`
+//! fails when the checked-in header differs, and `tests/c_header.rs` compiles C programs against it).
 //!
 //! Machine state: a `mtec.machine-error/1` model (a geometric map plus thermal models) has a
 //! state. `mtec_rt_update_state(handle, readings, n, dt_s)` advances it with the readings of this

@@ -1,4 +1,4 @@
-//! The hand-written header against the built library: compiles a small C program with gcc,
+//! The generated header (include/mtec_rt.h) against the built library: compiles a small C program with gcc,
 //! links it to libmtec_rt.so and runs it on a map. Skipped (with a message) when no C compiler
 //! is installed.
 
