@@ -192,6 +192,9 @@ pub struct ReplayOutcome {
     /// The CSV of every reading, when written (not part of the JSON summary).
     #[serde(skip)]
     pub output: Option<PathBuf>,
+    /// Every probe reading, compensated (the rows of the CSV; not part of the JSON summary).
+    #[serde(skip)]
+    pub samples: Vec<replay::ReplaySample>,
 }
 
 impl fmt::Display for ReplayOutcome {
@@ -259,5 +262,6 @@ pub fn replay(opts: &ReplayOptions, _obs: &mut dyn Observer) -> Result<ReplayOut
         model: comp.describe(),
         state_inputs: comp.state_inputs().to_vec(),
         output: opts.output.clone(),
+        samples,
     })
 }

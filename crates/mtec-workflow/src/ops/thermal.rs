@@ -568,6 +568,28 @@ pub enum PredictOutcome {
 }
 
 impl PredictOutcome {
+    /// The predicted drift of `target` (`ch1` or `ch1_um`) per row, µm; `None` when the model
+    /// does not predict it.
+    pub fn predictions_of(&self, target: &str) -> Option<Vec<f64>> {
+        let column = mtec_thermal::data::target_column(target);
+        match self {
+            PredictOutcome::Regression(p) => (mtec_thermal::data::target_column(&p.target)
+                == column)
+                .then(|| p.predictions.clone()),
+            #[cfg(feature = "neural")]
+            PredictOutcome::Neural(p) => {
+                let j = p
+                    .targets
+                    .iter()
+                    .position(|t| mtec_thermal::data::target_column(t) == column)?;
+                p.predictions
+                    .iter()
+                    .map(|row| row.get(j).copied())
+                    .collect()
+            }
+        }
+    }
+
     /// The prediction CSV (also written to `output` when given).
     pub fn csv(&self) -> &str {
         match self {

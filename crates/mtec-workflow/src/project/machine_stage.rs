@@ -8,6 +8,7 @@ use super::pipeline::{s, Pipeline};
 use super::spec::{MachineModelStage, ReplayStage};
 use crate::ops::machine;
 use crate::Error;
+use mtec_comp::replay::ReplaySample;
 use mtec_report::{line_chart, Series};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -101,11 +102,6 @@ pub fn build(
     Ok(out)
 }
 
-/// One column of the replay CSV as numbers (`time_min`, `ex_um`, …).
-fn column(t: &mtec_io::Table, name: &str) -> Vec<f64> {
-    t.f64_column(name).unwrap_or_default()
-}
-
 /// Compensates a recorded day and reports it.
 pub fn replay(p: &mut Pipeline, r: &ReplayStage, built: Option<&Path>) -> crate::Result<()> {
     let name = if r.name.is_empty() {
@@ -132,29 +128,36 @@ pub fn replay(p: &mut Pipeline, r: &ReplayStage, built: Option<&Path>) -> crate:
         output: Some(csv.clone()),
     };
     let done = machine::replay(&opts, &mut crate::Collect::default())?;
-    let doc = serde_json::to_value(&done)?;
-    let v = p.json_result(
+    p.json_result(
         &format!("replay-{tag}.json"),
-        &format!("{}\n", serde_json::to_string_pretty(&doc)?),
+        &format!(
+            "{}\n",
+            serde_json::to_string_pretty(&serde_json::to_value(&done)?)?
+        ),
     )?;
     p.outputs.push(s(&csv));
     let sec = p.report.section(format!("Compensation replay: {name}"));
     sec.text("The recorded day compensated exactly as the real-time library would have done it: at each probe reading the model has received every state reading up to that moment (update_state), then gives the correction for the probe point (correction_um). The error after compensation is the measured error plus the correction.");
-    let get = |k: &str, f: &str| v.get(k).and_then(|x| x.get(f)).and_then(Value::as_f64);
-    let mut rows = Vec::new();
-    for (k, label) in [("x", "X"), ("y", "Y"), ("z", "Z"), ("vector", "vector")] {
-        let f = |x: Option<f64>| x.map(|v| format!("{v:.3}")).unwrap_or_default();
-        let pc = |x: Option<f64>| x.map(|v| format!("{:.1} %", 100.0 * v)).unwrap_or_default();
-        rows.push(vec![
+    let sum = &done.summary;
+    let rows = [
+        ("X", &sum.x),
+        ("Y", &sum.y),
+        ("Z", &sum.z),
+        ("vector", &sum.vector),
+    ]
+    .into_iter()
+    .map(|(label, r)| {
+        vec![
             label.to_string(),
-            f(get(k, "rms_before_um")),
-            f(get(k, "rms_after_um")),
-            f(get(k, "max_before_um")),
-            f(get(k, "max_after_um")),
-            pc(get(k, "compensation_rate")),
-            pc(get(k, "worst_reduction")),
-        ]);
-    }
+            format!("{:.3}", r.rms_before_um),
+            format!("{:.3}", r.rms_after_um),
+            format!("{:.3}", r.max_before_um),
+            format!("{:.3}", r.max_after_um),
+            format!("{:.1} %", 100.0 * r.compensation_rate),
+            format!("{:.1} %", 100.0 * r.worst_reduction),
+        ]
+    })
+    .collect();
     sec.table(
         &[
             "",
@@ -167,108 +170,88 @@ pub fn replay(p: &mut Pipeline, r: &ReplayStage, built: Option<&Path>) -> crate:
         ],
         rows,
     );
-    let n = |k: &str| v.get(k).map(super::stages::fmt_value).unwrap_or_default();
+    let n = |x: f64| super::stages::fmt_value(&serde_json::json!(x));
     sec.text(format!(
         "{} probe readings; {} made worse by the compensation (largest increase of |e| {} µm); {} taken with the thermal part faded (smallest weight {}).",
-        n("readings"),
-        n("worse"),
-        n("largest_worsening_um"),
-        n("faded"),
-        n("min_thermal_weight")
+        sum.readings,
+        sum.worse,
+        n(sum.largest_worsening_um),
+        sum.faded,
+        n(sum.min_thermal_weight)
     ));
-    if let Ok(t) = mtec_io::Table::read(&csv) {
-        let time_h: Vec<f64> = column(&t, "time_min").iter().map(|m| m / 60.0).collect();
-        let probes = t.str_column("probe").unwrap_or_default();
-        let first = probes.first().cloned().unwrap_or_default();
-        // the worst probe at each moment: |e| before and after
-        let (bx, by, bz) = (
-            column(&t, "ex_um"),
-            column(&t, "ey_um"),
-            column(&t, "ez_um"),
-        );
-        let (ax, ay, az) = (
-            column(&t, "ex_after_um"),
-            column(&t, "ey_after_um"),
-            column(&t, "ez_after_um"),
-        );
-        let norm = |x: f64, y: f64, z: f64| (x * x + y * y + z * z).sqrt();
-        let before = bx
-            .iter()
-            .zip(&by)
-            .zip(&bz)
-            .map(|((x, y), z)| norm(*x, *y, *z));
-        let after = ax
-            .iter()
-            .zip(&ay)
-            .zip(&az)
-            .map(|((x, y), z)| norm(*x, *y, *z));
-        let mut worst_b: Vec<(f64, f64)> = Vec::new();
-        let mut worst_a: Vec<(f64, f64)> = Vec::new();
-        for ((&h, nb), na) in time_h.iter().zip(before).zip(after) {
-            match (worst_b.last_mut(), worst_a.last_mut()) {
-                (Some(b), Some(a)) if b.0 == h => {
-                    b.1 = b.1.max(nb);
-                    a.1 = a.1.max(na);
-                }
-                _ => {
-                    worst_b.push((h, nb));
-                    worst_a.push((h, na));
-                }
+    replay_figures(sec, &done.samples);
+    Ok(())
+}
+
+/// The error at the tool tip over the day, before and after, from the compensated readings.
+fn replay_figures(sec: &mut mtec_report::Section, samples: &[ReplaySample]) {
+    let Some(first) = samples.first().map(|r| r.probe.clone()) else {
+        return;
+    };
+    let norm = |e: &[f64; 3]| (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+    // the worst probe at each moment: |e| before and after
+    let mut worst_b: Vec<(f64, f64)> = Vec::new();
+    let mut worst_a: Vec<(f64, f64)> = Vec::new();
+    for r in samples {
+        let (h, nb, na) = (r.time_min / 60.0, norm(&r.before_um), norm(&r.after_um));
+        match (worst_b.last_mut(), worst_a.last_mut()) {
+            (Some(b), Some(a)) if b.0 == h => {
+                b.1 = b.1.max(nb);
+                a.1 = a.1.max(na);
+            }
+            _ => {
+                worst_b.push((h, nb));
+                worst_a.push((h, na));
             }
         }
+    }
+    sec.figure(
+        line_chart(
+            "Error at the tool tip, worst probe point",
+            "time (h)",
+            "|e| (µm)",
+            &[
+                Series::new("without compensation", worst_b),
+                Series::new("compensated", worst_a),
+            ],
+            &[],
+        ),
+        "The largest error vector over the probe points at each moment, before and after compensation.",
+    );
+    let at_first = || samples.iter().filter(|r| r.probe == first);
+    for (i, label) in ["X", "Y", "Z"].into_iter().enumerate() {
+        let pick = |e: fn(&ReplaySample) -> [f64; 3]| -> Vec<(f64, f64)> {
+            at_first().map(|r| (r.time_min / 60.0, e(r)[i])).collect()
+        };
         sec.figure(
             line_chart(
-                "Error at the tool tip, worst probe point",
+                &format!("{label} error at probe point `{first}`"),
                 "time (h)",
-                "|e| (µm)",
+                &format!("e{} (µm)", label.to_lowercase()),
                 &[
-                    Series::new("without compensation", worst_b),
-                    Series::new("compensated", worst_a),
+                    Series::new("without compensation", pick(|r| r.before_um)),
+                    Series::new("compensated", pick(|r| r.after_um)),
                 ],
                 &[],
             ),
-            "The largest error vector over the probe points at each moment, before and after compensation.",
+            format!("{label} component of the error at the first probe point over the day."),
         );
-        for (label, b, a) in [("X", &bx, &ax), ("Y", &by, &ay), ("Z", &bz, &az)] {
-            let pick = |v: &[f64]| -> Vec<(f64, f64)> {
-                (0..time_h.len().min(v.len()))
-                    .filter(|&i| probes.get(i) == Some(&first))
-                    .map(|i| (time_h[i], v[i]))
-                    .collect()
-            };
-            sec.figure(
-                line_chart(
-                    &format!("{label} error at probe point `{first}`"),
-                    "time (h)",
-                    &format!("e{} (µm)", label.to_lowercase()),
-                    &[
-                        Series::new("without compensation", pick(b)),
-                        Series::new("compensated", pick(a)),
-                    ],
-                    &[],
-                ),
-                format!("{label} component of the error at the first probe point over the day."),
-            );
-        }
-        let w = column(&t, "thermal_weight");
-        if w.iter().any(|&x| x < 1.0) {
-            let pts: Vec<(f64, f64)> = (0..time_h.len().min(w.len()))
-                .filter(|&i| probes.get(i) == Some(&first))
-                .map(|i| (time_h[i], w[i]))
-                .collect();
-            sec.figure(
-                line_chart(
-                    "Thermal weight (envelope rule)",
-                    "time (h)",
-                    "weight",
-                    &[Series::new("thermal weight", pts)],
-                    &[],
-                ),
-                "1 inside the training envelope; fading to 0 (no thermal correction) outside it.",
-            );
-        }
     }
-    Ok(())
+    if samples.iter().any(|r| r.thermal_weight < 1.0) {
+        let pts: Vec<(f64, f64)> = at_first()
+            .map(|r| (r.time_min / 60.0, r.thermal_weight))
+            .collect();
+        sec.figure(
+            line_chart(
+                "Thermal weight (envelope rule)",
+                "time (h)",
+                "weight",
+                &[Series::new("thermal weight", pts)],
+                &[],
+            ),
+            "1 inside the training envelope; fading to 0 (no thermal correction) outside it.",
+        );
+    }
 }
 
 fn stem(p: &Path) -> String {

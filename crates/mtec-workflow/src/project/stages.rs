@@ -10,9 +10,13 @@ use crate::ops;
 use crate::Collect;
 use crate::Error;
 use mtec_comp::kinematic::KinematicFile;
+use mtec_measure::circular::Diagnostics;
+use mtec_measure::iso230_2::TargetStats;
+use mtec_measure::positioning::PositioningData;
 use mtec_report::{bar_chart, line_chart, scatter_chart, Section, Series};
 use mtec_sensitivity::error_model::ErrorStatistics;
 use mtec_thermal::model_file::SplitBy;
+use mtec_thermal::select::RidgeTrace;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -137,46 +141,51 @@ pub fn iso230_2(p: &mut Pipeline, data: &Path) -> crate::Result<()> {
     warnings(sec, &obs, &mut *p.obs);
     sec.text("Bidirectional positioning accuracy A, repeatability R, reversal B, systematic deviation E and mean reversal per ISO 230-2:2014, from the laser runs.");
     // mean unidirectional deviations with their ±2s bands, from the statistics themselves
-    if let Some(targets) = v.get("targets").and_then(Value::as_array) {
-        let col = |k: &str| {
-            targets
-                .iter()
-                .map(|t| t.get(k).and_then(Value::as_f64).unwrap_or(f64::NAN))
-                .collect::<Vec<f64>>()
-        };
-        let x = col("target_mm");
-        let mut series = Vec::new();
-        let mut bands = Vec::new();
-        for (dir, tag) in [("up", "↑"), ("down", "↓")] {
-            let mean = col(&format!("mean_{dir}_um"));
-            series.push(Series::new(
-                format!("mean deviation {tag}"),
-                x.iter().zip(&mean).map(|(a, b)| (*a, *b)).collect(),
-            ));
-            bands.push(mtec_report::Band {
-                name: format!("±2s {tag}"),
-                x: x.clone(),
-                lower: col(&format!("lower_{dir}_um")),
-                upper: col(&format!("upper_{dir}_um")),
-            });
-        }
-        sec.figure(line_chart("Mean positioning deviation with ±2s bands", "target (mm)", "deviation (µm)", &series, &bands), "ISO 230-2: mean unidirectional positioning deviation per target and direction, with the mean ± 2s band.");
+    let col = |f: fn(&TargetStats) -> f64| done.targets.iter().map(f).collect::<Vec<f64>>();
+    let x = col(|t| t.target_mm);
+    type Column = fn(&TargetStats) -> f64;
+    let directions: [(&str, Column, Column, Column); 2] = [
+        ("↑", |t| t.mean_up_um, |t| t.lower_up_um, |t| t.upper_up_um),
+        (
+            "↓",
+            |t| t.mean_down_um,
+            |t| t.lower_down_um,
+            |t| t.upper_down_um,
+        ),
+    ];
+    let mut series = Vec::new();
+    let mut bands = Vec::new();
+    for (tag, mean, lower, upper) in directions {
+        let mean = col(mean);
+        series.push(Series::new(
+            format!("mean deviation {tag}"),
+            x.iter().zip(&mean).map(|(a, b)| (*a, *b)).collect(),
+        ));
+        bands.push(mtec_report::Band {
+            name: format!("±2s {tag}"),
+            x: x.clone(),
+            lower: col(lower),
+            upper: col(upper),
+        });
     }
-    // every reading of every run, from the file itself
-    if let Ok(t) = mtec_io::Table::read(&f) {
-        if let (Ok(tg), Ok(dev)) = (t.f64_column("target_mm"), t.f64_column("deviation_um")) {
-            let raw: Vec<(f64, f64)> = tg.iter().zip(&dev).map(|(a, b)| (*a, *b)).collect();
-            sec.figure(
-                scatter_chart(
-                    "All readings",
-                    "target (mm)",
-                    "deviation (µm)",
-                    &[Series::new("readings", raw)],
-                ),
-                "Every reading of every run.",
-            );
-        }
-    }
+    sec.figure(line_chart("Mean positioning deviation with ±2s bands", "target (mm)", "deviation (µm)", &series, &bands), "ISO 230-2: mean unidirectional positioning deviation per target and direction, with the mean ± 2s band.");
+    // every reading of every run, as the file gives it
+    let runs = PositioningData::read(&f)?;
+    let raw: Vec<(f64, f64)> = runs
+        .targets_mm
+        .iter()
+        .zip(runs.up_um.iter().zip(&runs.down_um))
+        .flat_map(|(t, (up, down))| up.iter().chain(down).map(move |d| (*t, *d)))
+        .collect();
+    sec.figure(
+        scatter_chart(
+            "All readings",
+            "target (mm)",
+            "deviation (µm)",
+            &[Series::new("readings", raw)],
+        ),
+        "Every reading of every run.",
+    );
     json_tables(sec, &v, 0);
     Ok(())
 }
@@ -262,7 +271,8 @@ pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> crate::Result<
     warnings(sec, &obs, &mut *p.obs);
     sec.text("Error elements identified by least squares from the laser-interferometer lines; the identifiability report names what the design cannot determine.");
     let mach = crate::inputs::read_machine(machine)?;
-    if let Ok(set) = crate::inputs::read_errors(&errors) {
+    let set = crate::inputs::read_errors(&errors)?;
+    {
         for group in [
             ["EXX", "EYY", "EZZ"],
             ["EYX", "EZX", "EXY"],
@@ -385,30 +395,21 @@ pub fn sensitivity(
         .section("Global sensitivity of the volumetric error");
     warnings(sec, &obs, &mut *p.obs);
     sec.text("First-order index S1 (key errors) and total index ST (ST − S1: coupling) of each error element for the volumetric error, inputs drawn from the statistics of the error functions.");
-    // `outputs`: one record per output (Ex, Ey, Ez, |E|) with S1 and ST per input
-    if let (Some(inputs), Some(outputs)) = (
-        v.get("inputs").and_then(Value::as_array),
-        v.get("outputs").and_then(Value::as_array),
-    ) {
-        let names: Vec<String> = inputs.iter().map(fmt).collect();
-        for idx in outputs {
-            let out = idx.get("output").map(fmt).unwrap_or_default();
-            let get = |k: &str| {
-                idx.get(k).and_then(Value::as_array).map(|a| {
-                    a.iter()
-                        .map(|x| x.as_f64().unwrap_or(0.0))
-                        .collect::<Vec<_>>()
-                })
-            };
-            if let (Some(s1), Some(st)) = (get("S1"), get("ST")) {
+    // one chart per output (Ex, Ey, Ez, |E|) with S1 and ST per input; Morris gives μ*, σ
+    if let ops::sensitivity::Outcome::Machine(m) = &done {
+        for idx in &m.report.outputs {
+            if let (Some(s1), Some(st)) = (&idx.s1, &idx.st) {
                 sec.figure(
                     bar_chart(
-                        &format!("Sensitivity of {out}"),
+                        &format!("Sensitivity of {}", idx.output),
                         "index",
-                        &names,
-                        &[("S1".into(), s1), ("ST".into(), st)],
+                        &m.report.inputs,
+                        &[("S1".into(), s1.clone()), ("ST".into(), st.clone())],
                     ),
-                    format!("First-order (S1) and total (ST) indices for {out}."),
+                    format!(
+                        "First-order (S1) and total (ST) indices for {}.",
+                        idx.output
+                    ),
                 );
             }
         }
@@ -427,7 +428,7 @@ pub fn circular(p: &mut Pipeline, data: &Path) -> crate::Result<()> {
     opts.out = Some(dir.clone());
     let mut obs = Collect::default();
     let done = ops::circular::run(&opts, &mut obs)?;
-    let v = p.json_result(
+    p.json_result(
         &format!("circular-{}.json", stem(&f)),
         &format!("{}\n", done.to_json()?),
     )?;
@@ -439,18 +440,17 @@ pub fn circular(p: &mut Pipeline, data: &Path) -> crate::Result<()> {
         "Circular deviation G and circular hysteresis H per ISO 230-4 ({} plane, R = {} mm, \
          F = {} mm/min), then the ballbar diagnostics fitted from the trace, ranked by their \
          contribution to the circularity (as `mtec circular` prints them).",
-        v["plane"].as_str().unwrap_or("?"),
-        fmt(&v["radius_mm"]),
-        fmt(&v["feed_mm_min"])
+        format!("{:?}", done.plane),
+        fmt(&serde_json::json!(done.radius_mm)),
+        fmt(&serde_json::json!(done.feed_mm_min))
     ));
-    if let Ok(svg) = std::fs::read_to_string(dir.join("polar.svg")) {
-        sec.figure(
-            svg,
-            "Polar plot of the radial deviation about the least-squares centre, ccw (blue) and \
-             cw (red), the mean radius deviation removed.",
-        );
-    }
-    sec.table(&["quantity", "value"], circular_rows(&v));
+    let polar = std::fs::read_to_string(dir.join(ops::circular::PLOT_FILE))?;
+    sec.figure(
+        polar,
+        "Polar plot of the radial deviation about the least-squares centre, ccw (blue) and \
+         cw (red), the mean radius deviation removed.",
+    );
+    sec.table(&["quantity", "value"], circular_rows(&done));
     sec.table(
         &[
             "fault",
@@ -461,73 +461,60 @@ pub fn circular(p: &mut Pipeline, data: &Path) -> crate::Result<()> {
             "contribution (µm)",
             "%",
         ],
-        fault_rows(&v),
+        fault_rows(&done.diagnostics),
     );
     Ok(())
 }
 
 /// ISO 230-4 numbers as `mtec circular` prints them.
-fn circular_rows(v: &Value) -> Vec<Vec<String>> {
-    let iso = &v["iso230_4"];
-    let um = |k: &str| format!("{:.3} µm", iso[k].as_f64().unwrap_or(f64::NAN));
-    let c = &iso["circle_bidirectional"];
-    let centre = |i: usize| c["centre_um"][i].as_f64().unwrap_or(f64::NAN);
+fn circular_rows(done: &ops::circular::Outcome) -> Vec<Vec<String>> {
+    let iso = &done.iso230_4;
+    let um = |x: f64| format!("{x:.3} µm");
+    let c = &iso.circle_bidirectional;
     vec![
-        vec!["circular deviation G(ccw)".into(), um("G_ccw_um")],
-        vec!["circular deviation G(cw)".into(), um("G_cw_um")],
+        vec!["circular deviation G(ccw)".into(), um(iso.g_ccw_um)],
+        vec!["circular deviation G(cw)".into(), um(iso.g_cw_um)],
         vec![
             "bidirectional circular deviation G(b)".into(),
-            um("G_bidirectional_um"),
+            um(iso.g_bidirectional_um),
         ],
-        vec!["circular hysteresis H".into(), um("H_um")],
+        vec!["circular hysteresis H".into(), um(iso.h_um)],
         vec![
             "least-squares centre (X, Y)".into(),
-            format!("({:.3}, {:.3}) µm", centre(0), centre(1)),
+            format!("({:.3}, {:.3}) µm", c.centre_um[0], c.centre_um[1]),
         ],
         vec![
             "radius deviation (least-squares circle)".into(),
-            format!(
-                "{:.3} µm",
-                c["radius_deviation_um"].as_f64().unwrap_or(f64::NAN)
-            ),
+            um(c.radius_deviation_um),
         ],
         vec![
             "residual RMS after the diagnostics fit".into(),
-            format!(
-                "{:.3} µm",
-                v["diagnostics"]["residual_rms_um"]
-                    .as_f64()
-                    .unwrap_or(f64::NAN)
-            ),
+            um(done.diagnostics.residual_rms_um),
         ],
     ]
 }
 
 /// The diagnostics table of `mtec circular`, in its order (by contribution).
-fn fault_rows(v: &Value) -> Vec<Vec<String>> {
-    let Some(faults) = v["diagnostics"]["faults"].as_array() else {
-        return vec![];
+fn fault_rows(d: &Diagnostics) -> Vec<Vec<String>> {
+    // a value that is not a number (a fault that could not be fitted) shows as `-`
+    let n = |x: f64, d: usize| {
+        if x.is_finite() {
+            format!("{x:.d$}")
+        } else {
+            "-".into()
+        }
     };
-    let n = |f: &Value, k: &str, d: usize| {
-        f[k].as_f64()
-            .map(|x| format!("{x:.d$}"))
-            .unwrap_or_else(|| "-".into())
-    };
-    faults
+    d.faults
         .iter()
         .map(|f| {
             vec![
-                f["label"].as_str().unwrap_or("?").to_string(),
-                if f["present"].as_bool() == Some(true) {
-                    "yes".into()
-                } else {
-                    "no".into()
-                },
-                n(f, "value", 3),
-                f["unit"].as_str().unwrap_or("").to_string(),
-                n(f, "std_error", 3),
-                n(f, "contribution_um", 3),
-                n(f, "contribution_percent", 1),
+                f.label.clone(),
+                if f.present { "yes" } else { "no" }.into(),
+                n(f.value, 3),
+                f.unit.clone(),
+                n(f.std_error, 3),
+                n(f.contribution_um, 3),
+                n(f.contribution_percent, 1),
             ]
         })
         .collect()
@@ -545,34 +532,52 @@ pub fn ballbar(p: &mut Pipeline, b: &BallbarStage) -> crate::Result<()> {
     };
     let mut obs = Collect::default();
     let done = ops::identify_ballbar::run(&opts, &mut obs)?;
-    let v = p.json_result("ballbar.json", &format!("{}\n", done.to_json()?))?;
+    p.json_result("ballbar.json", &format!("{}\n", done.to_json()?))?;
     let sec = p
         .report
         .section("Rotary axis: ballbar identification (5 installation modes)");
     warnings(sec, &obs, &mut *p.obs);
     sec.text("Error motions EXC, EYC, EZC (µm), EAC, EBC (µrad) identified per angle and time from five installation modes, after removal of each mode's mean and first harmonic (set-up errors). ECC is not observable by a ballbar.");
-    let mut svgs: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .map(|d| {
-            d.filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|x| x == "svg"))
-                .collect()
-        })
-        .unwrap_or_default();
+    // the polar and time plots `identify ballbar --out` drew, in name order
+    let mut svgs = Vec::new();
+    for e in std::fs::read_dir(&dir)? {
+        let f = e?.path();
+        if f.extension().is_some_and(|x| x == "svg") {
+            svgs.push(f);
+        }
+    }
     svgs.sort();
     for f in svgs {
-        if let Ok(svg) = std::fs::read_to_string(&f) {
-            sec.figure(svg, stem(&f).replace('_', " "));
-        }
+        let svg = std::fs::read_to_string(&f)?;
+        sec.figure(svg, stem(&f).replace('_', " "));
     }
-    if let Some(c) = v.get("conditioning") {
-        let mut summary = serde_json::Map::new();
-        for (k, x) in c.as_object().into_iter().flatten() {
-            if k != "per_angle" {
-                summary.insert(k.clone(), x.clone());
-            }
-        }
-        json_tables(sec, &Value::Object(summary), 0);
-    }
+    let c = &done.conditioning;
+    sec.text("Conditioning of the five-mode identification (the worst angle):");
+    sec.table(
+        &["quantity", "value"],
+        vec![
+            vec!["unknowns".into(), c.unknowns.join(", ")],
+            vec!["smallest rank over the angles".into(), c.rank.to_string()],
+            vec![
+                "worst angle (deg)".into(),
+                fmt(&serde_json::json!(c.worst_angle_deg)),
+            ],
+            vec![
+                "worst condition number".into(),
+                fmt(&serde_json::json!(c.worst_condition_number)),
+            ],
+            vec![
+                "worst noise gain (per µm of reading)".into(),
+                fmt(&serde_json::json!(c.worst_noise_gain)),
+            ],
+            vec![
+                "largest ECC coefficient (µm/µrad)".into(),
+                fmt(&serde_json::json!(c.ecc_coefficient_max)),
+            ],
+        ],
+    );
+    sec.text("revolution");
+    json_tables(sec, &serde_json::to_value(&c.revolution)?, 1);
     Ok(())
 }
 
@@ -622,7 +627,7 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> crate::Result<PathBuf> {
         output: None,
     };
     let done = ops::thermal::predict(&predict, &mut obs)?;
-    let pred = p.json_result(
+    p.json_result(
         &format!("thermal-predict-{tag}.json"),
         &format!(
             "{}\n",
@@ -630,11 +635,7 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> crate::Result<PathBuf> {
         ),
     )?;
     let model_json: Value = mtec_io::read_json(&model)?;
-    let table = mtec_io::Table::read(&data).ok();
-    let predictions: Option<Vec<f64>> = pred
-        .get("predictions")
-        .and_then(Value::as_array)
-        .map(|v| v.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect());
+    let table = mtec_io::Table::read(&data)?;
     let sec = p
         .report
         .section(format!("Thermal model: {} from {}", t.target, stem(&data)));
@@ -642,24 +643,24 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> crate::Result<PathBuf> {
     let ridge_trace = super::thermal_section::section(
         sec,
         &model_json,
-        table.as_ref(),
+        Some(&table),
         &t.target,
-        predictions.as_deref(),
+        done.predictions_of(&t.target).as_deref(),
     );
-    if let Some(tab) = &table {
+    {
+        let tab = &table;
         let temps: Vec<Series> = tab
             .columns_with_suffix("_c")
             .iter()
             .take(8)
-            .filter_map(|c| {
-                tab.f64_column(c).ok().map(|v| {
-                    Series::new(
-                        c.clone(),
-                        v.iter().enumerate().map(|(i, t)| (i as f64, *t)).collect(),
-                    )
-                })
+            .map(|c| {
+                let v = tab.f64_column(c)?;
+                Ok(Series::new(
+                    c.clone(),
+                    v.iter().enumerate().map(|(i, t)| (i as f64, *t)).collect(),
+                ))
             })
-            .collect();
+            .collect::<crate::Result<_>>()?;
         if !temps.is_empty() {
             sec.figure(
                 line_chart("Temperatures", "sample", "°C", &temps, &[]),
@@ -691,7 +692,7 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> crate::Result<PathBuf> {
             "The ridge-trace selection the model was fitted with: variance inflation factors, \
              the elimination steps and the chosen k, on all rows of the data.",
         );
-        if let Some(fig) = ridge_trace_figure(&sel) {
+        if let Some(fig) = ridge_trace_figure(&done.selection.trace) {
             sec.figure(
                 fig,
                 "Ridge trace: each sensor's standardised coefficient against the ridge parameter k.",
@@ -706,10 +707,9 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> crate::Result<PathBuf> {
     Ok(model)
 }
 
-/// The ridge trace of `thermal select --json`: one line per sensor over log10 k. The file's
-/// `coefficients` are one row per k, one column per sensor.
-fn ridge_trace_figure(sel: &Value) -> Option<String> {
-    let series = ridge_trace_series(sel)?;
+/// The ridge trace of the selection: one line per sensor over log10 k (k > 0).
+fn ridge_trace_figure(trace: &RidgeTrace) -> Option<String> {
+    let series = ridge_trace_series(trace);
     (!series.is_empty()).then(|| {
         line_chart(
             "Ridge trace",
@@ -721,36 +721,26 @@ fn ridge_trace_figure(sel: &Value) -> Option<String> {
     })
 }
 
-fn ridge_trace_series(sel: &Value) -> Option<Vec<Series>> {
-    let trace = sel.get("trace")?;
-    let k: Vec<f64> = trace
-        .get("k")?
-        .as_array()?
-        .iter()
-        .filter_map(Value::as_f64)
-        .collect();
-    let names = trace.get("sensors")?.as_array()?;
-    let rows = trace.get("coefficients")?.as_array()?;
-    if rows.len() != k.len() || k.is_empty() {
-        return None;
-    }
-    let series: Vec<Series> = names
+/// `coefficients[i][j]` is sensor j at k[i]: one series per sensor, over every k > 0 (k = 0
+/// has no logarithm).
+fn ridge_trace_series(trace: &RidgeTrace) -> Vec<Series> {
+    trace
+        .sensors
         .iter()
         .enumerate()
-        .map(|(j, n)| {
+        .map(|(j, name)| {
             Series::new(
-                fmt(n),
-                k.iter()
-                    .zip(rows)
-                    .filter_map(|(k, row)| {
-                        let c = row.as_array()?.get(j)?.as_f64()?;
-                        Some((k.log10(), c))
-                    })
+                name.clone(),
+                trace
+                    .k
+                    .iter()
+                    .zip(&trace.coefficients)
+                    .filter(|(k, row)| **k > 0.0 && j < row.len())
+                    .map(|(k, row)| (k.log10(), row[j]))
                     .collect(),
             )
         })
-        .collect();
-    Some(series)
+        .collect()
 }
 
 /// A volumetric map from a grid; returns the map file.
@@ -762,6 +752,7 @@ pub fn map(p: &mut Pipeline, m: &MapStage) -> crate::Result<PathBuf> {
     ops::map::fit(&ops::map::FitOptions::trilinear(&grid, &map), &mut obs)?;
     p.outputs.push(s(&map));
     let mut figures = Vec::new();
+    let mut notes = Vec::new();
     if let Some(check) = &m.check {
         let pts = p.path_of(check);
         let out = p.out.join("map-check.csv");
@@ -772,19 +763,35 @@ pub fn map(p: &mut Pipeline, m: &MapStage) -> crate::Result<PathBuf> {
         };
         ops::map::eval(&opts, &mut obs)?;
         p.outputs.push(s(&out));
-        if let (Ok(meas), Ok(pred)) = (mtec_io::Table::read(&pts), mtec_io::Table::read(&out)) {
-            for (c, name) in ["ex_um", "ey_um", "ez_um"].iter().zip(["Ex", "Ey", "Ez"]) {
-                if let (Ok(a), Ok(b)) = (meas.f64_column(c), pred.f64_column(c)) {
-                    let rms = (a.iter().zip(&b).map(|(x, y)| (x - y).powi(2)).sum::<f64>()
-                        / a.len() as f64)
-                        .sqrt();
-                    let xs = 0..a.len();
-                    figures.push((
-                        line_chart(&format!("{name} along the check points"), "point", "µm", &[Series::new("measured", xs.clone().map(|i| (i as f64, a[i])).collect()), Series::new("map", xs.map(|i| (i as f64, b[i])).collect())], &[]),
-                        format!("{name}: map against measurement off the grid, RMS difference {rms:.2} µm."),
-                    ));
-                }
+        let (meas, pred) = (mtec_io::Table::read(&pts)?, mtec_io::Table::read(&out)?);
+        for (c, name) in ["ex_um", "ey_um", "ez_um"].iter().zip(["Ex", "Ey", "Ez"]) {
+            if !meas.has(c) {
+                notes.push(format!(
+                    "{}: no `{c}` column, so {name} of the map is not compared with a measurement.",
+                    pts.display()
+                ));
+                continue;
             }
+            let (a, b) = (meas.f64_column(c)?, pred.f64_column(c)?);
+            let rms = (a.iter().zip(&b).map(|(x, y)| (x - y).powi(2)).sum::<f64>()
+                / a.len() as f64)
+                .sqrt();
+            let xs = 0..a.len();
+            figures.push((
+                line_chart(
+                    &format!("{name} along the check points"),
+                    "point",
+                    "µm",
+                    &[
+                        Series::new("measured", xs.clone().map(|i| (i as f64, a[i])).collect()),
+                        Series::new("map", xs.map(|i| (i as f64, b[i])).collect()),
+                    ],
+                    &[],
+                ),
+                format!(
+                    "{name}: map against measurement off the grid, RMS difference {rms:.2} µm."
+                ),
+            ));
         }
     }
     let sec = p.report.section("Volumetric error map");
@@ -792,6 +799,9 @@ pub fn map(p: &mut Pipeline, m: &MapStage) -> crate::Result<PathBuf> {
     sec.text("A regular grid of measured volumetric errors, interpolated trilinearly (the controller-style compensation baseline).");
     for (svg, cap) in figures {
         sec.figure(svg, cap);
+    }
+    for n in notes {
+        sec.note(n);
     }
     Ok(map)
 }
@@ -894,12 +904,12 @@ mod tests {
     /// report drew it transposed, one line per k).
     #[test]
     fn the_ridge_trace_has_one_line_per_sensor() {
-        let sel = serde_json::json!({"trace": {
-            "k": [0.001, 0.01, 0.1],
-            "sensors": ["s1_c", "s2_c"],
-            "coefficients": [[1.0, -1.0], [0.8, -0.5], [0.3, -0.1]]
-        }});
-        let s = ridge_trace_series(&sel).unwrap();
+        let trace = RidgeTrace {
+            k: vec![0.001, 0.01, 0.1],
+            sensors: vec!["s1_c".into(), "s2_c".into()],
+            coefficients: vec![vec![1.0, -1.0], vec![0.8, -0.5], vec![0.3, -0.1]],
+        };
+        let s = ridge_trace_series(&trace);
         assert_eq!(s.len(), 2);
         assert_eq!(s[0].name, "s1_c");
         assert_eq!(s[0].points, vec![(-3.0, 1.0), (-2.0, 0.8), (-1.0, 0.3)]);
