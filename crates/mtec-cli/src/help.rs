@@ -7,7 +7,7 @@
 
 /// The heading every example block starts with.
 macro_rules! examples {
-    ($body:literal) => {
+    ($body:expr) => {
         concat!(
             "Examples (they run as written, in order, in an empty folder):\n",
             $body

@@ -10,32 +10,7 @@ mod observer;
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
-const WORKFLOW: &str = "\
-mtec makes CNC machine tools more accurate: it measures, identifies, models and compensates their
-geometric and thermal errors.
-
-The workflow, and the commands for each step:
-  simulate      a virtual machine with a known truth writes measurement files to practise on
-  volumetric    volumetric error Ex, Ey, Ez of the tool tip at commanded points (HTM or POE)
-  identify lines   the 21 error elements of a 3-axis machine from laser lines (9-line method)
-  identify ballbar  rotary-axis error motions (EXC EYC EZC EAC EBC) from ballbar readings in 5 modes
-  iso230-2      positioning statistics of a linear axis from laser runs (ISO 230-2, VDI 3441)
-  circular      circular test of two axes: ISO 230-4 G and H, ballbar diagnostics ranked
-  map           volumetric error maps: fit a grid (trilinear) and evaluate it at points
-  compensate    compensation: corrected NC programs (`compensate gcode`), controller tables
-                (`compensate table`), work-offset updates for the thermal state now
-                (`compensate thermal-offset`)
-  thermal       thermal drift models from temperature logs: select sensors, fit, predict
-                (regression models; neural ones, `thermal fit --model cnn-lstm|bpnn`, in a
-                build with `cargo build --release --features neural`)
-  machine       the machine's error with a state: `machine build` sums a geometric model and
-                thermal models with their training envelopes, `machine replay` compensates a
-                recorded day through the real-time path
-  sensitivity   which error elements drive the volumetric error (EFAST/Sobol/Morris), tolerances
-
-Units: positions mm, angles deg, linear errors um, angular errors urad, temperatures C, time min.
-Every CSV column name carries its unit suffix (x_mm, ex_um, ...). Exit codes: 0 success,
-2 bad input (the message names file, line and column), 1 internal failure.";
+const WORKFLOW: &str = include_str!("../help/main.workflow.txt");
 
 #[derive(Parser)]
 #[command(name = "mtec", version, about = "Measure, identify, model and compensate machine-tool errors", long_about = WORKFLOW)]

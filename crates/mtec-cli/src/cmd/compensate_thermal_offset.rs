@@ -10,52 +10,11 @@ use mtec_workflow::ops::compensate_table::parse_axis;
 use mtec_workflow::ops::compensate_thermal_offset::{self as op, parse_travel, Options};
 use std::path::PathBuf;
 
-pub const HELP: &str = "\
-Writes the part-program lines that bring a work offset up to date with the machine's thermal
-drift now, for controllers without a real-time hook: shops that re-zero at each tool change run
-these lines there instead of probing. Formats are described in docs/formats.md, the method in
-docs/methods.md.
+pub const HELP: &str = include_str!("../../help/compensate_thermal_offset.help.txt");
 
-The state now: --temps is the temperature log up to now (time_min and the model's input columns,
-e.g. t3_c, spindle_rpm, ambient_c), one continuous record; the model runs over every row and
-its state at the last row is used. Lag filters and exp-ambient's temperature rises start at the
-first row as if the machine were at rest there, in equilibrium with the room, as in training. So
-give the log since the machine was last at rest and --starts-at-rest; a log that does not start
-at rest is accepted only when it spans 5 of the model's slowest time constants (exp-ambient: never).
-
-The update: mtec's error e is where the tool goes wrong (it reaches commanded + e); the offset
-moves by c = -e, so a predicted +12 um drift in Z moves the offset, and with it the tool relative
-to the part, by -12 um. If the offset was set (touched off, probed) while the machine was already
-warm, give --zeroed-at-min T (its time in the log): c = -(e(now) - e(T)). Absolute values are
-written, never increments: running the lines twice gives the same offset.
-
-Formats:
-  g10           LinuxCNC:  G10 L2 P<offset> Z<base + c>           (--base-mm required)
-  fanuc         FANUC:     G90 G10 L2 P<offset> Z<base + c>       (--base-mm required)
-  fanuc-macro   FANUC:     #<5201+20*offset+axis-1>=<base + c>    (--base-mm required)
-  sinumerik     Siemens:   $P_UIFR[<offset>,Z,FI]=<c>, then G54 (or the frame's G code): the
-                update goes into the frame's fine offset, the touched-off coarse one stays
-  sinumerik-sd  Siemens temperature compensation SD43900/SD43910/SD43920 of --machine-axis:
-                K0 = e at P0 = --position-origin-mm, tan(beta) = the slope; needs MD32750
-
-Safety: an input outside the model's training range refuses the update (exit 2) unless
---outside fade accepts the safe fallback: the update scaled by the envelope weight, down to no
-update. An update larger than --max-correction-um (default 500 um) is refused.
-
-Positions (mm, machine coordinates): --position-origin-mm is where the model's position_mm is 0;
-a model whose drift depends on the position (exp-ambient, e = k*x + b) needs --at-mm (offset
-formats: where the offset is used) or --travel-mm (sinumerik-sd: the axis travel, for the bound).";
-
-const EXAMPLES: &str = crate::help::examples!(
-    "  # training days of a machining centre, and a day's log since it started cold
-  $ mtec simulate production-day --out p
-  $ mtec thermal fit --data p/train.csv --target dz_um --model mlr -o p/dz.json
-  $ mtec machine build --thermal z=p/dz.json -o p/machine.json
-  # the G10 line that updates G54's Z (-312.45 mm, touched off cold) for now
-  $ mtec compensate thermal-offset --model p/machine.json \\
-      --temps p/day-state.csv --starts-at-rest --format g10 --offset 1 \\
-      --base-mm -312.45"
-);
+const EXAMPLES: &str = crate::help::examples!(include_str!(
+    "../../help/compensate_thermal_offset.examples.txt"
+));
 
 /// Output format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

@@ -6,21 +6,9 @@ use crate::error::CliError;
 use mtec_workflow::project::demo;
 use std::path::PathBuf;
 
-const LONG: &str = "\
-Simulate a machine (geometry, thermal, rotary axis), run the whole pipeline, write the report.
+const LONG: &str = include_str!("../../help/demo.long.txt");
 
-The virtual machine writes every kind of measurement (laser lines, positioning runs, circular
-and ballbar tests, thermal logs, a tracker grid) into <out>/data with a project file
-<out>/data/project.toml; `mtec run` then analyses it exactly as it would a real machine's files,
-and the demo adds the one thing only a simulation can: the compensation rate measured against
-the known truth.";
-
-const EXAMPLES: &str = crate::help::examples!(
-    "  # simulate, analyse, compensate: open demo/report.html in a browser
-  $ mtec demo --out demo
-  # the same analysis from the project file the demo wrote (edit it to try)
-  $ mtec run demo/data/project.toml --out results"
-);
+const EXAMPLES: &str = crate::help::examples!(include_str!("../../help/demo.examples.txt"));
 
 /// Arguments of `mtec demo`.
 #[derive(clap::Args, Debug)]

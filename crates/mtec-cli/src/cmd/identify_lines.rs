@@ -7,56 +7,11 @@ use std::io::Write;
 use std::path::PathBuf;
 
 /// The long help of `mtec identify lines`.
-pub const LONG_ABOUT: &str =
-    "Identify the 21 error elements of a three-axis machine from laser lines (9-line method).
-
-Each error motion is a polynomial of its axis position (zero at the travel's lower end;
-straightness measured from its least-squares reference line, ISO 230-1), squareness a
-constant; every straightness channel gets its own alignment slope (reported, never turned
-into squareness). The observation model is the machine's first-order kinematics; the fit is
-weighted least squares. The report says
-which elements the design cannot identify (named, with what they are confounded with, and
-given no numbers), the rank, singular values and condition number, the residual RMS and the
-1-sigma uncertainty of every identified element. Predictions of the identified set are valid
-at the tool offset of the measurement.
-
-Data (CSV, docs/formats.md, \"Line measurement CSV\"): line,step,x_mm,y_mm,z_mm,ux,uy,uz,
-reading_um, one row per point and channel; the reading is the laser reading minus the commanded
-displacement from the line's first point, projected on the unit direction (ux,uy,uz). Name a
-line's channels `X1` (along the line) and `X1.y`, `X1.z` (straightness). The design is read from
-the points. An optional `run` column (1, 2, ...) holds repeat runs: each run of a channel has its own
-zero and alignment slope, and least squares averages the runs.
-
-Outputs (each checked before any work; none may be an input or another output): -o the error
-set (mtec.errors/1); --kinematic-model the machine with that set (mtec.kinematic-model/1), which
-`compensate gcode|table --model` and mtec-rt read as it is; --stats each identified element's
-mean and std over its travel (element,mean,std,unit; a constant element's std is its
-magnitude), which `sensitivity --stats` reads.
-
---design checks the data against a built-in design; without --data it analyses that design
-alone (what it can identify) on the machine.";
+pub const LONG_ABOUT: &str = include_str!("../../help/identify_lines.long_about.txt");
 
 /// The examples that end the help of `mtec identify lines`.
-pub const EXAMPLES: &str = crate::help::examples!(
-    "  # the 9-line laser measurements of a 3-axis machining centre (simulated)
-  $ mtec simulate vmc-9line --out d --seed 1
-  # what the 9-line design can identify on this machine, before measuring
-  $ mtec identify lines --machine d/machine.toml --design nine-line
-  # the 21 error elements with their uncertainties, written as an error set,
-  # as a kinematic model to compensate with, and as statistics for sensitivity
-  $ mtec identify lines --machine d/machine.toml --data d/lines.csv \\
-      -o d/errors.json --kinematic-model d/km.json --stats d/stats.csv
-  # the volumetric error the identified set predicts at one point
-  $ printf 'x_mm,y_mm,z_mm\\n500,700,250\\n' > pts.csv
-  $ mtec volumetric --machine d/machine.toml --errors d/errors.json \\
-      --points pts.csv
-  # a program corrected with the identified model, no file made by hand
-  $ printf 'G21 G90\\nG0 X100 Y200 Z50\\nG1 X500 Y700 Z250 F1000\\nM2\\n' > part.ngc
-  $ mtec compensate gcode --model d/km.json part.ngc -o part-km.ngc
-  # which identified elements drive the error at X500 Y700 Z250
-  $ mtec sensitivity --machine d/machine.toml --stats d/stats.csv \\
-      --at 500,700,250"
-);
+pub const EXAMPLES: &str =
+    crate::help::examples!(include_str!("../../help/identify_lines.examples.txt"));
 
 /// Options of `mtec identify lines` (its help text is [`LONG_ABOUT`]).
 #[derive(clap::Args, Debug)]

@@ -5,26 +5,9 @@
 use crate::error::CliError;
 use mtec_workflow::project;
 
-const LONG: &str = "\
-Run the whole pipeline of a project file and write report.html.
+const LONG: &str = include_str!("../../help/run.long.txt");
 
-The project file (TOML; docs/formats.md, \"Project TOML\") names the machine and the
-measurement files, and which analyses, models and compensation outputs to produce; paths in it
-are relative to it. Each stage runs the job of the subcommand a user would type and keeps its
-JSON result in the output folder; a stage that fails stops the run with its message and exit
-code. `mtec demo` writes a complete project to start from.";
-
-const EXAMPLES: &str = crate::help::examples!(
-    "  # positioning runs of an axis and a spindle's thermal log
-  $ mtec simulate iso230-2 --out p
-  $ mtec simulate spindle-sensors --out t
-  # a project: ISO 230-2 of the runs, a thermal model of the radial drift
-  $ printf '%s\\n' 'name = \"X axis and spindle\"' \\
-      '[[iso230_2]]' 'data = \"p/iso230-2.csv\"' \\
-      '[[thermal]]' 'data = \"t/thermal.csv\"' 'target = \"radial_um\"' \\
-      'model = \"ridge-select\"' > project.toml
-  $ mtec run project.toml --out results"
-);
+const EXAMPLES: &str = crate::help::examples!(include_str!("../../help/run.examples.txt"));
 
 /// Arguments of `mtec run`.
 #[derive(clap::Args, Debug)]

@@ -5,43 +5,9 @@ use crate::error::CliError;
 use mtec_workflow::ops::sensitivity::{self as op, MethodKind, Options};
 use std::path::PathBuf;
 
-const LONG: &str = "\
-Which error elements drive the volumetric error: S1 (key errors) and ST (coupling) of every
-element for Ex, Ey, Ez and |E|, and how tightly each must be held for a target accuracy.
+const LONG: &str = include_str!("../../help/sensitivity.long.txt");
 
-Inputs are the geometric error elements with normal distributions from an error-statistics CSV
-(docs/formats.md, \"Error statistics CSV\"), one row per element, units um (translations,
-squareness excluded) or urad (rotations and squareness):
-
-  element,mean,std,unit
-  EXX,4.1,3.2,um
-  ECX,-2.0,6.5,urad
-
-Elements with std 0 stay fixed at their mean. The model is the machine's first-order
-volumetric error at the pose given by --at (machine axis order, mm/deg) or at every point of
---points (columns x_mm, y_mm, z_mm, ...), where indices are aggregated over the points with
-variance weights. Methods: efast (the source method: --samples points per search curve,
-interference factor --interference), sobol (--samples base points, bootstrap intervals),
-morris (--samples trajectories; mu* and sigma instead of S1 and ST).
-
-The report ranks key errors (S1 of |E|), coupled errors (ST - S1 of |E| >= 0.03), and
-allocates tolerances: each element's allowed std so that Ex, Ey, Ez stay within --target-um at
-coverage factor --coverage (equal-effects rule).
-
---function ishigami|sobol-g|linear analyses a standard test function instead and prints its
-analytic indices beside the estimates.";
-
-const EXAMPLES: &str = crate::help::examples!(
-    "  # EFAST on the Ishigami function: the estimates beside the exact indices
-  $ mtec sensitivity --function ishigami --method efast --samples 2000
-  # a machining centre, and the spread of five of its error elements
-  $ mtec simulate vmc-9line --out d
-  $ printf '%s\\n' element,mean,std,unit EXX,2,1.5,um EYY,0,2,um EZZ,1,1,um \\
-      EBX,0,4,urad EC0Y,10,5,urad > stats.csv
-  # which drive the error at X300 Y400 Z150, and their tolerances for 10 um
-  $ mtec sensitivity --machine d/machine.toml --stats stats.csv \\
-      --at 300,400,150 --target-um 10"
-);
+const EXAMPLES: &str = crate::help::examples!(include_str!("../../help/sensitivity.examples.txt"));
 
 /// Arguments of `mtec sensitivity`.
 #[derive(clap::Args, Debug)]

@@ -4,22 +4,9 @@ use crate::error::CliError;
 use mtec_workflow::ops::simulate::{self as op, Options, SCENARIOS};
 use std::path::PathBuf;
 
-const LONG: &str = "\
-Simulate measurements on the virtual machine (known ground truth).
+const LONG: &str = include_str!("../../help/simulate.long.txt");
 
-Writes the scenario's measurement files and `truth.json` (the errors the analysis should find)
-into --out. The same seed always gives the same files; another seed gives other noise and other
-error shapes. The files are described in docs/formats.md, \"Simulation outputs\".";
-
-const EXAMPLES: &str = crate::help::examples!(
-    "  # 9-line laser measurements of a 3-axis machining centre, and its truth
-  $ mtec simulate vmc-9line --out d --seed 1
-  # the errors identified from the lines: compare d/errors.json, d/truth.json
-  $ mtec identify lines --machine d/machine.toml --data d/lines.csv \\
-      -o d/errors.json
-  # another machine of the same kind: other noise, other error shapes
-  $ mtec simulate vmc-9line --out d2 --seed 2"
-);
+const EXAMPLES: &str = crate::help::examples!(include_str!("../../help/simulate.examples.txt"));
 
 /// Arguments of `mtec simulate`.
 #[derive(clap::Args, Debug)]

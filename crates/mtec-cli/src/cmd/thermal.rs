@@ -14,48 +14,19 @@ use mtec_workflow::ops::thermal as op;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-const FORMAT_HELP: &str = "\
-Thermal log format (CSV, docs/formats.md, Thermal CSV):
-  experiment,time_min,<sensor>_c...,[ambient_c],[position_mm],<target>_um
-Every `_c` column except `ambient_c` is a temperature sensor. `experiment` may be absent (one
-continuous record). Rows of one experiment are in time order. Other columns are ignored.";
+const FORMAT_HELP: &str = include_str!("../../help/thermal.format_help.txt");
 
-const SELECT_EXAMPLES: &str = crate::help::examples!(
-    "  # eight collinear spindle temperature sensors and the radial drift
-  $ mtec simulate spindle-sensors --out t
-  # VIF, ridge trace and the sensors the ridge-trace rules keep; plots in t/sel
-  $ mtec thermal select --data t/thermal.csv --target radial_um --out t/sel"
-);
+const SELECT_EXAMPLES: &str =
+    crate::help::examples!(include_str!("../../help/thermal.select_examples.txt"));
 
-const FIT_EXAMPLES: &str = crate::help::examples!(
-    "  # Z drift along the axis at ambient 15, 20, 25 and 30 C (experiments 1 to 4)
-  $ mtec simulate feed-axis-ambient --out f
-  # the exp-ambient model: trained at 15, 20 and 30 C, tested at 25 C
-  $ mtec thermal fit --data f/thermal.csv --target ez_um --model exp-ambient \\
-      --sensors up,nut --train 1,2,4 --test 3 -o f/z.json
-  # plain multiple linear regression on the same two sensors, to compare
-  $ mtec thermal fit --data f/thermal.csv --target ez_um --model mlr \\
-      --sensors up,nut --train 1,2,4 --test 3 -o f/z-mlr.json
-  # a build with the neural models (cargo feature `neural`) also fits
-  # --model bpnn --hidden 8 --features position_mm, and --model cnn-lstm"
-);
+const FIT_EXAMPLES: &str =
+    crate::help::examples!(include_str!("../../help/thermal.fit_examples.txt"));
 
-const PREDICT_EXAMPLES: &str = crate::help::examples!(
-    "  # a Z drift model trained at three ambient temperatures
-  $ mtec simulate feed-axis-ambient --out f
-  $ mtec thermal fit --data f/thermal.csv --target ez_um --model exp-ambient \\
-      --sensors up,nut --train 1,2,4 --test 3 -o f/z.json
-  # the prediction per row, residual where the log has ez_um, and the RMSE
-  $ mtec thermal predict --model f/z.json --data f/thermal.csv -o f/pred.csv"
-);
+const PREDICT_EXAMPLES: &str =
+    crate::help::examples!(include_str!("../../help/thermal.predict_examples.txt"));
 
-const CV_EXAMPLES: &str = crate::help::examples!(
-    "  # 4 production days: temperatures, spindle speed, drift at the table centre
-  $ mtec simulate production-day --out p
-  # which model predicts each block's Z drift best from the blocks before it
-  $ mtec thermal cv --data p/train.csv --target dz_um --model auto \\
-      --input spindle_rpm"
-);
+const CV_EXAMPLES: &str =
+    crate::help::examples!(include_str!("../../help/thermal.cv_examples.txt"));
 
 /// Thermal error models: sensor selection, fitting and prediction.
 #[derive(clap::Args)]
