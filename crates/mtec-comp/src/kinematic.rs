@@ -4,7 +4,7 @@
 //! rotary axes A, B, C, on the workpiece side (tables: `WCXYFZT`, `WCAYFXZT`) or the tool side
 //! (heads). See [`crate::pose`] for the conventions.
 
-use crate::pose::{ChainKinematics, Pose, PoseError};
+use crate::chain::{ChainKinematics, Pose, PoseError};
 use crate::ErrorModel;
 use mtec_model::{Axis, ErrorSet, Formalism, Machine, MachineSpec, Order, VolumetricModel};
 use serde::{Deserialize, Serialize};

@@ -18,6 +18,7 @@
 //! What it is not for: identifying or fitting errors; it takes an [`ErrorModel`] from elsewhere.
 
 pub mod bpnn;
+pub mod chain;
 pub mod correction;
 pub mod gcode;
 pub mod hand;

@@ -42,9 +42,10 @@ pub fn load_error_model(path: &Path) -> Result<Box<dyn ErrorModel>, InputError> 
                 .map_err(|e| InputError::file(path, e.to_string()))?;
             Ok(Box::new(net))
         }
-        crate::machine::MACHINE_FORMAT => {
-            Ok(Box::new(crate::machine::MachineErrorModel::load(path)?))
-        }
+        crate::machine::MACHINE_FORMAT => Ok(Box::new(crate::machine::MachineErrorModel::load(
+            path,
+            &load_error_model,
+        )?)),
         crate::hand::ZERO_FORMAT => Ok(Box::new(crate::hand::ZeroModel::new(
             path.display().to_string(),
         ))),

@@ -25,8 +25,8 @@
 //! first update the thermal part is zero. Updates do not allocate: every buffer is sized when the
 //! file is loaded.
 
+use crate::chain::{ChainKinematics, Pose, PoseError};
 use crate::model::{StateError, StateStatus};
-use crate::pose::{ChainKinematics, Pose, PoseError};
 use crate::ErrorModel;
 use mtec_io::InputError;
 use mtec_thermal::{ModelFile, ThermalStream};
@@ -138,8 +138,13 @@ fn axis_index(name: &str) -> Option<usize> {
 }
 
 impl MachineErrorModel {
-    /// Reads a `mtec.machine-error/1` file and the model files it names.
-    pub fn load(path: &Path) -> Result<MachineErrorModel, InputError> {
+    /// Reads a `mtec.machine-error/1` file and the model files it names, each through `load_model`
+    /// (`crate::load::load_error_model`, which reads any model format, this one included: the
+    /// loader is passed in so that this module does not depend on the registry of formats).
+    pub fn load(
+        path: &Path,
+        load_model: &dyn Fn(&Path) -> Result<Box<dyn ErrorModel>, InputError>,
+    ) -> Result<MachineErrorModel, InputError> {
         let text = mtec_io::read_text(path)?;
         let file: MachineFile =
             serde_json::from_str(&text).map_err(|e| mtec_io::json_error(path, &e))?;
@@ -159,7 +164,7 @@ impl MachineErrorModel {
         let dir = path.parent().unwrap_or(Path::new("."));
         let geometric = match &file.geometric {
             Some(g) => {
-                let m = crate::load::load_error_model(&dir.join(g))?;
+                let m = load_model(&dir.join(g))?;
                 if !m.state_inputs().is_empty() {
                     return Err(at(
                         "\"geometric\"",

@@ -34,7 +34,6 @@
 //! arrays in C order: node (i, j, k) at index (i·ny + j)·nz + k (x slowest, z fastest — the
 //! layout of a NumPy array `values[i, j, k]`).
 
-use crate::ErrorModel;
 use mtec_io::{InputError, Table};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -576,46 +575,6 @@ impl GridMap {
     }
 }
 
-impl ErrorModel for GridMap {
-    /// The interpolated error; NaN outside the grid when the policy is `refuse`.
-    fn error_um(&self, p_mm: [f64; 3]) -> [f64; 3] {
-        self.try_error_um(p_mm).unwrap_or([f64::NAN; 3])
-    }
-
-    fn as_grid(&self) -> Option<&GridMap> {
-        Some(self)
-    }
-
-    fn domain_mm(&self) -> Option<[[f64; 2]; 3]> {
-        let r = |a: usize| {
-            [
-                self.axes_mm[a][0],
-                self.axes_mm[a][self.axes_mm[a].len() - 1],
-            ]
-        };
-        Some([r(0), r(1), r(2)])
-    }
-
-    fn describe(&self) -> String {
-        let r = |a: usize| {
-            let ax = &self.axes_mm[a];
-            format!("{}..{} mm ({})", ax[0], ax[ax.len() - 1], ax.len())
-        };
-        format!(
-            "trilinear grid map (mtec.map/1): x {}, y {}, z {}, outside = {}, from {}",
-            r(0),
-            r(1),
-            r(2),
-            self.outside.name(),
-            if self.source.is_empty() {
-                "unknown source"
-            } else {
-                &self.source
-            }
-        )
-    }
-}
-
 /// Index of the grid value `x` (within [`SAME_VALUE_MM`]) in the sorted `nodes`.
 fn node_index(nodes: &[f64], x: f64) -> usize {
     // first node ≥ x − tolerance: nodes are ≥ SAME_VALUE_MM apart, so it is x's own node
@@ -627,6 +586,7 @@ fn node_index(nodes: &[f64], x: f64) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ErrorModel;
 
     fn affine_map(outside: Outside) -> GridMap {
         // e = (1 + 2x + 3y + 4z, x·y, −z) on x ∈ {0, 10, 30}, y ∈ {0, 5}, z ∈ {−1, 1}

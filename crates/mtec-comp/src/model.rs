@@ -1,6 +1,7 @@
 //! The one interface every compensable error model offers.
 
-use crate::pose::{ChainKinematics, Pose, PoseError};
+use crate::chain::{ChainKinematics, Pose, PoseError};
+use crate::map::GridMap;
 
 /// What an update of the machine state did to the model (see [`ErrorModel::update_state`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,7 +82,7 @@ pub trait ErrorModel: Send + Sync {
     fn describe(&self) -> String;
     /// The model as a trilinear grid map, when it is one: G-code rewriting then bounds the
     /// path error exactly from the grid's cells instead of sampling (see `gcode::bound`).
-    fn as_grid(&self) -> Option<&crate::GridMap> {
+    fn as_grid(&self) -> Option<&GridMap> {
         None
     }
     /// The box of machine positions [[x_min, x_max], [y_min, y_max], [z_min, z_max]] (mm) the
@@ -111,5 +112,48 @@ pub trait ErrorModel: Send + Sync {
             return Err(StateError::TimeStep);
         }
         Ok(StateStatus::default())
+    }
+}
+
+/// The grid map is the one model the trait has a concrete view of (`as_grid`, for the exact
+/// path bounds of the G-code rewriter), so its implementation lives beside the trait and
+/// `map` stays plain data and interpolation.
+impl ErrorModel for GridMap {
+    /// The interpolated error; NaN outside the grid when the policy is `refuse`.
+    fn error_um(&self, p_mm: [f64; 3]) -> [f64; 3] {
+        self.try_error_um(p_mm).unwrap_or([f64::NAN; 3])
+    }
+
+    fn as_grid(&self) -> Option<&GridMap> {
+        Some(self)
+    }
+
+    fn domain_mm(&self) -> Option<[[f64; 2]; 3]> {
+        let r = |a: usize| {
+            [
+                self.axes_mm()[a][0],
+                self.axes_mm()[a][self.axes_mm()[a].len() - 1],
+            ]
+        };
+        Some([r(0), r(1), r(2)])
+    }
+
+    fn describe(&self) -> String {
+        let r = |a: usize| {
+            let ax = &self.axes_mm()[a];
+            format!("{}..{} mm ({})", ax[0], ax[ax.len() - 1], ax.len())
+        };
+        format!(
+            "trilinear grid map (mtec.map/1): x {}, y {}, z {}, outside = {}, from {}",
+            r(0),
+            r(1),
+            r(2),
+            self.outside().name(),
+            if self.source().is_empty() {
+                "unknown source"
+            } else {
+                self.source()
+            }
+        )
     }
 }

@@ -34,7 +34,7 @@
 //! against a reference instrument with a smooth error of at most ±1″ and 0.5 µrad noise, which
 //! gives ECC.
 
-use crate::scenario::{OutputFile, ScenarioOutput, SimError};
+use crate::output::{OutputFile, ScenarioOutput, SimError};
 use crate::thermal_network::{AmbientProfile, Body, DutyCycle, HeatSource, Link, ThermalNetwork};
 use mtec_model::Htm;
 use nalgebra::Vector3;

@@ -17,7 +17,7 @@
 //! Files: `thermal.csv` (`experiment,time_min,up_c,nut_c,motor_c,column_c,ambient_c,position_mm,ez_um`),
 //! one experiment per ambient level, 25 times × 11 positions (0–500 mm) each.
 
-use crate::scenario::{OutputFile, ScenarioOutput, SimError};
+use crate::output::{OutputFile, ScenarioOutput, SimError};
 use crate::thermal_network::{AmbientProfile, Body, DutyCycle, HeatSource, Link, ThermalNetwork};
 use rand::rngs::StdRng;
 use rand::SeedableRng;

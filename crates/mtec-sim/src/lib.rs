@@ -12,6 +12,7 @@ pub mod dbb_rotary;
 pub mod feed_axis_ambient;
 pub mod instruments;
 pub mod iso230_2;
+pub mod output;
 pub mod production_day;
 pub mod scenario;
 pub mod spindle_sensors;

@@ -47,7 +47,7 @@
 //! builds the machine model and compensates both days) and `truth.json` (network, geometry,
 //! plans, noise-free drift).
 
-use crate::scenario::{OutputFile, ScenarioOutput, SimError};
+use crate::output::{OutputFile, ScenarioOutput, SimError};
 use crate::thermal_network::{Body, Link, ThermalHistory, ThermalNetwork};
 use nalgebra::DVector;
 use rand::rngs::StdRng;

@@ -1,27 +1,6 @@
 //! Scenarios: named recipes that write a set of measurement files plus their ground truth.
 
-/// One file a scenario writes (name relative to the output folder, full text).
-#[derive(Debug, Clone)]
-pub struct OutputFile {
-    pub name: String,
-    pub contents: String,
-}
-
-/// What a scenario produces: its measurement files and the truth (written as `truth.json`).
-#[derive(Debug, Clone)]
-pub struct ScenarioOutput {
-    pub files: Vec<OutputFile>,
-    pub truth: serde_json::Value,
-}
-
-/// Why a scenario could not run.
-#[derive(Debug, thiserror::Error)]
-pub enum SimError {
-    #[error("unknown scenario `{0}`; known scenarios: {known}", known = SCENARIOS.iter().map(|s| s.0).collect::<Vec<_>>().join(", "))]
-    UnknownScenario(String),
-    #[error("{0}")]
-    Invalid(String),
-}
+pub use crate::output::{OutputFile, ScenarioOutput, SimError};
 
 /// The scenarios this build knows, with a one-line description each (shown by `mtec simulate --help`).
 pub const SCENARIOS: &[(&str, &str)] = &[
@@ -64,6 +43,9 @@ pub fn run_scenario(name: &str, seed: u64) -> Result<ScenarioOutput, SimError> {
         "feed-axis-ambient" => crate::feed_axis_ambient::run(seed),
         "dbb-rotary" => crate::dbb_rotary::run(seed),
         "production-day" => crate::production_day::run(seed),
-        _ => Err(SimError::UnknownScenario(name.to_string())),
+        _ => Err(SimError::UnknownScenario(
+            name.to_string(),
+            SCENARIOS.iter().map(|s| s.0).collect::<Vec<_>>().join(", "),
+        )),
     }
 }

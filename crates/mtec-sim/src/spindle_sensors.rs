@@ -16,7 +16,7 @@
 //! duty cycle (with a stop) in a cooling shop (−0.6 °C/h) for testing. Both start at 21 °C.
 //! `truth.json` holds the network, the sensor mixing weights, and the noise-free drift.
 
-use crate::scenario::{OutputFile, ScenarioOutput, SimError};
+use crate::output::{OutputFile, ScenarioOutput, SimError};
 use crate::thermal_network::{AmbientProfile, Body, DutyCycle, HeatSource, Link, ThermalNetwork};
 use rand::rngs::StdRng;
 use rand::SeedableRng;

@@ -9,7 +9,7 @@
 //! slopes of every run).
 
 use crate::instruments::{exact_error_um, gauss, LaserInterferometer};
-use crate::scenario::{OutputFile, ScenarioOutput};
+use crate::output::{OutputFile, ScenarioOutput};
 use crate::truth::geometric_truth;
 use mtec_model::{line_preset, LineSpec, Machine, VolumetricModel};
 use rand::rngs::StdRng;

@@ -5,7 +5,7 @@
 //! same way, for checking predictions off the grid), `truth.json`.
 
 use crate::instruments::{exact_error_um, gauss, Tracker};
-use crate::scenario::{OutputFile, ScenarioOutput};
+use crate::output::{OutputFile, ScenarioOutput};
 use crate::truth::geometric_truth;
 use mtec_model::{Axis, Machine, VolumetricModel};
 use rand::rngs::StdRng;
