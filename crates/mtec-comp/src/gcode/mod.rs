@@ -70,6 +70,7 @@
 pub mod arc;
 pub mod block;
 pub mod bound;
+pub mod code;
 pub mod expr;
 pub mod flatten;
 pub mod format;
@@ -81,6 +82,7 @@ pub mod rotary;
 pub mod solve;
 pub mod tooltable;
 
+pub use code::GCode;
 pub use offsets::{Offsets, OffsetsFile};
 pub use rewrite::{
     header_comment, rewrite, BlockDelete, Diagnostic, GcodeError, OnUnsupported, OutsidePoint,

@@ -7,6 +7,7 @@
 use super::arc::{self, Arc, Plane};
 use super::block::{Block, Issue};
 use super::bound::{norm, PathBound};
+use super::code::GCode;
 use super::expr::{system_parameters_written_by, LineValues, Params};
 use super::format::{apply_edits, decimal_value, format_number, to_decimal, write_decimal, Edit};
 use super::lexer::{lex_line, Token, TokenKind, Value};
@@ -814,52 +815,51 @@ impl<'a> Rewriter<'a> {
         // --- classify G codes, in order; collect issues ---------------------------------
         let mut motion_word: Option<(Motion, usize)> = None;
         let mut g53 = false;
-        let mut axis_consumer: Option<u32> = None; // G10, G28, G30, G52, G92 take the axis words
+        let mut axis_consumer: Option<GCode> = None; // G10, G28, G30, G52, G92 take the axis words
         let mut g92_reset = false;
         for &(code, tok) in &b.g {
+            use GCode::*;
             match code {
-                0 => motion_word = Some((Motion::Rapid, tok)),
-                10 => motion_word = Some((Motion::Linear, tok)),
-                20 => motion_word = Some((Motion::Cw, tok)),
-                30 => motion_word = Some((Motion::Ccw, tok)),
-                800 => motion_word = Some((Motion::Cancelled, tok)),
-                40 | 170 | 180 | 190 | 200 | 210 | 400 | 430 | 490 | 540 | 550 | 560 | 570
-                | 580 | 590 | 591 | 592 | 593 | 610 | 611 | 640 | 80 | 900 | 910 | 901 | 911
-                | 940 | 950 | 960 | 970 | 980 | 990 | 281 | 301 => {}
-                530 => g53 = true,
-                280 | 300 => axis_consumer = Some(code),
-                410 | 411 | 420 | 421 => issues.push(Issue {
+                G0 => motion_word = Some((Motion::Rapid, tok)),
+                G1 => motion_word = Some((Motion::Linear, tok)),
+                G2 => motion_word = Some((Motion::Cw, tok)),
+                G3 => motion_word = Some((Motion::Ccw, tok)),
+                G80 => motion_word = Some((Motion::Cancelled, tok)),
+                G4 | G17 | G18 | G19 | G20 | G21 | G40 | G43 | G49 | G54 | G55 | G56 | G57
+                | G58 | G59 | G59_1 | G59_2 | G59_3 | G61 | G61_1 | G64 | G8 | G90 | G91
+                | G90_1 | G91_1 | G94 | G95 | G96 | G97 | G98 | G99 | G28_1 | G30_1 => {}
+                G53 => g53 = true,
+                G28 | G30 => axis_consumer = Some(code),
+                G41 | G41_1 | G42 | G42_1 => issues.push(Issue {
                     token: Some(tok),
                     message: format!(
-                        "{}: cutter radius compensation offsets the path in the controller; compensate the offset path instead",
-                        g_name(code)
+                        "{code}: cutter radius compensation offsets the path in the controller; compensate the offset path instead"
                     ),
                     poisons_all: false,
                 }),
-                930 => {}
-                100 | 920 | 520 => axis_consumer = Some(code),
+                G93 => {}
+                G10 | G92 | G52 => axis_consumer = Some(code),
                 // G92.1 and G92.2 zero the G92 offset (they differ only in parameters 5211-5219)
-                921 | 922 => g92_reset = true,
-                923 => issues.push(Issue {
+                G92_1 | G92_2 => g92_reset = true,
+                G92_3 => issues.push(Issue {
                     token: Some(tok),
                     message: "G92.3 restores the G92 offset from parameters 5211-5219, whose values are not known here; use G52 or G92 with literal values".into(),
                     poisons_all: true,
                 }),
-                330 | 331 | 382 | 383 | 384 | 385 | 730 | 740 | 760 | 810 | 820 | 830 | 840
-                | 850 | 860 | 870 | 880 | 890 | 50 | 51 | 52 | 53 => {
+                G33 | G33_1 | G38_2 | G38_3 | G38_4 | G38_5 | G73 | G74 | G76 | G81 | G82 | G83
+                | G84 | G85 | G86 | G87 | G88 | G89 | G5 | G5_1 | G5_2 | G5_3 => {
                     motion_word = Some((Motion::Unknown, tok));
                     issues.push(Issue {
                         token: Some(tok),
                         message: format!(
-                            "{} (canned cycle, threading, probing or spline) cannot be compensated point by point",
-                            g_name(code)
+                            "{code} (canned cycle, threading, probing or spline) cannot be compensated point by point"
                         ),
                         poisons_all: false,
                     });
                 }
                 _ => issues.push(Issue {
                     token: Some(tok),
-                    message: format!("{} is not a code the rewriter knows", g_name(code)),
+                    message: format!("{code} is not a code the rewriter knows"),
                     poisons_all: true,
                 }),
             }
@@ -885,13 +885,13 @@ impl<'a> Rewriter<'a> {
 
         // --- modal state changes, in the controller's order of execution ------------------
         let st = &mut self.st;
-        if b.has_g(930).is_some() {
+        if b.has_g(GCode::G93).is_some() {
             st.inverse_time = true;
             st.feed_per_rev = false;
         }
-        if b.has_g(940).is_some() || b.has_g(950).is_some() {
+        if b.has_g(GCode::G94).is_some() || b.has_g(GCode::G95).is_some() {
             st.inverse_time = false;
-            st.feed_per_rev = b.has_g(950).is_some();
+            st.feed_per_rev = b.has_g(GCode::G95).is_some();
         }
         if let Some(f) = b.word(b'F') {
             st.feed = match f.value {
@@ -909,15 +909,16 @@ impl<'a> Rewriter<'a> {
             st.current_tool = st.selected_tool;
         }
         for &(code, tok) in &b.g {
+            use GCode::*;
             match code {
-                170 => st.plane = Some(arc::XY),
-                180 => st.plane = Some(arc::ZX),
-                190 => st.plane = Some(arc::YZ),
-                200 => st.units = Some(Units::Inch),
-                210 => st.units = Some(Units::Mm),
-                400 => st.cutter_comp = false,
-                410 | 411 | 420 | 421 => st.cutter_comp = true,
-                430 => {
+                G17 => st.plane = Some(arc::XY),
+                G18 => st.plane = Some(arc::ZX),
+                G19 => st.plane = Some(arc::YZ),
+                G20 => st.units = Some(Units::Inch),
+                G21 => st.units = Some(Units::Mm),
+                G40 => st.cutter_comp = false,
+                G41 | G41_1 | G42 | G42_1 => st.cutter_comp = true,
+                G43 => {
                     let tool = match b.word(b'H') {
                         Some(h) => match h.value {
                             Value::Number(v) if v >= 0.0 && v.fract() == 0.0 && v < 1e9 => {
@@ -940,8 +941,8 @@ impl<'a> Rewriter<'a> {
                         });
                     }
                 }
-                490 => st.tool_length_mm = Some(0.0),
-                540 | 550 | 560 | 570 | 580 | 590 | 591 | 592 | 593 => {
+                G49 => st.tool_length_mm = Some(0.0),
+                G54 | G55 | G56 | G57 | G58 | G59 | G59_1 | G59_2 | G59_3 => {
                     st.work = work_system_index(code);
                     if let Some(i) = st.work.filter(|&i| st.frames[PROG].work_of(i).is_none()) {
                         st.work = None;
@@ -949,17 +950,17 @@ impl<'a> Rewriter<'a> {
                             token: Some(tok),
                             message: format!(
                                 "{} is selected but its offset is not known: give it in the offsets file (--offsets, [work_offsets_mm] {} = [x, y, z]) or set all three axes with G10 L2 first; taking it as zero would compensate the wrong place",
-                                g_name(code),
+                                code,
                                 super::offsets::WORK_SYSTEMS[i]
                             ),
                             poisons_all: false,
                         });
                     }
                 }
-                900 => st.absolute = Some(true),
-                910 => st.absolute = Some(false),
-                901 => st.arc_absolute = Some(true),
-                911 => st.arc_absolute = Some(false),
+                G90 => st.absolute = Some(true),
+                G91 => st.absolute = Some(false),
+                G90_1 => st.arc_absolute = Some(true),
+                G91_1 => st.arc_absolute = Some(false),
                 _ => {}
             }
         }
@@ -971,16 +972,22 @@ impl<'a> Rewriter<'a> {
 
         // --- G10 / G92 / G52: the new offsets, from the state after this block's modes -------
         let mut offset_change = None;
-        if let Some(code) = axis_consumer.filter(|&c| matches!(c, 100 | 520 | 920)) {
-            let reset = [921, 922].into_iter().find_map(|c| b.has_g(c));
+        if let Some(code) =
+            axis_consumer.filter(|&c| matches!(c, GCode::G10 | GCode::G52 | GCode::G92))
+        {
+            let reset = [GCode::G92_1, GCode::G92_2]
+                .into_iter()
+                .find_map(|c| b.has_g(c));
             if let Some(tok) = reset {
                 // LinuxCNC accepts both in one block, in an order of its own: not guessed
                 issues.push(Issue {
                     token: Some(tok),
                     message: format!(
                         "{} with {} in one block: write them on separate lines",
-                        g_name(b.g.iter().find(|(_, t)| *t == tok).map_or(921, |g| g.0)),
-                        g_name(code)
+                        b.g.iter()
+                            .find(|(_, t)| *t == tok)
+                            .map_or(GCode::G92_1, |g| g.0),
+                        code
                     ),
                     poisons_all: true,
                 });
@@ -1170,7 +1177,7 @@ impl<'a> Rewriter<'a> {
 
         // --- G28 / G30: reference-point moves leave the axes at a position we do not know ----
         if let Some(code) = axis_consumer {
-            debug_assert!(code == 280 || code == 300);
+            debug_assert!(code == GCode::G28 || code == GCode::G30);
             // the rotary axes may go to their reference positions too
             self.st.rot = [None; 3];
             for (a, l) in axis_letters.iter().enumerate() {
@@ -1235,9 +1242,9 @@ impl<'a> Rewriter<'a> {
     /// (checked with its `rs274`): values in the block's units, absolute also in G91, axes not
     /// given keep their offset; G92 and G10 L20 set an offset so that the current position
     /// becomes the given value. Err: the token to report and why the block is refused.
-    fn offset_change(&self, b: &Block, code: u32) -> Result<OffsetChange, Refusal> {
+    fn offset_change(&self, b: &Block, code: GCode) -> Result<OffsetChange, Refusal> {
         let st = &self.st;
-        let name = g_name(code);
+        let name = code.to_string();
         let code_tok = b.has_g(code);
         let num = |l: u8| -> Result<Option<(f64, usize)>, Refusal> {
             match b.word(l) {
@@ -1303,7 +1310,7 @@ impl<'a> Rewriter<'a> {
             )
         };
         match code {
-            520 | 920 => {
+            GCode::G52 | GCode::G92 => {
                 let any_axis = [b'X', b'Y', b'Z', b'A', b'B', b'C', b'U', b'V', b'W']
                     .iter()
                     .any(|&l| b.word(l).is_some());
@@ -1313,7 +1320,7 @@ impl<'a> Rewriter<'a> {
                 for (a, v) in xyz.iter().enumerate() {
                     let Some(v) = *v else { continue };
                     for f in [PROG, OUT] {
-                        frames[f].g92[a] = if code == 520 {
+                        frames[f].g92[a] = if code == GCode::G52 {
                             Some(v)
                         } else {
                             Some(from_position(f, a, v, true).ok_or_else(|| not_known(a))?)
@@ -2199,7 +2206,7 @@ impl<'a> Rewriter<'a> {
                 }
             }
             let g1 = case("G1", lower);
-            match b.g.iter().find(|(c, _)| *c == 20 || *c == 30) {
+            match b.g.iter().find(|(c, _)| matches!(c, GCode::G2 | GCode::G3)) {
                 Some(&(_, tok)) if !uses_modal => {
                     let span = self.tokens[tok].span.clone();
                     self.edits.push(Edit {
@@ -2514,14 +2521,6 @@ fn case_letter(l: u8, lower: bool) -> u8 {
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
-
-fn g_name(code10: u32) -> String {
-    if (code10 / 10) * 10 == code10 {
-        format!("G{}", code10 / 10)
-    } else {
-        format!("G{}.{}", code10 / 10, code10 % 10)
-    }
 }
 
 /// The provenance comment written before the first rewritten line.

@@ -449,7 +449,7 @@ impl Rewriter<'_> {
             // per-minute feeds for this move, inverse time again after it
             let texts: Vec<String> = (0..n).map(|i| feed_text(lengths[i] / want[i])).collect();
             self.write_feeds(b, &texts, lower);
-            self.switch_feed_mode(b, 930, "G94", lower);
+            self.switch_feed_mode(b, GCode::G93, "G94", lower);
             self.extra_lines.push(case("G93", lower));
             self.report.feeds_rewritten += 1;
             return Ok(());
@@ -484,7 +484,7 @@ impl Rewriter<'_> {
     }
 
     /// Replaces the block's feed-mode word `code` (G93/G94) by `to`, or puts `to` first.
-    fn switch_feed_mode(&mut self, b: &Block, code: u32, to: &str, lower: bool) {
+    fn switch_feed_mode(&mut self, b: &Block, code: GCode, to: &str, lower: bool) {
         match b.has_g(code) {
             Some(tok) => {
                 let span = self.tokens[tok].span.clone();
