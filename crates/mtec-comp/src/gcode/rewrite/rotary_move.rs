@@ -37,7 +37,15 @@
 //! - A split straight move or linearised arc without rotary motion keeps F in G94/G95 as
 //!   before (its XYZ length changes by the correction only).
 
-use super::*;
+use super::super::block::Block;
+use super::super::bound::norm;
+use super::super::code::GCode;
+use super::super::format::{decimal_value, format_number, to_decimal, write_decimal, Edit};
+use super::super::lexer::{Token, TokenKind, Value};
+use super::emit::case;
+use super::interp::Motion;
+use super::plan::{dist, Piece};
+use super::{GcodeError, ProblemKind, Rewriter};
 use crate::pose::Pose;
 
 /// Digits after the point of a rotary word written for a piece (degrees): 10⁻⁴° turns a point
