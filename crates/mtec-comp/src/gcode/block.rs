@@ -3,6 +3,7 @@
 //! The block keeps references into the token list, never copies of the text: an edit later
 //! replaces exactly the bytes of one word's value.
 
+use super::code::{tenths_of, GCode};
 use super::lexer::{Token, TokenKind, Value};
 
 /// A word of the block: its value and the index of its token.
@@ -27,8 +28,9 @@ pub struct Issue {
 pub struct Block {
     pub block_delete: bool,
     pub percent: bool,
-    /// G-codes times ten (G59.1 → 591) with their token index.
-    pub g: Vec<(u32, usize)>,
+    /// The G codes with their token index.
+    pub g: Vec<(GCode, usize)>,
+    /// The M codes (M6 → 6) with their token index.
     pub m: Vec<(u32, usize)>,
     /// A..Z words other than G, M, N (index: letter − b'A'); `@` and `^` in `polar`.
     pub letters: [Option<WordRef>; 26],
@@ -43,8 +45,8 @@ impl Block {
         self.letters[(letter - b'A') as usize]
     }
 
-    pub fn has_g(&self, code10: u32) -> Option<usize> {
-        self.g.iter().find(|(c, _)| *c == code10).map(|(_, t)| *t)
+    pub fn has_g(&self, code: GCode) -> Option<usize> {
+        self.g.iter().find(|(c, _)| *c == code).map(|(_, t)| *t)
     }
 
     pub fn has_m(&self, code: u32) -> Option<usize> {
@@ -119,17 +121,16 @@ impl Block {
                                 );
                                 continue;
                             };
-                            let code10 = (v * 10.0).round();
-                            if v < 0.0 || (v * 10.0 - code10).abs() > 1e-6 || code10 > 1e7 {
+                            let Some(tenths) = tenths_of(v) else {
                                 b.issue(i, format!("{} code {v} is not a known code", letter as char), true);
                                 continue;
-                            }
+                            };
                             if letter == b'G' {
-                                b.g.push((code10 as u32, i));
-                            } else if (code10 as u32 / 10) * 10 != code10 as u32 {
+                                b.g.push((GCode::from_tenths(tenths), i));
+                            } else if !tenths.is_multiple_of(10) {
                                 b.issue(i, format!("M code {v} is not a known code", ), true);
                             } else {
-                                b.m.push((code10 as u32 / 10, i));
+                                b.m.push((tenths / 10, i));
                             }
                         }
                         b'N' => {}

@@ -71,6 +71,7 @@
 //! `expr_assign_random_rs274.csv` (700 random programs of assignments); the tests require
 //! rs274's value (to 5e-5) or a refusal where rs274 refused, for every row.
 
+use super::code::GCode;
 use super::lexer::{Token, TokenKind};
 use std::collections::HashMap;
 use std::ops::Range;
@@ -163,29 +164,30 @@ fn numbered_read_only(n: u32) -> bool {
     matches!(n, 5400..=5413 | 5420..=5428)
 }
 
-/// The system parameters the interpreter itself rewrites when a block has these G codes
-/// (times ten), M codes, or moves the machine: G10 (tool table and work offsets), G28.1/G30.1
+/// The system parameters the interpreter itself rewrites when a block has these G codes, M
+/// codes, or moves the machine: G10 (tool table and work offsets), G28.1/G30.1
 /// (homes), G52/G92/G92.x (#5210-#5219), G54-G59.3 (#5220), G43/G49 (#5081-#5089), G38.x
 /// (probe results), M6/M61 (tool), M66 (#5399), any motion (positions #5021-#5029, #5420-#5428).
 /// Checked with rs274: `#5211=3` then `G92 X10` leaves 10 in #5211.
 pub fn system_parameters_written_by(
-    g_codes: &[(u32, usize)],
+    g_codes: &[(GCode, usize)],
     m_codes: &[(u32, usize)],
     moves: bool,
 ) -> Vec<std::ops::RangeInclusive<u32>> {
+    use GCode::*;
     let mut out = Vec::new();
     for &(g, _) in g_codes {
         match g {
-            100 => {
+            G10 => {
                 out.push(5221..=5390);
                 out.push(5400..=5413);
             }
-            281 => out.push(5161..=5169),
-            301 => out.push(5181..=5189),
-            520 | 920..=923 => out.push(5210..=5219),
-            540 | 550 | 560 | 570 | 580 | 590 | 591..=593 => out.push(5220..=5220),
-            430..=432 | 490 => out.push(5081..=5089),
-            382..=385 => out.push(5061..=5070),
+            G28_1 => out.push(5161..=5169),
+            G30_1 => out.push(5181..=5189),
+            G52 | G92 | G92_1 | G92_2 | G92_3 => out.push(5210..=5219),
+            G54 | G55 | G56 | G57 | G58 | G59 | G59_1 | G59_2 | G59_3 => out.push(5220..=5220),
+            G43 | G43_1 | G43_2 | G49 => out.push(5081..=5089),
+            G38_2 | G38_3 | G38_4 | G38_5 => out.push(5061..=5070),
             _ => {}
         }
     }
@@ -1296,13 +1298,14 @@ mod tests {
         run(&mut p, &["#5211=3 #5221=4 #5161=5 #5021=6 #100=7"]).unwrap();
         assert_eq!(run(&mut p, &["G0 X#5211"]).unwrap(), Some(3.0));
         // after "G92 X10" rs274 holds 10 in #5211: the store must not answer 3
-        for r in system_parameters_written_by(&[(920, 0)], &[], false) {
+        for r in system_parameters_written_by(&[(GCode::G92, 0)], &[], false) {
             p.forget_numbered(r);
         }
         let e = run(&mut p, &["G0 X#5211"]).unwrap_err();
         assert!(e.message.contains("G52/G92 offset"), "{e:?}");
         assert_eq!(run(&mut p, &["G0 X#5221"]).unwrap(), Some(4.0)); // G92 leaves G54 alone
-        let w = system_parameters_written_by(&[(100, 0), (281, 1)], &[(6, 2)], true);
+        let w =
+            system_parameters_written_by(&[(GCode::G10, 0), (GCode::G28_1, 1)], &[(6, 2)], true);
         for (n, hit) in [
             (5221, true),
             (5390, true),
@@ -1318,7 +1321,10 @@ mod tests {
         assert!(run(&mut p, &["G0 X#5221"]).is_err());
         assert!(run(&mut p, &["G0 X#5021"]).is_err());
         assert_eq!(run(&mut p, &["G0 X#100"]).unwrap(), Some(7.0)); // user parameters stay
-        assert!(system_parameters_written_by(&[(10, 0), (900, 1)], &[(3, 2)], false).is_empty());
+        assert!(
+            system_parameters_written_by(&[(GCode::G1, 0), (GCode::G90, 1)], &[(3, 2)], false)
+                .is_empty()
+        );
     }
 
     fn lexed(l: &str) -> Vec<Token> {

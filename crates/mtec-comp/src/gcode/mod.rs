@@ -44,7 +44,7 @@
 //!   Most of them can go through [`flatten`] first: LinuxCNC's interpreter runs the program and
 //!   its moves are written as a plain program (`compensate gcode --flatten-with rs274`).
 //! - **Offsets set by the program** (G10 L1/L2/L20, G92, G52, G92.1, G92.2 with literal values)
-//!   are modal state, with LinuxCNC's meaning (see `rewrite.rs`, `offset_change`, and
+//!   are modal state, with LinuxCNC's meaning (see `rewrite/interp.rs`, `offset_change`, and
 //!   docs/formats.md, "Offsets the program sets").
 //! - **Positions not yet known** (the first moves of a program, after G28/G30): rapids are
 //!   copied uncorrected; feed moves to a known end point from an unknown start are corrected at
@@ -70,6 +70,7 @@
 pub mod arc;
 pub mod block;
 pub mod bound;
+pub mod code;
 pub mod expr;
 pub mod flatten;
 pub mod format;
@@ -81,6 +82,7 @@ pub mod rotary;
 pub mod solve;
 pub mod tooltable;
 
+pub use code::GCode;
 pub use offsets::{Offsets, OffsetsFile};
 pub use rewrite::{
     header_comment, rewrite, BlockDelete, Diagnostic, GcodeError, OnUnsupported, OutsidePoint,

@@ -31,6 +31,8 @@
 //! Besides the table of hand-written cases, the tests compare [`check_block`] with rs274's
 //! verdict on ~1450 random blocks (`tests/data/modal_random_rs274.tsv`).
 
+use super::code::GCode;
+
 /// A G-code modal group (LinuxCNC's numbering in the names).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum GGroup {
@@ -89,35 +91,39 @@ impl GGroup {
     }
 }
 
-/// The group of a G code given times ten (G59.1 → 591), None for codes not in the table.
-pub fn g_group(code10: u32) -> Option<GGroup> {
+/// The group of a G code, None for codes not in the table.
+pub fn g_group(code: GCode) -> Option<GGroup> {
+    use GCode::*;
     use GGroup::*;
-    Some(match code10 {
-        40 | 100 | 280 | 281 | 300 | 301 | 520 | 530 | 920 => NonModal,
-        921..=923 => OffsetReset,
-        0 | 10 | 20 | 30 | 50 | 51 | 52 | 330 | 331 | 382..=385 => Motion,
-        700 | 710..=712 | 720..=722 | 730 | 740 | 760 => Motion,
-        800 | 810 | 820 | 830 | 840 | 850 | 860 | 870 | 880 | 890 => Motion,
-        170 | 180 | 190 | 171 | 181 | 191 => Plane,
-        900 | 910 => Distance,
-        901 | 911 => ArcDistance,
-        930 | 940 | 950 => FeedMode,
-        200 | 210 => Units,
-        400 | 410 | 411 | 420 | 421 => CutterComp,
-        430 | 431 | 432 | 490 => ToolLength,
-        980 | 990 => ReturnMode,
-        540 | 550 | 560 | 570 | 580 | 590 | 591..=593 => CoordSystem,
-        610 | 611 | 640 => PathControl,
-        960 | 970 => SpindleMode,
-        70 | 80 => LatheDiameter,
+    Some(match code {
+        G4 | G10 | G28 | G28_1 | G30 | G30_1 | G52 | G53 | G92 => NonModal,
+        G92_1 | G92_2 | G92_3 => OffsetReset,
+        G0 | G1 | G2 | G3 | G5 | G5_1 | G5_2 | G33 | G33_1 | G38_2 | G38_3 | G38_4 | G38_5 => {
+            Motion
+        }
+        G70 | G71 | G71_1 | G71_2 | G72 | G72_1 | G72_2 | G73 | G74 | G76 => Motion,
+        G80 | G81 | G82 | G83 | G84 | G85 | G86 | G87 | G88 | G89 => Motion,
+        G17 | G18 | G19 | G17_1 | G18_1 | G19_1 => Plane,
+        G90 | G91 => Distance,
+        G90_1 | G91_1 => ArcDistance,
+        G93 | G94 | G95 => FeedMode,
+        G20 | G21 => Units,
+        G40 | G41 | G41_1 | G42 | G42_1 => CutterComp,
+        G43 | G43_1 | G43_2 | G49 => ToolLength,
+        G98 | G99 => ReturnMode,
+        G54 | G55 | G56 | G57 | G58 | G59 | G59_1 | G59_2 | G59_3 => CoordSystem,
+        G61 | G61_1 | G64 => PathControl,
+        G96 | G97 => SpindleMode,
+        G7 | G8 => LatheDiameter,
         _ => return None,
     })
 }
 
 /// True for the group-0 codes that use axis words (G10 G28 G30 G52 G92): LinuxCNC refuses
 /// them in a block with an explicit motion code other than G80.
-pub fn g_uses_axis_words(code10: u32) -> bool {
-    matches!(code10, 100 | 280 | 300 | 520 | 920)
+pub fn g_uses_axis_words(code: GCode) -> bool {
+    use GCode::*;
+    matches!(code, G10 | G28 | G30 | G52 | G92)
 }
 
 /// An M-code modal group (LinuxCNC's numbering in the names).
@@ -173,20 +179,12 @@ pub fn m_group(code: u32) -> Option<MGroup> {
 /// LinuxCNC's limit of M words in one block.
 pub const MAX_M_WORDS: usize = 4;
 
-fn g_name(code10: u32) -> String {
-    if code10.is_multiple_of(10) {
-        format!("G{}", code10 / 10)
-    } else {
-        format!("G{}.{}", code10 / 10, code10 % 10)
-    }
-}
-
-/// Checks one block's G codes (times ten, with their token index) and M codes (with their token
+/// Checks one block's G codes (with their token index) and M codes (with their token
 /// index) as LinuxCNC does; `axis_words` tells whether the block has any of X Y Z A B C U V W.
 /// The error names the token of the word LinuxCNC reports and the rule, with LinuxCNC's message
 /// in quotes.
 pub fn check_block(
-    g_codes: &[(u32, usize)],
+    g_codes: &[(GCode, usize)],
     m_codes: &[(u32, usize)],
     axis_words: bool,
 ) -> Result<(), (usize, String)> {
@@ -198,19 +196,19 @@ pub fn check_block(
             let (code, tok) = g_codes[gi];
             gi += 1;
             let Some(group) = g_group(code) else { continue };
-            if group == GGroup::Motion && code == 800 {
+            if group == GGroup::Motion && code == GCode::G80 {
                 continue;
             }
             if let Some(&(other, _)) = g_codes[..gi - 1].iter().find(|(c, _)| {
-                g_group(*c) == Some(group) && !(group == GGroup::Motion && *c == 800)
+                g_group(*c) == Some(group) && !(group == GGroup::Motion && *c == GCode::G80)
             }) {
                 return Err((
                     tok,
                     format!(
                         "{} and {} in one block: both are in {}, where only one can be in \
                          effect (LinuxCNC: \"Two g codes used from same modal group\")",
-                        g_name(other),
-                        g_name(code),
+                        other,
+                        code,
                         group.meaning()
                     ),
                 ));
@@ -239,7 +237,7 @@ pub fn check_block(
     // 2. rules between groups
     let motion = g_codes
         .iter()
-        .find(|(c, _)| g_group(*c) == Some(GGroup::Motion) && *c != 800);
+        .find(|(c, _)| g_group(*c) == Some(GGroup::Motion) && *c != GCode::G80);
     let axis_user = g_codes.iter().find(|(c, _)| g_uses_axis_words(*c));
     if let (Some(&(m, mt)), Some(&(a, at))) = (motion, axis_user) {
         return Err((
@@ -247,12 +245,11 @@ pub fn check_block(
             format!(
                 "{} and {} in one block: both use axis words, so LinuxCNC cannot tell whose \
                  they are (LinuxCNC: \"Cannot use two g codes that both use axis values\")",
-                g_name(a),
-                g_name(m)
+                a, m
             ),
         ));
     }
-    if let Some(&(_, t80)) = g_codes.iter().find(|(c, _)| *c == 800) {
+    if let Some(&(_, t80)) = g_codes.iter().find(|(c, _)| *c == GCode::G80) {
         if axis_words && motion.is_none() && axis_user.is_none() {
             return Err((
                 t80,
@@ -279,16 +276,16 @@ pub fn check_block(
 mod tests {
     use super::*;
 
-    /// A one-line program as the rewriter's block sees it: G codes ×10 and M codes with token
+    /// A one-line program as the rewriter's block sees it: G codes and M codes with token
     /// indices (each word is one token, in order), and whether it has axis words.
-    type Codes = Vec<(u32, usize)>;
+    type Codes = (Vec<(GCode, usize)>, Vec<(u32, usize)>, bool);
 
-    fn block(line: &str) -> (Codes, Codes, bool) {
+    fn block(line: &str) -> Codes {
         let (mut g, mut m, mut axis) = (vec![], vec![], false);
         for (i, w) in line.split_whitespace().enumerate() {
             let (l, v) = w.split_at(1);
             match l {
-                "G" => g.push(((v.parse::<f64>().unwrap() * 10.0).round() as u32, i)),
+                "G" => g.push((GCode::from_word(v.parse().unwrap()).unwrap(), i)),
                 "M" => m.push((v.parse().unwrap(), i)),
                 "X" | "Y" | "Z" | "A" | "B" | "C" | "U" | "V" | "W" => axis = true,
                 _ => {}
@@ -483,19 +480,21 @@ mod tests {
         );
     }
 
+    use proptest::strategy::Strategy;
+
     proptest::proptest! {
         /// Any codes, in any order and number: an answer, never a panic, and a refusal always
         /// names one of the block's own tokens.
         #[test]
         fn never_panics(
-            g in proptest::collection::vec(0u32..1000, 0..6),
+            g in proptest::collection::vec((0u32..1000).prop_map(GCode::from_tenths), 0..6),
             m in proptest::collection::vec(0u32..200, 0..7),
             axis in proptest::bool::ANY,
         ) {
-            let g: Vec<(u32, usize)> = g.into_iter().enumerate().map(|(i, c)| (c, 2 * i)).collect();
+            let g: Vec<(GCode, usize)> = g.into_iter().enumerate().map(|(i, c)| (c, 2 * i)).collect();
             let m: Vec<(u32, usize)> = m.into_iter().enumerate().map(|(i, c)| (c, 2 * i + 1)).collect();
             if let Err((tok, msg)) = check_block(&g, &m, axis) {
-                proptest::prop_assert!(g.iter().chain(&m).any(|(_, t)| *t == tok));
+                proptest::prop_assert!(g.iter().map(|c| c.1).chain(m.iter().map(|c| c.1)).any(|t| t == tok));
                 proptest::prop_assert!(msg.contains("(LinuxCNC: \""));
             }
         }
@@ -503,21 +502,29 @@ mod tests {
 
     #[test]
     fn tables() {
-        assert_eq!(g_group(591), Some(GGroup::CoordSystem));
-        assert_eq!(g_group(382), Some(GGroup::Motion));
-        assert_eq!(g_group(921), Some(GGroup::OffsetReset));
-        assert_eq!(g_group(530), Some(GGroup::NonModal));
-        assert_eq!(g_group(123), None); // unknown: left to the caller
+        use GCode::*;
+        assert_eq!(g_group(G59_1), Some(GGroup::CoordSystem));
+        assert_eq!(g_group(G38_2), Some(GGroup::Motion));
+        assert_eq!(g_group(G92_1), Some(GGroup::OffsetReset));
+        assert_eq!(g_group(G53), Some(GGroup::NonModal));
+        assert_eq!(g_group(Other(123)), None); // unknown: left to the caller
         assert_eq!(m_group(19), Some(MGroup::Spindle));
         assert_eq!(m_group(150), Some(MGroup::User));
         assert_eq!(m_group(72), Some(MGroup::Spindle));
         assert_eq!(m_group(98), None);
-        assert!(g_uses_axis_words(920) && !g_uses_axis_words(530) && !g_uses_axis_words(921));
+        assert!(g_uses_axis_words(G92) && !g_uses_axis_words(G53) && !g_uses_axis_words(G92_1));
         // unknown codes never conflict
         assert_eq!(
-            check_block(&[(123, 0), (123, 1)], &[(98, 2), (99, 3)], true),
+            check_block(
+                &[(Other(123), 0), (Other(123), 1)],
+                &[(98, 2), (99, 3)],
+                true
+            ),
             Ok(())
         );
-        assert_eq!(g_name(591), "G59.1");
+        assert!(check_block(&[(G59_1, 0), (G54, 1)], &[], false)
+            .unwrap_err()
+            .1
+            .starts_with("G59.1 and G54 in one block"));
     }
 }

@@ -35,6 +35,7 @@
 //!   unsupported construct — evaluating the model at a point off by a tool length would
 //!   compensate the wrong place.
 
+use super::code::GCode;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 
@@ -104,13 +105,12 @@ pub const WORK_SYSTEMS: [&str; 9] = [
     "G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3",
 ];
 
-/// Index of a work system from its G-code times ten (540 → 0, …, 593 → 8).
-pub fn work_system_index(code10: u32) -> Option<usize> {
-    match code10 {
-        540 | 550 | 560 | 570 | 580 | 590 => Some(((code10 - 540) / 10) as usize),
-        591..=593 => Some((code10 - 591) as usize + 6),
-        _ => None,
-    }
+/// Index of a work system from its G code (G54 → 0, …, G59.3 → 8).
+pub fn work_system_index(code: GCode) -> Option<usize> {
+    use GCode::*;
+    [G54, G55, G56, G57, G58, G59, G59_1, G59_2, G59_3]
+        .iter()
+        .position(|&c| c == code)
 }
 
 impl OffsetsFile {
@@ -179,10 +179,10 @@ mod tests {
 
     #[test]
     fn names_and_indices() {
-        assert_eq!(work_system_index(540), Some(0));
-        assert_eq!(work_system_index(590), Some(5));
-        assert_eq!(work_system_index(593), Some(8));
-        assert_eq!(work_system_index(541), None);
+        assert_eq!(work_system_index(GCode::G54), Some(0));
+        assert_eq!(work_system_index(GCode::G59), Some(5));
+        assert_eq!(work_system_index(GCode::G59_3), Some(8));
+        assert_eq!(work_system_index(GCode::Other(541)), None);
         let f = OffsetsFile {
             active: Some("g55".into()),
             work_offsets_mm: [("G59.2".to_string(), [1.0, 2.0, 3.0])].into(),

@@ -37,7 +37,15 @@
 //! - A split straight move or linearised arc without rotary motion keeps F in G94/G95 as
 //!   before (its XYZ length changes by the correction only).
 
-use super::*;
+use super::super::block::Block;
+use super::super::bound::norm;
+use super::super::code::GCode;
+use super::super::format::{decimal_value, format_number, to_decimal, write_decimal, Edit};
+use super::super::lexer::{Token, TokenKind, Value};
+use super::emit::case;
+use super::interp::Motion;
+use super::plan::{dist, Piece};
+use super::{GcodeError, ProblemKind, Rewriter};
 use crate::pose::Pose;
 
 /// Digits after the point of a rotary word written for a piece (degrees): 10⁻⁴° turns a point
@@ -449,7 +457,7 @@ impl Rewriter<'_> {
             // per-minute feeds for this move, inverse time again after it
             let texts: Vec<String> = (0..n).map(|i| feed_text(lengths[i] / want[i])).collect();
             self.write_feeds(b, &texts, lower);
-            self.switch_feed_mode(b, 930, "G94", lower);
+            self.switch_feed_mode(b, GCode::G93, "G94", lower);
             self.extra_lines.push(case("G93", lower));
             self.report.feeds_rewritten += 1;
             return Ok(());
@@ -484,7 +492,7 @@ impl Rewriter<'_> {
     }
 
     /// Replaces the block's feed-mode word `code` (G93/G94) by `to`, or puts `to` first.
-    fn switch_feed_mode(&mut self, b: &Block, code: u32, to: &str, lower: bool) {
+    fn switch_feed_mode(&mut self, b: &Block, code: GCode, to: &str, lower: bool) {
         match b.has_g(code) {
             Some(tok) => {
                 let span = self.tokens[tok].span.clone();

@@ -1,0 +1,856 @@
+//! The planner: one motion block turned into corrected pieces.
+//!
+//! **What it is for**: the target of a move in machine coordinates (from its words and the
+//! interpreter's state), the correction at its end and along it ([`correction_mm`]), and the
+//! pieces it is written as: a straight move split until the bound of each piece's path error
+//! ([`PathBound`]) is within `--tolerance-um`, an arc kept whole when its bound allows it or
+//! else cut into chords, a move of a rotary axis handed to `rotary_move`; also the refusals of
+//! moves the model cannot compensate ([`Rewriter::check_compensable`]).
+//! **Not for**: the modal state and how a block changes it (`interp`), or the text of the
+//! pieces (`emit`: the planner hands them to [`Rewriter::emit_pieces`]).
+
+// axis loops index several per-axis arrays at once (target, correction, offsets, words)
+#![allow(clippy::needless_range_loop)]
+
+use super::super::arc::Arc;
+use super::super::block::{Block, Issue};
+use super::super::bound::{norm, PathBound};
+use super::super::lexer::Value;
+use super::super::solve::{correction_mm, SolveError};
+use super::interp::{Motion, OUT, PROG};
+use super::rotary_move::RotaryMove;
+use super::{rounding_um, GcodeError, OutsidePoint, ProblemKind, Rewriter, Units};
+
+/// A point this far outside the model's box (mm) counts as outside (rounding of written words
+/// and of the solve stays inside).
+const OUTSIDE_MODEL_TOL_MM: f64 = 1e-3;
+
+/// The end of one output piece of a move.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Piece {
+    /// The target in machine axes (mm) at the piece's rotary angles.
+    pub(super) t: [f64; 3],
+    /// The correction (mm): the axes are commanded to `t + c`.
+    pub(super) c: [f64; 3],
+    /// The fraction of the original move's duration at the piece's end (1 for the last).
+    pub(super) s: f64,
+    /// The rotary axes' machine angles (deg) written at the piece's end, for a move that turns
+    /// a rotary axis.
+    pub(super) rot: Option<[f64; 3]>,
+}
+
+impl Piece {
+    pub(super) fn new(t: [f64; 3], c: [f64; 3], s: f64) -> Piece {
+        Piece { t, c, s, rot: None }
+    }
+}
+
+impl Rewriter<'_> {
+    /// Refusals of a move the interpreter follows but the rewriter cannot compensate: U, V, W
+    /// words, a rotary axis the model does not have or an arc that turns one, polar
+    /// coordinates, and words computed from parameters that could not be evaluated. Pushed
+    /// after the interpreter's issues (the first by column is reported).
+    pub(super) fn check_compensable(&self, b: &Block, m: Motion, issues: &mut Vec<Issue>) {
+        let tok = [b'X', b'Y', b'Z']
+            .iter()
+            .chain([b'A', b'B', b'C', b'U', b'V', b'W', b'I', b'J', b'K'].iter())
+            .find_map(|&l| b.word(l))
+            .map(|w| w.token)
+            .or(b.polar);
+        let mut why: Option<String> = None;
+        // the word a refusal points at, when it is not the first axis word
+        let mut why_tok: Option<usize> = None;
+        let rotary = self.view.rotary_axes();
+        let moved_rotary = [b'A', b'B', b'C']
+            .into_iter()
+            .enumerate()
+            .find(|&(_, l)| b.word(l).is_some());
+        if let Some(l) = [b'U', b'V', b'W']
+            .into_iter()
+            .find(|&l| b.word(l).is_some())
+        {
+            why = Some(format!(
+                "axis {} moves: U, V and W (linear axes parallel to X, Y, Z) are in no chain mtec models; only X, Y, Z and the model's rotary axes are compensated",
+                l as char
+            ));
+            why_tok = b.word(l).map(|w| w.token);
+        } else if let Some((k, l)) = moved_rotary {
+            why_tok = b.word(l).map(|w| w.token);
+            if !rotary[k] {
+                why = Some(match self.view.kinematics() {
+                    Some(kin) => format!(
+                        "axis {} moves but the model's machine (chain `{}`) has no {} axis",
+                        l as char,
+                        kin.chain(),
+                        l as char
+                    ),
+                    None => format!(
+                        "axis {} moves but the error model has no rotary axes (a kinematic model, `mtec.kinematic-model/1`, of a chain with {} compensates it)",
+                        l as char, l as char
+                    ),
+                });
+            } else if matches!(m, Motion::Cw | Motion::Ccw) {
+                why = Some(format!(
+                    "an arc that also turns the rotary axis {} is not compensated (write it as straight moves)",
+                    l as char
+                ));
+            }
+        } else if b.polar.is_some() {
+            why = Some("polar coordinates (@ ^) are not supported".into());
+        }
+        if why.is_none() {
+            for l in [
+                b'X', b'Y', b'Z', b'A', b'B', b'C', b'I', b'J', b'K', b'R', b'P',
+            ] {
+                if l == b'P' && !matches!(m, Motion::Cw | Motion::Ccw) {
+                    continue;
+                }
+                if let Some(w) = b.word(l) {
+                    if w.value == Value::Computed {
+                        issues.push(Issue {
+                            token: Some(w.token),
+                            message: format!(
+                                "{} word with a parameter or expression in a motion block",
+                                l as char
+                            ),
+                            poisons_all: false,
+                        });
+                    }
+                }
+            }
+        }
+        if let Some(w) = why {
+            issues.push(Issue {
+                token: why_tok.or(tok),
+                message: w,
+                poisons_all: false,
+            });
+        }
+    }
+
+    /// Plans one move: its target from the words and the state, the corrections, the pieces
+    /// (split, arcs kept or linearised, rotary moves), then has them written.
+    pub(super) fn motion_block(
+        &mut self,
+        b: &Block,
+        body: &[u8],
+        m: Motion,
+        motion_tok: Option<usize>,
+        g53: bool,
+    ) -> Result<(), GcodeError> {
+        self.rot_move = None;
+        let first_axis_tok = [b'X', b'Y', b'Z', b'A', b'B', b'C']
+            .iter()
+            .find_map(|&l| b.word(l))
+            .map(|w| w.token);
+        let col = self.column_of(first_axis_tok.or(motion_tok));
+        let (Some(units), Some(absolute)) = (self.st.units, self.st.absolute) else {
+            let d = self.diag(
+                col,
+                ProblemKind::Unsupported,
+                "units or distance mode not known here (after an unsupported line)".into(),
+            );
+            self.unsupported(d)?;
+            self.st.prog = [None; 3];
+            self.st.out = [None; 3];
+            return Ok(());
+        };
+        if g53 && !absolute {
+            let d = self.diag(
+                col,
+                ProblemKind::Syntax,
+                "G53 needs absolute distance mode (G90)".into(),
+            );
+            return self.unsupported(d);
+        }
+        if g53 && !matches!(m, Motion::Rapid | Motion::Linear) {
+            let d = self.diag(
+                col,
+                ProblemKind::Syntax,
+                "G53 needs G0 or G1 (LinuxCNC: \"Must use g0 or g1 with g53\")".into(),
+            );
+            return self.unsupported(d);
+        }
+        self.g53 = g53;
+        let scale = units.mm_per_unit();
+        // program coordinates → machine: `offsets` as the original program has set them (its
+        // targets), `out_offsets` as the rewritten program has (its written words)
+        let mut offsets = [0.0; 3];
+        let mut out_offsets = [0.0; 3];
+        for a in 0..3 {
+            match (
+                self.st.offset_mm(a, g53, PROG),
+                self.st.offset_mm(a, g53, OUT),
+            ) {
+                (Some(o), Some(oo)) => {
+                    offsets[a] = o;
+                    out_offsets[a] = oo;
+                }
+                _ => {
+                    let frame = &self.st.frames[PROG];
+                    let d = self.diag(
+                        col,
+                        ProblemKind::Unsupported,
+                        match self.st.work {
+                            Some(i) if frame.work_of(i).is_none() => format!(
+                                "work offset {} (in effect) is not known: give it in the offsets file (--offsets, [work_offsets_mm]) or set all three axes with G10 L2",
+                                super::super::offsets::WORK_SYSTEMS[i]
+                            ),
+                            Some(_) if frame.g92.iter().any(|g| g.is_none()) => "the G92/G52 offset is not known here (after an unsupported line): set it with G52 or G92 with literal values, or zero it with G92.1".into(),
+                            _ => "work offset or tool length not known here (after an unsupported line)".into(),
+                        },
+                    );
+                    self.unsupported(d)?;
+                    self.st.prog = [None; 3];
+                    self.st.out = [None; 3];
+                    return Ok(());
+                }
+            }
+        }
+        self.shift = [0, 1, 2].map(|a| offsets[a] - out_offsets[a]);
+        // target of the program, machine frame
+        let start = self.st.prog;
+        let mut target = start;
+        let mut words = [None; 3];
+        for (a, l) in [b'X', b'Y', b'Z'].iter().enumerate() {
+            if let Some(w) = b.word(*l) {
+                let Value::Number(v) = w.value else {
+                    // refused in `block` before motion is interpreted; kept safe here
+                    let d = self.diag(
+                        col,
+                        ProblemKind::Unsupported,
+                        "parameter or expression in an axis word".into(),
+                    );
+                    return self.unsupported(d);
+                };
+                words[a] = Some((v, w.token));
+                target[a] = if absolute {
+                    Some(v * scale + offsets[a])
+                } else {
+                    start[a].map(|s| s + v * scale)
+                };
+            }
+        }
+        // the rotary axes: degrees in every unit system, machine = program + rotary offset
+        let rot_axes = self.view.rotary_axes();
+        let rot_start = self.st.rot;
+        let mut rot_target = rot_start;
+        let mut rot_words: [Option<(f64, usize)>; 3] = [None; 3];
+        for (k, l) in [b'A', b'B', b'C'].into_iter().enumerate() {
+            if let Some(w) = b.word(l).filter(|_| rot_axes[k]) {
+                let Value::Number(v) = w.value else {
+                    let d = self.diag(
+                        col,
+                        ProblemKind::Unsupported,
+                        "parameter or expression in an axis word".into(),
+                    );
+                    return self.unsupported(d);
+                };
+                rot_words[k] = Some((v, w.token));
+                let off = if g53 {
+                    0.0
+                } else {
+                    self.st
+                        .work
+                        .map_or(0.0, |w| self.opt.offsets.rotary_deg[w][k])
+                };
+                rot_target[k] = if absolute {
+                    Some(v + off)
+                } else {
+                    rot_start[k].map(|s| s + v)
+                };
+            }
+        }
+        // the end pose is what a correction needs; the start, for splitting (as for X, Y, Z)
+        let rot_known = (0..3).all(|k| !rot_axes[k] || rot_target[k].is_some());
+        let rot_start_known = (0..3).all(|k| !rot_axes[k] || rot_start[k].is_some());
+        let is_arc = matches!(m, Motion::Cw | Motion::Ccw);
+        let uses_modal = motion_tok.is_none();
+        let target_known = target.iter().all(|t| t.is_some());
+        let start_known =
+            start.iter().all(|t| t.is_some()) && self.st.out.iter().all(|t| t.is_some());
+
+        let start_known = start_known && rot_start_known;
+        if !target_known || !rot_known || (is_arc && !start_known) {
+            for k in 0..3 {
+                if rot_words[k].is_some() {
+                    self.st.rot[k] = rot_target[k];
+                }
+            }
+            if m == Motion::Rapid {
+                // positioning before every axis is known: copied, not compensated
+                self.report.rapids_not_compensated += 1;
+                for a in 0..3 {
+                    if let Some((v, _)) = words[a] {
+                        self.st.prog[a] = target[a];
+                        self.st.out[a] = if absolute {
+                            Some(v * scale + out_offsets[a])
+                        } else {
+                            self.st.out[a].map(|o| o + v * scale)
+                        };
+                    }
+                }
+                self.restore_motion_word(b, m, uses_modal);
+                self.emitted = true;
+                return Ok(());
+            }
+            let missing = match (0..3)
+                .find(|&a| target[a].is_none() || (is_arc && start[a].is_none()))
+            {
+                Some(a) => ["X", "Y", "Z"][a],
+                None => {
+                    let k = (0..3)
+                        .find(|&k| {
+                            rot_axes[k]
+                                && (rot_target[k].is_none() || (is_arc && rot_start[k].is_none()))
+                        })
+                        .unwrap_or(0);
+                    ["A", "B", "C"][k]
+                }
+            };
+            let d = self.diag(
+                col,
+                ProblemKind::Unsupported,
+                format!(
+                    "the position of {missing} is not known before this feed move (program it in an absolute move first{})",
+                    if target_known { ", or give --start-rotary-deg" } else { "" }
+                ),
+            );
+            self.unsupported(d)?;
+            for a in 0..3 {
+                if words[a].is_some() {
+                    self.st.prog[a] = None;
+                    self.st.out[a] = None;
+                }
+            }
+            return Ok(());
+        }
+        let rot_target = rot_target.map(|r| r.unwrap_or(0.0));
+        // an unknown start angle: the move is corrected at its end only (no c_start below)
+        let rot_start = [0, 1, 2].map(|k| rot_start[k].unwrap_or(rot_target[k]));
+        if let Some(kin) = self.view.kinematics() {
+            if kin.has_tool_side_rotary()
+                && !g53
+                && self.st.tool_length_mm.is_some_and(|l| l != 0.0)
+            {
+                let d = self.diag(
+                    col,
+                    ProblemKind::Unsupported,
+                    format!("a tool length offset (G43) on chain `{}`, whose rotary head turns the tool: the model's tool_offset_mm is the tool, so compensate with G49 and the tool in the machine file", kin.chain()),
+                );
+                self.unsupported(d)?;
+                self.st.prog = [None; 3];
+                self.st.out = [None; 3];
+                self.st.rot = [None; 3];
+                return Ok(());
+            }
+        }
+        let rot_moves = (0..3).any(|k| rot_axes[k] && rot_target[k] != rot_start[k]);
+        if let Err(msg) = self.view.set_rotary(rot_target) {
+            let d = self.diag(col, ProblemKind::Unsupported, msg);
+            self.unsupported(d)?;
+            self.st.prog = [None; 3];
+            self.st.out = [None; 3];
+            self.st.rot = [None; 3];
+            return Ok(());
+        }
+        self.st.rot = rot_target.map(Some);
+        let target = target.map(|t| t.unwrap_or(0.0));
+        let c_end = self.correct(target, col)?;
+        let c_start = if start_known {
+            Some([0, 1, 2].map(|a| self.st.out[a].unwrap_or(0.0) - self.st.prog[a].unwrap_or(0.0)))
+        } else {
+            None
+        };
+        let start_p = start.map(|s| s.unwrap_or(0.0));
+        if rot_moves {
+            let mv = RotaryMove {
+                x0: start_p,
+                x1: target,
+                r0: rot_start,
+                r1: rot_target,
+                c0: c_start,
+                c1: c_end,
+                words: rot_words,
+                absolute,
+                offset: if g53 {
+                    [0.0; 3]
+                } else {
+                    self.st
+                        .work
+                        .map_or([0.0; 3], |w| self.opt.offsets.rotary_deg[w])
+                },
+            };
+            self.rotary_move(
+                b,
+                body,
+                m,
+                uses_modal,
+                &mv,
+                &words,
+                out_offsets,
+                absolute,
+                scale,
+                col,
+            )?;
+            self.st.prog = target.map(Some);
+            return Ok(());
+        }
+
+        match (m, c_start) {
+            (Motion::Linear, Some(c0)) => {
+                let start_xyz = self.st.out.map(|o| o.unwrap_or(0.0));
+                let mut pieces = std::mem::take(&mut self.pieces);
+                pieces.clear();
+                self.split_linear(start_p, target, c0, c_end, (0.0, 1.0), &mut pieces, col)?;
+                self.emit_pieces(
+                    b,
+                    body,
+                    m,
+                    uses_modal,
+                    &pieces,
+                    &words,
+                    out_offsets,
+                    absolute,
+                    scale,
+                    false,
+                )?;
+                self.pieces = pieces;
+                self.apply_feed(
+                    b,
+                    body,
+                    start_xyz,
+                    None,
+                    (dist(start_p, target) / scale, 0.0),
+                    scale,
+                    col,
+                )?;
+            }
+            (Motion::Cw | Motion::Ccw, Some(c0)) => {
+                let arc = match self.arc_of(
+                    b,
+                    start_p,
+                    target,
+                    m == Motion::Cw,
+                    absolute,
+                    scale,
+                    offsets,
+                ) {
+                    Ok(a) => a,
+                    Err(msg) => {
+                        let d = self.diag(col, ProblemKind::Syntax, msg);
+                        self.unsupported(d)?;
+                        for a in 0..3 {
+                            self.st.prog[a] = None;
+                            self.st.out[a] = None;
+                        }
+                        return Ok(());
+                    }
+                };
+                // kept as an arc when the bound of its path error allows it (NaN: linearised,
+                // where the pieces report the missing model value)
+                let keep = self.arc_bound_um(&arc, c0, c_end) <= self.opt.tolerance_um;
+                if keep {
+                    let moved = c0 != [0.0; 3] || c_end != [0.0; 3];
+                    if let Some(rw) = b.word(b'R').filter(|_| moved) {
+                        // R kept with a corrected end point moves the centre, badly so near
+                        // 180°: the corrected arc is written in centre form instead
+                        self.r_to_center(&arc, rw.token, start_p, c0, out_offsets, scale);
+                    } else if self.st.arc_absolute == Some(true) {
+                        self.shift_center_words(b, c0, scale);
+                    }
+                    let pieces = [Piece::new(target, c_end, 1.0)];
+                    self.emit_pieces(
+                        b,
+                        body,
+                        m,
+                        uses_modal,
+                        &pieces,
+                        &words,
+                        out_offsets,
+                        absolute,
+                        scale,
+                        false,
+                    )?;
+                } else {
+                    let n = arc.chord_count(self.opt.chord_tolerance_um * 1e-3);
+                    if n > self.opt.max_pieces_per_move {
+                        return Err(self.too_many(col));
+                    }
+                    let mut pieces = Vec::new();
+                    let mut prev = start_p;
+                    let mut c_prev = c0;
+                    for k in 1..=n {
+                        let v = arc.point(k as f64 / n as f64);
+                        let cv = if k == n { c_end } else { self.correct(v, col)? };
+                        let s_range = ((k - 1) as f64 / n as f64, k as f64 / n as f64);
+                        self.split_linear(prev, v, c_prev, cv, s_range, &mut pieces, col)?;
+                        prev = v;
+                        c_prev = cv;
+                    }
+                    self.report.arcs_linearised += 1;
+                    let start_xyz = self.st.out.map(|o| o.unwrap_or(0.0));
+                    self.emit_pieces(
+                        b,
+                        body,
+                        m,
+                        uses_modal,
+                        &pieces,
+                        &words,
+                        out_offsets,
+                        absolute,
+                        scale,
+                        true,
+                    )?;
+                    self.apply_feed(
+                        b,
+                        body,
+                        start_xyz,
+                        None,
+                        (arc_length(&arc) / scale, 0.0),
+                        scale,
+                        col,
+                    )?;
+                }
+            }
+            _ => {
+                // rapids and feed moves from an unknown start: end point only
+                if m != Motion::Rapid {
+                    self.report.moves_end_point_only += 1;
+                }
+                let pieces = [Piece::new(target, c_end, 1.0)];
+                self.emit_pieces(
+                    b,
+                    body,
+                    m,
+                    uses_modal,
+                    &pieces,
+                    &words,
+                    out_offsets,
+                    absolute,
+                    scale,
+                    false,
+                )?;
+            }
+        }
+        self.st.prog = target.map(Some);
+        Ok(())
+    }
+
+    /// A bound (µm) on the tool's distance from the nominal arc when the arc is written as an
+    /// arc with its start corrected by `c0` and its end by `c1`: the centre moves with `c0`, so
+    /// the path error is at most twice the model's variation over the arc (once along the
+    /// way, once through the end radius), plus the solve residuals and the rounding of the end
+    /// point and the centre.
+    fn arc_bound_um(&mut self, arc: &Arc, c0: [f64; 3], c1: [f64; 3]) -> f64 {
+        let (mut lo, mut hi) = arc_box(arc);
+        let margin = norm(c0).max(norm(c1));
+        for i in 0..3 {
+            lo[i] -= margin;
+            hi[i] += margin;
+        }
+        let r = arc.r_start.max(arc.r_end);
+        let n_normal = arc.end[arc.plane.normal] - arc.start[arc.plane.normal];
+        let length = (arc.sweep.abs() * r).hypot(n_normal);
+        let n = ((length / self.opt.check_step_mm).ceil() as usize).clamp(16, 1_000_000);
+        let mut samples = (0..=n).map(|k| {
+            let p = arc.point(k as f64 / n as f64);
+            [0, 1, 2].map(|i| p[i] + c0[i])
+        });
+        let v = self.bound.variation_um(&self.view, lo, hi, &mut samples);
+        let (a, b) = (
+            PathBound::end(&self.view, arc.start, c0),
+            PathBound::end(&self.view, arc.end, c1),
+        );
+        2.0 * v + a.residual_um + b.residual_um + 2.0 * self.rounding_now_um()
+    }
+
+    /// The correction at a target (mm), with the error located at the block.
+    pub(super) fn correct(&mut self, target: [f64; 3], col: usize) -> Result<[f64; 3], GcodeError> {
+        match correction_mm(&self.view, target, self.opt.max_correction_um) {
+            Ok(c) => {
+                let n = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() * 1e3;
+                if n > self.report.max_correction_um {
+                    self.report.max_correction_um = n;
+                }
+                self.note_if_outside_model(target, col);
+                Ok(c)
+            }
+            Err(e) => {
+                let msg = match e {
+                    SolveError::NotFinite { .. }
+                    | SolveError::NotConverged { .. }
+                    | SolveError::TooLarge { .. } => {
+                        format!(
+                            "{e} (target [{:.4}, {:.4}, {:.4}] mm, machine frame)",
+                            target[0], target[1], target[2]
+                        )
+                    }
+                };
+                Err(GcodeError::At(self.diag(col, ProblemKind::Correction, msg)))
+            }
+        }
+    }
+
+    /// Counts `target` when it lies outside the model's box (the first one with its place).
+    fn note_if_outside_model(&mut self, target: [f64; 3], col: usize) {
+        let Some(domain_mm) = self.domain else {
+            return;
+        };
+        let outside = (0..3).any(|a| {
+            target[a] < domain_mm[a][0] - OUTSIDE_MODEL_TOL_MM
+                || target[a] > domain_mm[a][1] + OUTSIDE_MODEL_TOL_MM
+        });
+        if outside {
+            self.report.points_outside_model += 1;
+            if self.report.first_outside_model.is_none() {
+                self.report.first_outside_model = Some(OutsidePoint {
+                    line: self.line_no,
+                    column: col,
+                    point_mm: target,
+                    domain_mm,
+                });
+            }
+        }
+    }
+
+    /// Half a unit of the last written digit on three axes, µm (see [`rounding_um`]).
+    pub(super) fn rounding_now_um(&self) -> f64 {
+        match self.st.units {
+            Some(Units::Inch) => rounding_um(self.opt.decimals_inch, Units::Inch),
+            _ => rounding_um(self.opt.decimals_mm, Units::Mm),
+        }
+    }
+
+    /// A bound (µm) on the tool's distance from the nominal segment ta→tb while the axes move
+    /// straight from ta + ca to tb + cb: the solve residuals at the ends, the model's departure
+    /// from its chord between them ([`PathBound`]) and the rounding of the written words.
+    pub(super) fn piece_bound_um(
+        &mut self,
+        ta: [f64; 3],
+        ca: [f64; 3],
+        tb: [f64; 3],
+        cb: [f64; 3],
+    ) -> f64 {
+        let (a, b) = (
+            PathBound::end(&self.view, ta, ca),
+            PathBound::end(&self.view, tb, cb),
+        );
+        self.bound
+            .chord_departure_um(&self.view, a.p, b.p, a.e, b.e)
+            + a.residual_um.max(b.residual_um)
+            + self.rounding_now_um()
+    }
+
+    pub(super) fn no_model_value(&self, col: usize) -> GcodeError {
+        GcodeError::At(self.diag(
+            col,
+            ProblemKind::Correction,
+            "the error model has no finite value along this move (a map with outside = refuse, and the move leaves its grid?)".into(),
+        ))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    /// Splits the straight move a→b into pieces whose path error, bounded by
+    /// [`Self::piece_bound_um`], is at most `--tolerance-um`; no piece of a compensated move is
+    /// longer than `max_segment_mm`. Pushes (target, correction) of each piece's end; the last
+    /// is exactly (b, c_b).
+    fn split_linear(
+        &mut self,
+        a: [f64; 3],
+        b: [f64; 3],
+        c_a: [f64; 3],
+        c_b: [f64; 3],
+        s_range: (f64, f64),
+        pieces: &mut Vec<Piece>,
+        col: usize,
+    ) -> Result<(), GcodeError> {
+        let tol = self.opt.tolerance_um;
+        let len = dist(a, b);
+        let lerp = |t: f64| -> [f64; 3] {
+            if t >= 1.0 {
+                b
+            } else {
+                [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * t)
+            }
+        };
+        let zero = [0.0; 3];
+        if c_a == zero && c_b == zero {
+            // nothing to correct at the ends: the move stays whole when the model is flat along it
+            let bound = self.piece_bound_um(a, c_a, b, c_b);
+            if bound.is_nan() {
+                return Err(self.no_model_value(col));
+            }
+            if bound <= tol {
+                pieces.push(Piece::new(b, c_b, s_range.1));
+                return Ok(());
+            }
+        }
+        let n0 = ((len / self.opt.max_segment_mm).ceil() as usize).max(1);
+        if n0 > self.opt.max_pieces_per_move {
+            return Err(self.too_many(col));
+        }
+        let mut t_prev = 0.0;
+        let mut c_prev = c_a;
+        for k in 1..=n0 {
+            let t1 = if k == n0 { 1.0 } else { k as f64 / n0 as f64 };
+            let c1 = if k == n0 {
+                c_b
+            } else {
+                self.correct(lerp(t1), col)?
+            };
+            // depth-first bisection of [t_prev, t1], left half first
+            let mut stack = std::mem::take(&mut self.split_stack);
+            stack.clear();
+            stack.push((t_prev, c_prev, t1, c1));
+            while let Some((t0, c0, t1, c1)) = stack.pop() {
+                let bound = self.piece_bound_um(lerp(t0), c0, lerp(t1), c1);
+                if bound.is_nan() {
+                    self.split_stack = stack;
+                    return Err(self.no_model_value(col));
+                }
+                if bound <= tol {
+                    let s = s_range.0 + (s_range.1 - s_range.0) * t1;
+                    pieces.push(Piece::new(
+                        lerp(t1),
+                        c1,
+                        if t1 >= 1.0 { s_range.1 } else { s },
+                    ));
+                    if pieces.len() > self.opt.max_pieces_per_move {
+                        self.split_stack = stack;
+                        return Err(self.too_many(col));
+                    }
+                } else if (t1 - t0) * len < 1e-6 {
+                    self.split_stack = stack;
+                    return Err(GcodeError::At(self.diag(
+                        col,
+                        ProblemKind::Correction,
+                        format!(
+                            "the path cannot be kept within --tolerance-um {tol}: {bound:.3} um on a piece shorter than 1 nm (is the error model continuous here?)"
+                        ),
+                    )));
+                } else {
+                    let tm = 0.5 * (t0 + t1);
+                    let cm = self.correct(lerp(tm), col)?;
+                    stack.push((tm, cm, t1, c1));
+                    stack.push((t0, c0, tm, cm));
+                }
+            }
+            self.split_stack = stack;
+            t_prev = t1;
+            c_prev = c1;
+        }
+        Ok(())
+    }
+
+    pub(super) fn too_many(&self, col: usize) -> GcodeError {
+        GcodeError::At(self.diag(
+            col,
+            ProblemKind::Correction,
+            format!(
+                "the move would need more than {} pieces: the error model changes too fast for --tolerance-um",
+                self.opt.max_pieces_per_move
+            ),
+        ))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn arc_of(
+        &self,
+        b: &Block,
+        start: [f64; 3],
+        end: [f64; 3],
+        clockwise: bool,
+        _absolute: bool,
+        scale: f64,
+        offsets: [f64; 3],
+    ) -> Result<Arc, String> {
+        let plane = self.st.plane.ok_or("plane not known here")?;
+        let num = |l: u8| -> Option<f64> {
+            b.word(l).map(|w| match w.value {
+                Value::Number(v) => v,
+                Value::Computed => f64::NAN,
+            })
+        };
+        let turns = match num(b'P') {
+            None => 1,
+            Some(p) if p >= 1.0 && p.fract() == 0.0 && p < 1e6 => p as u32,
+            Some(p) => return Err(format!("arc P word {p} is not a whole number of turns ≥ 1")),
+        };
+        if let Some(r) = num(b'R') {
+            if [b'I', b'J', b'K'].iter().any(|&l| b.word(l).is_some()) {
+                return Err("arc with both R and I/J/K".into());
+            }
+            if turns != 1 {
+                return Err("R-format arc with a P word".into());
+            }
+            return Arc::from_radius(start, end, r * scale, plane, clockwise);
+        }
+        let ijk = [num(b'I'), num(b'J'), num(b'K')];
+        let (f, s) = (plane.first, plane.second);
+        if ijk[plane.normal].is_some() {
+            let l = [b'I', b'J', b'K'][plane.normal] as char;
+            return Err(format!("arc offset {l} is not in the selected plane"));
+        }
+        if ijk[f].is_none() && ijk[s].is_none() {
+            return Err("arc without R or centre offsets (I, J, K) in its plane".into());
+        }
+        let center = if self.st.arc_absolute == Some(true) {
+            [
+                ijk[f].map(|v| v * scale + offsets[f]).unwrap_or(start[f]),
+                ijk[s].map(|v| v * scale + offsets[s]).unwrap_or(start[s]),
+            ]
+        } else {
+            [
+                start[f] + ijk[f].unwrap_or(0.0) * scale,
+                start[s] + ijk[s].unwrap_or(0.0) * scale,
+            ]
+        };
+        Arc::from_center(start, end, center, plane, clockwise, turns)
+    }
+}
+
+/// An axis-aligned box (mm) holding every point of the arc: its end points and, at both radii,
+/// the in-plane extremes (multiples of 90°) its sweep passes.
+fn arc_box(arc: &Arc) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [0.0; 3];
+    let mut hi = [0.0; 3];
+    for i in 0..3 {
+        lo[i] = arc.start[i].min(arc.end[i]);
+        hi[i] = arc.start[i].max(arc.end[i]);
+    }
+    let (f, s) = (arc.plane.first, arc.plane.second);
+    let (a0, a1) = if arc.sweep >= 0.0 {
+        (arc.theta_start, arc.theta_start + arc.sweep)
+    } else {
+        (arc.theta_start + arc.sweep, arc.theta_start)
+    };
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    let mut k = (a0 / half_pi).ceil();
+    let mut angles = vec![a0, a1];
+    while k * half_pi <= a1 && angles.len() < 12 {
+        angles.push(k * half_pi);
+        k += 1.0;
+    }
+    for th in angles {
+        for r in [arc.r_start, arc.r_end] {
+            let p = [arc.center[0] + r * th.cos(), arc.center[1] + r * th.sin()];
+            lo[f] = lo[f].min(p[0]);
+            hi[f] = hi[f].max(p[0]);
+            lo[s] = lo[s].min(p[1]);
+            hi[s] = hi[s].max(p[1]);
+        }
+    }
+    (lo, hi)
+}
+
+/// Length (mm) of an arc as LinuxCNC's interpreter measures it for inverse-time feeds
+/// (`find_arc_length`): the helix over the start radius, √((r·|θ|)² + Δnormal²).
+fn arc_length(arc: &Arc) -> f64 {
+    let n = arc.plane.normal;
+    (arc.r_start * arc.sweep.abs()).hypot(arc.end[n] - arc.start[n])
+}
+
+pub(super) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
