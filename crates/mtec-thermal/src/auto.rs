@@ -21,12 +21,13 @@
 //!    tie in rank goes to the lower mean).
 //! 5. The chosen candidate is refitted on every training row (its choices made again there).
 
-use crate::data::ThermalData;
+use crate::data::{input_column, ThermalData};
 use crate::error::ThermalError;
+use crate::fit::{Fit, Predict};
 use crate::heat_input::HeatInput;
-use crate::model::{ExpAmbient, Fit, Predict, ThermalModel};
+use crate::model::{ExpAmbient, ThermalModel};
 use crate::stepwise::{Family, Stepwise};
-use crate::validate::{forward_cv, forward_folds_of, input_column, BlockSpec, ForwardCv};
+use crate::validate::{forward_cv, forward_folds_of, BlockSpec, ForwardCv};
 use serde::{Deserialize, Serialize};
 
 /// Default number of temperature sensors a candidate may use.

@@ -12,7 +12,7 @@
 //! time-constant-like parameters positive, reports when the data cannot separate them from the
 //! amplitudes, and can take its temperature rises from sensor groups (first principal
 //! component).
-//! Every model `fit`s and `predict`s through the traits in [`model`], serialises to versioned
+//! Every model `fit`s and `predict`s through the traits in [`fit`], serialises to versioned
 //! JSON (`mtec.thermal-model/1`) and is scored by one [`Metrics`] type.
 //!
 //! What it is not for: reading files beyond turning a [`mtec_io::Table`] into [`ThermalData`],
@@ -29,6 +29,7 @@ pub mod data;
 pub mod error;
 pub mod exp_ambient;
 pub mod features;
+pub mod fit;
 pub mod guard;
 pub mod heat_input;
 pub mod lag_select;
@@ -48,12 +49,12 @@ pub use data::ThermalData;
 pub use error::ThermalError;
 pub use exp_ambient::ExpAmbientModel;
 pub use features::Feature;
+pub use fit::{Fit, Predict};
 pub use heat_input::{HeatInput, HeatInputModel};
 pub use lag_select::LagSelect;
 pub use metrics::Metrics;
 pub use model::{
-    ExpAmbient, Fit, LinearModel, Mlr, ModelFile, Predict, Ridge, RidgeSelect, ThermalModel,
-    MODEL_FORMAT,
+    ExpAmbient, LinearModel, Mlr, ModelFile, Ridge, RidgeSelect, ThermalModel, MODEL_FORMAT,
 };
 pub use registry::{FitOptions, ModelSpec, KINDS};
 pub use select::{select_sensors, RidgeTrace, SelectOptions, Selection};

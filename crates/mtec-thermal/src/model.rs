@@ -1,8 +1,8 @@
-//! The common fit/predict interface (linfa style: a fitter is a value with its options, `fit`
-//! returns a model, a model `predict`s), the linear thermal models, and the versioned JSON file.
+//! The linear thermal models and the versioned JSON file; every model fits and predicts
+//! through the interface in [`crate::fit`].
 
 use crate::auto::CandidateScore;
-use crate::data::ThermalData;
+use crate::data::{target_rows, ThermalData};
 use crate::error::ThermalError;
 use crate::exp_ambient::ExpAmbientModel;
 use crate::features::{design, fit_time_constants, temp_features, Feature};
@@ -10,37 +10,18 @@ use crate::guard::InputRange;
 use crate::linear::{ols, RidgeProblem};
 use crate::metrics::Metrics;
 use crate::select::{k_grid, select_sensors, RidgeTrace, SelectOptions};
-use crate::validate::{forward_folds_of, ridge_forward_scores, thin_folds, BlockSpec, ForwardCv};
+use crate::validate::{
+    forward_folds_of, ridge_forward_scores, thin_folds, BlockSpec, ForwardCv, SELECTION_DT_MIN,
+};
 use serde::{Deserialize, Serialize};
+
+// the fit/predict interface and the cancellation warning live below this module now; kept here
+// under their old paths
+pub use crate::fit::{Fit, Predict};
+pub use crate::linear::{cancellation_warning, LARGE_STANDARDISED_COEFFICIENT};
 
 /// The format tag of a model file.
 pub const MODEL_FORMAT: &str = "mtec.thermal-model/1";
-
-/// Something that fits a thermal model to data (options live in the fitter).
-pub trait Fit {
-    type Model: Predict;
-    /// Fits to the rows `rows` of `data` (the target must be present). Features that look back
-    /// in time (lags, rates) are computed on the whole record first, so leaving a block out of
-    /// the fit does not break their history.
-    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<Self::Model, ThermalError>;
-    /// Fits to every row of `data`.
-    fn fit(&self, data: &ThermalData) -> Result<Self::Model, ThermalError> {
-        self.fit_rows(data, &(0..data.len()).collect::<Vec<_>>())
-    }
-}
-
-/// A fitted thermal model.
-pub trait Predict {
-    /// Predicted drift (µm) for every row of `data`.
-    fn predict(&self, data: &ThermalData) -> Result<Vec<f64>, ThermalError>;
-    /// Number of regressors (for adjusted R² and F).
-    fn predictors(&self) -> usize;
-    /// Metrics against the target of `data`.
-    fn evaluate(&self, data: &ThermalData) -> Result<Metrics, ThermalError> {
-        let y = data.target_um()?;
-        Ok(Metrics::new(y, &self.predict(data)?, self.predictors()))
-    }
-}
 
 /// Which linear method produced a model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -85,34 +66,6 @@ pub struct LinearModel {
     /// What the fit found suspicious (grid-edge k, cancelling coefficients, collapse).
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
     pub warnings: Vec<String>,
-}
-
-/// |β*| above which a standardised coefficient is "large": the feature alone would swing the
-/// prediction by this many standard deviations of the drift.
-pub const LARGE_STANDARDISED_COEFFICIENT: f64 = 4.0;
-
-/// A warning when large standardised coefficients β*_j (b_j·s_j/s_y) of opposite sign cancel:
-/// the prediction is then a small difference of large terms, which amplifies sensor noise and
-/// breaks outside the duty cycle it was fitted on (Hoerl & Kennard 1970: the mark of collinearity).
-pub fn cancellation_warning(names: &[String], beta_std: &[f64]) -> Option<String> {
-    let large: Vec<(usize, f64)> = beta_std
-        .iter()
-        .enumerate()
-        .filter(|(_, b)| b.abs() > LARGE_STANDARDISED_COEFFICIENT || !b.is_finite())
-        .map(|(j, b)| (j, *b))
-        .collect();
-    let pos = large.iter().any(|(_, b)| *b > 0.0);
-    let neg = large.iter().any(|(_, b)| *b < 0.0);
-    (pos && neg).then(|| {
-        let list: Vec<String> = large
-            .iter()
-            .map(|(j, b)| format!("{} {b:+.1}", names.get(*j).map(|s| s.as_str()).unwrap_or("?")))
-            .collect();
-        format!(
-            "large coefficients of opposite sign cancel (standardised, in standard deviations of the drift: {}): the prediction is a small difference of large terms, which amplifies sensor noise and fails outside the training duty cycle; use fewer sensors or more shrinkage (larger k)",
-            list.join(", ")
-        )
-    })
 }
 
 /// Standardised coefficients b_j·s_j/s_y of a fitted equation on the rows `rows` of `x`.
@@ -183,12 +136,6 @@ fn sensor_features(
     } else {
         Ok(features)
     }
-}
-
-/// The target on the given rows.
-pub fn target_rows(data: &ThermalData, rows: &[usize]) -> Result<Vec<f64>, ThermalError> {
-    let y = data.target_um()?;
-    Ok(rows.iter().map(|&i| y[i]).collect())
 }
 
 /// Multiple linear regression (OLS) on the named sensors (all when empty).
@@ -263,9 +210,6 @@ pub fn forward_k(
         .min_by(|a, b| a.0 .0.total_cmp(&b.0 .0))
         .map(|((r, _), k)| (*k, *r)))
 }
-
-/// Row spacing (min) of the rows that selection scores (see [`thin_folds`]).
-pub const SELECTION_DT_MIN: f64 = 1.0;
 
 #[allow(clippy::too_many_arguments)]
 fn ridge_model(

@@ -2,8 +2,9 @@
 //! validation, the metrics on both sets of rows, the training envelope and the warnings — the
 //! `mtec.thermal-model/1` document `thermal fit` writes.
 
+use crate::fit::Predict;
 use crate::guard::envelope;
-use crate::model::{ModelFile, Predict, Split, ThermalModel, MODEL_FORMAT};
+use crate::model::{ModelFile, Split, ThermalModel, MODEL_FORMAT};
 use crate::registry::{ModelSpec, Validated};
 use crate::validate::{rows_of_experiments, split_at_time, BlockSpec, ForwardCv};
 use crate::{Metrics, ThermalData, ThermalError};

@@ -15,13 +15,14 @@
 //! `thermal_fit`, and a candidate of `--model auto`.
 
 use crate::auto::Auto;
+use crate::data::{target_rows, ThermalData};
+use crate::error::ThermalError;
 use crate::features::{design, temp_features};
-use crate::model::{
-    cancellation_warning, target_rows, Fit, LinearMethod, LinearModel, ThermalModel,
-};
+use crate::fit::Fit;
+use crate::linear::cancellation_warning;
+use crate::model::{LinearMethod, LinearModel, ThermalModel};
 use crate::registry::{FitOptions, Kind};
 use crate::validate::{forward_cv, forward_folds_of, BlockSpec};
-use crate::{ThermalData, ThermalError};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 

@@ -9,7 +9,8 @@
 //! [`ThermalModel`] (a new stored form is a new variant there).
 
 use crate::auto::{Auto, AutoFit};
-use crate::model::{ExpAmbient, Fit, Mlr, Ridge, RidgeSelect, ThermalModel};
+use crate::fit::Fit;
+use crate::model::{ExpAmbient, Mlr, Ridge, RidgeSelect, ThermalModel};
 use crate::validate::{duty_cycle_blocks, forward_cv, forward_folds, BlockSpec, ForwardCv};
 use crate::{HeatInput, LagSelect, ThermalData, ThermalError};
 use serde::{Deserialize, Serialize};

@@ -17,11 +17,14 @@
 
 use crate::data::ThermalData;
 use crate::error::ThermalError;
+use crate::fit::{Fit, Predict};
 use crate::linear::RidgeProblem;
 use crate::metrics::Metrics;
-use crate::model::{Fit, Predict};
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
+
+// a column of the data ([`crate::data`]); kept here under its old path
+pub use crate::data::input_column;
 
 /// Rows of the listed experiments.
 pub fn rows_of_experiments(
@@ -133,15 +136,6 @@ pub struct BlockSpec {
     /// Column whose steps mark duty-cycle changes (e.g. `spindle_rpm`), when the data has it.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub input: Option<String>,
-}
-
-/// Values of a non-temperature column attached to the data (see
-/// [`crate::heat_input::with_input`]), by its exact name.
-pub fn input_column(data: &ThermalData, name: &str) -> Option<Vec<f64>> {
-    data.sensor_names
-        .iter()
-        .position(|s| s == name)
-        .map(|j| data.sensor(j))
 }
 
 /// Validation blocks of `rows` (in time order), following the duty cycle.
@@ -485,3 +479,6 @@ pub fn ridge_forward_scores(
         .map(|(s, f)| ((s / n.max(1) as f64).sqrt(), f))
         .collect()
 }
+
+/// Row spacing (min) of the rows that selection scores (see [`thin_folds`]).
+pub const SELECTION_DT_MIN: f64 = 1.0;
