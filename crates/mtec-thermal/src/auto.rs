@@ -23,9 +23,10 @@
 
 use crate::data::{input_column, ThermalData};
 use crate::error::ThermalError;
+use crate::exp_ambient::ExpAmbient;
 use crate::fit::{Fit, Predict};
 use crate::heat_input::HeatInput;
-use crate::model::{ExpAmbient, ThermalModel};
+use crate::model::ThermalModel;
 use crate::stepwise::{Family, Stepwise};
 use crate::validate::{forward_cv, forward_folds_of, BlockSpec, ForwardCv};
 use serde::{Deserialize, Serialize};

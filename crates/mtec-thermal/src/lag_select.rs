@@ -20,7 +20,7 @@ use crate::error::ThermalError;
 use crate::features::{design, lag_filter, tau_grid, Feature};
 use crate::fit::Fit;
 use crate::linear::ols;
-use crate::model::{LinearMethod, LinearModel};
+use crate::linear_model::{LinearMethod, LinearModel};
 use crate::validate::{
     forward_folds_of, ridge_forward_scores, thin_folds, BlockSpec, ForwardFold, SELECTION_DT_MIN,
 };

@@ -34,6 +34,7 @@ pub mod guard;
 pub mod heat_input;
 pub mod lag_select;
 pub mod linear;
+pub mod linear_model;
 pub mod metrics;
 pub mod model;
 pub mod model_file;
@@ -47,15 +48,15 @@ pub mod validate;
 
 pub use data::ThermalData;
 pub use error::ThermalError;
-pub use exp_ambient::ExpAmbientModel;
+pub use exp_ambient::{ExpAmbient, ExpAmbientModel};
 pub use features::Feature;
 pub use fit::{Fit, Predict};
 pub use heat_input::{HeatInput, HeatInputModel};
 pub use lag_select::LagSelect;
+pub use linear_model::{LinearModel, Mlr, Ridge, RidgeSelect};
 pub use metrics::Metrics;
-pub use model::{
-    ExpAmbient, LinearModel, Mlr, ModelFile, Ridge, RidgeSelect, ThermalModel, MODEL_FORMAT,
-};
+pub use model::ThermalModel;
+pub use model_file::{ModelFile, Split, MODEL_FORMAT};
 pub use registry::{FitOptions, ModelSpec, KINDS};
 pub use select::{select_sensors, RidgeTrace, SelectOptions, Selection};
 pub use stream::ThermalStream;

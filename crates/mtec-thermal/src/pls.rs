@@ -20,7 +20,8 @@ use crate::error::ThermalError;
 use crate::features::{design, temp_features};
 use crate::fit::Fit;
 use crate::linear::cancellation_warning;
-use crate::model::{LinearMethod, LinearModel, ThermalModel};
+use crate::linear_model::{LinearMethod, LinearModel};
+use crate::model::ThermalModel;
 use crate::registry::{FitOptions, Kind};
 use crate::validate::{forward_cv, forward_folds_of, BlockSpec};
 use nalgebra::{DMatrix, DVector};
@@ -242,7 +243,7 @@ impl Kind for Pls {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::Mlr;
+    use crate::linear_model::Mlr;
 
     /// Three collinear sensors and a drift that depends on two of them, with a little noise.
     fn data() -> ThermalData {

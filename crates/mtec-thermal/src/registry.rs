@@ -9,8 +9,10 @@
 //! [`ThermalModel`] (a new stored form is a new variant there).
 
 use crate::auto::{Auto, AutoFit};
+use crate::exp_ambient::ExpAmbient;
 use crate::fit::Fit;
-use crate::model::{ExpAmbient, Mlr, Ridge, RidgeSelect, ThermalModel};
+use crate::linear_model::{Mlr, Ridge, RidgeSelect};
+use crate::model::ThermalModel;
 use crate::validate::{duty_cycle_blocks, forward_cv, forward_folds, BlockSpec, ForwardCv};
 use crate::{HeatInput, LagSelect, ThermalData, ThermalError};
 use serde::{Deserialize, Serialize};

@@ -27,7 +27,7 @@ use crate::error::ThermalError;
 use crate::features::{tau_grid, temp_features, Feature};
 use crate::fit::Fit;
 use crate::linear::{cancellation_warning, RidgeProblem};
-use crate::model::{LinearMethod, LinearModel, RidgeEquation};
+use crate::linear_model::{LinearMethod, LinearModel, RidgeEquation};
 use crate::validate::{
     forward_folds_of, ridge_forward_scores, thin_folds, BlockSpec, ForwardFold, SELECTION_DT_MIN,
 };

@@ -22,7 +22,8 @@ use crate::error::ThermalError;
 use crate::exp_ambient::{ExpAmbientModel, GroupWeight, AMBIENT_REF_C, AMBIENT_SCALE_C};
 use crate::features::Feature;
 use crate::heat_input::HeatInputModel;
-use crate::model::{LinearModel, ThermalModel};
+use crate::linear_model::LinearModel;
+use crate::model::ThermalModel;
 
 /// How a filter's input is made from a reading.
 #[derive(Debug, Clone, PartialEq)]
