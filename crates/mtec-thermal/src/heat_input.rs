@@ -44,7 +44,8 @@ use crate::error::ThermalError;
 use crate::features::lag_filter;
 use crate::fit::{Fit, Predict};
 use crate::linear::{cancellation_warning, ols, RidgeProblem};
-use crate::validate::{forward_folds_of, thin_folds, BlockSpec, SELECTION_DT_MIN};
+use crate::options::BlockSpec;
+use crate::validate::{forward_folds_of, thin_folds, SELECTION_DT_MIN};
 use serde::{Deserialize, Serialize};
 
 // the heat-input filter and its reference speed are features ([`crate::features`]); kept here

@@ -21,8 +21,9 @@ use crate::features::{design, lag_filter, tau_grid, Feature};
 use crate::fit::Fit;
 use crate::linear::ols;
 use crate::linear_model::{LinearMethod, LinearModel};
+use crate::options::BlockSpec;
 use crate::validate::{
-    forward_folds_of, ridge_forward_scores, thin_folds, BlockSpec, ForwardFold, SELECTION_DT_MIN,
+    forward_folds_of, ridge_forward_scores, thin_folds, ForwardFold, SELECTION_DT_MIN,
 };
 use serde::{Deserialize, Serialize};
 

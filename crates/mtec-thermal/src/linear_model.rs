@@ -9,10 +9,9 @@ use crate::error::ThermalError;
 use crate::features::{design, fit_time_constants, temp_features, Feature};
 use crate::fit::{Fit, Predict};
 use crate::linear::{cancellation_warning, ols, RidgeProblem};
+use crate::options::BlockSpec;
 use crate::select::{k_grid, select_sensors, RidgeTrace, SelectOptions};
-use crate::validate::{
-    forward_folds_of, ridge_forward_scores, thin_folds, BlockSpec, SELECTION_DT_MIN,
-};
+use crate::validate::{forward_folds_of, ridge_forward_scores, thin_folds, SELECTION_DT_MIN};
 use serde::{Deserialize, Serialize};
 
 /// Which linear method produced a model.

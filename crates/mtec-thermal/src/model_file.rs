@@ -8,10 +8,12 @@ use crate::data::ThermalData;
 use crate::error::ThermalError;
 use crate::fit::Predict;
 use crate::guard::{envelope, InputRange};
+use crate::kind::Validated;
 use crate::metrics::Metrics;
 use crate::model::ThermalModel;
-use crate::registry::{ModelSpec, Validated};
-use crate::validate::{rows_of_experiments, split_at_time, BlockSpec, ForwardCv};
+use crate::options::BlockSpec;
+use crate::registry::ModelSpec;
+use crate::validate::{rows_of_experiments, split_at_time, ForwardCv};
 use serde::{Deserialize, Serialize};
 
 /// The format tag of a model file.

@@ -10,7 +10,7 @@
 //! of cancelling. The model is stored as a linear model in the sensors (`mtec.thermal-model/1`),
 //! predicted and streamed like any other.
 //!
-//! This file is the whole kind (fitter, `Fit`, registry `Kind`, `auto` candidate): with its line
+//! This file is the whole kind (fitter, `Fit`, [`Kind`], `auto` candidate): with its line
 //! in `registry!` it is a `--model` of `thermal fit` and `cv`, a model of Python's
 //! `thermal_fit`, and a candidate of `--model auto`.
 
@@ -19,11 +19,12 @@ use crate::data::{target_rows, ThermalData};
 use crate::error::ThermalError;
 use crate::features::{design, temp_features};
 use crate::fit::Fit;
+use crate::kind::Kind;
 use crate::linear::cancellation_warning;
 use crate::linear_model::{LinearMethod, LinearModel};
 use crate::model::ThermalModel;
-use crate::registry::{FitOptions, Kind};
-use crate::validate::{forward_cv, forward_folds_of, BlockSpec};
+use crate::options::{BlockSpec, FitOptions};
+use crate::validate::{forward_cv, forward_folds_of};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 

@@ -28,8 +28,9 @@ use crate::features::{tau_grid, temp_features, Feature};
 use crate::fit::Fit;
 use crate::linear::{cancellation_warning, RidgeProblem};
 use crate::linear_model::{LinearMethod, LinearModel, RidgeEquation};
+use crate::options::BlockSpec;
 use crate::validate::{
-    forward_folds_of, ridge_forward_scores, thin_folds, BlockSpec, ForwardFold, SELECTION_DT_MIN,
+    forward_folds_of, ridge_forward_scores, thin_folds, ForwardFold, SELECTION_DT_MIN,
 };
 use serde::{Deserialize, Serialize};
 

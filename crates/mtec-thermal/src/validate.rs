@@ -23,8 +23,10 @@ use crate::metrics::Metrics;
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-// a column of the data ([`crate::data`]); kept here under its old path
+// a column of the data ([`crate::data`]) and the block options ([`crate::options`]); kept here
+// under their old paths
 pub use crate::data::input_column;
+pub use crate::options::BlockSpec;
 
 /// Rows of the listed experiments.
 pub fn rows_of_experiments(
@@ -126,17 +128,6 @@ pub const MIN_BLOCK_MIN: f64 = 30.0;
 
 /// Number of equal time blocks of a single record without input steps or `block_min`.
 pub const DEFAULT_TIME_BLOCKS: usize = 8;
-
-/// How a record is cut into validation blocks.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-pub struct BlockSpec {
-    /// Fixed block length (min) from the start of the record; overrides the duty cycle.
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub block_min: Option<f64>,
-    /// Column whose steps mark duty-cycle changes (e.g. `spindle_rpm`), when the data has it.
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub input: Option<String>,
-}
 
 /// Validation blocks of `rows` (in time order), following the duty cycle.
 ///
