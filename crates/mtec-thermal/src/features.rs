@@ -10,7 +10,11 @@
 //! - `rate`: the temperature rate dT/dt (°C/min) as the backward difference over a window w,
 //!   (T(t) − T(t − w))/w, clamped at the start of the experiment.
 //!
-//! Both are causal: they use only past temperatures, so a controller can compute them on line.
+//! A third follows the heat source instead of a sensor: the heat lag, a first-order lag of the
+//! heat input p = (n/n_ref)^α of a non-temperature column n (the spindle speed) with its own
+//! time constant at rest ([`switched_lag`], which the `heat-input` kind builds on).
+//!
+//! All are causal: they use only past readings, so a controller can compute them on line.
 //! The time constants are fitted (see [`fit_time_constants`]): coordinate descent over a log
 //! grid of τ minimising the pooled forward-fold RMSE of the linear model that uses the features
 //! (fit on the blocks before, score the next: [`crate::validate::forward_folds`]); only when the

@@ -1,5 +1,6 @@
 //! Linear least squares on a design of regressors: ordinary least squares (MLR) by QR, ridge
-//! regression in standardised (correlation) form by SVD, and variance inflation factors.
+//! regression in standardised (correlation) form by SVD, variance inflation factors, and the
+//! warning every linear kind gives when large standardised coefficients cancel.
 //!
 //! Ridge convention (Hoerl & Kennard 1970, the form ridge traces are drawn in): the regressors
 //! are standardised with their mean and population standard deviation, z = (x − x̄)/s_x, the
