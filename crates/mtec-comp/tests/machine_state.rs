@@ -3,7 +3,7 @@
 //! to no thermal correction outside the training range); refusals with located messages.
 
 use mtec_comp::{Compensator, CorrectionOptions, ErrorModel, StateError};
-use mtec_thermal::model::{LinearMethod, Split};
+use mtec_thermal::{linear_model::LinearMethod, Split};
 use mtec_thermal::{Feature, LinearModel, Metrics, ModelFile, ThermalModel, MODEL_FORMAT};
 use std::path::{Path, PathBuf};
 

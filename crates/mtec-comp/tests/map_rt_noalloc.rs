@@ -64,7 +64,7 @@ fn correction_does_not_allocate() {
 #[test]
 fn state_update_does_not_allocate() {
     use mtec_thermal::heat_input::HeatInputModel;
-    use mtec_thermal::model::Split;
+    use mtec_thermal::Split;
     use mtec_thermal::{Metrics, ModelFile, ThermalModel, MODEL_FORMAT};
     let dir = tempfile::tempdir().unwrap();
     let map = r#"{"format":"mtec.map/1","model":"trilinear","outside":"clamp","source":"t",

@@ -14,7 +14,7 @@ use mtec_comp::machine_build::{self, BuildRequest, PartRequest};
 use mtec_comp::replay::{replay, ReplaySummary};
 use mtec_comp::{Compensator, CorrectionOptions};
 use mtec_io::Table;
-use mtec_thermal::model::Split;
+use mtec_thermal::Split;
 use mtec_thermal::{Fit, Mlr, ModelFile, Predict, ThermalData, ThermalModel, MODEL_FORMAT};
 use std::path::Path;
 

@@ -9,7 +9,7 @@ use mtec_comp::thermal_offset::{
 };
 use mtec_io::Table;
 use mtec_thermal::heat_input::HeatInputModel;
-use mtec_thermal::model::{LinearMethod, Split};
+use mtec_thermal::{linear_model::LinearMethod, Split};
 use mtec_thermal::{
     Feature, LinearModel, Metrics, ModelFile, Predict, ThermalData, ThermalModel, MODEL_FORMAT,
 };

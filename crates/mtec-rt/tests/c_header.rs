@@ -94,7 +94,7 @@ int main(int argc, char **argv) {
 /// correction cancels it; a reading 3 °C above the range fades the thermal part to 0.
 #[test]
 fn c_program_updates_the_machine_state() {
-    use mtec_thermal::model::{LinearMethod, Split};
+    use mtec_thermal::{linear_model::LinearMethod, Split};
     use mtec_thermal::{Feature, LinearModel, Metrics, ModelFile, ThermalModel, MODEL_FORMAT};
     if !have_gcc() {
         return;

@@ -8,9 +8,9 @@
 
 use mtec_io::Table;
 use mtec_thermal::heat_input::with_input;
-use mtec_thermal::model::{ModelFile, Split, ThermalModel};
 use mtec_thermal::validate::{block_cv, time_blocks};
 use mtec_thermal::{Fit, HeatInput, Mlr, Predict, ThermalData, MODEL_FORMAT};
+use mtec_thermal::{ModelFile, Split, ThermalModel};
 use std::path::PathBuf;
 
 const BLOCK_MIN: f64 = 240.0;

@@ -4,9 +4,12 @@
 //! Candidates: `mlr`, `ridge`, `lagged-ridge` and `dynamic` ([`crate::stepwise`]: forward
 //! selection of at most `max_sensors` temperature sensors, the heat input not counted),
 //! `heat-input` ([`crate::heat_input`]) when the data has the input column, and `exp-ambient`
-//! when the caller supplies its fitter (its columns exist), and every kind of the registry that
-//! offers itself ([`crate::registry::Kind::auto_candidate`]: `pls`). Neural models are never
-//! candidates.
+//! when the caller supplies its fitter (its columns exist), and every kind that offers itself
+//! ([`crate::kind::Kind::auto_candidate`]: `pls`). Neural models are never candidates.
+//!
+//! Auto does not know the registry of the kinds (it is one of them): the kinds that may offer a
+//! candidate are passed in ([`Auto::fit_with`], a list of [`Offer`]s). `Auto::fit_auto` and
+//! auto's [`Fit`], which pass every kind of the registry, are defined in [`crate::registry`].
 //!
 //! 1. Forward folds of the training rows ([`crate::validate::forward_folds_of`]).
 //! 2. Each candidate is fitted on each fold's training rows, with every choice it makes
@@ -21,12 +24,15 @@
 //!    tie in rank goes to the lower mean).
 //! 5. The chosen candidate is refitted on every training row (its choices made again there).
 
-use crate::data::ThermalData;
+use crate::data::{input_column, ThermalData};
 use crate::error::ThermalError;
+use crate::exp_ambient::ExpAmbient;
+use crate::fit::{Fit, Predict};
 use crate::heat_input::HeatInput;
-use crate::model::{ExpAmbient, Fit, Predict, ThermalModel};
+use crate::model::ThermalModel;
+use crate::options::BlockSpec;
 use crate::stepwise::{Family, Stepwise};
-use crate::validate::{forward_cv, forward_folds_of, input_column, BlockSpec, ForwardCv};
+use crate::validate::{forward_cv, forward_folds_of, ForwardCv};
 use serde::{Deserialize, Serialize};
 
 /// Default number of temperature sensors a candidate may use.
@@ -91,12 +97,23 @@ pub struct AutoFit {
     pub candidates: Vec<CandidateScore>,
 }
 
+/// A candidate offered to auto by a kind ([`crate::kind::Kind::auto_candidate`]): its simplicity
+/// rank and its fitter.
+pub type AutoCandidate = (usize, Box<dyn Fit<Model = ThermalModel>>);
+
+/// A kind that may offer auto a candidate: its name, and how the candidate is built from auto's
+/// options and the data (`None`: not a candidate there). The registry makes the list.
+pub type Offer = (
+    &'static str,
+    fn(&Auto, &ThermalData) -> Option<AutoCandidate>,
+);
+
 /// A candidate fitter as a [`ThermalModel`] fitter.
 enum Candidate {
     Stepwise(Stepwise),
     HeatInput(HeatInput),
     ExpAmbient(ExpAmbient),
-    /// A kind of the registry that is an auto candidate ([`crate::registry::Kind::auto_candidate`]).
+    /// A candidate a kind offered ([`Offer`]).
     Registered(Box<dyn Fit<Model = ThermalModel>>),
 }
 
@@ -113,7 +130,7 @@ impl Fit for Candidate {
 }
 
 impl Auto {
-    fn candidates(&self, data: &ThermalData) -> Vec<(String, usize, Candidate)> {
+    fn candidates(&self, data: &ThermalData, offers: &[Offer]) -> Vec<(String, usize, Candidate)> {
         let has_input = input_column(data, &self.input).is_some();
         let step = |family: Family| Stepwise {
             family,
@@ -156,17 +173,24 @@ impl Auto {
         if let Some(e) = &self.exp_ambient {
             out.push(("exp-ambient".into(), 5, Candidate::ExpAmbient(e.clone())));
         }
-        // every kind of the registry that offers itself as a candidate
-        for k in crate::registry::KINDS {
-            if let Some((rank, fitter)) = (k.auto)(self, data) {
-                out.push((k.name.to_string(), rank, Candidate::Registered(fitter)));
+        // every kind that offers itself as a candidate
+        for (name, offer) in offers {
+            if let Some((rank, fitter)) = offer(self, data) {
+                out.push((name.to_string(), rank, Candidate::Registered(fitter)));
             }
         }
         out
     }
 
-    /// Scores every candidate on the forward folds of `rows`, chooses one, refits it on `rows`.
-    pub fn fit_auto(&self, data: &ThermalData, rows: &[usize]) -> Result<AutoFit, ThermalError> {
+    /// Scores every candidate (auto's own and those the `offers` make) on the forward folds of
+    /// `rows`, chooses one, refits it on `rows`. `Auto::fit_auto` ([`crate::registry`]) offers
+    /// every kind of the registry.
+    pub fn fit_with(
+        &self,
+        data: &ThermalData,
+        rows: &[usize],
+        offers: &[Offer],
+    ) -> Result<AutoFit, ThermalError> {
         let spec = BlockSpec {
             block_min: self.block_min,
             input: Some(self.input.clone()),
@@ -177,7 +201,7 @@ impl Auto {
                 "auto: forward validation needs at least two blocks in the training rows (a longer record, experiments, or --block-min)".into(),
             ));
         }
-        let cands = self.candidates(data);
+        let cands = self.candidates(data, offers);
         let mut scores: Vec<CandidateScore> = Vec::new();
         for (name, complexity, c) in &cands {
             let (forward, error) = match forward_cv(c, data, &folds) {
@@ -258,13 +282,5 @@ impl Predict for AutoFit {
     }
     fn predictors(&self) -> usize {
         self.model.predictors()
-    }
-}
-
-/// `Auto` as a fitter of [`ThermalModel`] (for validating the whole procedure, nested once more).
-impl Fit for Auto {
-    type Model = ThermalModel;
-    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
-        self.fit_auto(data, rows).map(|a| a.model)
     }
 }

@@ -281,3 +281,18 @@ impl ThermalData {
         }
     }
 }
+
+/// The target on the given rows.
+pub fn target_rows(data: &ThermalData, rows: &[usize]) -> Result<Vec<f64>, ThermalError> {
+    let y = data.target_um()?;
+    Ok(rows.iter().map(|&i| y[i]).collect())
+}
+
+/// Values of a non-temperature column attached to the data (see
+/// [`crate::heat_input::with_input`]), by its exact name.
+pub fn input_column(data: &ThermalData, name: &str) -> Option<Vec<f64>> {
+    data.sensor_names
+        .iter()
+        .position(|s| s == name)
+        .map(|j| data.sensor(j))
+}

@@ -1,4 +1,5 @@
 //! The ambient-temperature-adaptive feed-axis model (SPEC §1 T(c), after the source patent):
+//! the stored model ([`ExpAmbientModel`]) and its fitter ([`ExpAmbient`]), the `exp-ambient` kind.
 //!
 //! δ(x, t) = k·x + b,  b = b_a·(1 − exp(−ΔT_up/b_b)),  k = k_a·(1 − exp(−ΔT_nut/k_b)),
 //!
@@ -37,6 +38,7 @@
 //!   PCA, so that a sensor with a large rise does not take the component alone;
 use crate::data::ThermalData;
 use crate::error::ThermalError;
+use crate::fit::{Fit, Predict};
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use serde::{Deserialize, Serialize};
@@ -811,5 +813,49 @@ impl ExpAmbientModel {
     /// Number of fitted coefficients.
     pub fn parameters(&self) -> usize {
         4 * (self.degree + 1)
+    }
+}
+
+/// The exp-ambient feed-axis model fitter (see [`crate::exp_ambient`]).
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ExpAmbient {
+    pub up_sensor: String,
+    pub nut_sensor: String,
+    /// When not empty, ΔT_up is the first principal component of these sensors' rises (and
+    /// `up_sensor` is ignored).
+    pub up_sensors: Vec<String>,
+    /// Likewise for ΔT_nut.
+    pub nut_sensors: Vec<String>,
+}
+
+impl Fit for ExpAmbient {
+    type Model = ExpAmbientModel;
+    fn fit_rows(
+        &self,
+        data: &ThermalData,
+        rows: &[usize],
+    ) -> Result<ExpAmbientModel, ThermalError> {
+        let pick = |group: &[String], one: &str| {
+            if group.is_empty() {
+                vec![one.to_string()]
+            } else {
+                group.to_vec()
+            }
+        };
+        ExpAmbientModel::fit_groups(
+            &data.rows(rows),
+            &pick(&self.up_sensors, &self.up_sensor),
+            &pick(&self.nut_sensors, &self.nut_sensor),
+        )
+    }
+}
+
+impl Predict for ExpAmbientModel {
+    fn predict(&self, data: &ThermalData) -> Result<Vec<f64>, ThermalError> {
+        ExpAmbientModel::predict(self, data)
+    }
+    fn predictors(&self) -> usize {
+        self.parameters()
     }
 }

@@ -10,7 +10,11 @@
 //! - `rate`: the temperature rate dT/dt (°C/min) as the backward difference over a window w,
 //!   (T(t) − T(t − w))/w, clamped at the start of the experiment.
 //!
-//! Both are causal: they use only past temperatures, so a controller can compute them on line.
+//! A third follows the heat source instead of a sensor: the heat lag, a first-order lag of the
+//! heat input p = (n/n_ref)^α of a non-temperature column n (the spindle speed) with its own
+//! time constant at rest ([`switched_lag`], which the `heat-input` kind builds on).
+//!
+//! All are causal: they use only past readings, so a controller can compute them on line.
 //! The time constants are fitted (see [`fit_time_constants`]): coordinate descent over a log
 //! grid of τ minimising the pooled forward-fold RMSE of the linear model that uses the features
 //! (fit on the blocks before, score the next: [`crate::validate::forward_folds`]); only when the
@@ -35,7 +39,7 @@ pub enum Feature {
     Rate { sensor: String, window_min: f64 },
     /// First-order lag of the heat input p = (n/1000)^α of a non-temperature column n (e.g.
     /// `spindle_rpm`), with time constant `tau_min` while n > 0 and `rest_tau_min` at rest:
-    /// [`crate::heat_input::switched_lag`]. On line: one filter state, advanced with the current
+    /// [`switched_lag`]. On line: one filter state, advanced with the current
     /// n and Δt by the same exact step.
     HeatLag {
         input: String,
@@ -80,19 +84,10 @@ impl Feature {
             rest_tau_min,
         } = self
         {
-            let n = crate::validate::input_column(data, input)
+            let n = crate::data::input_column(data, input)
                 .ok_or_else(|| ThermalError::MissingColumn(input.clone()))?;
-            let p: Vec<f64> = n
-                .iter()
-                .map(|v| (v / crate::heat_input::INPUT_REF).powf(*alpha))
-                .collect();
-            return Ok(crate::heat_input::switched_lag(
-                data,
-                &p,
-                &n,
-                *tau_min,
-                *rest_tau_min,
-            ));
+            let p: Vec<f64> = n.iter().map(|v| (v / INPUT_REF).powf(*alpha)).collect();
+            return Ok(switched_lag(data, &p, &n, *tau_min, *rest_tau_min));
         }
         let t = data.sensor(data.sensor_index(self.sensor())?);
         Ok(match self {
@@ -244,4 +239,35 @@ pub fn fit_time_constants(
         ));
     }
     Ok(best)
+}
+
+/// Reference speed of the power input p = (n/n_ref)^α (rpm).
+pub const INPUT_REF: f64 = 1000.0;
+
+/// First-order lag with a time constant that depends on whether the input runs over the
+/// interval: τ·dL/dt = p − L with τ = `tau_run_min` when n > 0 and `tau_rest_min` when n = 0,
+/// discretised exactly for p and n held over each interval (the value at its end, like
+/// [`lag_filter`]); L starts at the experiment's first value.
+pub fn switched_lag(
+    data: &ThermalData,
+    p: &[f64],
+    input: &[f64],
+    tau_run_min: f64,
+    tau_rest_min: f64,
+) -> Vec<f64> {
+    let mut out = vec![0.0; p.len()];
+    for (a, b) in data.segments() {
+        out[a] = p[a];
+        for i in a + 1..b {
+            let dt = data.time_min[i] - data.time_min[i - 1];
+            let tau = if input[i] > 0.0 {
+                tau_run_min
+            } else {
+                tau_rest_min
+            };
+            // exact step response of τ·dL/dt = p − L over dt
+            out[i] = out[i - 1] + (1.0 - (-dt / tau).exp()) * (p[i] - out[i - 1]);
+        }
+    }
+    out
 }

@@ -82,7 +82,7 @@ fn column(data: &ThermalData, name: &str) -> Option<Vec<f64>> {
     match name {
         "ambient_c" => data.ambient_c.clone(),
         "position_mm" => data.position_mm.clone(),
-        _ => crate::validate::input_column(data, name)
+        _ => crate::data::input_column(data, name)
             .or_else(|| data.sensor_index(name).ok().map(|j| data.sensor(j))),
     }
 }

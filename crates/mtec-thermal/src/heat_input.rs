@@ -39,16 +39,18 @@
 //! - the input column is not a temperature: it is attached to [`ThermalData`] with
 //!   [`with_input`] under its own name (e.g. `spindle_rpm`) and never taken as an ambient sensor.
 
-use crate::data::ThermalData;
+use crate::data::{target_rows, ThermalData};
 use crate::error::ThermalError;
 use crate::features::lag_filter;
-use crate::linear::{ols, RidgeProblem};
-use crate::model::{target_rows, Fit, Predict, SELECTION_DT_MIN};
-use crate::validate::{forward_folds_of, thin_folds, BlockSpec};
+use crate::fit::{Fit, Predict};
+use crate::linear::{cancellation_warning, ols, RidgeProblem};
+use crate::options::BlockSpec;
+use crate::validate::{forward_folds_of, thin_folds, SELECTION_DT_MIN};
 use serde::{Deserialize, Serialize};
 
-/// Reference speed of the power input p = (n/n_ref)^α (rpm).
-pub const INPUT_REF: f64 = 1000.0;
+// the heat-input filter and its reference speed are features ([`crate::features`]); kept here
+// under their old paths
+pub use crate::features::{switched_lag, INPUT_REF};
 
 /// Attaches a non-temperature input column (e.g. `spindle_rpm`) to the data, under `name`.
 /// Replaces a column of that name if present.
@@ -126,34 +128,6 @@ pub fn heat_features_switched(
             }
         })
         .collect()
-}
-
-/// First-order lag with a time constant that depends on whether the input runs over the
-/// interval: τ·dL/dt = p − L with τ = `tau_run_min` when n > 0 and `tau_rest_min` when n = 0,
-/// discretised exactly for p and n held over each interval (the value at its end, like
-/// [`lag_filter`]); L starts at the experiment's first value.
-pub fn switched_lag(
-    data: &ThermalData,
-    p: &[f64],
-    input: &[f64],
-    tau_run_min: f64,
-    tau_rest_min: f64,
-) -> Vec<f64> {
-    let mut out = vec![0.0; p.len()];
-    for (a, b) in data.segments() {
-        out[a] = p[a];
-        for i in a + 1..b {
-            let dt = data.time_min[i] - data.time_min[i - 1];
-            let tau = if input[i] > 0.0 {
-                tau_run_min
-            } else {
-                tau_rest_min
-            };
-            // exact step response of τ·dL/dt = p − L over dt
-            out[i] = out[i - 1] + (1.0 - (-dt / tau).exp()) * (p[i] - out[i - 1]);
-        }
-    }
-    out
 }
 
 /// ((α, τ bank, rest factor), filter-bank columns on every row).
@@ -432,9 +406,7 @@ fn fit_config(
         );
     }
     Ok(HeatInputModel {
-        warnings: crate::model::cancellation_warning(&names, &beta)
-            .into_iter()
-            .collect(),
+        warnings: cancellation_warning(&names, &beta).into_iter().collect(),
         input: input.to_string(),
         input_ref: INPUT_REF,
         alpha: cfg.alpha,

@@ -15,12 +15,16 @@
 //! (Until issue 17 the score was leave-one-block-out, which let the selection see each block's
 //! future: `mlr --lag` scored 1.95 µm there and drifted 59 µm on the next duty cycle.)
 
-use crate::data::ThermalData;
+use crate::data::{target_rows, ThermalData};
 use crate::error::ThermalError;
 use crate::features::{design, lag_filter, tau_grid, Feature};
+use crate::fit::Fit;
 use crate::linear::ols;
-use crate::model::{target_rows, Fit, LinearMethod, LinearModel, SELECTION_DT_MIN};
-use crate::validate::{forward_folds_of, ridge_forward_scores, thin_folds, BlockSpec, ForwardFold};
+use crate::linear_model::{LinearMethod, LinearModel};
+use crate::options::BlockSpec;
+use crate::validate::{
+    forward_folds_of, ridge_forward_scores, thin_folds, ForwardFold, SELECTION_DT_MIN,
+};
 use serde::{Deserialize, Serialize};
 
 /// A scored candidate step: score, its features, their columns, the sensor index.

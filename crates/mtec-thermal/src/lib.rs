@@ -12,7 +12,7 @@
 //! time-constant-like parameters positive, reports when the data cannot separate them from the
 //! amplitudes, and can take its temperature rises from sensor groups (first principal
 //! component).
-//! Every model `fit`s and `predict`s through the traits in [`model`], serialises to versioned
+//! Every model `fit`s and `predict`s through the traits in [`fit`], serialises to versioned
 //! JSON (`mtec.thermal-model/1`) and is scored by one [`Metrics`] type.
 //!
 //! What it is not for: reading files beyond turning a [`mtec_io::Table`] into [`ThermalData`],
@@ -29,13 +29,17 @@ pub mod data;
 pub mod error;
 pub mod exp_ambient;
 pub mod features;
+pub mod fit;
 pub mod guard;
 pub mod heat_input;
+pub mod kind;
 pub mod lag_select;
 pub mod linear;
+pub mod linear_model;
 pub mod metrics;
 pub mod model;
 pub mod model_file;
+pub mod options;
 pub mod pls;
 pub mod registry;
 pub mod select;
@@ -46,16 +50,17 @@ pub mod validate;
 
 pub use data::ThermalData;
 pub use error::ThermalError;
-pub use exp_ambient::ExpAmbientModel;
+pub use exp_ambient::{ExpAmbient, ExpAmbientModel};
 pub use features::Feature;
+pub use fit::{Fit, Predict};
 pub use heat_input::{HeatInput, HeatInputModel};
 pub use lag_select::LagSelect;
+pub use linear_model::{LinearModel, Mlr, Ridge, RidgeSelect};
 pub use metrics::Metrics;
-pub use model::{
-    ExpAmbient, Fit, LinearModel, Mlr, ModelFile, Predict, Ridge, RidgeSelect, ThermalModel,
-    MODEL_FORMAT,
-};
-pub use registry::{FitOptions, ModelSpec, KINDS};
+pub use model::ThermalModel;
+pub use model_file::{ModelFile, Split, MODEL_FORMAT};
+pub use options::FitOptions;
+pub use registry::{ModelSpec, KINDS};
 pub use select::{select_sensors, RidgeTrace, SelectOptions, Selection};
 pub use stream::ThermalStream;
 pub use summary::{ModelSummary, Term};

@@ -1,5 +1,6 @@
 //! Linear least squares on a design of regressors: ordinary least squares (MLR) by QR, ridge
-//! regression in standardised (correlation) form by SVD, and variance inflation factors.
+//! regression in standardised (correlation) form by SVD, variance inflation factors, and the
+//! warning every linear kind gives when large standardised coefficients cancel.
 //!
 //! Ridge convention (Hoerl & Kennard 1970, the form ridge traces are drawn in): the regressors
 //! are standardised with their mean and population standard deviation, z = (x − x̄)/s_x, the
@@ -294,4 +295,32 @@ pub fn vif_by_regressions(x: &DMatrix<f64>, names: &[String]) -> Result<Vec<f64>
         });
     }
     Ok(out)
+}
+
+/// |β*| above which a standardised coefficient is "large": the feature alone would swing the
+/// prediction by this many standard deviations of the drift.
+pub const LARGE_STANDARDISED_COEFFICIENT: f64 = 4.0;
+
+/// A warning when large standardised coefficients β*_j (b_j·s_j/s_y) of opposite sign cancel:
+/// the prediction is then a small difference of large terms, which amplifies sensor noise and
+/// breaks outside the duty cycle it was fitted on (Hoerl & Kennard 1970: the mark of collinearity).
+pub fn cancellation_warning(names: &[String], beta_std: &[f64]) -> Option<String> {
+    let large: Vec<(usize, f64)> = beta_std
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| b.abs() > LARGE_STANDARDISED_COEFFICIENT || !b.is_finite())
+        .map(|(j, b)| (j, *b))
+        .collect();
+    let pos = large.iter().any(|(_, b)| *b > 0.0);
+    let neg = large.iter().any(|(_, b)| *b < 0.0);
+    (pos && neg).then(|| {
+        let list: Vec<String> = large
+            .iter()
+            .map(|(j, b)| format!("{} {b:+.1}", names.get(*j).map(|s| s.as_str()).unwrap_or("?")))
+            .collect();
+        format!(
+            "large coefficients of opposite sign cancel (standardised, in standard deviations of the drift: {}): the prediction is a small difference of large terms, which amplifies sensor noise and fails outside the training duty cycle; use fewer sensors or more shrinkage (larger k)",
+            list.join(", ")
+        )
+    })
 }

@@ -1,12 +1,72 @@
-//! Fitting a model file: the train/test split, the fit of a registered kind with its forward
-//! validation, the metrics on both sets of rows, the training envelope and the warnings — the
-//! `mtec.thermal-model/1` document `thermal fit` writes.
+//! The model file, the versioned JSON document `thermal fit` writes (`mtec.thermal-model/1`,
+//! [`ModelFile`]), and how it is fitted: the train/test split, the fit of a registered kind with
+//! its forward validation, the metrics on both sets of rows, the training envelope and the
+//! warnings.
 
-use crate::guard::envelope;
-use crate::model::{ModelFile, Predict, Split, ThermalModel, MODEL_FORMAT};
-use crate::registry::{ModelSpec, Validated};
-use crate::validate::{rows_of_experiments, split_at_time, BlockSpec, ForwardCv};
-use crate::{Metrics, ThermalData, ThermalError};
+use crate::auto::CandidateScore;
+use crate::data::ThermalData;
+use crate::error::ThermalError;
+use crate::fit::Predict;
+use crate::guard::{envelope, InputRange};
+use crate::kind::Validated;
+use crate::metrics::Metrics;
+use crate::model::ThermalModel;
+use crate::options::BlockSpec;
+use crate::registry::ModelSpec;
+use crate::validate::{rows_of_experiments, split_at_time, ForwardCv};
+use serde::{Deserialize, Serialize};
+
+/// The format tag of a model file.
+pub const MODEL_FORMAT: &str = "mtec.thermal-model/1";
+
+/// Which rows a model was trained (and tested) on.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+pub struct Split {
+    pub train_experiments: Vec<String>,
+    pub test_experiments: Vec<String>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub train_until_min: Option<f64>,
+    pub train_rows: usize,
+    pub test_rows: usize,
+}
+
+/// The JSON model file: `{"format": "mtec.thermal-model/1", "target": …, "model": {…}, …}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModelFile {
+    pub format: String,
+    pub target: String,
+    pub model: ThermalModel,
+    pub split: Split,
+    pub train_metrics: Metrics,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub test_metrics: Option<Metrics>,
+    /// Forward (rolling-origin) validation on the training rows: the error on blocks the model
+    /// had not seen; its pooled RMSE is the uncertainty `predict` reports.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub validation: Option<ForwardCv>,
+    /// Training range of every column the model reads (`predict` flags rows outside).
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub envelope: Vec<InputRange>,
+    /// `--model auto`: every candidate's forward score and which was chosen.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub candidates: Vec<CandidateScore>,
+    /// Warnings of the fit (also printed by `fit`).
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub warnings: Vec<String>,
+}
+
+impl ModelFile {
+    /// Checks the format tag after reading.
+    pub fn check_format(&self) -> Result<(), ThermalError> {
+        if self.format != MODEL_FORMAT {
+            return Err(ThermalError::Invalid(format!(
+                "`format` is `{}`: this mtec reads `{MODEL_FORMAT}`",
+                self.format
+            )));
+        }
+        Ok(())
+    }
+}
 
 /// Which rows train the model and which test it.
 #[derive(Debug, Clone, PartialEq, Default)]

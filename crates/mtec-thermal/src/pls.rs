@@ -10,18 +10,21 @@
 //! of cancelling. The model is stored as a linear model in the sensors (`mtec.thermal-model/1`),
 //! predicted and streamed like any other.
 //!
-//! This file is the whole kind (fitter, `Fit`, registry `Kind`, `auto` candidate): with its line
+//! This file is the whole kind (fitter, `Fit`, [`Kind`], `auto` candidate): with its line
 //! in `registry!` it is a `--model` of `thermal fit` and `cv`, a model of Python's
 //! `thermal_fit`, and a candidate of `--model auto`.
 
 use crate::auto::Auto;
+use crate::data::{target_rows, ThermalData};
+use crate::error::ThermalError;
 use crate::features::{design, temp_features};
-use crate::model::{
-    cancellation_warning, target_rows, Fit, LinearMethod, LinearModel, ThermalModel,
-};
-use crate::registry::{FitOptions, Kind};
-use crate::validate::{forward_cv, forward_folds_of, BlockSpec};
-use crate::{ThermalData, ThermalError};
+use crate::fit::Fit;
+use crate::kind::Kind;
+use crate::linear::cancellation_warning;
+use crate::linear_model::{LinearMethod, LinearModel};
+use crate::model::ThermalModel;
+use crate::options::{BlockSpec, FitOptions};
+use crate::validate::{forward_cv, forward_folds_of};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
@@ -241,7 +244,7 @@ impl Kind for Pls {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::Mlr;
+    use crate::linear_model::Mlr;
 
     /// Three collinear sensors and a drift that depends on two of them, with a little noise.
     fn data() -> ThermalData {

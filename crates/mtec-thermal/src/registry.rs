@@ -2,64 +2,33 @@
 //! is built from the options of a fit.
 //!
 //! Every kind is a fitter type (its options as plain data, `Serialize`/`Deserialize`) that
-//! implements [`Kind`]; the [`registry!`] list below turns them into [`ModelSpec`], an enum
+//! implements [`Kind`] ([`crate::kind`]); the [`registry!`] list below turns them into [`ModelSpec`], an enum
 //! tagged by the kind's name (`{"model": "ridge", "k": 0.1, ...}`), and [`KINDS`], the table the
 //! command line takes its `--model` values and help from. A new kind is one file (the fitter,
 //! its `Fit` and its `Kind`) plus one line in `registry!`; it fits to one of the stored forms of
 //! [`ThermalModel`] (a new stored form is a new variant there).
 
-use crate::auto::{Auto, AutoFit};
-use crate::model::{ExpAmbient, Fit, Mlr, Ridge, RidgeSelect, ThermalModel};
-use crate::validate::{duty_cycle_blocks, forward_cv, forward_folds, BlockSpec, ForwardCv};
-use crate::{HeatInput, LagSelect, ThermalData, ThermalError};
+use crate::auto::{Auto, AutoFit, Offer, DEFAULT_MAX_SENSORS};
+use crate::data::ThermalData;
+use crate::error::ThermalError;
+use crate::exp_ambient::ExpAmbient;
+use crate::fit::Fit;
+use crate::heat_input::HeatInput;
+use crate::lag_select::LagSelect;
+use crate::linear_model::{Mlr, Ridge, RidgeSelect};
+use crate::model::ThermalModel;
+use crate::options::BlockSpec;
+use crate::pls::Pls;
 use serde::{Deserialize, Serialize};
 
-/// The options of a fit, as `thermal fit` takes them; each kind reads the ones it uses.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct FitOptions {
-    /// Sensor columns to use (all `_c` columns but `ambient_c` when empty).
-    pub sensors: Vec<String>,
-    /// Ridge parameter k (correlation form); `None`: chosen by the kind.
-    pub k: Option<f64>,
-    /// Add a first-order lag of each sensor (linear kinds).
-    pub lag: bool,
-    /// Validation block length, min (`None`: experiments, or the steps of `input`).
-    pub block_min: Option<f64>,
-    /// Largest number of temperature sensors (`None`: the kind's default).
-    pub max_sensors: Option<usize>,
-    /// The heat-source column (spindle speed, rpm).
-    pub input: String,
-    /// exp-ambient: the sensors whose first principal component is ΔT_up.
-    pub up_sensors: Vec<String>,
-    /// exp-ambient: the sensors whose first principal component is ΔT_nut.
-    pub nut_sensors: Vec<String>,
-}
+// The options, the kind trait and auto's candidate type were defined here; they live in the
+// modules below this one now and keep these paths.
+pub use crate::auto::AutoCandidate;
+pub use crate::kind::{validate_forward, AsModel, Kind, Owned, Validated};
+pub use crate::options::FitOptions;
 
-impl Default for FitOptions {
-    fn default() -> Self {
-        FitOptions {
-            sensors: Vec::new(),
-            k: None,
-            lag: false,
-            block_min: None,
-            max_sensors: None,
-            input: "spindle_rpm".into(),
-            up_sensors: Vec::new(),
-            nut_sensors: Vec::new(),
-        }
-    }
-}
-
+// the usage checks of the options, against the kinds listed here
 impl FitOptions {
-    /// The validation blocks the options ask for.
-    pub fn blocks(&self) -> BlockSpec {
-        BlockSpec {
-            block_min: self.block_min,
-            input: Some(self.input.clone()),
-        }
-    }
-
     /// Whether the options fit together with `kind` (a usage error otherwise, phrased with the
     /// command-line option names).
     pub fn check(&self, kind: &KindInfo) -> Result<(), String> {
@@ -106,113 +75,11 @@ fn names_where(f: impl Fn(&KindInfo) -> bool) -> String {
         .join(" or ")
 }
 
-/// A model fitted on training rows, with its forward validation on them.
-#[derive(Debug, Clone)]
-pub struct Validated {
-    pub model: ThermalModel,
-    /// `None`: the training rows hold fewer than two blocks, or the validation failed (said in
-    /// `warnings`).
-    pub validation: Option<ForwardCv>,
-    /// `auto`: every candidate's forward score.
-    pub candidates: Vec<crate::auto::CandidateScore>,
-    /// What the validation found (the model's own warnings are not repeated here).
-    pub warnings: Vec<String>,
-}
-
-/// A thermal model kind: a fitter (its options) that the registry can build and fit.
-pub trait Kind: Sized {
-    /// The `--model` value and the serde tag.
-    const NAME: &'static str;
-    /// One line for `--model`'s help (`""`: none).
-    const HELP: &'static str = "";
-    /// Takes `--k`.
-    const TAKES_K: bool = false;
-    /// Takes `--max-sensors`.
-    const TAKES_MAX_SENSORS: bool = false;
-    /// Takes `--up-sensors`/`--nut-sensors`.
-    const TAKES_SENSOR_GROUPS: bool = false;
-    /// Needs the heat-source column (`FitOptions::input`) in the log.
-    const REQUIRES_INPUT: bool = false;
-    /// A usage check of the options particular to the kind.
-    fn check(_options: &FitOptions) -> Result<(), String> {
-        Ok(())
-    }
-    /// The fitter the options describe (`data` for what the log has, e.g. auto's candidates).
-    fn from_options(options: &FitOptions, data: &ThermalData) -> Result<Self, ThermalError>;
-    /// Fits to the rows `rows` of `data` (the kind's [`Fit`], as the stored form).
-    fn fit_model(&self, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError>;
-    /// `auto`'s candidate of this kind, built from auto's options: its simplicity rank for the
-    /// one-standard-error rule (auto's own families rank 0 mlr, 1 ridge, 2 heat-input,
-    /// 3 lagged-ridge, 4 dynamic, 5 exp-ambient) and the fitter; `None` (the default): not a
-    /// candidate, or the data lack what it needs.
-    fn auto_candidate(_auto: &Auto, _data: &ThermalData) -> Option<(usize, Self)> {
-        None
-    }
-    /// Fits on `train` and validates forward on the blocks of `train` (the default fits, then
-    /// refits on every fold; `auto` overrides it with its nested choice).
-    fn fit_validated(
-        &self,
-        data: &ThermalData,
-        train: &[usize],
-        blocks: &BlockSpec,
-    ) -> Result<Validated, ThermalError> {
-        let model = self.fit_model(data, train)?;
-        let (validation, warnings) = validate_forward(&AsModel(self), data, train, blocks);
-        Ok(Validated {
-            model,
-            validation,
-            candidates: Vec::new(),
-            warnings,
-        })
-    }
-}
-
-/// A kind as a fitter of the stored form.
-pub struct AsModel<'a, K>(pub &'a K);
-
-/// A kind's fitter, owned, as a fitter of the stored form (`auto`'s registered candidates).
-pub struct Owned<K>(pub K);
-
-impl<K: Kind> Fit for Owned<K> {
-    type Model = ThermalModel;
-    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
-        self.0.fit_model(data, rows)
-    }
-}
-
-/// A registered kind's `auto` candidate: its rank and its fitter.
-pub type AutoCandidate = (usize, Box<dyn Fit<Model = ThermalModel>>);
-
 fn auto_candidate_of<K: Kind + 'static>(auto: &Auto, data: &ThermalData) -> Option<AutoCandidate> {
     K::auto_candidate(auto, data).map(|(rank, k)| {
         let fitter: Box<dyn Fit<Model = ThermalModel>> = Box::new(Owned(k));
         (rank, fitter)
     })
-}
-
-impl<K: Kind> Fit for AsModel<'_, K> {
-    type Model = ThermalModel;
-    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
-        self.0.fit_model(data, rows)
-    }
-}
-
-/// Forward validation of `fitter` on the rows `train` (`None`: fewer than two blocks, or the
-/// validation failed), and the warning that says so.
-pub fn validate_forward<F: Fit<Model = ThermalModel>>(
-    fitter: &F,
-    data: &ThermalData,
-    train: &[usize],
-    blocks: &BlockSpec,
-) -> (Option<ForwardCv>, Vec<String>) {
-    let folds = forward_folds(&duty_cycle_blocks(data, train, blocks));
-    if folds.is_empty() {
-        return (None, vec!["no forward validation: the training rows hold fewer than two blocks, so the model carries no uncertainty (use a longer record, experiments, or --block-min)".into()]);
-    }
-    match forward_cv(fitter, data, &folds) {
-        Ok(v) => (Some(v), Vec::new()),
-        Err(e) => (None, vec![format!("forward validation failed: {e}")]),
-    }
 }
 
 /// What the command line needs to know of a kind.
@@ -242,6 +109,11 @@ impl KindInfo {
             auto: auto_candidate_of::<K>,
         }
     }
+}
+
+/// Every kind's offer of an `auto` candidate ([`Kind::auto_candidate`]; most decline).
+pub fn auto_offers() -> Vec<Offer> {
+    KINDS.iter().map(|k| (k.name, k.auto)).collect()
 }
 
 /// The kind named `name`.
@@ -327,7 +199,25 @@ registry! {
     ExpAmbient(ExpAmbient),
     LagSelect(LagSelect),
     HeatInput(HeatInput),
-    Pls(crate::pls::Pls),
+    Pls(Pls),
+}
+
+// ---- auto with every kind of the registry (auto itself does not know them) ----
+
+impl Auto {
+    /// Scores every candidate, auto's own and every kind of the registry that offers itself, on
+    /// the forward folds of `rows`, chooses one, refits it on `rows` ([`Auto::fit_with`]).
+    pub fn fit_auto(&self, data: &ThermalData, rows: &[usize]) -> Result<AutoFit, ThermalError> {
+        self.fit_with(data, rows, &auto_offers())
+    }
+}
+
+/// `Auto` as a fitter of [`ThermalModel`] (for validating the whole procedure, nested once more).
+impl Fit for Auto {
+    type Model = ThermalModel;
+    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<ThermalModel, ThermalError> {
+        self.fit_auto(data, rows).map(|a| a.model)
+    }
 }
 
 // ---- the kinds of this crate ----
@@ -352,7 +242,7 @@ impl Kind for Auto {
         Ok(Auto {
             sensors: o.sensors.clone(),
             input: o.input.clone(),
-            max_sensors: o.max_sensors.unwrap_or(crate::auto::DEFAULT_MAX_SENSORS),
+            max_sensors: o.max_sensors.unwrap_or(DEFAULT_MAX_SENSORS),
             block_min: o.block_min,
             exp_ambient: exp.then(|| ExpAmbient {
                 up_sensor: o.sensors[0].clone(),

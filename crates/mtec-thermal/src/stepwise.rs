@@ -20,18 +20,17 @@
 //!   than a still one; [`Feature::HeatLag`]).
 //!
 //! Shrinkage: the ridge families choose k by the forward folds, and every model reports
-//! cancelling large coefficients ([`crate::model::cancellation_warning`]).
+//! cancelling large coefficients ([`crate::linear::cancellation_warning`]).
 
-use crate::data::ThermalData;
+use crate::data::{input_column, target_rows, ThermalData};
 use crate::error::ThermalError;
-use crate::features::{tau_grid, Feature};
-use crate::linear::RidgeProblem;
-use crate::model::{
-    cancellation_warning, target_rows, Fit, LinearMethod, LinearModel, RidgeEquation,
-    SELECTION_DT_MIN,
-};
+use crate::features::{tau_grid, temp_features, Feature};
+use crate::fit::Fit;
+use crate::linear::{cancellation_warning, RidgeProblem};
+use crate::linear_model::{LinearMethod, LinearModel, RidgeEquation};
+use crate::options::BlockSpec;
 use crate::validate::{
-    forward_folds_of, input_column, ridge_forward_scores, thin_folds, BlockSpec,
+    forward_folds_of, ridge_forward_scores, thin_folds, ForwardFold, SELECTION_DT_MIN,
 };
 use serde::{Deserialize, Serialize};
 
@@ -94,7 +93,7 @@ pub struct Stepwise {
 
 /// The pool of a family on `data`.
 fn pool(s: &Stepwise, data: &ThermalData) -> Result<Vec<Feature>, ThermalError> {
-    let temps = crate::features::temp_features(data, &s.sensors)?;
+    let temps = temp_features(data, &s.sensors)?;
     let mut out = temps.clone();
     if matches!(s.family, Family::LaggedRidge | Family::Dynamic) {
         for t in &temps {
@@ -160,12 +159,7 @@ fn with_tau(f: &Feature, tau: f64) -> Option<Feature> {
 }
 
 /// Best (pooled forward RMSE, k) of the columns over the grid.
-fn score(
-    cols: &[&[f64]],
-    y: &[f64],
-    folds: &[crate::validate::ForwardFold],
-    ks: &[f64],
-) -> (f64, f64) {
+fn score(cols: &[&[f64]], y: &[f64], folds: &[ForwardFold], ks: &[f64]) -> (f64, f64) {
     ridge_forward_scores(cols, y, folds, ks)
         .into_iter()
         .zip(ks)

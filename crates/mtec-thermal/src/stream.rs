@@ -22,7 +22,8 @@ use crate::error::ThermalError;
 use crate::exp_ambient::{ExpAmbientModel, GroupWeight, AMBIENT_REF_C, AMBIENT_SCALE_C};
 use crate::features::Feature;
 use crate::heat_input::HeatInputModel;
-use crate::model::{LinearModel, ThermalModel};
+use crate::linear_model::LinearModel;
+use crate::model::ThermalModel;
 
 /// How a filter's input is made from a reading.
 #[derive(Debug, Clone, PartialEq)]
@@ -153,12 +154,12 @@ fn linear_stream(m: &LinearModel, inputs: &mut Vec<String>) -> Result<Kind, Ther
                 rest_tau_min,
             } => {
                 let u = input_index(inputs, input);
-                // L[(n/n_ref)^α] with τ running, τ_rest at rest (heat_input::switched_lag)
+                // L[(n/n_ref)^α] with τ running, τ_rest at rest (features::switched_lag)
                 s.lags.push((
                     Lag {
                         input: u,
                         transform: Transform::Power {
-                            reference: crate::heat_input::INPUT_REF,
+                            reference: crate::features::INPUT_REF,
                             alpha: *alpha,
                         },
                         tau_run_min: *tau_min,
@@ -200,7 +201,7 @@ fn heat_input_stream(m: &HeatInputModel, inputs: &mut Vec<String>) -> Result<Kin
         lags: Vec::new(),
     };
     for (&tau, &c) in m.taus_min.iter().zip(&m.heat_coefficients_um) {
-        // L_τ[(n/n_ref)^α] with s·τ at rest (heat_input::switched_lag)
+        // L_τ[(n/n_ref)^α] with s·τ at rest (features::switched_lag)
         s.lags.push((
             Lag {
                 input: u,

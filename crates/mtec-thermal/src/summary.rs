@@ -5,7 +5,8 @@
 
 use crate::features::Feature;
 use crate::guard::model_columns;
-use crate::model::{LinearMethod, ThermalModel};
+use crate::linear_model::LinearMethod;
+use crate::model::ThermalModel;
 
 /// One term of the model's equation: its name, value and unit.
 #[derive(Debug, Clone, PartialEq)]
@@ -221,7 +222,7 @@ impl ThermalModel {
 mod tests {
     use super::*;
     use crate::heat_input::HeatInputModel;
-    use crate::model::LinearModel;
+    use crate::linear_model::LinearModel;
 
     #[test]
     fn a_heat_input_model_names_its_input_and_every_coefficient() {

@@ -17,11 +17,16 @@
 
 use crate::data::ThermalData;
 use crate::error::ThermalError;
+use crate::fit::{Fit, Predict};
 use crate::linear::RidgeProblem;
 use crate::metrics::Metrics;
-use crate::model::{Fit, Predict};
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
+
+// a column of the data ([`crate::data`]) and the block options ([`crate::options`]); kept here
+// under their old paths
+pub use crate::data::input_column;
+pub use crate::options::BlockSpec;
 
 /// Rows of the listed experiments.
 pub fn rows_of_experiments(
@@ -123,26 +128,6 @@ pub const MIN_BLOCK_MIN: f64 = 30.0;
 
 /// Number of equal time blocks of a single record without input steps or `block_min`.
 pub const DEFAULT_TIME_BLOCKS: usize = 8;
-
-/// How a record is cut into validation blocks.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-pub struct BlockSpec {
-    /// Fixed block length (min) from the start of the record; overrides the duty cycle.
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub block_min: Option<f64>,
-    /// Column whose steps mark duty-cycle changes (e.g. `spindle_rpm`), when the data has it.
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub input: Option<String>,
-}
-
-/// Values of a non-temperature column attached to the data (see
-/// [`crate::heat_input::with_input`]), by its exact name.
-pub fn input_column(data: &ThermalData, name: &str) -> Option<Vec<f64>> {
-    data.sensor_names
-        .iter()
-        .position(|s| s == name)
-        .map(|j| data.sensor(j))
-}
 
 /// Validation blocks of `rows` (in time order), following the duty cycle.
 ///
@@ -485,3 +470,6 @@ pub fn ridge_forward_scores(
         .map(|(s, f)| ((s / n.max(1) as f64).sqrt(), f))
         .collect()
 }
+
+/// Row spacing (min) of the rows that selection scores (see [`thin_folds`]).
+pub const SELECTION_DT_MIN: f64 = 1.0;

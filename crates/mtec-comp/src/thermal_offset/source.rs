@@ -8,8 +8,8 @@ use crate::machine::{Fade, MachineFile, ThermalPartSpec, MACHINE_FORMAT};
 use crate::table::Axis;
 use crate::MachineErrorModel;
 use mtec_io::{InputError, Table};
-use mtec_thermal::model::{ModelFile, ThermalModel, MODEL_FORMAT};
 use mtec_thermal::Feature;
+use mtec_thermal::{ModelFile, ThermalModel, MODEL_FORMAT};
 use std::collections::BTreeMap;
 use std::path::Path;
 

@@ -437,10 +437,10 @@ pub fn circular(p: &mut Pipeline, data: &Path) -> crate::Result<()> {
         .section(format!("Circular test (ISO 230-4): {}", stem(&f)));
     warnings(sec, &obs, &mut *p.obs);
     sec.text(format!(
-        "Circular deviation G and circular hysteresis H per ISO 230-4 ({} plane, R = {} mm, \
+        "Circular deviation G and circular hysteresis H per ISO 230-4 ({:?} plane, R = {} mm, \
          F = {} mm/min), then the ballbar diagnostics fitted from the trace, ranked by their \
          contribution to the circularity (as `mtec circular` prints them).",
-        format!("{:?}", done.plane),
+        done.plane,
         fmt(&serde_json::json!(done.radius_mm)),
         fmt(&serde_json::json!(done.feed_mm_min))
     ));
