@@ -11,10 +11,21 @@ items from the parent is a cycle, the kind issue 18 asked to remove.
 
 Usage: scripts/module_cycles.py [CRATE_DIR ...]   (default: every crates/*)
 Exit code 1 and the cycles when there are any, 0 and a one-line summary otherwise.
+
+KNOWN lists the cycles that are known and not yet removed, each with the reason: they are
+printed, and fail the check only when they grow beyond the subtree named.
 """
 import os
 import re
 import sys
+
+
+# (crate, module subtree): why its cycle is still there
+KNOWN = {
+    ("mtec-comp", "gcode::rewrite"): "one struct (Rewriter) whose methods are split over "
+    "interp/plan/emit by impl blocks; separate Interpreter/Planner/Emitter types would remove "
+    "it (issue 18 item 3, open)",
+}
 
 
 def module_files(src):
@@ -188,7 +199,17 @@ def main():
                 if t is not None and t != m:
                     graph[m].add(t)
                     why.setdefault((m, t), p)
+        crate = os.path.basename(os.path.normpath(c))
         for comp in sccs(graph):
+            names = [name(m) for m in comp]
+            known = [
+                why
+                for (kc, sub), why in KNOWN.items()
+                if kc == crate and all(n == sub or n.startswith(sub + "::") for n in names)
+            ]
+            if len(comp) > 1 and known:
+                print(f"known cycle in {crate}: {', '.join(sorted(names))}: {known[0]}")
+                continue
             if len(comp) > 1:
                 edges = [
                     f"    {name(a)} -> {name(b)} ({why[(a, b)]})"
