@@ -368,6 +368,9 @@ impl fmt::Display for Outcome {
     }
 }
 
+/// Reads one quantity of a standard's values (`None`: the standard does not define it).
+type Getter = fn(&StandardValues) -> Option<f64>;
+
 /// The chosen standards' axis values in one table, one column per standard.
 fn side_by_side(o: &mut fmt::Formatter<'_>, st: &[StandardValues]) -> fmt::Result {
     writeln!(o)?;
@@ -376,7 +379,7 @@ fn side_by_side(o: &mut fmt::Formatter<'_>, st: &[StandardValues]) -> fmt::Resul
         write!(o, " {:>14}", s.standard)?;
     }
     writeln!(o)?;
-    let rows: [(&str, fn(&StandardValues) -> Option<f64>); 5] = [
+    let rows: [(&str, Getter); 5] = [
         ("accuracy (A; P)", |s| Some(s.accuracy_um)),
         ("repeatability (R; Ps)", |s| Some(s.repeatability_um)),
         ("reversal (B; U)", |s| Some(s.reversal_um)),
