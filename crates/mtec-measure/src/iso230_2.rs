@@ -220,6 +220,124 @@ pub fn vdi3441(iso: &Iso230_2) -> Vdi3441 {
     }
 }
 
+/// An evaluation standard `mtec iso230-2 --standard` reports (docs/methods.md §2.2).
+///
+/// Only standards whose definitions were established from a citable source are here; the
+/// others a customer's contract may name are in [`NOT_ESTABLISHED`], with what is unknown.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Standard {
+    /// ISO 230-2:2014, clause 3 ([`evaluate`]).
+    Iso230_2_2014,
+    /// VDI/DGQ 3441 ([`vdi3441`]).
+    Vdi3441,
+}
+
+impl Standard {
+    /// Every implemented standard, in the order `--standard all` reports them.
+    pub const ALL: [Standard; 2] = [Standard::Iso230_2_2014, Standard::Vdi3441];
+
+    /// The `--standard` value.
+    pub fn name(self) -> &'static str {
+        match self {
+            Standard::Iso230_2_2014 => "iso230-2:2014",
+            Standard::Vdi3441 => "vdi-3441",
+        }
+    }
+
+    /// Parses a `--standard` value: one implemented standard or `all`. A standard named in
+    /// [`NOT_ESTABLISHED`] is refused with what is unknown about it.
+    pub fn parse(value: &str) -> Result<Vec<Standard>, String> {
+        let v = value.trim().to_ascii_lowercase();
+        if v == "all" {
+            return Ok(Standard::ALL.to_vec());
+        }
+        if let Some(s) = Standard::ALL.iter().find(|s| s.name() == v) {
+            return Ok(vec![*s]);
+        }
+        let known = Standard::ALL.map(Standard::name).join(", ");
+        match NOT_ESTABLISHED.iter().find(|(n, _)| *n == v) {
+            Some((n, why)) => Err(format!(
+                "--standard {n} is not implemented: {why} (docs/methods.md §2.2); implemented: {known}, all"
+            )),
+            None => Err(format!(
+                "--standard `{value}` is not a standard mtec knows: expected {known} or all"
+            )),
+        }
+    }
+}
+
+/// Standards asked for in acceptance contracts whose definitions could not be established from
+/// a citable source, with what is unknown (docs/methods.md §2.2). Reporting them would mean
+/// guessing their definitions, so `--standard` refuses them.
+pub const NOT_ESTABLISHED: [(&str, &str); 5] = [
+    (
+        "iso230-2:1997",
+        "only its coverage factor is established (2 standard uncertainties, replacing the 1988 \
+         edition's 3 standard deviations); the text of its A, E, R, B and M definitions was not \
+         found",
+    ),
+    (
+        "iso230-2:2006",
+        "its scope is established (uncertainty by ISO/TR 230-9 Annex C, step cycle in Annex B), \
+         the text of its A, E, R, B and M definitions was not found",
+    ),
+    (
+        "gb-t-17421.2",
+        "neither edition's degree of equivalence to ISO 230-2 (IDT or MOD, and of which \
+         edition) nor its definitions were found",
+    ),
+    (
+        "jis-b-6190-2",
+        "what it modifies from ISO 230-2 was not found",
+    ),
+    (
+        "asme-b5.54",
+        "its positioning accuracy and repeatability definitions were not found",
+    ),
+];
+
+/// One standard's axis values from one run, for the side-by-side report (µm).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StandardValues {
+    /// The `--standard` name.
+    pub standard: String,
+    /// Positioning accuracy: A (ISO 230-2) or P (VDI 3441).
+    pub accuracy_um: f64,
+    /// Repeatability: R (ISO 230-2, bidirectional) or Ps (VDI 3441, positional scatter).
+    pub repeatability_um: f64,
+    /// Reversal: B = max |B_i| (ISO 230-2) or U (VDI 3441).
+    pub reversal_um: f64,
+    /// Systematic deviation E (ISO 230-2); VDI 3441 defines none.
+    pub systematic_um: Option<f64>,
+    /// Range of the mean bidirectional deviations: M (ISO 230-2) or Pa (VDI 3441).
+    pub mean_range_um: f64,
+}
+
+/// The values of `standard` from the one evaluation `iso` (VDI 3441 from its statistics).
+pub fn values_of(standard: Standard, iso: &Iso230_2) -> StandardValues {
+    match standard {
+        Standard::Iso230_2_2014 => StandardValues {
+            standard: standard.name().into(),
+            accuracy_um: iso.axis.a_um,
+            repeatability_um: iso.axis.r_um,
+            reversal_um: iso.axis.b_um,
+            systematic_um: Some(iso.axis.e_um),
+            mean_range_um: iso.axis.m_um,
+        },
+        Standard::Vdi3441 => {
+            let v = vdi3441(iso);
+            StandardValues {
+                standard: standard.name().into(),
+                accuracy_um: v.p_um,
+                repeatability_um: v.ps_um,
+                reversal_um: v.u_um,
+                systematic_um: None,
+                mean_range_um: v.pa_um,
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -330,6 +448,25 @@ mod tests {
             "R_down_um",
         ] {
             assert!(j.get(k).is_some(), "missing {k}");
+        }
+    }
+
+    #[test]
+    fn standard_values_parse_and_refuse() {
+        assert_eq!(
+            Standard::parse("iso230-2:2014").unwrap(),
+            [Standard::Iso230_2_2014]
+        );
+        assert_eq!(Standard::parse("ALL").unwrap(), Standard::ALL);
+        let e = Standard::parse("asme-b5.54").unwrap_err();
+        assert!(e.contains("not implemented") && e.contains("§2.2"), "{e}");
+        let e = Standard::parse("iso230-2:1988").unwrap_err();
+        assert!(
+            e.contains("not a standard") && e.contains("vdi-3441"),
+            "{e}"
+        );
+        for (n, _) in NOT_ESTABLISHED {
+            assert!(Standard::parse(n).is_err(), "{n}");
         }
     }
 }

@@ -18,5 +18,5 @@ pub mod circular;
 pub mod iso230_2;
 pub mod positioning;
 
-pub use iso230_2::{evaluate as evaluate_iso230_2, vdi3441, Iso230_2, Vdi3441};
+pub use iso230_2::{evaluate as evaluate_iso230_2, vdi3441, Iso230_2, Standard, Vdi3441};
 pub use positioning::{Approach, PositioningData};

@@ -36,7 +36,9 @@ const EXAMPLES: &str = crate::help::examples!(
   $ mtec iso230-2 p/iso230-2.csv --json --out p
   # corrected for 23.5 °C, 98.7 kPa, 40 % RH air and a 24 °C steel axis
   $ mtec iso230-2 p/iso230-2.csv --air-temp-c 23.5 --pressure-pa 98700 \\
-      --humidity-pct 40 --material-temp-c 24 --alpha-um-per-m-k 11.5"
+      --humidity-pct 40 --material-temp-c 24 --alpha-um-per-m-k 11.5
+  # every implemented standard's A, R, B, E, M side by side
+  $ mtec iso230-2 p/iso230-2.csv --standard all"
 );
 
 /// Refractive-index equation of `--air-formula`.
@@ -110,6 +112,11 @@ pub struct Args {
     /// Linear expansion coefficient of the axis (µm/m/K, 0..50; steel 11.5).
     #[arg(long, value_name = "A", allow_negative_numbers = true)]
     pub alpha_um_per_m_k: Option<f64>,
+    /// Standard(s) to report: iso230-2:2014 (default, the report as always), vdi-3441, or
+    /// all (side by side). ISO 230-2:1997/2006, GB/T 17421.2, JIS B 6190-2 and ASME B5.54
+    /// are refused: their definitions are not established (docs/methods.md 2.2).
+    #[arg(long, value_name = "NAME", default_value = op::DEFAULT_STANDARD)]
+    pub standard: String,
 }
 
 impl Args {
@@ -126,6 +133,7 @@ impl Args {
             laser_n: self.laser_n,
             material_temp_c: self.material_temp_c,
             alpha_um_per_m_k: self.alpha_um_per_m_k,
+            standard: self.standard.clone(),
         }
     }
 }

@@ -5,8 +5,8 @@
 use crate::{Error, Observer, Result};
 use mtec_io::OutputGuard;
 use mtec_measure::air::{self, Air, AirFormula};
-use mtec_measure::iso230_2::{AxisValues, TargetStats};
-use mtec_measure::{evaluate_iso230_2, vdi3441, PositioningData, Vdi3441};
+use mtec_measure::iso230_2::{self as iso230_2, AxisValues, StandardValues, TargetStats};
+use mtec_measure::{evaluate_iso230_2, vdi3441, PositioningData, Standard, Vdi3441};
 use serde::Serialize;
 use std::fmt;
 use std::path::PathBuf;
@@ -40,6 +40,9 @@ pub struct Options {
     pub material_temp_c: Option<f64>,
     /// Linear expansion coefficient of the axis (µm/m/K, 0..50).
     pub alpha_um_per_m_k: Option<f64>,
+    /// The standard(s) to report: `iso230-2:2014` (the report as it always was), `vdi-3441`
+    /// or `all` (docs/methods.md §2.2); anything else is a usage error.
+    pub standard: String,
 }
 
 impl Options {
@@ -57,9 +60,13 @@ impl Options {
             laser_n: None,
             material_temp_c: None,
             alpha_um_per_m_k: None,
+            standard: DEFAULT_STANDARD.into(),
         }
     }
 }
+
+/// The `--standard` of the report as it has always been: ISO 230-2:2014 (with VDI 3441).
+pub const DEFAULT_STANDARD: &str = "iso230-2:2014";
 
 /// The air-index correction applied (docs/methods.md §2.1).
 #[derive(Debug, Clone, Serialize)]
@@ -123,6 +130,10 @@ pub struct Outcome {
     /// VDI/DGQ 3441 values (µm).
     pub vdi3441: Vdi3441,
     pub corrections: Corrections,
+    /// With `--standard` other than iso230-2:2014: each chosen standard's axis values, side by
+    /// side (absent otherwise, so the default output is what it always was).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub standards: Option<Vec<StandardValues>>,
     /// What the reader noticed about the runs (e.g. fewer than 5 per direction).
     pub warnings: Vec<String>,
 }
@@ -206,6 +217,7 @@ fn corrections(o: &Options) -> Result<Corrections> {
 /// Evaluates the runs; writes `iso230-2.json` into `opts.out` when given.
 pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
     let corrections = corrections(opts)?;
+    let chosen = Standard::parse(&opts.standard).map_err(Error::usage)?;
     let guard = OutputGuard::new(&[&opts.run]);
     let out_file = opts.out.as_ref().map(|d| d.join(OUTPUT_FILE));
     if let Some(f) = &out_file {
@@ -217,6 +229,12 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
     }
     let iso = evaluate_iso230_2(&data);
     let vdi = vdi3441(&iso);
+    let standards = (chosen != [Standard::Iso230_2_2014]).then(|| {
+        chosen
+            .iter()
+            .map(|s| iso230_2::values_of(*s, &iso))
+            .collect()
+    });
     for w in &data.warnings {
         obs.warning(&format!("{}: {w}", opts.run.display()));
     }
@@ -229,6 +247,7 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
         targets: iso.targets,
         vdi3441: vdi,
         corrections,
+        standards,
         warnings: data.warnings,
     };
     if let Some(f) = &out_file {
@@ -341,6 +360,46 @@ impl fmt::Display for Outcome {
             o,
             "VDI/DGQ 3441 (um): Ps = {:.3}  U = {:.3}  Pa = {:.3}  P = {:.3}",
             v.ps_um, v.u_um, v.pa_um, v.p_um
-        )
+        )?;
+        if let Some(st) = &self.standards {
+            side_by_side(o, st)?;
+        }
+        Ok(())
     }
+}
+
+/// Reads one quantity of a standard's values (`None`: the standard does not define it).
+type Getter = fn(&StandardValues) -> Option<f64>;
+
+/// The chosen standards' axis values in one table, one column per standard.
+fn side_by_side(o: &mut fmt::Formatter<'_>, st: &[StandardValues]) -> fmt::Result {
+    writeln!(o)?;
+    write!(o, "standards side by side (um)  ")?;
+    for s in st {
+        write!(o, " {:>14}", s.standard)?;
+    }
+    writeln!(o)?;
+    let rows: [(&str, Getter); 5] = [
+        ("accuracy (A; P)", |s| Some(s.accuracy_um)),
+        ("repeatability (R; Ps)", |s| Some(s.repeatability_um)),
+        ("reversal (B; U)", |s| Some(s.reversal_um)),
+        ("systematic (E)", |s| s.systematic_um),
+        ("range of means (M; Pa)", |s| Some(s.mean_range_um)),
+    ];
+    for (label, get) in rows {
+        write!(o, "  {label:<27}")?;
+        for s in st {
+            match get(s) {
+                Some(x) => write!(o, " {x:>14.3}")?,
+                None => write!(o, " {:>14}", "-")?,
+            }
+        }
+        writeln!(o)?;
+    }
+    let missing: Vec<&str> = iso230_2::NOT_ESTABLISHED.iter().map(|(n, _)| *n).collect();
+    writeln!(
+        o,
+        "not reported (definitions not established, docs/methods.md 2.2): {}",
+        missing.join(", ")
+    )
 }
