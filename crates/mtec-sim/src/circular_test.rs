@@ -97,7 +97,7 @@ impl CircularFaults {
     /// Every fault the ballbar diagnostics know, at plausible magnitudes for a machining
     /// centre (the `circular-test-arc` scenario): the faults of [`CircularFaults::scenario`]
     /// plus a 1 µm cyclic error of Y with a 5 mm pitch (a ball screw's lead), reversal spikes
-    /// of 3 µm (X) and 2 µm (Y) decaying over 3° of travel, lateral play of 2 µm (X) and
+    /// of 2 µm (X) and 1.5 µm (Y) decaying over 3° of travel (a well-tuned axis shows 1–3 µm), lateral play of 2 µm (X) and
     /// 1.5 µm (Y) (a few µm is usual for worn guideways), and straightness bows of 3 µm (X)
     /// and −2 µm (Y) over ±100 mm (ISO 230-1 tolerances of a few µm per 200 mm).
     pub fn every_fault() -> Self {
@@ -105,8 +105,8 @@ impl CircularFaults {
             cyclic_y_um: 1.0,
             cyclic_y_pitch_mm: 5.0,
             cyclic_y_phase_rad: 1.9,
-            reversal_spike_x_um: 3.0,
-            reversal_spike_y_um: 2.0,
+            reversal_spike_x_um: 2.0,
+            reversal_spike_y_um: 1.5,
             lateral_play_x_um: 2.0,
             lateral_play_y_um: 1.5,
             straightness_x_um: 3.0,
