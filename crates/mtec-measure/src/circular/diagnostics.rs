@@ -812,16 +812,26 @@ pub fn diagnose(
         });
     }
     if let Some(arc) = &trace.arc {
-        let missing: Vec<&str> = faults
-            .iter()
-            .filter(|f| !f.determined)
-            .map(|f| f.id.as_str())
-            .collect();
-        if !missing.is_empty() {
+        let (mut collinear, mut off_arc) = (Vec::new(), Vec::new());
+        for f in faults.iter().filter(|f| !f.determined) {
+            if f.vif > MAX_VIF {
+                collinear.push(f.id.as_str());
+            } else {
+                off_arc.push(f.id.as_str());
+            }
+        }
+        if !collinear.is_empty() {
             notes.push(format!(
-                "partial arc of {:.0}°: {} not determined (their patterns are reproduced by the other faults over these angles; trace the full circle for them)",
+                "partial arc of {:.0}°: {} not determined: over these angles the other faults reproduce their patterns (variance inflation > {MAX_VIF}); trace the full circle for them",
                 arc.span_deg,
-                missing.join(", ")
+                collinear.join(", ")
+            ));
+        }
+        if !off_arc.is_empty() {
+            notes.push(format!(
+                "partial arc of {:.0}°: {} not determined: the axis reversal that shows them is not on the arc",
+                arc.span_deg,
+                off_arc.join(", ")
             ));
         }
     }
