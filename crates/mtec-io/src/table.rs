@@ -28,6 +28,8 @@ pub struct Table {
     pub header_line: usize,
     pub rows: Vec<TableRow>,
     pub comments: Vec<String>,
+    /// The line (1-based) of each comment in [`Table::comments`].
+    pub comment_lines: Vec<usize>,
     /// What the reader assumed about the file (a spreadsheet dialect), for the user.
     pub notes: Vec<String>,
 }
@@ -65,6 +67,7 @@ impl Table {
     /// Parses CSV text that was read from `path` (the path is used in messages only).
     pub fn parse(path: &Path, text: &str) -> Result<Table, InputError> {
         let mut comments = Vec::new();
+        let mut comment_lines = Vec::new();
         let mut notes = Vec::new();
         let mut header: Option<(usize, Vec<String>)> = None;
         let mut rows = Vec::new();
@@ -79,6 +82,7 @@ impl Table {
             }
             if let Some(c) = trimmed.strip_prefix('#') {
                 comments.push(c.trim().to_string());
+                comment_lines.push(line_no);
                 continue;
             }
             if header.is_none() {
@@ -177,6 +181,7 @@ impl Table {
             header_line,
             rows,
             comments,
+            comment_lines,
             notes,
         })
     }
@@ -302,9 +307,20 @@ impl Table {
 
     /// The `key = value` or `key: value` pairs found in the comment lines (e.g. `# radius_mm = 100`).
     pub fn comment_value(&self, key: &str) -> Option<String> {
-        self.comments.iter().find_map(|c| {
+        self.comment_value_at(key).map(|(_, v)| v)
+    }
+
+    /// Like [`Table::comment_value`], with the comment's line (1-based; 0 when the table was
+    /// not read from text).
+    pub fn comment_value_at(&self, key: &str) -> Option<(usize, String)> {
+        self.comments.iter().enumerate().find_map(|(i, c)| {
             let (k, v) = c.split_once('=').or_else(|| c.split_once(':'))?;
-            (k.trim() == key).then(|| v.trim().to_string())
+            (k.trim() == key).then(|| {
+                (
+                    self.comment_lines.get(i).copied().unwrap_or(0),
+                    v.trim().to_string(),
+                )
+            })
         })
     }
 }
@@ -413,6 +429,9 @@ mod tests {
         assert_eq!(t.f64_column("y_um").unwrap(), vec![2.0, 4.0]);
         assert_eq!(t.rows[1].line, 5);
         assert_eq!(t.comment_value("radius_mm").as_deref(), Some("100"));
+        let t = parse("# a\n\n# plane: ZX\nx_mm\n1\n").unwrap();
+        assert_eq!(t.comment_value_at("plane"), Some((3, "ZX".to_string())));
+        assert_eq!(t.comment_value_at("radius_mm"), None);
     }
 
     #[test]

@@ -83,6 +83,7 @@ fn table_from_mapping(obj: &Bound<'_, PyAny>, what: &str) -> Result<Table> {
         header_line: 0,
         rows,
         comments: Vec::new(),
+        comment_lines: Vec::new(),
         notes: Vec::new(),
     })
 }

@@ -9,8 +9,8 @@ use std::path::PathBuf;
 /// Simulates a scenario's measurement files and its `truth.json` into the folder `out`, as
 /// `mtec simulate SCENARIO --out OUT --seed SEED` does (the same seed gives the same bytes).
 ///
-/// Scenarios: `vmc-9line`, `volumetric-grid`, `iso230-2`, `circular-test`, `spindle-sensors`,
-/// `feed-axis-ambient`, `production-day`, `dbb-rotary` (docs/formats.md, "Simulation outputs").
+/// Scenarios: `vmc-9line`, `volumetric-grid`, `iso230-2`, `circular-test`, `circular-test-arc`,
+/// `spindle-sensors`, `feed-axis-ambient`, `production-day`, `dbb-rotary` (docs/formats.md, "Simulation outputs").
 /// Returns a dict of file name to path (`str`).
 ///
 /// >>> import mtec, tempfile

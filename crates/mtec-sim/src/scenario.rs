@@ -8,6 +8,7 @@ pub const SCENARIOS: &[(&str, &str)] = &[
     ("volumetric-grid", "laser-tracker volumetric error grid (11x11x11) and body diagonals, for `mtec map fit`"),
     ("iso230-2", "laser-interferometer positioning runs of one axis (ISO 230-2: 11 targets, 5 bidirectional runs)"),
     ("circular-test", "ISO 230-4 ballbar circular test of X and Y with injected faults, and a fault-free run"),
+    ("circular-test-arc", "ISO 230-4 ballbar test on a 220 degree partial arc in the ZX plane, every diagnosable fault injected"),
     ("spindle-sensors", "8 collinear spindle temperature sensors and the radial drift (ridge-trace sensor selection)"),
     ("feed-axis-ambient", "Z-axis thermal error along the axis at ambient 15/20/25/30 C (exp-ambient model)"),
     ("production-day", "a VMC through 4 production days and an unseen day (spindle steps, idle, cooling, day/night air), its project.toml fits, builds and compensates: `mtec run`"),
@@ -34,6 +35,13 @@ pub fn run_scenario(name: &str, seed: u64) -> Result<ScenarioOutput, SimError> {
         }
         "circular-test" => {
             let (files, truth) = crate::circular_test::scenario(seed);
+            Ok(ScenarioOutput {
+                files: pairs(files),
+                truth,
+            })
+        }
+        "circular-test-arc" => {
+            let (files, truth) = crate::circular_test::scenario_arc(seed);
             Ok(ScenarioOutput {
                 files: pairs(files),
                 truth,

@@ -46,10 +46,12 @@ fn a_known_trace_gives_its_faults_back_and_both_files() {
     );
     assert!((o.iso230_4.g_cw_um - 4.0).abs() < 2e-3);
     assert!(o.iso230_4.h_um.abs() < 2e-3);
+    assert!(o.arc.is_none());
     let d = &o.diagnostics;
-    assert!((d.get("centre_offset_X").unwrap().value - 12.0).abs() < 2e-3);
-    assert!((d.get("centre_offset_Y").unwrap().value + 7.0).abs() < 2e-3);
-    assert!((d.get("scale_mismatch").unwrap().value - 40.0).abs() < 0.05);
+    let value = |id: &str| d.get(id).unwrap().value.unwrap();
+    assert!((value("centre_offset_X") - 12.0).abs() < 2e-3);
+    assert!((value("centre_offset_Y") + 7.0).abs() < 2e-3);
+    assert!((value("scale_mismatch") - 40.0).abs() < 0.05);
     assert_eq!(
         d.faults.iter().find(|f| f.present).unwrap().id,
         "scale_mismatch"
@@ -95,4 +97,40 @@ fn a_bad_direction_is_located() {
         circular::run(&opts, &mut Silent),
         Err(Error::Usage(_))
     ));
+}
+
+/// The 220° arc of `circular-test-arc`: its span in the JSON and the text report, the
+/// undetermined faults named in both; the same file read with a 60° arc refused at the option.
+#[test]
+fn a_partial_arc_is_evaluated_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = mtec_sim::run_scenario("circular-test-arc", 4).unwrap();
+    let run = dir.path().join("circular-arc.csv");
+    std::fs::write(&run, &out.files[0].contents).unwrap();
+    let o = circular::run(&Options::new(&run), &mut Silent).unwrap();
+    let arc = o.arc.unwrap();
+    assert_eq!(
+        (arc.start_deg, arc.end_deg, arc.span_deg),
+        (250.0, 110.0, 220.0)
+    );
+    let v: serde_json::Value = serde_json::from_str(&o.to_json().unwrap()).unwrap();
+    assert_eq!(v["arc"]["span_deg"], 220.0);
+    let f = v["diagnostics"]["faults"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["id"] == "backlash_Z_neg")
+        .unwrap();
+    assert!(f["value"].is_null() && f["determined"] == false, "{f}");
+    assert_eq!(f["note"], "not determined by a 220° arc");
+    let text = o.to_string();
+    assert!(text.contains("span 220.0°"), "{text}");
+    assert!(text.contains("not determined by a 220° arc"), "{text}");
+
+    let mut opts = Options::new(&run);
+    opts.arc_deg = Some([-30.0, 30.0]);
+    match circular::run(&opts, &mut Silent) {
+        Err(Error::Input(e)) => assert!(e.message.contains("spans 60.0°"), "{e}"),
+        other => panic!("{other:?}"),
+    }
 }

@@ -21,7 +21,13 @@ Input (CSV, docs/formats.md, \"Circular test CSV\"): angle_deg,direction,dl_um
     # radius_mm = 100
     # plane = XY          (XY, YZ or ZX)
     # feed_mm_min = 1000  (optional)
-  Options override them. Both directions, full circles; the diagnostics need >= 90 samples each.";
+    # arc_start_deg = -110  (a partial arc, e.g. 220 deg in a vertical plane:
+    # arc_end_deg = 110      traced ccw from start to end and cw back; >= 90 deg)
+  Options override them. Both directions, over the full circle unless an arc is declared; the
+  diagnostics need >= 90 samples each. On a partial arc, G and G(b) are taken over the arc, H
+  where both directions overlap, and each fault the arc cannot determine (its pattern reproduced
+  by the others over these angles, or its axis reversal off the arc) is reported as \"not
+  determined by a 220 deg arc\" instead of a number.";
 
 const EXAMPLES: &str = crate::help::examples!(
     "  # a ballbar test of X and Y (R 100 mm, both directions) with injected faults
@@ -30,7 +36,11 @@ const EXAMPLES: &str = crate::help::examples!(
   # results and the polar plot go to c/result (circular.json, polar.svg)
   $ mtec circular c/circular.csv --out c/result
   # the same machine without the faults, to compare
-  $ mtec circular c/circular-fault-free.csv"
+  $ mtec circular c/circular-fault-free.csv
+  # a 220 deg partial arc in ZX (its header: # arc_start_deg = -110 and
+  # # arc_end_deg = 110); the faults the arc cannot determine are named
+  $ mtec simulate circular-test-arc --out a
+  $ mtec circular a/circular-arc.csv --out a/result"
 );
 
 /// Arguments of `mtec circular`.
@@ -55,6 +65,12 @@ pub struct Args {
     /// Plane XY, YZ or ZX; overrides `# plane`.
     #[arg(long)]
     pub plane: Option<String>,
+    /// Start of a partial arc (deg); overrides `# arc_start_deg`. Needs --arc-end-deg.
+    #[arg(long, allow_negative_numbers = true)]
+    pub arc_start_deg: Option<f64>,
+    /// End of a partial arc (deg), traced ccw from the start; overrides `# arc_end_deg`.
+    #[arg(long, allow_negative_numbers = true)]
+    pub arc_end_deg: Option<f64>,
     /// Contribution (um) from which a fault is reported as present.
     #[arg(long, default_value_t = 0.3)]
     pub threshold_um: f64,
@@ -72,8 +88,18 @@ impl Args {
                     CliError::usage(format!("--plane {p}: expected XY, YZ or ZX"))
                 })?),
             };
+        let arc_deg = match (self.arc_start_deg, self.arc_end_deg) {
+            (None, None) => None,
+            (Some(a), Some(b)) => Some([a, b]),
+            _ => {
+                return Err(CliError::usage(
+                    "a partial arc needs both --arc-start-deg and --arc-end-deg",
+                ))
+            }
+        };
         Ok(Options {
             run: self.run.clone(),
+            arc_deg,
             radius_mm: self.radius_mm,
             feed_mm_min: self.feed_mm_min,
             plane,

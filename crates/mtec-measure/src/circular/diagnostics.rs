@@ -52,6 +52,12 @@
 //!   τ = 16/14 ms it is −2.5 ppm (6 % of the 40 ppm injected in the `circular-test` scenario).
 //! - The reversal angles are the commanded ones: a servo lag moves the actual reversal by ωτ
 //!   (0.15° in the scenario), which leaves a few residual samples at each backlash step.
+//! - Reversal spikes come out 11–16 % low on the simulator (`circular-test-arc`, and
+//!   `crates/mtec-measure/tests/circular_faults.rs`): the column is 1 at the reversal sample
+//!   itself, where the axis has not yet reversed (it lags by ωτ) and the data hold no spike;
+//!   that one sample carries 1/8 of the column's weight at 0.2° sampling and w = 3°. Making
+//!   the column 0 there was tried and is worse: the backlash dead-zone mismatch at the same
+//!   sample then leaks into the spike.
 //!
 //! ## Contributions and thresholds
 //! A fault's contribution to circularity is the peak-to-valley of its fitted pattern over both
@@ -109,11 +115,20 @@ pub struct Diagnostic {
     pub id: String,
     /// Human-readable name.
     pub label: String,
-    /// The fitted value in `unit` (for cyclic errors the amplitude).
-    pub value: f64,
+    /// The fitted value in `unit` (for cyclic errors the amplitude); `None` when the trace does
+    /// not determine it (see `determined`).
+    pub value: Option<f64>,
     pub unit: String,
     /// Standard error of `value` from the residual variance.
-    pub std_error: f64,
+    pub std_error: Option<f64>,
+    /// Whether the trace determines the fault: its pattern is not reproduced by the others over
+    /// the angles sampled (variance inflation factor at most [`MAX_VIF`]).
+    pub determined: bool,
+    /// Why there is no value, e.g. "not determined by a 220° arc".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+    /// Variance inflation factor of the fault's column (1 = independent of the others).
+    pub vif: f64,
     /// Peak-to-valley the fault adds to the bidirectional circularity (µm).
     pub contribution_um: f64,
     /// Share of the sum of all contributions (%).
@@ -148,6 +163,15 @@ impl Diagnostics {
         self.faults.iter().filter(|d| d.present)
     }
 }
+
+/// Largest variance inflation factor of a determined fault: its column must keep at least
+/// 1/√VIF = 10 % of its norm outside the span of the other columns. On the full circle every
+/// fault stays below 11 (servo mismatch, against the backlash patterns); on a partial arc the
+/// faults whose patterns the others reproduce go above (docs/methods.md §5).
+pub const MAX_VIF: f64 = 100.0;
+
+/// A reversal counts as traced when it lies this far (deg) inside a partial arc's ends.
+pub const REVERSAL_MARGIN_DEG: f64 = 5.0;
 
 /// Minimum samples per direction for the diagnostic fit.
 pub const MIN_SAMPLES_PER_DIRECTION: usize = 90;
@@ -440,50 +464,88 @@ fn scan_pitch(pts: &[Pt], r_mm: f64, axis: usize, resid: &[f64], k_lo: f64, k_hi
     0.5 * (a + b)
 }
 
-/// Least-squares solution, residual and coefficient standard errors.
+/// Least-squares solution, residual, coefficient standard errors and collinearity.
 struct Fit {
     coef: Vec<f64>,
     std_err: Vec<f64>,
     resid: Vec<f64>,
+    /// Variance inflation factor of each column: [(AᵀA)⁻¹]_jj with unit-norm columns,
+    /// = 1/(1 − R²_j), R²_j the share of column j the other columns reproduce; infinite for a
+    /// column that is zero on these samples.
+    vif: Vec<f64>,
 }
+
+/// Singular values below this fraction of the largest are treated as zero in the solve.
+const RANK_TOL: f64 = 1e-10;
 
 fn solve(cols: &[&[f64]], y: &[f64]) -> Result<Fit, DiagnosticsError> {
     let n = y.len();
     let p = cols.len();
-    // scale columns to unit norm for conditioning
+    // scale columns to unit norm for conditioning; a column that vanishes on these samples
+    // (a fault the trace never excites, e.g. a reversal outside a partial arc) stays zero
     let norms: Vec<f64> = cols
         .iter()
-        .map(|c| c.iter().map(|v| v * v).sum::<f64>().sqrt().max(1e-300))
+        .map(|c| c.iter().map(|v| v * v).sum::<f64>().sqrt())
         .collect();
-    let a = DMatrix::from_fn(n, p, |i, j| cols[j][i] / norms[j]);
+    let biggest = norms.iter().copied().fold(0.0, f64::max);
+    let live: Vec<bool> = norms.iter().map(|&m| m > 1e-9 * biggest).collect();
+    let a = DMatrix::from_fn(
+        n,
+        p,
+        |i, j| {
+            if live[j] {
+                cols[j][i] / norms[j]
+            } else {
+                0.0
+            }
+        },
+    );
     let svd = a.clone().svd(true, true);
     let smax = svd.singular_values.max();
-    let smin = svd.singular_values.min();
-    let cond = smax / smin.max(1e-300);
-    if cond.is_nan() || cond >= 1e8 {
-        return Err(DiagnosticsError::IllConditioned(cond));
+    if !smax.is_finite() || smax == 0.0 {
+        return Err(DiagnosticsError::IllConditioned(f64::NAN));
     }
     let yv = DVector::from_column_slice(y);
+    // pseudo-inverse: directions the columns cannot tell apart get no coefficient
     let x = svd
-        .solve(&yv, 0.0)
-        .map_err(|_| DiagnosticsError::IllConditioned(cond))?;
+        .solve(&yv, RANK_TOL * smax)
+        .map_err(|_| DiagnosticsError::IllConditioned(f64::NAN))?;
     let resid_v = &yv - &a * &x;
-    let dof = (n as f64 - p as f64).max(1.0);
+    let rank = svd
+        .singular_values
+        .iter()
+        .filter(|&&s| s > RANK_TOL * smax)
+        .count();
+    let dof = (n as f64 - rank as f64).max(1.0);
     let sigma2 = resid_v.norm_squared() / dof;
-    // (AᵀA)⁻¹ = V Σ⁻² Vᵀ
+    // (AᵀA)⁻¹ = V Σ⁻² Vᵀ (Var x̂ = σ² (AᵀA)⁻¹); a vanishing singular value counts as 1e-8·s_max
     let v_t = svd.v_t.as_ref().expect("v_t was requested");
+    let vif: Vec<f64> = (0..p)
+        .map(|j| {
+            if !live[j] {
+                return f64::INFINITY;
+            }
+            (0..p)
+                .map(|k| (v_t[(k, j)] / svd.singular_values[k].max(1e-8 * smax)).powi(2))
+                .sum()
+        })
+        .collect();
     let std_err = (0..p)
         .map(|j| {
-            let var: f64 = (0..p)
-                .map(|k| (v_t[(k, j)] / svd.singular_values[k]).powi(2))
-                .sum();
-            (sigma2 * var).sqrt() / norms[j]
+            if live[j] {
+                (sigma2 * vif[j]).sqrt() / norms[j]
+            } else {
+                f64::INFINITY
+            }
         })
         .collect();
     Ok(Fit {
-        coef: (0..p).map(|j| x[j] / norms[j]).collect(),
+        coef: (0..p)
+            .map(|j| if live[j] { x[j] / norms[j] } else { 0.0 })
+            .collect(),
         std_err,
         resid: resid_v.iter().copied().collect(),
+        vif,
     })
 }
 
@@ -627,9 +689,63 @@ pub fn diagnose(
     };
     let mut faults = Vec::new();
     let mut notes = Vec::new();
+    let why_not = match &trace.arc {
+        Some(arc) => format!("not determined by a {:.0}° arc", arc.span_deg),
+        None => "not determined by this trace".to_string(),
+    };
+    let undetermined = |id: String, label: String, unit: String, vif: f64| Diagnostic {
+        id,
+        label,
+        value: None,
+        unit,
+        std_error: None,
+        determined: false,
+        note: Some(why_not.clone()),
+        vif,
+        contribution_um: 0.0,
+        contribution_percent: 0.0,
+        present: false,
+        pitch_mm: None,
+    };
+    // a fault defined by an axis reversal needs that reversal on the arc
+    let reversal_missing = |id: &str| -> bool {
+        let Some(arc) = &trace.arc else {
+            return false;
+        };
+        let on_arc = |deg: f64| {
+            let u = arc.along(deg);
+            u >= REVERSAL_MARGIN_DEG && u <= arc.span_deg - REVERSAL_MARGIN_DEG
+        };
+        let [a1, a2] = axes;
+        let needs: &[f64] = if id == format!("backlash_{a1}_pos") {
+            &[0.0]
+        } else if id == format!("backlash_{a1}_neg") {
+            &[180.0]
+        } else if id == format!("backlash_{a2}_pos") {
+            &[90.0]
+        } else if id == format!("backlash_{a2}_neg") {
+            &[270.0]
+        } else if id == format!("reversal_spike_{a1}") {
+            &[0.0, 180.0]
+        } else if id == format!("reversal_spike_{a2}") {
+            &[90.0, 270.0]
+        } else {
+            return false;
+        };
+        !needs.iter().any(|&d| on_arc(d))
+    };
     for (j, t) in terms.iter().enumerate().skip(1) {
         let value = fit.coef[j];
         let se = fit.std_err[j];
+        if fit.vif[j] > MAX_VIF || reversal_missing(&t.id) {
+            faults.push(undetermined(
+                t.id.clone(),
+                t.label.clone(),
+                t.unit.clone(),
+                fit.vif[j],
+            ));
+            continue;
+        }
         let is_centre = t.id.starts_with("centre_offset");
         let contrib = if is_centre {
             0.0
@@ -644,9 +760,12 @@ pub fn diagnose(
         faults.push(Diagnostic {
             id: t.id.clone(),
             label: t.label.clone(),
-            value,
+            value: Some(value),
             unit: t.unit.clone(),
-            std_error: se,
+            std_error: Some(se),
+            determined: true,
+            note: None,
+            vif: fit.vif[j],
             contribution_um: contrib,
             contribution_percent: 0.0,
             present,
@@ -655,8 +774,18 @@ pub fn diagnose(
     }
     let nb = terms.len();
     for axis in 0..2 {
-        let (a, b) = (fit.coef[nb + 2 * axis], fit.coef[nb + 2 * axis + 1]);
-        let (sa, sb) = (fit.std_err[nb + 2 * axis], fit.std_err[nb + 2 * axis + 1]);
+        let (ja, jb) = (nb + 2 * axis, nb + 2 * axis + 1);
+        let vif = fit.vif[ja].max(fit.vif[jb]);
+        let (id, label) = (
+            format!("cyclic_{}", axes[axis]),
+            format!("Cyclic error {}", axes[axis]),
+        );
+        if vif > MAX_VIF {
+            faults.push(undetermined(id, label, "um".into(), vif));
+            continue;
+        }
+        let (a, b) = (fit.coef[ja], fit.coef[jb]);
+        let (sa, sb) = (fit.std_err[ja], fit.std_err[jb]);
         let amp = a.hypot(b);
         let se = if amp > 0.0 {
             ((a * sa).powi(2) + (b * sb).powi(2)).sqrt() / amp
@@ -668,16 +797,43 @@ pub fn diagnose(
             .collect();
         let contrib = contribution(pattern);
         faults.push(Diagnostic {
-            id: format!("cyclic_{}", axes[axis]),
-            label: format!("Cyclic error {}", axes[axis]),
-            value: amp,
+            id,
+            label,
+            value: Some(amp),
             unit: "um".into(),
-            std_error: se,
+            std_error: Some(se),
+            determined: true,
+            note: None,
+            vif,
             contribution_um: contrib,
             contribution_percent: 0.0,
             present: contrib >= cfg.threshold_um && amp > 3.0 * se,
             pitch_mm: Some(1.0 / pitch_k[axis]),
         });
+    }
+    if let Some(arc) = &trace.arc {
+        let (mut collinear, mut off_arc) = (Vec::new(), Vec::new());
+        for f in faults.iter().filter(|f| !f.determined) {
+            if f.vif > MAX_VIF {
+                collinear.push(f.id.as_str());
+            } else {
+                off_arc.push(f.id.as_str());
+            }
+        }
+        if !collinear.is_empty() {
+            notes.push(format!(
+                "partial arc of {:.0}°: {} not determined: over these angles the other faults reproduce their patterns (variance inflation > {MAX_VIF}); trace the full circle for them",
+                arc.span_deg,
+                collinear.join(", ")
+            ));
+        }
+        if !off_arc.is_empty() {
+            notes.push(format!(
+                "partial arc of {:.0}°: {} not determined: the axis reversal that shows them is not on the arc",
+                arc.span_deg,
+                off_arc.join(", ")
+            ));
+        }
     }
     if trace.feed_mm_min.is_none() {
         notes.push(
@@ -695,7 +851,13 @@ pub fn diagnose(
     faults.sort_by(|a, b| {
         b.contribution_um
             .total_cmp(&a.contribution_um)
-            .then(b.value.abs().total_cmp(&a.value.abs()))
+            .then(b.determined.cmp(&a.determined))
+            .then(
+                b.value
+                    .unwrap_or(0.0)
+                    .abs()
+                    .total_cmp(&a.value.unwrap_or(0.0).abs()),
+            )
     });
     let rms = (fit.resid.iter().map(|r| r * r).sum::<f64>() / fit.resid.len() as f64).sqrt();
     Ok(Diagnostics {
@@ -728,6 +890,7 @@ mod tests {
             radius_mm: 100.0,
             plane: Plane::XY,
             feed_mm_min: Some(1000.0),
+            arc: None,
             ccw: dir(1.0),
             cw: dir(-1.0),
         }
@@ -741,7 +904,7 @@ mod tests {
         let t = trace_from(|th, _| 2.0 * (2.0 * th).cos(), 720);
         let d = diagnose(&t, &DiagnosticsConfig::default()).unwrap();
         let s = d.get("scale_mismatch").unwrap();
-        assert!((s.value - 40.0).abs() < 1e-6, "{s:?}");
+        assert!((s.value.unwrap() - 40.0).abs() < 1e-6, "{s:?}");
         assert!((s.contribution_um - 4.0).abs() < 1e-6, "{s:?}");
         assert_eq!(d.faults[0].id, "scale_mismatch");
         assert_eq!(
@@ -761,10 +924,10 @@ mod tests {
         let t = trace_from(|th, d| (d * 1.5 + 0.8) * (2.0 * th).sin(), 720);
         let d = diagnose(&t, &DiagnosticsConfig::default()).unwrap();
         let servo = d.get("servo_mismatch").unwrap();
-        assert!((servo.value - 0.18).abs() < 1e-9, "{servo:?}");
+        assert!((servo.value.unwrap() - 0.18).abs() < 1e-9, "{servo:?}");
         assert!((servo.contribution_um - 3.0).abs() < 1e-6, "{servo:?}");
         let sq = d.get("squareness").unwrap();
-        assert!((sq.value - 16.0).abs() < 1e-6, "{sq:?}");
+        assert!((sq.value.unwrap() - 16.0).abs() < 1e-6, "{sq:?}");
         assert!((sq.contribution_um - 1.6).abs() < 1e-6, "{sq:?}");
         let ids: Vec<&str> = d.present().map(|f| f.id.as_str()).collect();
         assert_eq!(ids, ["servo_mismatch", "squareness"]);

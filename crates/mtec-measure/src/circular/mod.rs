@@ -7,4 +7,7 @@ pub mod trace;
 
 pub use diagnostics::{diagnose, Diagnostic, Diagnostics, DiagnosticsConfig, DiagnosticsError};
 pub use iso230_4::{evaluate, fit_circle, radii_about, Iso230_4, LsqCircle};
-pub use trace::{CircularTrace, Plane, Sample, TraceOptions, Travel};
+pub use trace::{
+    circle_fit_condition, circle_fit_condition_of_span, Arc, CircularTrace, Plane, Sample,
+    TraceOptions, Travel, MIN_ARC_DEG,
+};

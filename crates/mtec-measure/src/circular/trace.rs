@@ -10,7 +10,15 @@
 //! - `dl_um` is the change of the bar length from its nominal length (= the radius): positive
 //!   when the tool is farther from the pivot than nominal.
 //! - Both directions must be present, each with at least 8 samples and no angular gap larger
-//!   than 45°: the least-squares circle of a partial arc is ill-determined.
+//!   than 45°, round the full circle unless a partial arc is declared.
+//! - A partial arc (ISO 230-4 allows one where the full circle cannot be reached, e.g. 220° in a
+//!   vertical plane) is declared by `# arc_start_deg = -110` and `# arc_end_deg = 110` (or
+//!   `--arc-start-deg`, `--arc-end-deg`): traced ccw from start to end and cw back. It must span
+//!   at least [`MIN_ARC_DEG`] (below that the least-squares centre is ill-conditioned, see
+//!   [`circle_fit_condition`]); every sample must lie on it; each direction must cover it end to
+//!   end (first and last sample within [`MAX_END_GAP_DEG`] of its ends) with no gap over 45°.
+//!   Declaring the arc keeps a full-circle test with lost data refused rather than silently
+//!   evaluated as an arc.
 
 use mtec_io::{InputError, Table};
 use std::path::Path;
@@ -83,6 +91,29 @@ pub struct TraceOptions {
     pub radius_mm: Option<f64>,
     pub plane: Option<Plane>,
     pub feed_mm_min: Option<f64>,
+    /// A partial arc: start and end (deg), traced ccw from start to end.
+    pub arc_deg: Option<[f64; 2]>,
+}
+
+/// A partial arc: from `start_deg` ccw to `end_deg` (both in [0, 360)), `span_deg` in
+/// [[`MIN_ARC_DEG`], 360).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Arc {
+    pub start_deg: f64,
+    pub end_deg: f64,
+    pub span_deg: f64,
+}
+
+impl Arc {
+    /// Position of an angle along the arc (deg from its start, ccw), in [−tol, 360 − tol).
+    pub fn along(&self, angle_deg: f64) -> f64 {
+        let u = (angle_deg - self.start_deg).rem_euclid(360.0);
+        if u > 360.0 - ANGLE_TOL_DEG {
+            u - 360.0
+        } else {
+            u
+        }
+    }
 }
 
 /// A validated circular-test trace.
@@ -91,6 +122,8 @@ pub struct CircularTrace {
     pub radius_mm: f64,
     pub plane: Plane,
     pub feed_mm_min: Option<f64>,
+    /// The partial arc, `None` for a full circle.
+    pub arc: Option<Arc>,
     /// Samples in file order per direction.
     pub ccw: Vec<Sample>,
     pub cw: Vec<Sample>,
@@ -98,6 +131,17 @@ pub struct CircularTrace {
 
 const MIN_SAMPLES: usize = 8;
 const MAX_GAP_DEG: f64 = 45.0;
+/// The shortest partial arc evaluated (deg). The circle fit's condition number (columns 1,
+/// cos θ, sin θ over evenly spaced samples, [`circle_fit_condition_of_span`]) is √2 = 1.41 on
+/// the full circle, 3.0 at 220°, 4.6 at 180°, 20 at 90°, 84 at 45° and 330 at 22.5°: it grows
+/// as 1/span², because over a short arc 1 and cos θ differ only by θ²/2, so the radius and the
+/// centre's component along the arc's bisector trade off against each other (a short arc fits
+/// circles of many radii). 90° caps it at 20, 14 times the full circle's.
+pub const MIN_ARC_DEG: f64 = 90.0;
+/// How far (deg) a direction's first and last samples may be from the declared arc's ends.
+pub const MAX_END_GAP_DEG: f64 = 5.0;
+/// Angles are compared to the arc's ends to this tolerance (deg): files hold 4 decimals.
+const ANGLE_TOL_DEG: f64 = 1e-3;
 
 impl CircularTrace {
     /// Reads and validates a trace file; `opts` override the header comments.
@@ -164,6 +208,7 @@ impl CircularTrace {
                 ));
             }
         }
+        let arc = read_arc(table, opts)?;
 
         table.require(&["angle_deg", "direction", "dl_um"])?;
         let angles = table.f64_column("angle_deg")?;
@@ -184,6 +229,18 @@ impl CircularTrace {
                         dls[k]
                     ),
                 ));
+            }
+            if let Some(arc) = &arc {
+                if arc.along(s.angle_deg) > arc.span_deg + ANGLE_TOL_DEG {
+                    return Err(table.error_at(
+                        row,
+                        "angle_deg",
+                        format!(
+                            "angle {}° is outside the declared arc from {}° to {}°",
+                            angles[k], arc.start_deg, arc.end_deg
+                        ),
+                    ));
+                }
             }
             match dirs[k].to_ascii_lowercase().as_str() {
                 "ccw" => ccw.push(s),
@@ -207,12 +264,16 @@ impl CircularTrace {
                     ),
                 ));
             }
+            if let Some(arc) = &arc {
+                check_arc_coverage(path, arc, samples, name)?;
+                continue;
+            }
             let gap = largest_gap_deg(samples);
             if gap > MAX_GAP_DEG {
                 return Err(InputError::file(
                     path,
                     format!(
-                        "direction `{name}` leaves a gap of {gap:.1}° without samples: a full circle is needed (largest gap allowed {MAX_GAP_DEG}°)"
+                        "direction `{name}` leaves a gap of {gap:.1}° without samples: a full circle is needed (largest gap allowed {MAX_GAP_DEG}°); a partial arc must be declared: `# arc_start_deg = ...` and `# arc_end_deg = ...` (or --arc-start-deg, --arc-end-deg)"
                     ),
                 ));
             }
@@ -221,6 +282,7 @@ impl CircularTrace {
             radius_mm,
             plane,
             feed_mm_min,
+            arc,
             ccw,
             cw,
         })
@@ -233,6 +295,119 @@ impl CircularTrace {
             Travel::Cw => &self.cw,
         }
     }
+}
+
+/// The declared partial arc, from the options or the header comments.
+fn read_arc(table: &Table, opts: &TraceOptions) -> Result<Option<Arc>, InputError> {
+    let path = &table.path;
+    // (start, end, where: a header line or the options)
+    let (start, end, line) = match opts.arc_deg {
+        Some([a, b]) => (a, b, None),
+        None => {
+            let get = |key: &str| -> Result<Option<(usize, f64)>, InputError> {
+                match table.comment_value_at(key) {
+                    None => Ok(None),
+                    Some((line, v)) => match v.parse::<f64>().ok().filter(|x| x.is_finite()) {
+                        Some(x) => Ok(Some((line, x))),
+                        None => Err(InputError::line(
+                            path,
+                            line,
+                            format!("header comment `{key} = {v}`: not a finite number"),
+                        )),
+                    },
+                }
+            };
+            match (get("arc_start_deg")?, get("arc_end_deg")?) {
+                (None, None) => return Ok(None),
+                (Some((_, a)), Some((l, b))) => (a, b, Some(l)),
+                (Some((l, _)), None) | (None, Some((l, _))) => {
+                    return Err(InputError::line(
+                        path,
+                        l,
+                        "a partial arc needs both `# arc_start_deg` and `# arc_end_deg`",
+                    ))
+                }
+            }
+        }
+    };
+    let fail = |msg: String| match line {
+        Some(l) => InputError::line(path, l, msg),
+        None => InputError::file(path, format!("--arc-start-deg/--arc-end-deg: {msg}")),
+    };
+    if !(start.is_finite() && end.is_finite()) {
+        return Err(fail("the arc's ends must be finite numbers".into()));
+    }
+    let span = (end - start).rem_euclid(360.0);
+    if span < MIN_ARC_DEG {
+        return Err(fail(format!(
+            "the arc from {start}° to {end}° spans {span:.1}°: too short to determine a circle \
+             (at least {MIN_ARC_DEG}°; the least-squares centre's condition number is {:.0} at \
+             this span against {:.0} at {MIN_ARC_DEG}°)",
+            circle_fit_condition_of_span(span.max(1.0)),
+            circle_fit_condition_of_span(MIN_ARC_DEG)
+        )));
+    }
+    Ok(Some(Arc {
+        start_deg: start.rem_euclid(360.0),
+        end_deg: end.rem_euclid(360.0),
+        span_deg: span,
+    }))
+}
+
+/// Each direction covers the arc end to end without a gap over 45°.
+fn check_arc_coverage(
+    path: &Path,
+    arc: &Arc,
+    samples: &[Sample],
+    name: &str,
+) -> Result<(), InputError> {
+    let mut u: Vec<f64> = samples.iter().map(|s| arc.along(s.angle_deg)).collect();
+    u.sort_by(f64::total_cmp);
+    let (first, last) = (u[0], u[u.len() - 1]);
+    if first > MAX_END_GAP_DEG || arc.span_deg - last > MAX_END_GAP_DEG {
+        return Err(InputError::file(
+            path,
+            format!(
+                "direction `{name}` covers {first:.1}° to {last:.1}° of the declared {:.1}° arc: \
+                 it must be traced end to end (within {MAX_END_GAP_DEG}° of each end)",
+                arc.span_deg
+            ),
+        ));
+    }
+    let gap = u.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
+    if gap > MAX_GAP_DEG {
+        return Err(InputError::file(
+            path,
+            format!(
+                "direction `{name}` leaves a gap of {gap:.1}° without samples inside the declared arc (largest gap allowed {MAX_GAP_DEG}°)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Condition number of the linearised least-squares circle fit (columns 1, cos θ, sin θ; the
+/// Gauss–Newton Jacobian at the solution up to signs) at these angles: how much the centre
+/// and radius amplify the noise relative to the best case.
+pub fn circle_fit_condition(angles_deg: &[f64]) -> f64 {
+    let a = nalgebra::DMatrix::from_fn(angles_deg.len(), 3, |i, j| {
+        let t = angles_deg[i].to_radians();
+        [1.0, t.cos(), t.sin()][j]
+    });
+    let s = a.singular_values();
+    s.max() / s.min()
+}
+
+/// [`circle_fit_condition`] of 0.5°-spaced samples over an arc of `span_deg`.
+pub fn circle_fit_condition_of_span(span_deg: f64) -> f64 {
+    let n = (span_deg / 0.5).ceil().max(2.0) as usize;
+    let step = if span_deg >= 360.0 {
+        360.0 / n as f64
+    } else {
+        span_deg / (n - 1) as f64
+    };
+    let a: Vec<f64> = (0..n).map(|k| k as f64 * step).collect();
+    circle_fit_condition(&a)
 }
 
 /// Largest angular gap (deg) between consecutive sample angles round the full circle.
@@ -299,5 +474,83 @@ mod tests {
         }
         let e = trace("# radius_mm = 100\n", &half).unwrap_err();
         assert!(e.message.contains("gap of 180.0°"), "{e}");
+    }
+}
+
+#[cfg(test)]
+mod arc_tests {
+    use super::*;
+
+    /// The full circle worked by hand: n evenly spaced samples make the columns 1, cos θ, sin θ
+    /// orthogonal with norms² n, n/2, n/2, so the condition number is √(n/(n/2)) = √2. Over a
+    /// short arc it grows as 1/span² (halving the span multiplies it by 4, to 2 %).
+    #[test]
+    fn circle_fit_condition_by_span() {
+        assert!((circle_fit_condition_of_span(360.0) - 2f64.sqrt()).abs() < 1e-9);
+        let c = |s: f64| circle_fit_condition_of_span(s);
+        for (span, want) in [(220.0, 3.03), (180.0, 4.63), (90.0, 20.38), (45.0, 83.86)] {
+            assert!((c(span) - want).abs() < 0.01, "{span}: {}", c(span));
+        }
+        let ratio = c(22.5) / c(45.0);
+        assert!((ratio - 4.0).abs() < 0.08, "{ratio}");
+    }
+
+    fn arc_trace(
+        header: &str,
+        from: i32,
+        to: i32,
+        step: usize,
+    ) -> Result<CircularTrace, InputError> {
+        let mut rows = String::new();
+        for d in ["ccw", "cw"] {
+            for a in (from..=to).step_by(step) {
+                rows.push_str(&format!("{a},{d},0.5\n"));
+            }
+        }
+        let text = format!("# radius_mm = 100\n{header}angle_deg,direction,dl_um\n{rows}");
+        CircularTrace::from_table(
+            &Table::parse(Path::new("arc.csv"), &text)?,
+            &TraceOptions::default(),
+        )
+    }
+
+    #[test]
+    fn a_declared_arc_is_read_and_checked() {
+        let h = "# arc_start_deg = -110\n# arc_end_deg = 110\n";
+        let t = arc_trace(h, -110, 110, 2).unwrap();
+        let arc = t.arc.unwrap();
+        assert_eq!(
+            (arc.start_deg, arc.end_deg, arc.span_deg),
+            (250.0, 110.0, 220.0)
+        );
+        assert_eq!(t.ccw.len(), 111);
+        // undeclared, the same data is a full circle with a 140° hole: refused
+        let e = arc_trace("", -110, 110, 2).unwrap_err();
+        assert!(
+            e.message.contains("gap of 140.0°") && e.message.contains("arc_start_deg"),
+            "{e}"
+        );
+        // a sample off the arc is located
+        let e = arc_trace(
+            "# arc_start_deg = -100\n# arc_end_deg = 110\n",
+            -110,
+            110,
+            2,
+        )
+        .unwrap_err();
+        assert_eq!((e.line, e.column), (Some(5), Some(1)), "{e}");
+        // an arc not traced to its end
+        let e = arc_trace(h, -110, 90, 2).unwrap_err();
+        assert!(e.message.contains("end to end"), "{e}");
+        // too short: refused at the line that declares its end
+        let e = arc_trace("# arc_start_deg = 10\n# arc_end_deg = 70\n", 10, 70, 1).unwrap_err();
+        assert_eq!(e.line, Some(3), "{e}");
+        assert!(
+            e.message.contains("spans 60.0°") && e.message.contains("at least 90°"),
+            "{e}"
+        );
+        // only one end
+        let e = arc_trace("# arc_end_deg = 70\n", 10, 70, 1).unwrap_err();
+        assert_eq!(e.line, Some(2), "{e}");
     }
 }

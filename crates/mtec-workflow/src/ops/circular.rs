@@ -5,7 +5,7 @@
 use crate::{Error, Observer, Result};
 use mtec_io::{InputError, OutputGuard};
 use mtec_measure::circular::{
-    diagnose, evaluate, radii_about, CircularTrace, Diagnostics, DiagnosticsConfig, Iso230_4,
+    diagnose, evaluate, radii_about, Arc, CircularTrace, Diagnostics, DiagnosticsConfig, Iso230_4,
     Plane, TraceOptions, Travel,
 };
 use mtec_report::polar::{polar_svg, PolarOptions, PolarTrace};
@@ -29,6 +29,9 @@ pub struct Options {
     pub feed_mm_min: Option<f64>,
     /// Plane; overrides `# plane`.
     pub plane: Option<Plane>,
+    /// A partial arc (start, end) in degrees, traced ccw from start to end; overrides
+    /// `# arc_start_deg` and `# arc_end_deg`.
+    pub arc_deg: Option<[f64; 2]>,
     /// Contribution (µm) from which a fault is reported as present.
     pub threshold_um: f64,
     /// Folder to write `circular.json` and `polar.svg` into; `None` writes nothing.
@@ -43,6 +46,7 @@ impl Options {
             radius_mm: None,
             feed_mm_min: None,
             plane: None,
+            arc_deg: None,
             threshold_um: 0.3,
             out: None,
         }
@@ -68,6 +72,8 @@ pub struct Outcome {
     pub plane: Plane,
     /// Feed (mm/min), when known.
     pub feed_mm_min: Option<f64>,
+    /// The partial arc (start, end, span in degrees), `null` for a full circle.
+    pub arc: Option<Arc>,
     pub samples: Samples,
     /// G, G(b), H and the least-squares circles (µm).
     pub iso230_4: Iso230_4,
@@ -96,6 +102,13 @@ fn check(o: &Options) -> Result<()> {
             }
         }
     }
+    if let Some([a, b]) = o.arc_deg {
+        if !(a.is_finite() && b.is_finite()) {
+            return Err(Error::usage(
+                "--arc-start-deg and --arc-end-deg must be finite numbers",
+            ));
+        }
+    }
     if !(o.threshold_um >= 0.0 && o.threshold_um.is_finite()) {
         return Err(Error::usage("--threshold-um must be a non-negative number"));
     }
@@ -116,6 +129,7 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
             radius_mm: opts.radius_mm,
             plane: opts.plane,
             feed_mm_min: opts.feed_mm_min,
+            arc_deg: opts.arc_deg,
         },
     )?;
     let iso = evaluate(&trace);
@@ -131,6 +145,7 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
         radius_mm: trace.radius_mm,
         plane: trace.plane,
         feed_mm_min: trace.feed_mm_min,
+        arc: trace.arc,
         samples: Samples {
             ccw: trace.ccw.len(),
             cw: trace.cw.len(),
@@ -205,6 +220,13 @@ impl fmt::Display for Outcome {
                 .map(|f| format!(", F = {f} mm/min"))
                 .unwrap_or_default()
         )?;
+        if let Some(a) = &self.arc {
+            writeln!(
+                o,
+                "partial arc: {:.1}° to {:.1}° (ccw), span {:.1}°; G, G(b) over the arc, H where both directions overlap",
+                a.start_deg, a.end_deg, a.span_deg
+            )?;
+        }
         writeln!(o)?;
         writeln!(
             o,
@@ -232,6 +254,11 @@ impl fmt::Display for Outcome {
             "  least-squares centre ({a1}, {a2})      ({:.3}, {:.3}) um, radius deviation {:.3} um",
             c.centre_um[0], c.centre_um[1], c.radius_deviation_um
         )?;
+        writeln!(
+            o,
+            "  condition number of the circle fit {:>9.2} (full circle 1.41)",
+            iso.circle_fit_condition
+        )?;
         writeln!(o)?;
         let diag = &self.diagnostics;
         writeln!(
@@ -249,14 +276,23 @@ impl fmt::Display for Outcome {
                 Some(p) if d.present => format!("{} (pitch {p:.2} mm)", d.label),
                 _ => d.label.clone(),
             };
+            let (Some(value), Some(se)) = (d.value, d.std_error) else {
+                writeln!(
+                    o,
+                    "  {:<40} {}",
+                    label,
+                    d.note.as_deref().unwrap_or("not determined")
+                )?;
+                continue;
+            };
             writeln!(
                 o,
                 "{} {:<40} {:>11.3} {:<5} {:>9.3} {:>8.3} {:>6.1}",
                 if d.present { "*" } else { " " },
                 label,
-                d.value,
+                value,
                 d.unit,
-                d.std_error,
+                se,
                 d.contribution_um,
                 d.contribution_percent
             )?;
