@@ -55,10 +55,9 @@ impl<R: BufRead> Lines<R> {
         }
     }
 
-    /// Reads one line into `pending` (an empty line for a blank or comment line). Returns the
-    /// line's text if it has content, `None` for blank and comment lines; `Ok(false)`-like end
-    /// of input is `eof`.
-    fn read_line(&mut self) -> Result<Option<String>, InputError> {
+    /// Reads one line into `pending` (an empty line for a blank or comment line). Returns true
+    /// for a line with content; at the end of the input `eof` is set.
+    fn read_line(&mut self) -> Result<bool, InputError> {
         self.raw.clear();
         let n = self
             .inner
@@ -66,7 +65,7 @@ impl<R: BufRead> Lines<R> {
             .map_err(|e| InputError::file(&self.path, format!("cannot read: {e}")))?;
         if n == 0 {
             self.eof = true;
-            return Ok(None);
+            return Ok(false);
         }
         self.line += 1;
         let mut bytes = self.raw.as_slice();
@@ -91,12 +90,12 @@ impl<R: BufRead> Lines<R> {
         let trimmed = text.trim();
         if trimmed.is_empty() {
             self.pending.push(b'\n');
-            return Ok(None);
+            return Ok(false);
         }
         if let Some(c) = trimmed.strip_prefix('#') {
             self.comments.push(c.trim().to_string());
             self.pending.push(b'\n');
-            return Ok(None);
+            return Ok(false);
         }
         self.pending.extend_from_slice(bytes);
         self.pending.push(b'\n');
@@ -113,15 +112,17 @@ impl<R: BufRead> Lines<R> {
                 ),
             ));
         }
-        Ok(Some(text.to_string()))
+        Ok(true)
     }
 
     /// Reads up to the first line with content (the header), queued for the parser; `None` at
     /// the end of the input.
     fn first_content_line(&mut self) -> Result<Option<String>, InputError> {
         while !self.eof {
-            if let Some(text) = self.read_line()? {
-                return Ok(Some(text));
+            let start = self.pending.len();
+            if self.read_line()? {
+                let line = &self.pending[start..self.pending.len() - 1];
+                return Ok(Some(String::from_utf8_lossy(line).into_owned()));
             }
         }
         Ok(None)

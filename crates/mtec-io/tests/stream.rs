@@ -161,3 +161,11 @@ fn quotes_that_do_not_close_on_their_line_are_located() {
     assert_eq!(e.line, Some(3), "{e}");
     assert!(e.message.contains("closing quote"), "{e}");
 }
+
+#[test]
+fn quoted_fields_hold_separators_in_both_dialects() {
+    let t = Table::parse(Path::new("t.csv"), "name;x_mm\n\"a;b\";1,5\n").unwrap();
+    assert_eq!(t.rows[0].fields, ["a;b", "1.5"]);
+    let t = Table::parse(Path::new("t.csv"), "name,x_mm\n\"a,\"\"b\"\"\",1.5\n").unwrap();
+    assert_eq!(t.rows[0].fields, ["a,\"b\"", "1.5"]);
+}

@@ -110,7 +110,12 @@ struct Collector {
     cols: [usize; 4],
     /// Target key -> (target number, value in mm as first written).
     targets: BTreeMap<i64, (usize, f64)>,
-    passes: BTreeMap<(Approach, i64), Pass>,
+    /// (direction, run) -> index into `passes`.
+    pass_index: BTreeMap<(Approach, i64), usize>,
+    passes: Vec<Pass>,
+    /// The pass of the previous row (rows come pass by pass: the map is searched only when the
+    /// pass changes).
+    last: Option<((Approach, i64), usize)>,
 }
 
 impl Collector {
@@ -125,7 +130,9 @@ impl Collector {
         Ok(Collector {
             cols,
             targets: BTreeMap::new(),
-            passes: BTreeMap::new(),
+            pass_index: BTreeMap::new(),
+            passes: Vec::new(),
+            last: None,
         })
     }
 
@@ -159,11 +166,23 @@ impl Collector {
             .targets
             .entry(target_key(target))
             .or_insert((n_targets, target));
-        let pass = self.passes.entry((dir, run)).or_insert_with(|| Pass {
-            dev_um: Vec::new(),
-            line: Vec::new(),
-            first_line: row.line(),
-        });
+        let k = match self.last {
+            Some((key, k)) if key == (dir, run) => k,
+            _ => {
+                let n = self.passes.len();
+                let k = *self.pass_index.entry((dir, run)).or_insert(n);
+                if k == n {
+                    self.passes.push(Pass {
+                        dev_um: Vec::new(),
+                        line: Vec::new(),
+                        first_line: row.line(),
+                    });
+                }
+                self.last = Some(((dir, run), k));
+                k
+            }
+        };
+        let pass = &mut self.passes[k];
         if i >= pass.dev_um.len() {
             pass.dev_um.resize(i + 1, f64::NAN);
             pass.line.resize(i + 1, 0);
@@ -185,7 +204,10 @@ impl Collector {
 
     fn finish(self, path: &Path) -> Result<PositioningData, InputError> {
         let Collector {
-            targets, passes, ..
+            targets,
+            pass_index,
+            passes,
+            ..
         } = self;
         if targets.len() < 2 {
             return Err(InputError::file(
@@ -197,7 +219,8 @@ impl Collector {
             ));
         }
         // Every pass must visit every target (checked in ascending target order).
-        for ((dir, run), pass) in &passes {
+        for ((dir, run), &k) in &pass_index {
+            let pass = &passes[k];
             if let Some((_, &(_, t))) = targets
                 .iter()
                 .find(|(_, (i, _))| pass.dev_um.get(*i).is_none_or(|x| x.is_nan()))
@@ -213,7 +236,7 @@ impl Collector {
             }
         }
         let runs_of = |d: Approach| -> Vec<i64> {
-            passes
+            pass_index
                 .keys()
                 .filter(|(dd, _)| *dd == d)
                 .map(|(_, r)| *r)
@@ -250,7 +273,11 @@ impl Collector {
         let matrix = |d: Approach, runs: &[i64]| -> Vec<Vec<f64>> {
             targets
                 .values()
-                .map(|&(i, _)| runs.iter().map(|r| passes[&(d, *r)].dev_um[i]).collect())
+                .map(|&(i, _)| {
+                    runs.iter()
+                        .map(|r| passes[pass_index[&(d, *r)]].dev_um[i])
+                        .collect()
+                })
                 .collect()
         };
         Ok(PositioningData {

@@ -3,7 +3,7 @@
 
 use crate::{Error, Observer, Result};
 use mtec_comp::map::{GridLimits, GridMap, Outside};
-use mtec_io::{CsvReader, Destination, InputError, OutputGuard, Table};
+use mtec_io::{CsvReader, Destination, InputError, OutputGuard};
 use serde::Serialize;
 use std::fmt;
 use std::fmt::Write as _;
@@ -146,7 +146,7 @@ fn fit_bpnn(
             "--hidden must be between 1 and 1000, got {hidden}"
         )));
     }
-    let table = Table::read(grid_path)?;
+    let table = mtec_io::Table::read(grid_path)?;
     let cols = ["x_mm", "y_mm", "z_mm", "ex_um", "ey_um", "ez_um"];
     table.require(&cols)?;
     let c: Vec<Vec<f64>> = cols
@@ -284,7 +284,12 @@ pub fn eval(opts: &EvalOptions, _obs: &mut dyn Observer) -> Result<EvalOutcome> 
         let _ = writeln!(
             out,
             "{},{},{},{},{},{}",
-            row.str(cols[0]), row.str(cols[1]), row.str(cols[2]), e[0], e[1], e[2]
+            row.str(cols[0]),
+            row.str(cols[1]),
+            row.str(cols[2]),
+            e[0],
+            e[1],
+            e[2]
         );
         n += 1;
     }
