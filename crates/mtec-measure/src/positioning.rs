@@ -270,6 +270,11 @@ impl Collector {
                 targets.len()
             ));
         }
+        // the lines were for messages; free them before the matrices are built
+        let mut passes = passes;
+        for p in &mut passes {
+            p.line = Vec::new();
+        }
         let matrix = |d: Approach, runs: &[i64]| -> Vec<Vec<f64>> {
             targets
                 .values()
