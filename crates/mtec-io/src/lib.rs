@@ -12,10 +12,12 @@
 
 mod error;
 pub mod notes;
+mod stream;
 mod table;
 mod write;
 
 pub use error::{InputError, Located};
+pub use stream::{CsvReader, Row, MAX_RECORD_BYTES};
 pub use table::{Table, TableRow};
 pub use write::{write_output, Destination, Output, OutputError, OutputGuard};
 

@@ -1,6 +1,7 @@
 //! A CSV table with a header row, `#` comment lines, and typed, located column access.
 
 use crate::error::InputError;
+use crate::stream::{CsvReader, Row};
 use std::path::{Path, PathBuf};
 
 /// One data row: its fields as text and the line of the file it came from (1-based).
@@ -36,14 +37,14 @@ pub struct Table {
 
 /// The field separator of a file, decided from its header.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Dialect {
+pub(crate) enum Dialect {
     Comma,
     /// Semicolons or tabs, with decimal commas in numbers.
     Spreadsheet(char),
 }
 
 /// `-1,25`, `3,5e-3`: a number with a decimal comma (digits on both sides, one comma).
-fn decimal_comma(f: &str) -> Option<String> {
+pub(crate) fn decimal_comma(f: &str) -> Option<String> {
     let (int, frac) = f.split_once(',')?;
     let int_digits = int.strip_prefix(['-', '+']).unwrap_or(int);
     let (frac_digits, exp) = match frac.find(['e', 'E']) {
@@ -60,160 +61,44 @@ impl Table {
     /// Reads and checks the file's shape: header present, no duplicated column, every row as wide
     /// as the header, at least one data row.
     pub fn read(path: &Path) -> Result<Table, InputError> {
-        let text = crate::read_text(path)?;
-        Table::parse(path, &text)
+        Table::collect(CsvReader::open(path)?)
     }
 
     /// Parses CSV text that was read from `path` (the path is used in messages only).
     pub fn parse(path: &Path, text: &str) -> Result<Table, InputError> {
-        let mut comments = Vec::new();
-        let mut comment_lines = Vec::new();
-        let mut notes = Vec::new();
-        let mut header: Option<(usize, Vec<String>)> = None;
+        Table::collect(CsvReader::new(path, text.as_bytes())?)
+    }
+
+    /// Every row of a streaming reader: the one CSV reading path, run to the end.
+    fn collect<R: std::io::BufRead>(mut r: CsvReader<R>) -> Result<Table, InputError> {
         let mut rows = Vec::new();
-        let mut dialect = Dialect::Comma;
-        let mut decimal_commas = 0usize;
-        for (i, raw) in text.split('\n').enumerate() {
-            let line_no = i + 1;
-            let line = raw.strip_suffix('\r').unwrap_or(raw);
-            let trimmed = line.trim();
-            if trimmed.is_empty() {
-                continue;
-            }
-            if let Some(c) = trimmed.strip_prefix('#') {
-                comments.push(c.trim().to_string());
-                comment_lines.push(line_no);
-                continue;
-            }
-            if header.is_none() {
-                dialect = detect_dialect(line);
-                if let Dialect::Spreadsheet(d) = dialect {
-                    notes.push(format!(
-                        "{}: read as a spreadsheet export: {} between fields, and numbers with \
-                         a decimal comma read with a decimal point",
-                        path.display(),
-                        if d == ';' { "semicolons" } else { "tabs" }
-                    ));
-                }
-            }
-            let fields = match dialect {
-                Dialect::Comma => split_fields(path, line_no, line)?,
-                Dialect::Spreadsheet(d) => line
-                    .split(d)
-                    .map(|f| {
-                        let f = f.trim();
-                        match decimal_comma(f) {
-                            Some(v) => {
-                                decimal_commas += 1;
-                                v
-                            }
-                            None => f.to_string(),
-                        }
-                    })
-                    .collect(),
-            };
-            match &header {
-                None => {
-                    let mut fields = fields;
-                    let trailing = fields.iter().rev().take_while(|f| f.is_empty()).count();
-                    if trailing > 0 && trailing < fields.len() {
-                        fields.truncate(fields.len() - trailing);
-                        notes.push(format!(
-                            "{}:{line_no}: {trailing} empty column(s) at the end of the header \
-                             ignored (a spreadsheet's trailing separators)",
-                            path.display()
-                        ));
-                    }
-                    check_header(path, line_no, line, &fields)?;
-                    header = Some((line_no, fields));
-                }
-                Some((_, h)) => {
-                    let mut fields = fields;
-                    // the header's dropped trailing columns: empty in every row too
-                    while fields.len() > h.len() && fields.last().is_some_and(|f| f.is_empty()) {
-                        fields.pop();
-                    }
-                    if fields.len() != h.len() {
-                        let col = fields.len().min(h.len()) + 1;
-                        return Err(InputError::at(
-                            path,
-                            line_no,
-                            col,
-                            format!(
-                                "row has {} fields but the header has {} columns",
-                                fields.len(),
-                                h.len()
-                            ),
-                        ));
-                    }
-                    rows.push(TableRow {
-                        line: line_no,
-                        fields,
-                    });
-                }
-            }
+        while let Some(row) = r.next_row()? {
+            rows.push(row.to_table_row());
         }
-        let Some((header_line, header)) = header else {
-            return Err(InputError::file(
-                path,
-                "file is empty: expected a header row with column names",
-            ));
-        };
-        if rows.is_empty() {
-            return Err(InputError::line(
-                path,
-                header_line,
-                "header only: the file has no data rows",
-            ));
-        }
-        if decimal_commas == 0 {
-            if let Some(n) = notes.iter_mut().find(|n| n.contains("decimal comma")) {
-                *n = n.replace(
-                    ", and numbers with a decimal comma read with a decimal point",
-                    "",
-                );
-            }
-        }
-        crate::notes::record(&notes);
         Ok(Table {
-            path: path.to_path_buf(),
-            header,
-            header_line,
+            path: r.path().to_path_buf(),
+            header: r.header().to_vec(),
+            header_line: r.header_line(),
             rows,
-            comments,
-            comment_lines,
-            notes,
+            comments: r.comments().to_vec(),
+            comment_lines: r.comment_lines().to_vec(),
+            notes: r.notes().to_vec(),
         })
+    }
+
+    /// The typed, located view of one of this table's rows.
+    pub fn view<'a>(&'a self, row: &'a TableRow) -> Row<'a> {
+        Row {
+            path: &self.path,
+            header: &self.header,
+            row,
+        }
     }
 
     /// Index of a column, or an error that says what is there instead (including a column with
     /// the same name but another unit suffix, the most common mistake).
     pub fn column(&self, name: &str) -> Result<usize, InputError> {
-        if let Some(i) = self.header.iter().position(|h| h == name) {
-            return Ok(i);
-        }
-        let stem = stem_of(name);
-        if let Some((i, other)) = self
-            .header
-            .iter()
-            .enumerate()
-            .find(|(_, h)| stem_of(h) == stem && h.as_str() != name)
-        {
-            return Err(InputError::at(
-                &self.path,
-                self.header_line,
-                i + 1,
-                format!("column `{other}` has the wrong unit suffix: mtec expects `{name}` (units are part of the column name: docs/formats.md, Rules for every file)"),
-            ));
-        }
-        Err(InputError::line(
-            &self.path,
-            self.header_line,
-            format!(
-                "missing column `{name}`; the header has: {}",
-                self.header.join(", ")
-            ),
-        ))
+        column_index(&self.path, &self.header, self.header_line, name)
     }
 
     /// True when the header has this exact column.
@@ -238,29 +123,7 @@ impl Table {
 
     /// The number in row `row`, column index `c`, or a located error.
     pub fn cell_f64(&self, row: &TableRow, c: usize) -> Result<f64, InputError> {
-        let s = row.fields[c].as_str();
-        let name = &self.header[c];
-        match s.parse::<f64>() {
-            Ok(v) if v.is_finite() => Ok(v),
-            Ok(_) => Err(InputError::at(
-                &self.path,
-                row.line,
-                c + 1,
-                format!("`{name}` is `{s}`: not a finite number"),
-            )),
-            Err(_) if s.is_empty() => Err(InputError::at(
-                &self.path,
-                row.line,
-                c + 1,
-                format!("`{name}` is empty"),
-            )),
-            Err(_) => Err(InputError::at(
-                &self.path,
-                row.line,
-                c + 1,
-                format!("`{name}` is `{s}`: not a number"),
-            )),
-        }
+        self.view(row).f64(c)
     }
 
     /// A column of text cells.
@@ -272,20 +135,7 @@ impl Table {
     /// A column of integers (e.g. run or experiment numbers).
     pub fn i64_column(&self, name: &str) -> Result<Vec<i64>, InputError> {
         let c = self.column(name)?;
-        self.rows
-            .iter()
-            .map(|r| {
-                let s = r.fields[c].as_str();
-                s.parse::<i64>().map_err(|_| {
-                    InputError::at(
-                        &self.path,
-                        r.line,
-                        c + 1,
-                        format!("`{}` is `{s}`: not a whole number", self.header[c]),
-                    )
-                })
-            })
-            .collect()
+        self.rows.iter().map(|r| self.view(r).i64(c)).collect()
     }
 
     /// Names of the columns that end with `suffix` (e.g. every `_c` temperature column).
@@ -299,10 +149,7 @@ impl Table {
 
     /// A located error about row `row`, column named `name` (or the row alone if the column is absent).
     pub fn error_at(&self, row: &TableRow, name: &str, message: impl Into<String>) -> InputError {
-        match self.header.iter().position(|h| h == name) {
-            Some(c) => InputError::at(&self.path, row.line, c + 1, message),
-            None => InputError::line(&self.path, row.line, message),
-        }
+        self.view(row).error_at(name, message)
     }
 
     /// The `key = value` or `key: value` pairs found in the comment lines (e.g. `# radius_mm = 100`).
@@ -325,6 +172,39 @@ impl Table {
     }
 }
 
+/// Index of column `name` in `header`, or an error that says what is there instead.
+pub(crate) fn column_index(
+    path: &Path,
+    header: &[String],
+    header_line: usize,
+    name: &str,
+) -> Result<usize, InputError> {
+    if let Some(i) = header.iter().position(|h| h == name) {
+        return Ok(i);
+    }
+    let stem = stem_of(name);
+    if let Some((i, other)) = header
+        .iter()
+        .enumerate()
+        .find(|(_, h)| stem_of(h) == stem && h.as_str() != name)
+    {
+        return Err(InputError::at(
+            path,
+            header_line,
+            i + 1,
+            format!("column `{other}` has the wrong unit suffix: mtec expects `{name}` (units are part of the column name: docs/formats.md, Rules for every file)"),
+        ));
+    }
+    Err(InputError::line(
+        path,
+        header_line,
+        format!(
+            "missing column `{name}`; the header has: {}",
+            header.join(", ")
+        ),
+    ))
+}
+
 fn stem_of(name: &str) -> &str {
     const SUFFIXES: [&str; 10] = [
         "_mm", "_deg", "_um", "_urad", "_c", "_min", "_s", "_in", "_rad", "_k",
@@ -337,30 +217,8 @@ fn stem_of(name: &str) -> &str {
     name
 }
 
-fn split_fields(path: &Path, line_no: usize, line: &str) -> Result<Vec<String>, InputError> {
-    // Without quotes or a stray CR a CSV record is the text between commas (RFC 4180): split it
-    // directly. Building a csv reader (and its 8 KiB buffer) for every line cost ~20 µs a line,
-    // 90 % of `map eval`'s time (issue 22).
-    if !line.contains(['"', '\r']) {
-        return Ok(line.split(',').map(|f| f.trim().to_string()).collect());
-    }
-    let mut rdr = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .from_reader(line.as_bytes());
-    let mut rec = csv::StringRecord::new();
-    match rdr.read_record(&mut rec) {
-        Ok(_) => Ok(rec.iter().map(|f| f.trim().to_string()).collect()),
-        Err(e) => Err(InputError::line(
-            path,
-            line_no,
-            format!("cannot split the line into fields: {e}"),
-        )),
-    }
-}
-
 /// Comma-separated unless the header has no comma and has semicolons (or tabs).
-fn detect_dialect(header_line: &str) -> Dialect {
+pub(crate) fn detect_dialect(header_line: &str) -> Dialect {
     if header_line.contains(',') {
         Dialect::Comma
     } else if header_line.contains(';') {
@@ -372,7 +230,7 @@ fn detect_dialect(header_line: &str) -> Dialect {
     }
 }
 
-fn check_header(
+pub(crate) fn check_header(
     path: &Path,
     line_no: usize,
     line: &str,
@@ -455,15 +313,15 @@ mod tests {
         assert_eq!(e.column, Some(1));
     }
 
-    /// The direct split and the csv crate agree on lines without quotes; quoted fields still go
-    /// through the csv crate.
+    /// Each line is split as the csv crate splits that line alone (RFC 4180 quotes), with
+    /// the fields trimmed.
     #[test]
-    fn direct_split_agrees_with_the_csv_crate() {
+    fn lines_split_as_the_csv_crate_splits_them() {
         let lines = [
             "1,2,3",
             " a , b ,c ",
             ",,",
-            "x",
+            "x,,",
             "1.5e3,-0, 7 ",
             "\"a,b\",c",
             "\"q\"\"x\",1",
@@ -476,11 +334,9 @@ mod tests {
             let mut rec = csv::StringRecord::new();
             rdr.read_record(&mut rec).unwrap();
             let want: Vec<String> = rec.iter().map(|f| f.trim().to_string()).collect();
-            assert_eq!(
-                split_fields(Path::new("t.csv"), 1, line).unwrap(),
-                want,
-                "{line}"
-            );
+            let header: Vec<String> = (0..want.len()).map(|i| format!("c{i}")).collect();
+            let t = parse(&format!("{}\n{line}\n", header.join(","))).unwrap();
+            assert_eq!(t.rows[0].fields, want, "{line}");
         }
     }
 

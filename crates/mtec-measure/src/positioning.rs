@@ -10,8 +10,9 @@
 //!   values); ISO 230-2 asks for 5 runs per direction and 5 targets per metre (at least 5): fewer
 //!   gives a warning, not an error.
 
-use mtec_io::{InputError, Table};
+use mtec_io::{CsvReader, InputError, Row, Table};
 use std::collections::BTreeMap;
+use std::io::BufRead;
 use std::path::Path;
 
 /// Approach direction of a target (ISO 230-2 ↑ and ↓).
@@ -69,94 +70,173 @@ impl PositioningData {
         }
     }
 
-    /// Reads and validates a run file.
+    /// Reads and validates a run file, streaming: the rows are checked as they are read (a bad
+    /// line stops the reading there) and only the deviations are kept, as numbers.
     pub fn read(path: &Path) -> Result<PositioningData, InputError> {
-        let table = Table::read(path)?;
-        Self::from_table(&table)
+        Self::from_reader(CsvReader::open(path)?)
+    }
+
+    /// Reads and validates the rows of a streaming CSV reader (see the module docs for the
+    /// rules).
+    pub fn from_reader<R: BufRead>(mut r: CsvReader<R>) -> Result<PositioningData, InputError> {
+        let mut c = Collector::new(|n| r.column(n))?;
+        while let Some(row) = r.next_row()? {
+            c.add(&row)?;
+        }
+        c.finish(r.path())
     }
 
     /// Validates a parsed table (see the module docs for the rules).
     pub fn from_table(table: &Table) -> Result<PositioningData, InputError> {
-        table.require(&["target_mm", "run", "direction", "deviation_um"])?;
-        let targets = table.f64_column("target_mm")?;
-        let runs = table.i64_column("run")?;
-        let dirs = table.str_column("direction")?;
-        let devs = table.f64_column("deviation_um")?;
-
-        // (direction, run) -> target key -> (deviation, line); first line of each pass kept.
-        type Pass = BTreeMap<i64, (f64, usize)>;
-        let mut passes: BTreeMap<(Approach, i64), Pass> = BTreeMap::new();
-        let mut first_line: BTreeMap<(Approach, i64), usize> = BTreeMap::new();
-        let mut target_values: BTreeMap<i64, f64> = BTreeMap::new();
-        for (k, row) in table.rows.iter().enumerate() {
-            let dir = match dirs[k].as_str() {
-                "+" => Approach::Up,
-                "-" => Approach::Down,
-                other => {
-                    return Err(table.error_at(
-                        row,
-                        "direction",
-                        format!("direction is `{other}`: expected `+` (approach in the positive direction) or `-`"),
-                    ))
-                }
-            };
-            // A deviation of a metre or more is not a positioning error but a unit or export
-            // mistake (e.g. nm or raw counts); the statistics would overflow to inf.
-            if devs[k].abs() >= MAX_DEVIATION_UM {
-                return Err(table.error_at(
-                    row,
-                    "deviation_um",
-                    format!(
-                        "deviation {:e} um is implausible (|deviation| must be below 1e6 um = 1 m): check the unit",
-                        devs[k]
-                    ),
-                ));
-            }
-            let key = target_key(targets[k]);
-            target_values.entry(key).or_insert(targets[k]);
-            first_line.entry((dir, runs[k])).or_insert(row.line);
-            let pass = passes.entry((dir, runs[k])).or_default();
-            if let Some((_, prev)) = pass.get(&key) {
-                return Err(table.error_at(
-                    row,
-                    "target_mm",
-                    format!(
-                        "target {} mm appears twice in run {} direction `{}` (first on line {prev})",
-                        targets[k],
-                        runs[k],
-                        dirs[k]
-                    ),
-                ));
-            }
-            pass.insert(key, (devs[k], row.line));
+        let mut c = Collector::new(|n| table.column(n))?;
+        for row in &table.rows {
+            c.add(&table.view(row))?;
         }
+        c.finish(&table.path)
+    }
+}
 
-        let keys: Vec<i64> = target_values.keys().copied().collect();
-        if keys.len() < 2 {
-            return Err(InputError::file(
-                &table.path,
+/// The deviations of one pass (a run in one direction), indexed by target number (the order in
+/// which targets first appear in the file); NaN where the pass has no value yet.
+struct Pass {
+    dev_um: Vec<f64>,
+    line: Vec<usize>,
+    first_line: usize,
+}
+
+/// The run file's rows, checked one at a time and kept as numbers.
+struct Collector {
+    /// Columns target_mm, run, direction, deviation_um.
+    cols: [usize; 4],
+    /// Target key -> (target number, value in mm as first written).
+    targets: BTreeMap<i64, (usize, f64)>,
+    /// (direction, run) -> index into `passes`.
+    pass_index: BTreeMap<(Approach, i64), usize>,
+    passes: Vec<Pass>,
+    /// The pass of the previous row (rows come pass by pass: the map is searched only when the
+    /// pass changes).
+    last: Option<((Approach, i64), usize)>,
+}
+
+impl Collector {
+    fn new(column: impl Fn(&str) -> Result<usize, InputError>) -> Result<Collector, InputError> {
+        let mut cols = [0; 4];
+        for (c, name) in cols
+            .iter_mut()
+            .zip(["target_mm", "run", "direction", "deviation_um"])
+        {
+            *c = column(name)?;
+        }
+        Ok(Collector {
+            cols,
+            targets: BTreeMap::new(),
+            pass_index: BTreeMap::new(),
+            passes: Vec::new(),
+            last: None,
+        })
+    }
+
+    fn add(&mut self, row: &Row) -> Result<(), InputError> {
+        let [ct, cr, cd, cx] = self.cols;
+        let target = row.f64(ct)?;
+        let run = row.i64(cr)?;
+        let dir = match row.str(cd) {
+            "+" => Approach::Up,
+            "-" => Approach::Down,
+            other => {
+                return Err(row.error_at(
+                    "direction",
+                    format!("direction is `{other}`: expected `+` (approach in the positive direction) or `-`"),
+                ))
+            }
+        };
+        let dev = row.f64(cx)?;
+        // A deviation of a metre or more is not a positioning error but a unit or export
+        // mistake (e.g. nm or raw counts); the statistics would overflow to inf.
+        if dev.abs() >= MAX_DEVIATION_UM {
+            return Err(row.error_at(
+                "deviation_um",
                 format!(
-                    "only {} target position(s): ISO 230-2 statistics need at least 2 (the standard asks for 5 or more)",
-                    keys.len()
+                    "deviation {dev:e} um is implausible (|deviation| must be below 1e6 um = 1 m): check the unit"
                 ),
             ));
         }
-        // Every pass must visit every target.
-        for ((dir, run), pass) in &passes {
-            if let Some(missing) = keys.iter().find(|k| !pass.contains_key(k)) {
+        let n_targets = self.targets.len();
+        let (i, _) = *self
+            .targets
+            .entry(target_key(target))
+            .or_insert((n_targets, target));
+        let k = match self.last {
+            Some((key, k)) if key == (dir, run) => k,
+            _ => {
+                let n = self.passes.len();
+                let k = *self.pass_index.entry((dir, run)).or_insert(n);
+                if k == n {
+                    self.passes.push(Pass {
+                        dev_um: Vec::new(),
+                        line: Vec::new(),
+                        first_line: row.line(),
+                    });
+                }
+                self.last = Some(((dir, run), k));
+                k
+            }
+        };
+        let pass = &mut self.passes[k];
+        if i >= pass.dev_um.len() {
+            pass.dev_um.resize(i + 1, f64::NAN);
+            pass.line.resize(i + 1, 0);
+        }
+        if !pass.dev_um[i].is_nan() {
+            return Err(row.error_at(
+                "target_mm",
+                format!(
+                    "target {target} mm appears twice in run {run} direction `{}` (first on line {})",
+                    row.str(cd),
+                    pass.line[i]
+                ),
+            ));
+        }
+        pass.dev_um[i] = dev;
+        pass.line[i] = row.line();
+        Ok(())
+    }
+
+    fn finish(self, path: &Path) -> Result<PositioningData, InputError> {
+        let Collector {
+            targets,
+            pass_index,
+            passes,
+            ..
+        } = self;
+        if targets.len() < 2 {
+            return Err(InputError::file(
+                path,
+                format!(
+                    "only {} target position(s): ISO 230-2 statistics need at least 2 (the standard asks for 5 or more)",
+                    targets.len()
+                ),
+            ));
+        }
+        // Every pass must visit every target (checked in ascending target order).
+        for ((dir, run), &k) in &pass_index {
+            let pass = &passes[k];
+            if let Some((_, &(_, t))) = targets
+                .iter()
+                .find(|(_, (i, _))| pass.dev_um.get(*i).is_none_or(|x| x.is_nan()))
+            {
                 return Err(InputError::line(
-                    &table.path,
-                    first_line[&(*dir, *run)],
+                    path,
+                    pass.first_line,
                     format!(
-                        "run {run} direction `{}` has no deviation for target {} mm: every run must visit every target",
+                        "run {run} direction `{}` has no deviation for target {t} mm: every run must visit every target",
                         if *dir == Approach::Up { "+" } else { "-" },
-                        target_values[missing]
                     ),
                 ));
             }
         }
         let runs_of = |d: Approach| -> Vec<i64> {
-            passes
+            pass_index
                 .keys()
                 .filter(|(dd, _)| *dd == d)
                 .map(|(_, r)| *r)
@@ -167,7 +247,7 @@ impl PositioningData {
         for (runs, sign) in [(&runs_up, "+"), (&runs_down, "-")] {
             if runs.len() < 2 {
                 return Err(InputError::file(
-                    &table.path,
+                    path,
                     format!(
                         "{} run(s) in direction `{sign}`: each direction needs at least 2 runs for a standard deviation (ISO 230-2 asks for 5)",
                         runs.len()
@@ -184,19 +264,29 @@ impl PositioningData {
                 ));
             }
         }
-        if keys.len() < 5 {
+        if targets.len() < 5 {
             warnings.push(format!(
                 "only {} targets: ISO 230-2 asks for at least 5 (and 5 per metre of travel)",
-                keys.len()
+                targets.len()
             ));
         }
+        // the lines were for messages; free them before the matrices are built
+        let mut passes = passes;
+        for p in &mut passes {
+            p.line = Vec::new();
+        }
         let matrix = |d: Approach, runs: &[i64]| -> Vec<Vec<f64>> {
-            keys.iter()
-                .map(|k| runs.iter().map(|r| passes[&(d, *r)][k].0).collect())
+            targets
+                .values()
+                .map(|&(i, _)| {
+                    runs.iter()
+                        .map(|r| passes[pass_index[&(d, *r)]].dev_um[i])
+                        .collect()
+                })
                 .collect()
         };
         Ok(PositioningData {
-            targets_mm: keys.iter().map(|k| target_values[k]).collect(),
+            targets_mm: targets.values().map(|&(_, t)| t).collect(),
             up_um: matrix(Approach::Up, &runs_up),
             down_um: matrix(Approach::Down, &runs_down),
             runs_up,
@@ -271,5 +361,46 @@ mod tests {
         assert_eq!((e.line, e.column), (Some(7), Some(4)), "{e}");
         assert!(e.message.contains("1e300 um is implausible"), "{e}");
         assert!(parse(&OK.replace("10,2,+,6", "10,2,+,-999999")).is_ok());
+    }
+
+    /// Streaming and whole-table reading give the same data; a spreadsheet export with
+    /// comments, BOM and CRLF too.
+    #[test]
+    fn streaming_reads_what_the_table_reads() {
+        let want = parse(OK).unwrap();
+        let stream = |text: &str| {
+            PositioningData::from_reader(CsvReader::new(Path::new("run.csv"), text.as_bytes())?)
+        };
+        assert_eq!(stream(OK).unwrap(), want);
+        let export = format!(
+            "\u{feff}# laser run\r\n{}",
+            OK.replace(',', ";").replace('\n', "\r\n# note\r\n")
+        );
+        assert_eq!(stream(&export).unwrap(), want);
+        assert_eq!(parse(&export).unwrap(), want);
+    }
+
+    /// An input that fails the test if read past `limit` bytes.
+    struct Tripwire(std::io::Cursor<Vec<u8>>, u64);
+    impl std::io::Read for Tripwire {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            assert!(self.0.position() < self.1, "read past byte {}", self.1);
+            self.0.read(buf)
+        }
+    }
+
+    /// A bad direction on line 3 of a 20 MB file is reported having read at most 16 KiB.
+    #[test]
+    fn a_bad_line_3_stops_the_reading() {
+        let mut text = "target_mm,run,direction,deviation_um\n0,1,+,1\n10,1,up,2\n".to_string();
+        text.push_str(&"20,1,+,3.25\n".repeat(20 << 20 >> 4));
+        let input = std::io::BufReader::with_capacity(
+            1024,
+            Tripwire(std::io::Cursor::new(text.into_bytes()), 16 << 10),
+        );
+        let e = PositioningData::from_reader(CsvReader::new(Path::new("run.csv"), input).unwrap())
+            .unwrap_err();
+        assert_eq!((e.line, e.column), (Some(3), Some(3)), "{e}");
+        assert!(e.message.contains("direction is `up`"), "{e}");
     }
 }

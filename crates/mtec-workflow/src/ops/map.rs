@@ -3,7 +3,7 @@
 
 use crate::{Error, Observer, Result};
 use mtec_comp::map::{GridLimits, GridMap, Outside};
-use mtec_io::{Destination, InputError, OutputGuard, Table};
+use mtec_io::{CsvReader, Destination, InputError, OutputGuard};
 use serde::Serialize;
 use std::fmt;
 use std::fmt::Write as _;
@@ -146,7 +146,7 @@ fn fit_bpnn(
             "--hidden must be between 1 and 1000, got {hidden}"
         )));
     }
-    let table = Table::read(grid_path)?;
+    let table = mtec_io::Table::read(grid_path)?;
     let cols = ["x_mm", "y_mm", "z_mm", "ex_um", "ey_um", "ez_um"];
     table.require(&cols)?;
     let c: Vec<Vec<f64>> = cols
@@ -254,24 +254,25 @@ pub fn eval(opts: &EvalOptions, _obs: &mut dyn Observer) -> Result<EvalOutcome> 
         None => Destination::Stdout,
     };
     let model = mtec_comp::load_error_model(&opts.model)?;
-    let table = Table::read(&opts.points)?;
+    // streamed: a bad point is reported without reading the rest, and the file is never held
+    let mut points = CsvReader::open(&opts.points)?;
     let cols = [
-        table.column("x_mm")?,
-        table.column("y_mm")?,
-        table.column("z_mm")?,
+        points.column("x_mm")?,
+        points.column("y_mm")?,
+        points.column("z_mm")?,
     ];
-    let mut out = String::with_capacity(64 * table.rows.len() + 64);
-    out.push_str("x_mm,y_mm,z_mm,ex_um,ey_um,ez_um\n");
-    for row in &table.rows {
+    let mut out = String::from("x_mm,y_mm,z_mm,ex_um,ey_um,ez_um\n");
+    let mut n = 0;
+    while let Some(row) = points.next_row()? {
         let mut p = [0.0; 3];
         for (pa, &c) in p.iter_mut().zip(&cols) {
-            *pa = table.cell_f64(row, c)?;
+            *pa = row.f64(c)?;
         }
         let e = model.error_um(p);
         if !e.iter().all(|v| v.is_finite()) {
             return Err(InputError::at(
                 &opts.points,
-                row.line,
+                row.line(),
                 cols[0] + 1,
                 format!(
                     "the model has no value at ({}, {}, {}) mm (outside the map's grid, whose policy is refuse; see `mtec map fit --outside`)",
@@ -283,12 +284,18 @@ pub fn eval(opts: &EvalOptions, _obs: &mut dyn Observer) -> Result<EvalOutcome> 
         let _ = writeln!(
             out,
             "{},{},{},{},{},{}",
-            row.fields[cols[0]], row.fields[cols[1]], row.fields[cols[2]], e[0], e[1], e[2]
+            row.str(cols[0]),
+            row.str(cols[1]),
+            row.str(cols[2]),
+            e[0],
+            e[1],
+            e[2]
         );
+        n += 1;
     }
     dest.write(out.as_bytes())?;
     Ok(EvalOutcome {
-        points: table.rows.len(),
+        points: n,
         out: opts.out.clone(),
     })
 }

@@ -510,9 +510,10 @@ fn fault_rows(d: &Diagnostics) -> Vec<Vec<String>> {
             vec![
                 f.label.clone(),
                 if f.present { "yes" } else { "no" }.into(),
-                n(f.value, 3),
+                // a fault a partial arc does not determine has no value: `-`
+                n(f.value.unwrap_or(f64::NAN), 3),
                 f.unit.clone(),
-                n(f.std_error, 3),
+                n(f.std_error.unwrap_or(f64::NAN), 3),
                 n(f.contribution_um, 3),
                 n(f.contribution_percent, 1),
             ]
