@@ -18,7 +18,13 @@ use mtec_comp::table::bidirectional::BidirectionalProfile;
 use mtec_comp::table::{beckhoff, fanuc, heidenhain, linuxcnc, sinumerik, Axis, TableError};
 
 const TARGETS: [f64; 5] = [0.0, 50.0, 100.0, 150.0, 200.0];
-const UP: [[f64; 2]; 5] = [[1.0, 2.0], [3.0, 4.0], [-2.0, -1.0], [-5.0, -4.0], [0.0, 1.0]];
+const UP: [[f64; 2]; 5] = [
+    [1.0, 2.0],
+    [3.0, 4.0],
+    [-2.0, -1.0],
+    [-5.0, -4.0],
+    [0.0, 1.0],
+];
 const DOWN: [[f64; 2]; 5] = [[4.0, 5.0], [6.0, 7.0], [0.0, 1.0], [-3.0, -2.0], [2.0, 3.0]];
 
 fn profile() -> BidirectionalProfile {
@@ -65,8 +71,13 @@ fn linuxcnc_reader_rules_are_enforced() {
         500.0,
     )
     .unwrap();
-    let e = linuxcnc::write_bidirectional(&p, 1).unwrap_err().to_string();
-    assert!(e.contains("257 targets") && e.contains("at most 256"), "{e}");
+    let e = linuxcnc::write_bidirectional(&p, 1)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("257 targets") && e.contains("at most 256"),
+        "{e}"
+    );
     // 256 are accepted
     let p256 = BidirectionalProfile::from_mean_deviations(
         Axis::X,
@@ -76,7 +87,13 @@ fn linuxcnc_reader_rules_are_enforced() {
         500.0,
     )
     .unwrap();
-    assert_eq!(linuxcnc::write_bidirectional(&p256, 1).unwrap().lines().count(), 256);
+    assert_eq!(
+        linuxcnc::write_bidirectional(&p256, 1)
+            .unwrap()
+            .lines()
+            .count(),
+        256
+    );
     // two targets 0.1 nm apart: increasing as numbers, equal at the file's 6 decimals
     let p = BidirectionalProfile::from_mean_deviations(
         Axis::X,
@@ -146,7 +163,10 @@ fn sinumerik_lec_refuses_a_reversal_it_cannot_hold() {
     )
     .unwrap();
     let t = sinumerik::write_lec_bidirectional(&same, &Default::default()).unwrap();
-    assert!(t.contains("$AA_ENC_COMP[0,0,X1]=0.0015\n$AA_ENC_COMP[0,1,X1]=0.0035\n"), "{t}");
+    assert!(
+        t.contains("$AA_ENC_COMP[0,0,X1]=0.0015\n$AA_ENC_COMP[0,1,X1]=0.0035\n"),
+        "{t}"
+    );
 }
 
 #[test]

@@ -26,8 +26,8 @@ fn the_run_file_gives_the_hand_worked_tables() {
     let run = dir.path().join("run.csv");
     std::fs::write(&run, RUN).unwrap();
     let out = dir.path().join("x.comp");
-    let o = compensate_table::run(&options(&run, Format::Linuxcnc, out.clone()), &mut Silent)
-        .unwrap();
+    let o =
+        compensate_table::run(&options(&run, Format::Linuxcnc, out.clone()), &mut Silent).unwrap();
     assert_eq!(
         std::fs::read_to_string(&out).unwrap(),
         "0.000000 -0.001500 -0.004500\n\
@@ -54,7 +54,10 @@ fn the_run_file_gives_the_hand_worked_tables() {
     }
     // the CEC file is the golden one of mtec-comp's test, read back: table 1 holds c↓
     let cec = std::fs::read_to_string(dir.path().join("t.sinumerik-cec")).unwrap();
-    assert!(cec.contains("$AN_CEC[1,3]=0.0025\n$AN_CEC[1,4]=-0.0025\n"), "{cec}");
+    assert!(
+        cec.contains("$AN_CEC[1,3]=0.0025\n$AN_CEC[1,4]=-0.0025\n"),
+        "{cec}"
+    );
     // the run file is never overwritten
     let e = compensate_table::run(&options(&run, Format::Linuxcnc, run.clone()), &mut Silent)
         .unwrap_err();
@@ -152,13 +155,20 @@ fn simulated_axis_round_trip_against_the_means_and_the_truth() {
     let read = |format: Format, name: &str| -> Vec<[f64; 3]> {
         let out = dir.path().join(name);
         compensate_table::run(&options(&run, format, out.clone()), &mut Silent).unwrap();
-        std::fs::read_to_string(&out).unwrap().lines().filter_map(|l| {
-            let v: Vec<f64> = l.split_whitespace().filter_map(|s| s.parse().ok()).collect();
-            (v.len() == 3 || v.len() == 4).then(|| {
-                let v = &v[v.len() - 3..];
-                [v[0], v[1], v[2]]
+        std::fs::read_to_string(&out)
+            .unwrap()
+            .lines()
+            .filter_map(|l| {
+                let v: Vec<f64> = l
+                    .split_whitespace()
+                    .filter_map(|s| s.parse().ok())
+                    .collect();
+                (v.len() == 3 || v.len() == 4).then(|| {
+                    let v = &v[v.len() - 3..];
+                    [v[0], v[1], v[2]]
+                })
             })
-        }).collect()
+            .collect()
     };
     // LinuxCNC trims (mm) = c = −x̄; resolution 1 nm
     let lin = read(Format::Linuxcnc, "x.comp");
@@ -176,10 +186,15 @@ fn simulated_axis_round_trip_against_the_means_and_the_truth() {
             let t = [true_up[i], true_down[i]][d];
             worst_mean = worst_mean.max((by_linuxcnc - mean(i, d)).abs());
             worst_truth = worst_truth.max((by_linuxcnc - t).abs());
-            assert!((by_linuxcnc - t).abs() < standard_error + 5e-4, "target {i} dir {d}");
+            assert!(
+                (by_linuxcnc - t).abs() < standard_error + 5e-4,
+                "target {i} dir {d}"
+            );
         }
     }
-    eprintln!("linuxcnc: |table - means| <= {worst_mean:.1e} um, |table - truth| <= {worst_truth:.3} um");
+    eprintln!(
+        "linuxcnc: |table - means| <= {worst_mean:.1e} um, |table - truth| <= {worst_truth:.3} um"
+    );
     // Beckhoff: pos/neg in 0.1 um = x̄
     let out = dir.path().join("x.lis");
     compensate_table::run(&options(&run, Format::Beckhoff, out.clone()), &mut Silent).unwrap();

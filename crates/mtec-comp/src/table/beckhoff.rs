@@ -189,7 +189,8 @@ pub mod ssfk {
             })?);
         }
         // x̄ = −c, µm → 0.1 µm
-        let units = |c: &[f64]| -> Vec<i64> { c.iter().map(|c| (-c * 10.0).round() as i64).collect() };
+        let units =
+            |c: &[f64]| -> Vec<i64> { c.iter().map(|c| (-c * 10.0).round() as i64).collect() };
         let (pos, neg) = (units(fwd), units(rev));
         let n = setpoints.len();
         let mut out = String::new();
@@ -232,7 +233,9 @@ pub mod ssfk {
             if key == "kopf.log_achs_name" {
                 continue;
             }
-            let v: i64 = value.parse().map_err(|_| bad("the value is not an integer"))?;
+            let v: i64 = value
+                .parse()
+                .map_err(|_| bad("the value is not an integer"))?;
             if let Some(rest) = key.strip_prefix("kw.ssfk.table[") {
                 let (idx, field) = rest.split_once("].").ok_or_else(|| bad("bad table key"))?;
                 let idx: usize = idx.parse().map_err(|_| bad("bad table index"))?;
@@ -272,7 +275,10 @@ pub mod ssfk {
                 return Err(TableError::rule(
                     FORMAT,
                     None,
-                    format!("table[i].{name} must be given for i = 0..{} in order", n - 1),
+                    format!(
+                        "table[i].{name} must be given for i = 0..{} in order",
+                        n - 1
+                    ),
                 ));
             }
         }

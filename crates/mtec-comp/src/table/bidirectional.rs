@@ -150,7 +150,10 @@ mod tests {
         assert_eq!(p.uniform_step("t").unwrap(), (0.0, 10.0));
         let small = p.clone().with_max_correction_um(3.5);
         let e = small.checked_values().unwrap_err().to_string();
-        assert!(e.contains("table position X = 10 mm") && e.contains("-4.000 um"), "{e}");
+        assert!(
+            e.contains("table position X = 10 mm") && e.contains("-4.000 um"),
+            "{e}"
+        );
         assert!(BidirectionalProfile::from_mean_deviations(
             Axis::X,
             vec![0.0, 0.0],

@@ -92,7 +92,16 @@ pub fn write_cec_bidirectional(
         t + 1
     ));
     cec_table(&mut out, opts, t, fwd, axes, [start, step, end], 1, false);
-    cec_table(&mut out, opts, t + 1, rev, axes, [start, step, end], -1, false);
+    cec_table(
+        &mut out,
+        opts,
+        t + 1,
+        rev,
+        axes,
+        [start, step, end],
+        -1,
+        false,
+    );
     out.push_str("M17\n");
     check_cec(&out, opts.max_points)?;
     Ok(out)
