@@ -213,8 +213,8 @@ fn simulated_axis_round_trip_against_the_means_and_the_truth() {
         }
     }
     // the reversal the table carries is the simulated lost motion, −3.5 um
-    for i in 0..targets.len() {
-        let b = (-lin[i][1] + lin[i][2]) * 1e3; // x̄↑ − x̄↓
+    for (i, row) in lin.iter().enumerate() {
+        let b = (-row[1] + row[2]) * 1e3; // x̄↑ − x̄↓
         assert!((b + 3.5).abs() < 2.0 * standard_error, "B at {i}: {b}");
     }
 }
