@@ -36,6 +36,17 @@ that axis), the other coordinates at --at X,Y,Z (default: the centre of the map'
 --x/y/z-range for beckhoff); a BPNN extrapolates without warning outside the box it was fitted
 on, so keep the ranges inside it.
 
+ISO 230-2 run (--from-iso230-2 RUN.csv, instead of --model): the table of --axis at the
+run's targets, one correction per approach direction, c = -(mean unidirectional deviation):
+  linuxcnc        `nominal forward reverse` (LinuxCNC applies forward while moving +)
+  sinumerik-cec   two tables, $AN_CEC_DIRECTION 1 (c up) and -1 (c down); equal spacing
+  sinumerik-lec   one table for both directions: refused when the two differ
+  fanuc           bidirectional pitch error tape: 3626/3627 and the negative-direction data
+  heidenhain      .COM with the axis column (error moving +) and BACKLASH (error moving -)
+  beckhoff        TwinCAT leadscrew error list kw.ssfk, bilateral: pos / neg in 0.1 um
+A run whose table a format cannot hold (spacing, point count, a value over the bound) is
+refused with exit code 2, naming the run file and the target's line.
+
 State: a machine error model (mtec.machine-error/1) changes with the machine's temperatures; a
 table is one moment of it, the state after the last row of --state LOG.csv (time_min and the
 model's state inputs, rows in time order), named in the table's provenance. Without --state such
@@ -50,7 +61,11 @@ const EXAMPLES: &str = crate::help::examples!(
       -o x.comp
   # Siemens 840D leadscrew error table of Z from 0 to 300 mm in 10 mm steps
   $ mtec compensate table --model g/map.json --format sinumerik-lec --axis Z \\
-      --range 0:300:10 -o z_lec.ini"
+      --range 0:300:10 -o z_lec.ini
+  # both directions of X from a laser run, as LinuxCNC trims
+  $ mtec simulate iso230-2 --out r
+  $ mtec compensate table --from-iso230-2 r/iso230-2.csv --format linuxcnc \\
+      --axis X -o x2.comp"
 );
 
 /// Target controller format.
@@ -84,8 +99,12 @@ pub struct Args {
     /// Error model JSON: a map (mtec.map/1), a kinematic model (mtec.kinematic-model/1), a BPNN
     /// map (mtec.bpnn/1), a machine error model (mtec.machine-error/1, with --state), or a
     /// poly/zero model; `mtec compensate gcode --help` says which command writes each.
-    #[arg(long)]
-    model: PathBuf,
+    #[arg(long, required_unless_present = "from_iso230_2")]
+    model: Option<PathBuf>,
+    /// ISO 230-2 run CSV (target_mm,run,direction,deviation_um) instead of --model: a
+    /// direction-dependent table of --axis at the run's targets.
+    #[arg(long, value_name = "RUN.csv", conflicts_with_all = ["model", "state", "output_axis", "range", "at", "x_range", "y_range", "z_range"])]
+    from_iso230_2: Option<PathBuf>,
     /// State log for a model with a state (mtec.machine-error/1): time_min and the model's
     /// state inputs; the table is for the state after the last row. Required for such a model.
     #[arg(long, value_name = "LOG.csv")]
@@ -175,7 +194,8 @@ impl Args {
                 range(&self.y_range)?,
                 range(&self.z_range)?,
             ],
-            model: self.model,
+            model: self.model.unwrap_or_default(),
+            from_iso230_2: self.from_iso230_2,
             state: self.state,
             format: self.format.into(),
             comp_type: self.comp_type,

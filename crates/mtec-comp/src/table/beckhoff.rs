@@ -148,3 +148,155 @@ pub fn check(text: &str) -> Result<(), TableError> {
     }
     Ok(())
 }
+
+/// Leadscrew error compensation (SSFK) of TwinCAT CNC, the direction-dependent table of one
+/// axis: the axis compensation value list `kw.ssfk.*` (Beckhoff Information System, TF5200 Axis
+/// compensation parameters, P-COMP-00017…00024 and "Example of a compensation value list"):
+/// `kw.ssfk.bilateral 1` (one table per direction), `kw.ssfk.interval 0` (every interpolation
+/// point given as `table[i].setpoint`), `kw.ssfk.unit 1` (metric), positions and values in
+/// 0.1 µm. The values are position errors, "Δs_i = s_ist,i − s_soll,i" (actual − setpoint, the
+/// manual's worked point: 19856.5 µm reached for 19866.7 µm → `pos` = −102), i.e. the ISO 230-2
+/// mean deviations x̄↑ (`pos`) and x̄↓ (`neg`) = −c↑, −c↓, rounded to 0.1 µm.
+pub mod ssfk {
+    use super::super::bidirectional::BidirectionalProfile;
+    use super::super::TableError;
+
+    const FORMAT: &str = "Beckhoff SSFK list";
+    /// Default largest number of table entries (P-COMP-00059 `kw.ssfk.max_points`).
+    pub const DEFAULT_MAX_POINTS: usize = 1500;
+
+    /// A length in mm as a whole number of 0.1 µm, if it is one (to 1e-6 of the unit).
+    fn tenth_um(mm: f64) -> Option<i64> {
+        let u = mm * 1e4;
+        ((u - u.round()).abs() < 1e-6).then_some(u.round() as i64)
+    }
+
+    /// Writes the list for logical axis `axis_number` (`kopf.log_achs_nr`).
+    pub fn write(
+        profile: &BidirectionalProfile,
+        axis_number: u8,
+        max_points: usize,
+    ) -> Result<String, TableError> {
+        let (fwd, rev) = profile.checked_values()?;
+        let mut setpoints = Vec::with_capacity(profile.len());
+        for &p in &profile.positions_mm {
+            setpoints.push(tenth_um(p).ok_or_else(|| {
+                TableError::rule(
+                    FORMAT,
+                    None,
+                    format!("target {p} mm is not a whole number of 0.1 um, the list's unit"),
+                )
+            })?);
+        }
+        // x̄ = −c, µm → 0.1 µm
+        let units =
+            |c: &[f64]| -> Vec<i64> { c.iter().map(|c| (-c * 10.0).round() as i64).collect() };
+        let (pos, neg) = (units(fwd), units(rev));
+        let n = setpoints.len();
+        let mut out = String::new();
+        let mut kv = |k: String, v: String| out.push_str(&format!("{k:<36}{v}\n"));
+        kv("kopf.log_achs_nr".into(), axis_number.to_string());
+        kv(
+            "kopf.log_achs_name".into(),
+            profile.axis.letter().to_string(),
+        );
+        kv("kw.ssfk.interval".into(), "0".into());
+        kv("kw.ssfk.kw_startpos".into(), setpoints[0].to_string());
+        kv("kw.ssfk.kw_nr_max".into(), n.to_string());
+        kv("kw.ssfk.unit".into(), "1".into());
+        kv("kw.ssfk.bilateral".into(), "1".into());
+        for (i, s) in setpoints.iter().enumerate() {
+            kv(format!("kw.ssfk.table[{i}].setpoint"), s.to_string());
+        }
+        for (i, v) in pos.iter().enumerate() {
+            kv(format!("kw.ssfk.table[{i}].pos"), v.to_string());
+        }
+        for (i, v) in neg.iter().enumerate() {
+            kv(format!("kw.ssfk.table[{i}].neg"), v.to_string());
+        }
+        check(&out, max_points)?;
+        Ok(out)
+    }
+
+    /// Constraint checker: `key value` lines, integer values, `kw_nr_max` entries of
+    /// `setpoint`, `pos` and `neg` with indices 0..kw_nr_max−1, setpoints strictly increasing and
+    /// the first equal to `kw_startpos`, at most `max_points` entries.
+    pub fn check(text: &str, max_points: usize) -> Result<(), TableError> {
+        let mut scalars = std::collections::BTreeMap::new();
+        let mut cols: [Vec<(usize, i64, usize)>; 3] = Default::default();
+        for (i, line) in text.lines().enumerate() {
+            let bad = |m: &str| TableError::rule(FORMAT, Some(i + 1), format!("`{line}`: {m}"));
+            let mut f = line.split_whitespace();
+            let (Some(key), Some(value), None) = (f.next(), f.next(), f.next()) else {
+                return Err(bad("not a `key value` line"));
+            };
+            if key == "kopf.log_achs_name" {
+                continue;
+            }
+            let v: i64 = value
+                .parse()
+                .map_err(|_| bad("the value is not an integer"))?;
+            if let Some(rest) = key.strip_prefix("kw.ssfk.table[") {
+                let (idx, field) = rest.split_once("].").ok_or_else(|| bad("bad table key"))?;
+                let idx: usize = idx.parse().map_err(|_| bad("bad table index"))?;
+                let c = ["setpoint", "pos", "neg"]
+                    .iter()
+                    .position(|f| *f == field)
+                    .ok_or_else(|| bad("unknown table field"))?;
+                cols[c].push((idx, v, i + 1));
+            } else {
+                scalars.insert(key.to_string(), v);
+            }
+        }
+        let get = |k: &str| {
+            scalars
+                .get(k)
+                .copied()
+                .ok_or_else(|| TableError::rule(FORMAT, None, format!("{k} missing")))
+        };
+        let n = get("kw.ssfk.kw_nr_max")?;
+        if get("kw.ssfk.interval")? != 0 || get("kw.ssfk.bilateral")? != 1 {
+            return Err(TableError::rule(
+                FORMAT,
+                None,
+                "mtec writes interval 0 (setpoints given) and bilateral 1",
+            ));
+        }
+        if n < 2 || n as usize > max_points {
+            return Err(TableError::rule(
+                FORMAT,
+                None,
+                format!("{n} entries: a table needs 2..{max_points} (P-COMP-00059)"),
+            ));
+        }
+        for (c, name) in cols.iter().zip(["setpoint", "pos", "neg"]) {
+            let idx: Vec<usize> = c.iter().map(|e| e.0).collect();
+            if idx != (0..n as usize).collect::<Vec<_>>() {
+                return Err(TableError::rule(
+                    FORMAT,
+                    None,
+                    format!(
+                        "table[i].{name} must be given for i = 0..{} in order",
+                        n - 1
+                    ),
+                ));
+            }
+        }
+        let sp = &cols[0];
+        if sp[0].1 != get("kw.ssfk.kw_startpos")? {
+            return Err(TableError::rule(
+                FORMAT,
+                Some(sp[0].2),
+                "the first setpoint must equal kw_startpos",
+            ));
+        }
+        if let Some(w) = sp.windows(2).find(|w| w[1].1 <= w[0].1) {
+            return Err(TableError::rule(
+                FORMAT,
+                Some(w[1].2),
+                "setpoints must increase",
+            ));
+        }
+        Ok(())
+    }
+}

@@ -30,6 +30,7 @@
 //! (the range depends on the control model — older ones allow ±7, 16i/0i ±127 — so it is an
 //! option, default 127).
 
+use super::bidirectional::BidirectionalProfile;
 use super::{AxisProfile, TableError};
 
 const FORMAT: &str = "FANUC pitch error";
@@ -51,6 +52,9 @@ pub struct FanucOptions {
     pub max_increment: i64,
     /// Largest compensation point number of the control.
     pub max_number: u32,
+    /// Bidirectional tables: parameter 3626, the number of the farthest − point of the
+    /// negative-direction data; `None`: right after the positive-direction points.
+    pub reverse_first_number: Option<u32>,
 }
 
 impl Default for FanucOptions {
@@ -63,6 +67,7 @@ impl Default for FanucOptions {
             detection_unit_um: 1.0,
             max_increment: 127,
             max_number: 1023,
+            reverse_first_number: None,
         }
     }
 }
@@ -184,6 +189,84 @@ pub fn write(profile: &AxisProfile, opts: &FanucOptions) -> Result<String, Table
     Ok(out)
 }
 
+/// Writes the bidirectional pitch error tape of an ISO 230-2 profile (A-77810E, table (a)):
+/// parameters 3620–3624 as for [`write`], the positive-direction increments of c↑ on points
+/// 3621..3622, and for travel in the negative direction parameter 3626 (farthest − point of the
+/// negative-direction data, which covers as many points as the positive one, section for
+/// section) and 3627, the absolute compensation at the reference position when it is approached
+/// in the direction opposite to reference return. mtec takes reference return to be in the
+/// positive direction (parameter 1006#5 = 0): the positive table is relative to c↑ at the
+/// reference (0 there), 3627 = c↓ − c↑ at the reference, and the negative increments follow
+/// c↓. Parameter 3605#0 (bidirectional pitch error compensation) must be set to 1 on the control;
+/// the tape does not write it (a bit parameter shared with other functions).
+pub fn write_bidirectional(
+    profile: &BidirectionalProfile,
+    opts: &FanucOptions,
+) -> Result<String, TableError> {
+    let (start, step) = profile.uniform_step(FORMAT)?;
+    let (fwd, rev) = profile.checked_values()?;
+    let forward = AxisProfile {
+        input_axis: profile.axis,
+        output_axis: profile.axis,
+        start_mm: start,
+        step_mm: step,
+        comp_um: fwd.to_vec(),
+        rotary: false,
+        max_correction_um: profile.max_correction_um,
+        at_mm: [0.0; 3],
+    };
+    // the positive-direction tape, with every rule of the unidirectional one
+    let plain = write(&forward, opts)?;
+    let n = fwd.len();
+    let m = ((opts.reference_mm - start) / step).round() as usize;
+    let r = opts.reference_number as i64;
+    let n_min = if m == 0 { r } else { r + 1 - m as i64 };
+    let n_max = r + (n - 1 - m) as i64;
+    let neg_min = opts
+        .reverse_first_number
+        .map(i64::from)
+        .unwrap_or(n_max + 1);
+    let neg_max = neg_min + (n_max - n_min);
+    if !(neg_min > n_max || neg_max < n_min) || neg_max > opts.max_number as i64 {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            format!(
+                "negative-direction points {neg_min}..{neg_max} must lie within 0..{} and not overlap the positive-direction points {n_min}..{n_max}: choose another 3626",
+                opts.max_number
+            ),
+        ));
+    }
+    let unit_um = opts.detection_unit_um * opts.magnification as f64;
+    // 3627: c↓ − c↑ at the reference, absolute, in units
+    let p3627 = ((rev[m] - fwd[m]) / unit_um).round() as i64;
+    // negative-direction increments: rounded absolute c↓ − c↓(ref), section by section
+    let abs_units: Vec<i64> = rev
+        .iter()
+        .map(|c| ((c - rev[m]) / unit_um).round() as i64)
+        .collect();
+    let mut negative: Vec<i64> = (1..n).map(|j| abs_units[j] - abs_units[j - 1]).collect();
+    if m == 0 {
+        negative.insert(0, 0);
+    }
+    let a = opts.axis_number;
+    let mut out = String::new();
+    for line in plain.lines() {
+        if line == "%" && !out.is_empty() {
+            for (k, v) in negative.iter().enumerate() {
+                out.push_str(&format!("N{}P{v}\n", 10000 + neg_min + k as i64));
+            }
+        }
+        out.push_str(line);
+        out.push('\n');
+        if line.starts_with("N03624A") {
+            out.push_str(&format!("N03626A{a}P{neg_min}\nN03627A{a}P{p3627}\n"));
+        }
+    }
+    check(&out, opts.max_increment)?;
+    Ok(out)
+}
+
 /// Constraint checker: tape framing, parameters present, points 3621..3622 all present in order,
 /// |value| ≤ `max_increment`, and for rotary axes (3625 given) the sum-to-zero rule.
 pub fn check(text: &str, max_increment: i64) -> Result<(), TableError> {
@@ -244,13 +327,32 @@ pub fn check(text: &str, max_increment: i64) -> Result<(), TableError> {
             format!("reference number {r} must lie within {n_min}..{n_max}"),
         ));
     }
-    let expect: Vec<i64> = (n_min..=n_max).collect();
+    let mut expect: Vec<i64> = (n_min..=n_max).collect();
+    if let Some(&neg_min) = params.get(&3626) {
+        // bidirectional: the negative-direction data follow, as many points as the positive
+        let neg_max = neg_min + (n_max - n_min);
+        if !(neg_min > n_max || neg_max < n_min) {
+            return Err(TableError::rule(
+                FORMAT,
+                None,
+                format!("negative-direction points {neg_min}..{neg_max} overlap {n_min}..{n_max}"),
+            ));
+        }
+        if param(3627)?.abs() > 32767 {
+            return Err(TableError::rule(
+                FORMAT,
+                None,
+                "parameter 3627 must lie within -32767..32767",
+            ));
+        }
+        expect.extend(neg_min..=neg_max);
+    }
     let got: Vec<i64> = points.iter().map(|p| p.0).collect();
     if got != expect {
         return Err(TableError::rule(
             FORMAT,
             None,
-            format!("pitch data must cover points {n_min}..{n_max} once each, in order"),
+            format!("pitch data must cover points {n_min}..{n_max} (and the negative-direction points from 3626) once each, in order"),
         ));
     }
     if params.contains_key(&3625) {

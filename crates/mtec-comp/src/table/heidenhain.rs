@@ -6,7 +6,13 @@
 //! compensation", pp. 4-28…4-31 and module 9095):
 //! - A `.COM` table has the column `AXISPOS` (compensation points, relative to the machine
 //!   datum) and a column named after the axis that is compensated, holding the compensation
-//!   values; an optional `BACKLASH` column (not written: mtec's models have no reversal error).
+//!   values; an optional `BACKLASH` column: "If required, enter the compensation values measured
+//!   in the negative direction of traverse in the BACKLASH column" (MANUALplus 620 Technical
+//!   Manual p. 716). [`write`] leaves it out (mtec's models have no reversal error);
+//!   [`write_bidirectional`] writes an ISO 230-2 run with the axis column = the error measured
+//!   in the positive direction (x̄↑) and `BACKLASH` = the error measured in the negative
+//!   direction (x̄↓), in the same form. That `BACKLASH` holds the whole negative-direction value
+//!   (not its difference to the axis column) is mtec's reading of that sentence.
 //! - The `.CMA` table has one column per axis; the `.COM` name is entered in the column of the
 //!   axis on which the compensation depends: "[axis in column of *.com] = F(axis in column of
 //!   *.cma in which *.com is entered)". The column `ACTIVE` marks the active line with `*`.
@@ -19,6 +25,7 @@
 //! is named *axis error* compensation, so mtec enters the error and the control removes it. This is
 //! mtec's reading, not a quoted rule: check one point on the machine before relying on it.
 
+use super::bidirectional::BidirectionalProfile;
 use super::{AxisProfile, TableError};
 
 const FORMAT: &str = "HEIDENHAIN .COM/.CMA";
@@ -55,9 +62,68 @@ pub fn write(
     }
     com.push_str("[END]\n");
     check_com(&com)?;
+    Ok(HeidenhainTables {
+        com_name: com_name.to_string(),
+        com,
+        cma_name: cma_name.to_string(),
+        cma: assignment(profile.input_axis, com_name, cma_name),
+    })
+}
+
+/// Writes an ISO 230-2 profile as a `.COM` table `NR AXISPOS <axis> BACKLASH` (the errors x̄↑ and
+/// x̄↓ = −c↑, −c↓ in mm, 4 decimals) and its `.CMA` assignment.
+pub fn write_bidirectional(
+    profile: &BidirectionalProfile,
+    com_name: &str,
+    cma_name: &str,
+) -> Result<HeidenhainTables, TableError> {
+    if profile.len() > MAX_ENTRIES {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            format!(
+                "{} targets; a .COM table holds at most {MAX_ENTRIES}",
+                profile.len()
+            ),
+        ));
+    }
+    let (fwd, rev) = profile.checked_values()?;
+    let axis = profile.axis.letter();
+    let mut com = format!("BEGIN {com_name} MM\n");
+    com.push_str(&format!(
+        "{:<5} {:>13} {:>10} {:>10}\n",
+        "NR", "AXISPOS", axis, "BACKLASH"
+    ));
+    for (n, &p) in profile.positions_mm.iter().enumerate() {
+        com.push_str(&format!(
+            "{:<5} {:>13} {:>10} {:>10}\n",
+            n,
+            format!("{p:+.4}"),
+            error_mm(fwd[n]),
+            error_mm(rev[n])
+        ));
+    }
+    com.push_str("[END]\n");
+    check_com(&com)?;
+    Ok(HeidenhainTables {
+        com_name: com_name.to_string(),
+        com,
+        cma_name: cma_name.to_string(),
+        cma: assignment(profile.axis, com_name, cma_name),
+    })
+}
+
+/// The axis error e = −c (mm) as the table holds it: 4 decimals, signed, no negative zero.
+fn error_mm(c_um: f64) -> String {
+    let e_mm = -c_um * 1e-3;
+    format!("{:+.4}", if e_mm.abs() < 5e-5 { 0.0 } else { e_mm })
+}
+
+/// A one-line `.CMA` entering `com_name` in the column of `input_axis`.
+fn assignment(input_axis: super::Axis, com_name: &str, cma_name: &str) -> String {
     let mut cma = format!("BEGIN {cma_name}\n");
     let col = |a: char| {
-        if a == profile.input_axis.letter() {
+        if a == input_axis.letter() {
             com_name.to_string()
         } else {
             String::new()
@@ -76,12 +142,7 @@ pub fn write(
         "*"
     ));
     cma.push_str("[END]\n");
-    Ok(HeidenhainTables {
-        com_name: com_name.to_string(),
-        com,
-        cma_name: cma_name.to_string(),
-        cma,
-    })
+    cma
 }
 
 /// Constraint checker of a `.COM` table: framing, NR 0..N−1, AXISPOS strictly increasing,

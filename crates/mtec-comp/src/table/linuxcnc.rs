@@ -11,9 +11,16 @@
 //! header or comment line may appear (the whole table would be ignored), and
 //! type 0 actual = nominal + e, type 1 trim = c = −e.
 //!
-//! mtec's models have no reversal error, so the forward and reverse columns are equal. Values are
-//! written in mm with 6 decimals (1 nm).
+//! The motion module (`src/emc/motion/control.c`, the compensation block of
+//! `compute_screw_comp`) applies `fwd_trim` (interpolated) while the joint's commanded velocity is
+//! positive, `rev_trim` while it is negative, and keeps the last one at standstill: a target
+//! approached from below gets the forward column, from above the reverse one.
+//!
+//! mtec's models have no reversal error, so [`write`] makes the forward and reverse columns
+//! equal; [`write_bidirectional`] writes the two columns of an ISO 230-2 run (forward = c↑ =
+//! −x̄↑, reverse = c↓ = −x̄↓). Values are written in mm with 6 decimals (1 nm).
 
+use super::bidirectional::BidirectionalProfile;
 use super::{AxisProfile, TableError};
 
 const FORMAT: &str = "LinuxCNC COMP_FILE";
@@ -48,6 +55,47 @@ pub fn write(profile: &AxisProfile, comp_type: u8) -> Result<String, TableError>
             }
         };
         out.push_str(&format!("{nominal:.6} {value:.6} {value:.6}\n"));
+    }
+    check(&out)?;
+    Ok(out)
+}
+
+/// Writes the compensation file of a direction-dependent profile: `nominal forward reverse` at
+/// each target; type 1 trims c↑, c↓ (mm), type 0 actual positions nominal − c↑, nominal − c↓.
+pub fn write_bidirectional(
+    profile: &BidirectionalProfile,
+    comp_type: u8,
+) -> Result<String, TableError> {
+    if comp_type > 1 {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            format!("COMP_FILE_TYPE must be 0 or 1, not {comp_type}"),
+        ));
+    }
+    if profile.len() > MAX_TRIPLETS {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            format!(
+                "{} targets; LinuxCNC holds at most {MAX_TRIPLETS} triplets per joint",
+                profile.len()
+            ),
+        ));
+    }
+    let (fwd, rev) = profile.checked_values()?;
+    let mut out = String::new();
+    for (n, &nominal) in profile.positions_mm.iter().enumerate() {
+        // type 1: trim = c; type 0: actual = nominal + e = nominal − c
+        let value = |c_um: f64| match comp_type {
+            0 => nominal - c_um * 1e-3,
+            _ => c_um * 1e-3,
+        };
+        out.push_str(&format!(
+            "{nominal:.6} {:.6} {:.6}\n",
+            value(fwd[n]),
+            value(rev[n])
+        ));
     }
     check(&out)?;
     Ok(out)

@@ -28,6 +28,7 @@
 //! to the same bound as a sampled one.
 
 pub mod beckhoff;
+pub mod bidirectional;
 pub mod fanuc;
 pub mod heidenhain;
 pub mod linuxcnc;

@@ -21,6 +21,7 @@
 //!
 //! Values are written in mm with 6 decimals (trailing zeros dropped), as in the manual's examples.
 
+use super::bidirectional::BidirectionalProfile;
 use super::{decimal_number, trim_number, AxisProfile, TableError};
 
 const CEC: &str = "Siemens CEC";
@@ -55,9 +56,71 @@ pub fn write_cec(profile: &AxisProfile, opts: &CecOptions) -> Result<String, Tab
     if ![-1, 0, 1].contains(&opts.direction) {
         return Err(TableError::rule(CEC, None, "_DIRECTION must be 0, 1 or -1"));
     }
+    let mut out = String::from("%_N_NC_CEC_INI\nCHANDATA(1)\n");
+    cec_table(
+        &mut out,
+        opts,
+        opts.table_index,
+        profile.checked_values()?,
+        [profile.input_axis, profile.output_axis],
+        [profile.start_mm, profile.step_mm, profile.end_mm()],
+        opts.direction,
+        profile.rotary,
+    );
+    out.push_str("M17\n");
+    check_cec(&out, opts.max_points)?;
+    Ok(out)
+}
+
+/// Writes the direction-dependent form of an axis's own error (K3, 4.4, `$AN_CEC_DIRECTION`:
+/// "position-dependent backlash compensation can be implemented using two tables"): table
+/// t = `opts.table_index` with `_DIRECTION = 1` holds c↑, table t + 1 with `_DIRECTION = -1`
+/// holds c↓; both have the axis as basic and compensation axis. The targets must be equally
+/// spaced (a CEC table is `_MIN` + n·`_STEP`).
+pub fn write_cec_bidirectional(
+    profile: &BidirectionalProfile,
+    opts: &CecOptions,
+) -> Result<String, TableError> {
+    let (start, step) = profile.uniform_step(CEC)?;
+    let (fwd, rev) = profile.checked_values()?;
+    let end = profile.positions_mm[profile.len() - 1];
+    let axes = [profile.axis, profile.axis];
     let t = opts.table_index;
     let mut out = String::from("%_N_NC_CEC_INI\nCHANDATA(1)\n");
-    for (n, &c_um) in profile.checked_values()?.iter().enumerate() {
+    out.push_str(&format!(
+        "; table {t}: travel in + (_DIRECTION 1), table {}: travel in - (_DIRECTION -1)\n",
+        t + 1
+    ));
+    cec_table(&mut out, opts, t, fwd, axes, [start, step, end], 1, false);
+    cec_table(
+        &mut out,
+        opts,
+        t + 1,
+        rev,
+        axes,
+        [start, step, end],
+        -1,
+        false,
+    );
+    out.push_str("M17\n");
+    check_cec(&out, opts.max_points)?;
+    Ok(out)
+}
+
+/// One table t of a CEC file: values c (µm) written in mm, axes [input, output], range
+/// [min, step, max].
+#[allow(clippy::too_many_arguments)]
+fn cec_table(
+    out: &mut String,
+    opts: &CecOptions,
+    t: usize,
+    values_um: &[f64],
+    axes: [super::Axis; 2],
+    range: [f64; 3],
+    direction: i8,
+    modulo: bool,
+) {
+    for (n, &c_um) in values_um.iter().enumerate() {
         out.push_str(&format!(
             "$AN_CEC[{t},{n}]={}\n",
             trim_number(c_um * 1e-3, 6)
@@ -66,22 +129,19 @@ pub fn write_cec(profile: &AxisProfile, opts: &CecOptions) -> Result<String, Tab
     let name = |a: super::Axis| &opts.machine_axes[a.index()];
     out.push_str(&format!(
         "$AN_CEC_INPUT_AXIS[{t}]=({})\n$AN_CEC_OUTPUT_AXIS[{t}]=({})\n",
-        name(profile.input_axis),
-        name(profile.output_axis)
+        name(axes[0]),
+        name(axes[1])
     ));
     out.push_str(&format!(
         "$AN_CEC_STEP[{t}]={}\n$AN_CEC_MIN[{t}]={}\n$AN_CEC_MAX[{t}]={}\n",
-        decimal_number(profile.step_mm, 6),
-        decimal_number(profile.start_mm, 6),
-        decimal_number(profile.end_mm(), 6)
+        decimal_number(range[1], 6),
+        decimal_number(range[0], 6),
+        decimal_number(range[2], 6)
     ));
     out.push_str(&format!(
-        "$AN_CEC_DIRECTION[{t}]={}\n$AN_CEC_MULT_BY_TABLE[{t}]=0\n$AN_CEC_IS_MODULO[{t}]={}\nM17\n",
-        opts.direction,
-        u8::from(profile.rotary)
+        "$AN_CEC_DIRECTION[{t}]={direction}\n$AN_CEC_MULT_BY_TABLE[{t}]=0\n$AN_CEC_IS_MODULO[{t}]={}\n",
+        u8::from(modulo)
     ));
-    check_cec(&out, opts.max_points)?;
-    Ok(out)
 }
 
 /// Options of an LEC table.
@@ -129,6 +189,41 @@ pub fn write_lec(profile: &AxisProfile, opts: &LecOptions) -> Result<String, Tab
     ));
     check_lec(&out, opts.max_points)?;
     Ok(out)
+}
+
+/// An LEC table holds one value per point for both directions (`$AA_ENC_COMP` has no direction
+/// index), so a run whose forward and reverse corrections differ (at the file's 1 nm) is
+/// refused: the direction-dependent form is `sinumerik-cec` ([`write_cec_bidirectional`]).
+pub fn write_lec_bidirectional(
+    profile: &BidirectionalProfile,
+    opts: &LecOptions,
+) -> Result<String, TableError> {
+    let (start, step) = profile.uniform_step(LEC)?;
+    let (fwd, rev) = profile.checked_values()?;
+    for (n, (f, r)) in fwd.iter().zip(rev).enumerate() {
+        if trim_number(f * 1e-3, 6) != trim_number(r * 1e-3, 6) {
+            return Err(TableError::rule(
+                LEC,
+                None,
+                format!(
+                    "at {} mm the forward correction {f:.4} um and the reverse one {r:.4} um differ (reversal B = {:.4} um); an LEC table has one value for both directions: use --format sinumerik-cec, which writes one table per direction ($AN_CEC_DIRECTION 1 and -1)",
+                    profile.positions_mm[n],
+                    r - f
+                ),
+            ));
+        }
+    }
+    let one = AxisProfile {
+        input_axis: profile.axis,
+        output_axis: profile.axis,
+        start_mm: start,
+        step_mm: step,
+        comp_um: fwd.to_vec(),
+        rotary: false,
+        max_correction_um: profile.max_correction_um,
+        at_mm: [0.0; 3],
+    };
+    write_lec(&one, opts)
 }
 
 /// One `$NAME[index list]=value` line.

@@ -1,7 +1,9 @@
-//! `compensate table`: the compensation table a CNC controller loads, from an error model.
+//! `compensate table`: the compensation table a CNC controller loads, from an error model, or
+//! (`--from-iso230-2`) the direction-dependent table of one axis from an ISO 230-2 run.
 
 use crate::{Error, Observer, Result};
 use mtec_comp::map::{GridMap, MAP_FORMAT};
+use mtec_comp::table::bidirectional::BidirectionalProfile;
 use mtec_comp::table::{self, axis_profile, Axis, TableError};
 use mtec_io::{Destination, InputError, OutputGuard};
 use serde::Serialize;
@@ -117,8 +119,13 @@ pub fn parse_at(s: &str) -> Result<[f64; 3]> {
 /// Options of [`run`].
 #[derive(Debug, Clone)]
 pub struct Options {
-    /// Any model file mtec reads (`mtec_comp::load_error_model`).
+    /// Any model file mtec reads (`mtec_comp::load_error_model`); not read when
+    /// [`Self::from_iso230_2`] is given.
     pub model: PathBuf,
+    /// An ISO 230-2 run (`target_mm,run,direction,deviation_um`) instead of a model: the table
+    /// of `axis` at the run's targets, forward c↑ = −x̄↑ and reverse c↓ = −x̄↓ in each format's
+    /// direction-dependent form.
+    pub from_iso230_2: Option<PathBuf>,
     /// State log of a model with a state: the table is for the state after its last row.
     pub state: Option<PathBuf>,
     pub format: Format,
@@ -166,6 +173,7 @@ impl Options {
     pub fn new(model: impl Into<PathBuf>, format: Format, out: Option<PathBuf>) -> Self {
         Options {
             model: model.into(),
+            from_iso230_2: None,
             state: None,
             format,
             axis: Axis::X,
@@ -204,12 +212,20 @@ pub struct Outcome {
     pub cma: Option<PathBuf>,
     /// Every warning, as sent to the observer.
     pub warnings: Vec<String>,
+    /// What the table assumes or leaves to the control (`--from-iso230-2`), printed with it.
+    pub notes: Vec<String>,
+    /// `--from-iso230-2`: the largest reversal |B_i| = |x̄_i↑ − x̄_i↓| of the run (µm), carried
+    /// by the table's two directions.
+    pub reversal_max_um: Option<f64>,
 }
 
 impl fmt::Display for Outcome {
     /// The line the command prints on stderr: which table from which model (nothing for a
     /// table on stdout, or a beckhoff table).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for n in &self.notes {
+            writeln!(f, "note: {n}")?;
+        }
         match (&self.out, &self.cma) {
             (Some(out), Some(cma)) => writeln!(
                 f,
@@ -249,6 +265,9 @@ impl Observer for Keep<'_> {
 /// directory) before any table is computed; every value is checked against the format's limits
 /// and `max_correction_um` before anything is written.
 pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
+    if let Some(run) = &opts.from_iso230_2 {
+        return run_iso230_2(opts, run, obs);
+    }
     let mut keep = Keep {
         obs,
         warnings: Vec::new(),
@@ -291,6 +310,8 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
         out: opts.out.clone(),
         cma,
         warnings: warnings.clone(),
+        notes: Vec::new(),
+        reversal_max_um: None,
     };
 
     if opts.format == Format::Beckhoff {
@@ -426,5 +447,185 @@ fn load_map_if_grid(path: &Path) -> std::result::Result<Option<GridMap>, InputEr
         Ok(Some(mtec_comp::load::load_map(path)?))
     } else {
         Ok(None)
+    }
+}
+
+/// `--from-iso230-2`: the direction-dependent table of `opts.axis` from the run's mean
+/// unidirectional deviations (ISO 230-2:2014 3.3.1), c↑ = −x̄↑ and c↓ = −x̄↓ at each target.
+fn run_iso230_2(opts: &Options, run: &Path, obs: &mut dyn Observer) -> Result<Outcome> {
+    if !(opts.max_correction_um.is_finite() && opts.max_correction_um > 0.0) {
+        return Err(Error::usage(format!(
+            "--max-correction-um must be a positive number, not {}",
+            opts.max_correction_um
+        )));
+    }
+    let guard = OutputGuard::new(&[run]);
+    let dest = match &opts.out {
+        Some(p) if opts.format == Format::Heidenhain && p.as_os_str() == "-" => {
+            return Err(Error::usage(
+                "heidenhain writes two files: give -o NAME.COM, not - (the .CMA goes beside it)",
+            ))
+        }
+        Some(p) => guard.check(p)?,
+        None => Destination::Stdout,
+    };
+    let table_in = mtec_io::Table::read(run)?;
+    let data = mtec_measure::PositioningData::from_table(&table_in)?;
+    let mut warnings = Vec::new();
+    for w in &data.warnings {
+        obs.warning(w);
+        warnings.push(w.clone());
+    }
+    let iso = mtec_measure::evaluate_iso230_2(&data);
+    // the first line of the run that names each target, for messages
+    let targets_col = table_in.f64_column("target_mm")?;
+    let line_of = |p: f64| {
+        table_in
+            .rows
+            .iter()
+            .zip(&targets_col)
+            .find(|(_, &t)| (t - p).abs() < 1e-6)
+            .map(|(row, _)| row.line)
+    };
+    let up: Vec<f64> = iso.targets.iter().map(|t| t.mean_up_um).collect();
+    let down: Vec<f64> = iso.targets.iter().map(|t| t.mean_down_um).collect();
+    let fail = |e: TableError| run_table_error(run, &data.targets_mm, &line_of, e);
+    let profile = BidirectionalProfile::from_mean_deviations(
+        opts.axis,
+        data.targets_mm.clone(),
+        &up,
+        &down,
+        opts.max_correction_um,
+    )
+    .map_err(fail)?;
+    let reversal_max = profile
+        .reversal_um()
+        .iter()
+        .fold(0.0f64, |m, b| m.max(b.abs()));
+    let provenance = format!(
+        "ISO 230-2 run {} ({} targets, {} runs +, {} runs -)",
+        run.display(),
+        profile.len(),
+        iso.runs_up,
+        iso.runs_down
+    );
+    let mut notes = Vec::new();
+    let axis_number = opts.axis_number.unwrap_or(opts.axis.index() as u8 + 1);
+    let mut cma = None;
+    let text = match opts.format {
+        Format::Linuxcnc => table::linuxcnc::write_bidirectional(&profile, opts.comp_type),
+        Format::SinumerikCec => {
+            notes.push(format!(
+                "tables {} (_DIRECTION 1, travel in +) and {} (_DIRECTION -1, travel in -); MD18342 MM_CEC_MAX_POINTS must allow {} points and MD32710 CEC_ENABLE be set",
+                opts.table_index,
+                opts.table_index + 1,
+                profile.len()
+            ));
+            table::sinumerik::write_cec_bidirectional(
+                &profile,
+                &table::sinumerik::CecOptions {
+                    table_index: opts.table_index,
+                    max_points: opts.max_points,
+                    ..Default::default()
+                },
+            )
+        }
+        Format::SinumerikLec => table::sinumerik::write_lec_bidirectional(
+            &profile,
+            &table::sinumerik::LecOptions {
+                max_points: opts.max_points,
+                ..Default::default()
+            },
+        ),
+        Format::Fanuc => {
+            notes.push(
+                "set parameter 3605#0 = 1 (bidirectional pitch error compensation); the tape assumes reference return in the + direction (1006#5 = 0)".into(),
+            );
+            table::fanuc::write_bidirectional(
+                &profile,
+                &table::fanuc::FanucOptions {
+                    axis_number,
+                    reference_mm: opts.reference_mm,
+                    reference_number: opts.reference_number,
+                    magnification: opts.magnification,
+                    detection_unit_um: opts.detection_unit_um,
+                    max_increment: opts.max_increment,
+                    ..Default::default()
+                },
+            )
+        }
+        Format::Heidenhain => {
+            let out = opts.out.as_deref().ok_or_else(|| {
+                Error::usage(
+                    "heidenhain writes two files: give -o NAME.COM (the .CMA goes beside it)",
+                )
+            })?;
+            let com_name = out
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "TABLE.COM".into());
+            notes.push(
+                "BACKLASH column = the error measured in the negative direction (MANUALplus 620 Technical Manual p. 716); check one point on the machine".into(),
+            );
+            let t = table::heidenhain::write_bidirectional(&profile, &com_name, &opts.cma_name)
+                .map_err(fail)?;
+            let cma_path = out.with_file_name(&opts.cma_name);
+            let cma_dest = guard.check(&cma_path)?;
+            dest.write(t.com.as_bytes())?;
+            cma_dest.write(t.cma.as_bytes())?;
+            cma = Some(cma_path);
+            Ok(String::new())
+        }
+        Format::Beckhoff => {
+            notes.push(
+                "TwinCAT CNC leadscrew error compensation list (kw.ssfk, bilateral): activate with P-AXIS-00175 lr_param.ssfk = 1".into(),
+            );
+            table::beckhoff::ssfk::write(
+                &profile,
+                axis_number,
+                opts.max_points
+                    .unwrap_or(table::beckhoff::ssfk::DEFAULT_MAX_POINTS),
+            )
+        }
+    }
+    .map_err(fail)?;
+    if cma.is_none() {
+        dest.write(text.as_bytes())?;
+    }
+    Ok(Outcome {
+        format: opts.format,
+        provenance,
+        points: profile.len(),
+        out: opts.out.clone(),
+        cma,
+        warnings,
+        notes,
+        reversal_max_um: Some(reversal_max),
+    })
+}
+
+/// A table the run cannot give is the run file's fault (exit 2): named with the line of the
+/// target the message is about (a value too large, or the first target the message names).
+fn run_table_error(
+    run: &Path,
+    targets_mm: &[f64],
+    line_of: &dyn Fn(f64) -> Option<usize>,
+    e: TableError,
+) -> Error {
+    let message = e.to_string();
+    let target = match &e {
+        TableError::TooLarge {
+            table_position: Some((_, p)),
+            ..
+        } => Some(*p),
+        _ => targets_mm
+            .iter()
+            .filter_map(|&p| message.find(&format!(" {p} mm")).map(|i| (i, p)))
+            .min_by_key(|(i, _)| *i)
+            .map(|(_, p)| p),
+    };
+    match target.and_then(line_of) {
+        Some(line) => InputError::line(run, line, message).into(),
+        None => InputError::file(run, message).into(),
     }
 }
