@@ -5,68 +5,10 @@ use mtec_comp::table;
 use mtec_workflow::ops::compensate_table::{self as op, parse_at, parse_axis, Options, Range};
 use std::path::PathBuf;
 
-pub const HELP: &str = "\
-Writes the compensation table a CNC controller loads, from an error model (a map from
-`mtec map fit`, or any model file mtec reads). The compensation value is the negative of the
-predicted error, converted to each format's own sign rule; every table is checked against its
-format's documented limits before it is written.
+pub const HELP: &str = include_str!("../../help/compensate_table.help.txt");
 
-Formats:
-  linuxcnc        [JOINT_n] COMP_FILE, one `nominal forward reverse` triplet per line, no header,
-                  <= 256 lines; --comp-type 1 (trims, default) or 0 (actual positions)
-  sinumerik-cec   Siemens 840D sag / cross-axis table %_N_NC_CEC_INI ($AN_CEC...): the value of
-                  --output-axis as a function of --axis; values added to the setpoint
-  sinumerik-lec   Siemens 840D leadscrew error table %_N_AX_EEC_INI ($AA_ENC_COMP...); a positive
-                  value moves the axis negative, so the written value is the error itself
-  fanuc           FANUC pitch error tape: parameters 3620-3624 and incremental values N1nnnnP...
-                  per interval, relative to the reference point (--reference-mm)
-  heidenhain      HEIDENHAIN nonlinear axis error compensation: a .COM table (-o) with the axis
-                  error, and its .CMA assignment table beside it (--cma-name)
-  beckhoff        Beckhoff TwinCAT CNC volumetric compensation, ISG CSV: X Y Z EXX EYY EZZ (mm)
-                  on the map's grid (or --x-range/--y-range/--z-range)
-
-Size bound: a table whose correction exceeds --max-correction-um (default 500 um, the same rule
-as `compensate gcode`) is refused with exit code 2, naming the axis, the table position and the
-value: for 1-D tables each value |c|, for beckhoff the length of the vector (ex, ey, ez). A
-value that is not a finite number is always refused.
-
-Sampling: 1-D tables run along --axis over --range FROM:TO:STEP (default: the map's grid along
-that axis), the other coordinates at --at X,Y,Z (default: the centre of the map's grid box, or
-0,0,0 for other models). Models without a grid (BPNN, kinematic) need --range (and the
---x/y/z-range for beckhoff); a BPNN extrapolates without warning outside the box it was fitted
-on, so keep the ranges inside it.
-
-ISO 230-2 run (--from-iso230-2 RUN.csv, instead of --model): the table of --axis at the
-run's targets, one correction per approach direction, c = -(mean unidirectional deviation):
-  linuxcnc        `nominal forward reverse` (LinuxCNC applies forward while moving +)
-  sinumerik-cec   two tables, $AN_CEC_DIRECTION 1 (c up) and -1 (c down); equal spacing
-  sinumerik-lec   one table for both directions: refused when the two differ
-  fanuc           bidirectional pitch error tape: 3626/3627 and the negative-direction data
-  heidenhain      .COM with the axis column (error moving +) and BACKLASH (error moving -)
-  beckhoff        TwinCAT leadscrew error list kw.ssfk, bilateral: pos / neg in 0.1 um
-A run whose table a format cannot hold (spacing, point count, a value over the bound) is
-refused with exit code 2, naming the run file and the target's line.
-
-State: a machine error model (mtec.machine-error/1) changes with the machine's temperatures; a
-table is one moment of it, the state after the last row of --state LOG.csv (time_min and the
-model's state inputs, rows in time order), named in the table's provenance. Without --state such
-a model is refused. Reload the table when the state changes.";
-
-const EXAMPLES: &str = crate::help::examples!(
-    "  # a volumetric error map from a laser-tracker grid
-  $ mtec simulate volumetric-grid --out g
-  $ mtec map fit --grid g/grid.csv -o g/map.json
-  # LinuxCNC COMP_FILE of X on the map's grid, at the centre of the grid box
-  $ mtec compensate table --model g/map.json --format linuxcnc --axis X \\
-      -o x.comp
-  # Siemens 840D leadscrew error table of Z from 0 to 300 mm in 10 mm steps
-  $ mtec compensate table --model g/map.json --format sinumerik-lec --axis Z \\
-      --range 0:300:10 -o z_lec.ini
-  # both directions of X from a laser run, as LinuxCNC trims
-  $ mtec simulate iso230-2 --out r
-  $ mtec compensate table --from-iso230-2 r/iso230-2.csv --format linuxcnc \\
-      --axis X -o x2.comp"
-);
+const EXAMPLES: &str =
+    crate::help::examples!(include_str!("../../help/compensate_table.examples.txt"));
 
 /// Target controller format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

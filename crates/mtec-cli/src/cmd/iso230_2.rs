@@ -5,41 +5,9 @@ use mtec_measure::air::{self, AirFormula};
 use mtec_workflow::ops::iso230_2::{self as op, Options};
 use std::path::PathBuf;
 
-const LONG: &str = "\
-Evaluates bidirectional positioning runs of one linear axis (laser interferometer) as ISO 230-2:2014
-asks: per target and direction the mean deviation, the standard uncertainty s and the mean +/- 2s
-band, the reversal value B_i; and the axis values E_up, E_down, E, M, R_up, R_down, R, B, mean B,
-A_up, A_down, A. A second report gives the VDI/DGQ 3441 values Ps, U, Pa and P.
+const LONG: &str = include_str!("../../help/iso230_2.long.txt");
 
-Input (CSV, docs/formats.md, \"ISO 230-2 run CSV\"): target_mm,run,direction,deviation_um
-  direction is + (target approached moving in the positive direction) or -;
-  every run must visit every target in each direction; at least 2 runs per direction
-  (ISO 230-2 asks for 5: fewer gives a warning).
-
-Environmental compensation (docs/methods.md, section 2.1), applied to the
-measured positions P_i + x_ij before the statistics (the interferometer is
-taken to read 0 at target 0 mm):
-  --air-temp-c, --pressure-pa, --humidity-pct (all three): the readings were
-  taken with the index the laser assumed (--laser-n; default: the formula at
-  20 °C, 101325 Pa, 50 % RH) and are scaled by n_laser / n_actual, n_actual
-  from Ciddor (default) or the updated Edlén equation (--air-formula);
-  --material-temp-c, --alpha-um-per-m-k (both): ISO 1 normalisation to 20 °C,
-  positions divided by 1 + alpha (T - 20).
-The report states n used, n actual and each correction in ppm.";
-
-const EXAMPLES: &str = crate::help::examples!(
-    "  # five bidirectional laser runs of one axis over 11 targets
-  $ mtec simulate iso230-2 --out p
-  # A, E, R, B, M per ISO 230-2 and Ps, U, Pa, P per VDI 3441, as a text report
-  $ mtec iso230-2 p/iso230-2.csv
-  # the same as one JSON object (mtec.iso230-2/1), also in p/iso230-2.json
-  $ mtec iso230-2 p/iso230-2.csv --json --out p
-  # corrected for 23.5 °C, 98.7 kPa, 40 % RH air and a 24 °C steel axis
-  $ mtec iso230-2 p/iso230-2.csv --air-temp-c 23.5 --pressure-pa 98700 \\
-      --humidity-pct 40 --material-temp-c 24 --alpha-um-per-m-k 11.5
-  # every implemented standard's A, R, B, E, M side by side
-  $ mtec iso230-2 p/iso230-2.csv --standard all"
-);
+const EXAMPLES: &str = crate::help::examples!(include_str!("../../help/iso230_2.examples.txt"));
 
 /// Refractive-index equation of `--air-formula`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

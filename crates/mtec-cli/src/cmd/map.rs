@@ -5,46 +5,14 @@ use mtec_comp::map::Outside;
 use mtec_workflow::ops::map;
 use std::path::PathBuf;
 
-const FIT_HELP: &str = "\
-Builds a volumetric error map from a measured grid and writes it as JSON (\"format\": \"mtec.map/1\").
+const FIT_HELP: &str = include_str!("../../help/map.fit_help.txt");
 
-The grid file is CSV with the columns x_mm,y_mm,z_mm,ex_um,ey_um,ez_um: one row per grid node
-(commanded position in mm, volumetric error of the tool tip in um). The rows must form a full
-regular grid: every combination of the distinct x, y and z values exactly once, in any order
-(they are sorted). Spacing may differ between grid lines unless a controller needs it equal.
-Duplicated, missing or stray nodes are reported with their line and column.
+const EVAL_HELP: &str = include_str!("../../help/map.eval_help.txt");
 
---model trilinear: the map interpolates trilinearly between nodes, as a controller's 3-D
-compensation does. --outside says what happens beyond the grid box: clamp (default: the value at
-the nearest point of the box), extrapolate (the edge cell continued linearly) or refuse.
---controller fanuc-3d checks at most 25 equally spaced points per axis; linuxcnc at most 256.";
+const FIT_EXAMPLES: &str = crate::help::examples!(include_str!("../../help/map.fit_examples.txt"));
 
-const EVAL_HELP: &str = "\
-Evaluates an error model (a map from `mtec map fit`, or any model file mtec reads) at points.
-
-The points file is CSV with at least the columns x_mm,y_mm,z_mm (other columns are ignored).
-The output has the columns x_mm,y_mm,z_mm,ex_um,ey_um,ez_um, one row per input row, in the same
-order; it goes to stdout unless -o is given. A point the model cannot evaluate (outside a map
-whose policy is refuse) is an error naming its line.";
-
-const FIT_EXAMPLES: &str = crate::help::examples!(
-    "  # a laser-tracker grid: 11 x 11 x 11 points over 600 x 800 x 300 mm
-  $ mtec simulate volumetric-grid --out g
-  # the trilinear map of a controller's 3-D compensation; outside: edge value
-  $ mtec map fit --grid g/grid.csv --model trilinear --outside clamp \\
-      -o g/map.json
-  # a build with the neural models (cargo feature `neural`) also fits a BPNN
-  # map of the grid: --model bpnn --hidden 10 (73 weights, not 3993 values)"
-);
-
-const EVAL_EXAMPLES: &str = crate::help::examples!(
-    "  # a measured grid and its map
-  $ mtec simulate volumetric-grid --out g
-  $ mtec map fit --grid g/grid.csv -o g/map.json
-  # the map's errors along the body diagonals the tracker measured too, to
-  # compare with their ex_um, ey_um, ez_um (map eval reads x_mm, y_mm, z_mm)
-  $ mtec map eval --map g/map.json --points g/diagonals.csv -o diag-map.csv"
-);
+const EVAL_EXAMPLES: &str =
+    crate::help::examples!(include_str!("../../help/map.eval_examples.txt"));
 
 /// `mtec map`: volumetric error maps.
 #[derive(clap::Args)]
