@@ -11,6 +11,7 @@
 //! `mtec-thermal`, ...), using the typed accessors of [`Table`].
 
 mod error;
+mod fields;
 pub mod notes;
 mod stream;
 mod table;

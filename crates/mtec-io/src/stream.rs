@@ -13,7 +13,7 @@
 //! line counter of [`Lines`] is the record's line.
 
 use crate::error::InputError;
-use crate::table::{check_header, decimal_comma, detect_dialect, Dialect, TableRow};
+use crate::fields::{check_header, decimal_comma, detect_dialect, Dialect, TableRow};
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -406,7 +406,7 @@ impl<R: BufRead> CsvReader<R> {
     /// Index of a column, or an error that says what is there instead (see
     /// [`Table::column`](crate::Table::column)).
     pub fn column(&self, name: &str) -> Result<usize, InputError> {
-        crate::table::column_index(&self.path, &self.header, self.header_line, name)
+        crate::fields::column_index(&self.path, &self.header, self.header_line, name)
     }
 
     /// Checks that all named columns are present (first missing one reported).
