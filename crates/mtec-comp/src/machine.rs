@@ -137,14 +137,14 @@ fn axis_index(name: &str) -> Option<usize> {
     }
 }
 
+/// Reads a model file of any format (`crate::load::load_error_model`).
+pub type ModelLoader = dyn Fn(&Path) -> Result<Box<dyn ErrorModel>, InputError>;
+
 impl MachineErrorModel {
     /// Reads a `mtec.machine-error/1` file and the model files it names, each through `load_model`
     /// (`crate::load::load_error_model`, which reads any model format, this one included: the
     /// loader is passed in so that this module does not depend on the registry of formats).
-    pub fn load(
-        path: &Path,
-        load_model: &dyn Fn(&Path) -> Result<Box<dyn ErrorModel>, InputError>,
-    ) -> Result<MachineErrorModel, InputError> {
+    pub fn load(path: &Path, load_model: &ModelLoader) -> Result<MachineErrorModel, InputError> {
         let text = mtec_io::read_text(path)?;
         let file: MachineFile =
             serde_json::from_str(&text).map_err(|e| mtec_io::json_error(path, &e))?;
