@@ -392,26 +392,10 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
         ),
         Format::Fanuc => table::fanuc::write(
             &profile,
-            &table::fanuc::FanucOptions {
-                axis_number: opts.axis_number.unwrap_or(axis.index() as u8 + 1),
-                reference_mm: opts.reference_mm,
-                reference_number: opts.reference_number,
-                magnification: opts.magnification,
-                detection_unit_um: opts.detection_unit_um,
-                max_increment: opts.max_increment,
-                ..Default::default()
-            },
+            &fanuc_options(opts, opts.axis_number.unwrap_or(axis.index() as u8 + 1)),
         ),
         Format::Heidenhain => {
-            let out = opts.out.as_deref().ok_or_else(|| {
-                Error::usage(
-                    "heidenhain writes two files: give -o NAME.COM (the .CMA goes beside it)",
-                )
-            })?;
-            let com_name = out
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "TABLE.COM".into());
+            let (out, com_name) = heidenhain_com(opts)?;
             let t = table::heidenhain::write(&profile, &com_name, &opts.cma_name)
                 .map_err(|e| table_error(&opts.model, e))?;
             let cma_path = out.with_file_name(&opts.cma_name);
@@ -543,27 +527,11 @@ fn run_iso230_2(opts: &Options, run: &Path, obs: &mut dyn Observer) -> Result<Ou
             );
             table::fanuc::write_bidirectional(
                 &profile,
-                &table::fanuc::FanucOptions {
-                    axis_number,
-                    reference_mm: opts.reference_mm,
-                    reference_number: opts.reference_number,
-                    magnification: opts.magnification,
-                    detection_unit_um: opts.detection_unit_um,
-                    max_increment: opts.max_increment,
-                    ..Default::default()
-                },
+                &fanuc_options(opts, axis_number),
             )
         }
         Format::Heidenhain => {
-            let out = opts.out.as_deref().ok_or_else(|| {
-                Error::usage(
-                    "heidenhain writes two files: give -o NAME.COM (the .CMA goes beside it)",
-                )
-            })?;
-            let com_name = out
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "TABLE.COM".into());
+            let (out, com_name) = heidenhain_com(opts)?;
             notes.push(
                 "BACKLASH column = the error measured in the negative direction (MANUALplus 620 Technical Manual p. 716); check one point on the machine".into(),
             );
@@ -628,4 +596,29 @@ fn run_table_error(
         Some(line) => InputError::line(run, line, message).into(),
         None => InputError::file(run, message).into(),
     }
+}
+
+/// The FANUC writer's options from the job's (the same for a model and an ISO 230-2 run).
+fn fanuc_options(opts: &Options, axis_number: u8) -> table::fanuc::FanucOptions {
+    table::fanuc::FanucOptions {
+        axis_number,
+        reference_mm: opts.reference_mm,
+        reference_number: opts.reference_number,
+        magnification: opts.magnification,
+        detection_unit_um: opts.detection_unit_um,
+        max_increment: opts.max_increment,
+        ..Default::default()
+    }
+}
+
+/// HEIDENHAIN writes two files: the `-o NAME.COM` path and the name the `.COM` is known by.
+fn heidenhain_com(opts: &Options) -> crate::Result<(&std::path::Path, String)> {
+    let out = opts.out.as_deref().ok_or_else(|| {
+        Error::usage("heidenhain writes two files: give -o NAME.COM (the .CMA goes beside it)")
+    })?;
+    let com_name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "TABLE.COM".into());
+    Ok((out, com_name))
 }
