@@ -7,7 +7,7 @@
 //! (SPEC §1, method C), per direction: c_i↑ = −x̄_i↑, c_i↓ = −x̄_i↓. The writers of each format
 //! (`write_bidirectional` and friends) carry both columns in the controller's own form.
 
-use super::{check_correction, Axis, TableError};
+use super::{check_correction, Axis, AxisProfile, TableError};
 
 /// Compensation values of one axis at its measured targets, one column per approach direction.
 #[derive(Debug, Clone, PartialEq)]
@@ -117,6 +117,27 @@ impl BidirectionalProfile {
             }
         }
         Ok((start, step))
+    }
+
+    /// One direction's values `comp_um` on the equally spaced grid `start_mm + k step_mm` (from
+    /// [`BidirectionalProfile::uniform_step`]) as the one-direction profile the start-and-step
+    /// writers take, with this profile's axis and bound.
+    pub fn uniform_axis_profile(
+        &self,
+        start_mm: f64,
+        step_mm: f64,
+        comp_um: &[f64],
+    ) -> AxisProfile {
+        AxisProfile {
+            input_axis: self.axis,
+            output_axis: self.axis,
+            start_mm,
+            step_mm,
+            comp_um: comp_um.to_vec(),
+            rotary: false,
+            max_correction_um: self.max_correction_um,
+            at_mm: [0.0; 3],
+        }
     }
 
     /// ISO 230-2 3.3.2 reversal B_i = x̄_i↑ − x̄_i↓ = c_i↓ − c_i↑ (µm).

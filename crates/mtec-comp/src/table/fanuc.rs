@@ -205,16 +205,7 @@ pub fn write_bidirectional(
 ) -> Result<String, TableError> {
     let (start, step) = profile.uniform_step(FORMAT)?;
     let (fwd, rev) = profile.checked_values()?;
-    let forward = AxisProfile {
-        input_axis: profile.axis,
-        output_axis: profile.axis,
-        start_mm: start,
-        step_mm: step,
-        comp_um: fwd.to_vec(),
-        rotary: false,
-        max_correction_um: profile.max_correction_um,
-        at_mm: [0.0; 3],
-    };
+    let forward = profile.uniform_axis_profile(start, step, fwd);
     // the positive-direction tape, with every rule of the unidirectional one
     let plain = write(&forward, opts)?;
     let n = fwd.len();

@@ -213,16 +213,7 @@ pub fn write_lec_bidirectional(
             ));
         }
     }
-    let one = AxisProfile {
-        input_axis: profile.axis,
-        output_axis: profile.axis,
-        start_mm: start,
-        step_mm: step,
-        comp_um: fwd.to_vec(),
-        rotary: false,
-        max_correction_um: profile.max_correction_um,
-        at_mm: [0.0; 3],
-    };
+    let one = profile.uniform_axis_profile(start, step, fwd);
     write_lec(&one, opts)
 }
 
