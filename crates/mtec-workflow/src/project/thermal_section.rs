@@ -164,7 +164,10 @@ pub fn time_axis(table: &mtec_io::Table, rows: usize) -> (Vec<f64>, &'static str
             };
         }
     }
-    ((0..rows).map(|i| i as f64).collect(), "row of the data file")
+    (
+        (0..rows).map(|i| i as f64).collect(),
+        "row of the data file",
+    )
 }
 
 fn drift_figure(
