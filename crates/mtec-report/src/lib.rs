@@ -11,6 +11,8 @@ pub mod ridge_trace;
 pub mod rotary;
 
 pub use html::{KeyFigure, Report, Section, Verdict};
-pub use plot::{bar_chart, bar_chart_with_errors, line_chart, scatter_chart, Band, Series};
+pub use plot::{
+    bar_chart, bar_chart_with_errors, line_chart, quiver_chart, scatter_chart, Arrow, Band, Series,
+};
 
 pub mod polar;

@@ -308,6 +308,90 @@ pub fn bar_chart_with_errors(
     svg
 }
 
+/// One arrow of a [`quiver_chart`]: at (x, y) (axis units), the vector (dx, dy) (vector units).
+#[derive(Debug, Clone, Copy)]
+pub struct Arrow {
+    pub x: f64,
+    pub y: f64,
+    pub dx: f64,
+    pub dy: f64,
+}
+
+/// Arrows over a plane (e.g. the volumetric error in XY over the workspace), drawn at equal
+/// scale in x and y on the page whatever the axes' ranges: an arrow of `full_scale` vector
+/// units is 0.8 of the smaller grid step long, so two charts drawn with the same `full_scale`
+/// compare by eye; a reference arrow of `reference` units with its label sits beside the plot.
+/// Returns SVG text.
+pub fn quiver_chart(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    arrows: &[Arrow],
+    full_scale: f64,
+    (reference, reference_label): (f64, &str),
+) -> String {
+    // the smallest spacing of the arrows' positions along each axis
+    let step = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.windows(2)
+            .map(|w| w[1] - w[0])
+            .filter(|d| *d > 1e-9)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let (sx, sy) = (
+        step(&mut arrows.iter().map(|a| a.x).collect()),
+        step(&mut arrows.iter().map(|a| a.y).collect()),
+    );
+    let (sx, sy) = (
+        if sx.is_finite() { sx } else { 1.0 },
+        if sy.is_finite() { sy } else { 1.0 },
+    );
+    // the strip beside the plot holds the scale: a reference arrow and its length
+    let lw = 150;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (CHART.0 + lw, CHART.1)).into_drawing_area();
+        let _ = root.fill(&WHITE);
+        let (plot, strip) = split_root(&root, CHART.0);
+        // one grid step of margin round the positions: room for the arrows
+        let (x0, x1) = range(arrows.iter().flat_map(|a| [a.x - sx, a.x + sx]));
+        let (y0, y1) = range(arrows.iter().flat_map(|a| [a.y - sy, a.y + sy]));
+        let Some(mut chart) = xy_frame(&plot, title, x_label, y_label, (x0, x1), (y0, y1)) else {
+            return svg_error(title);
+        };
+        // pixels per axis unit, each way
+        let (ax, ay) = chart.backend_coord(&(x0, y0));
+        let (bx, by) = chart.backend_coord(&(x1, y1));
+        let kx = (bx - ax).abs() as f64 / (x1 - x0);
+        let ky = (by - ay).abs() as f64 / (y1 - y0);
+        // pixels per vector unit, the same in both directions
+        let g = 0.8 * (sx * kx).min(sy * ky) / full_scale.max(1e-12);
+        let c = colour(0);
+        for a in arrows {
+            let end = (a.x + a.dx * g / kx, a.y + a.dy * g / ky);
+            let _ = chart.draw_series(std::iter::once(PathElement::new(
+                vec![(a.x, a.y), end],
+                c.stroke_width(2),
+            )));
+            let _ = chart.draw_series(std::iter::once(Circle::new(end, 2, c.filled())));
+            let _ = chart.draw_series(std::iter::once(Circle::new((a.x, a.y), 1, BLACK.filled())));
+        }
+        let len = ((reference * g).round() as i32).clamp(2, lw as i32 - 20);
+        let text = TextStyle::from(("sans-serif", 13).into_font())
+            .color(&BLACK)
+            .pos(Pos::new(HPos::Left, VPos::Center));
+        let _ = strip.draw(&Text::new("scale", (8, 50), text.clone()));
+        let _ = strip.draw(&PathElement::new(
+            vec![(8, 72), (8 + len, 72)],
+            c.stroke_width(2),
+        ));
+        let _ = strip.draw(&Circle::new((8 + len, 72), 2, c.filled()));
+        let _ = strip.draw(&Text::new(reference_label.to_string(), (8, 94), text));
+        let _ = root.present();
+    }
+    svg
+}
+
 fn svg_error(title: &str) -> String {
     format!("<svg xmlns='http://www.w3.org/2000/svg' width='400' height='40'><text x='5' y='25'>{}: no data to plot</text></svg>", crate::html::escape(title))
 }

@@ -177,8 +177,83 @@ fn compensation_rate_section(p: &mut Pipeline, data: &Path, seed: u64) -> Result
         2,
         tol,
     );
+    let arrows = error_arrows(&vm, model.as_ref(), &tr, &opts)?;
     let sec = p.report.section("Compensation rate on the virtual machine");
     sec.text(format!("The machine commanded to 1000 random points with and without the map's correction; errors measured against the simulation's truth ({}). Rate = 1 − RMS after / RMS before.", model.describe()));
     sec.table(&["axis", "RMS before (µm)", "RMS after (µm)", "rate"], rows);
+    let ([before, after], scale, reference) = arrows;
+    let label = format!("{reference} µm");
+    for (title, set, what) in [
+        (
+            "Volumetric error in XY, before compensation",
+            &before,
+            "before",
+        ),
+        (
+            "Volumetric error in XY, after compensation",
+            &after,
+            "after",
+        ),
+    ] {
+        let caption = format!(
+            "The error of the tool tip in X and Y {what} compensation on a grid over the XY \
+             travel at mid Z, one arrow a point, both plots at the same scale (the arrow beside \
+             the plot is {reference} µm): after compensation the arrows should be too short to \
+             see."
+        );
+        let svg =
+            mtec_report::quiver_chart(title, "X (mm)", "Y (mm)", set, scale, (reference, &label));
+        sec.figure(svg, caption);
+    }
     Ok(())
+}
+
+/// The (Ex, Ey) error at a 7 × 9 grid over the XY travel at mid Z, before and after the
+/// correction, with the largest error before (µm: both charts' full scale) and a round
+/// reference length (µm).
+fn error_arrows(
+    vm: &VolumetricModel,
+    model: &dyn mtec_comp::ErrorModel,
+    tr: &[[f64; 2]],
+    opts: &CorrectionOptions,
+) -> Result<([Vec<mtec_report::Arrow>; 2], f64, f64)> {
+    let (nx, ny) = (7, 9);
+    let mut before = Vec::new();
+    let mut after = Vec::new();
+    let z = 0.5 * (tr[2][0] + tr[2][1]);
+    for i in 0..nx {
+        for j in 0..ny {
+            let x = tr[0][0] + 5.0 + (tr[0][1] - tr[0][0] - 10.0) * i as f64 / (nx - 1) as f64;
+            let y = tr[1][0] + 5.0 + (tr[1][1] - tr[1][0] - 10.0) * j as f64 / (ny - 1) as f64;
+            let t = [x, y, z];
+            let e0 = vm.error(&t, Formalism::Htm, Order::Exact).position_um;
+            let cmd = command_for_target(model, t, opts)
+                .map_err(|e| Error::Internal(anyhow::anyhow!("correction failed: {e}")))?;
+            let e1 = vm.error(&cmd, Formalism::Htm, Order::Exact).position_um;
+            // where the tool lands relative to the target
+            let landed = [0, 1].map(|k| (cmd[k] - t[k]) * 1e3 + e1[k]);
+            before.push(mtec_report::Arrow {
+                x,
+                y,
+                dx: e0[0],
+                dy: e0[1],
+            });
+            after.push(mtec_report::Arrow {
+                x,
+                y,
+                dx: landed[0],
+                dy: landed[1],
+            });
+        }
+    }
+    let largest = before.iter().map(|a| a.dx.hypot(a.dy)).fold(1e-9, f64::max);
+    // a round reference length at most the largest error: 1, 2 or 5 × 10^k µm
+    let top = largest;
+    let p = 10f64.powf(top.log10().floor());
+    let reference = [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .map(|m| m * p)
+        .rfind(|r| *r <= top)
+        .unwrap_or(p);
+    Ok(([before, after], largest, reference))
 }
