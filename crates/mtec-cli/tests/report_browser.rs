@@ -8,6 +8,8 @@
 //! Chromium and poppler-utils come from Debian's packages (.ci/run installs them); without them
 //! the test is skipped on a developer machine and fails in CI.
 
+mod support;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -15,27 +17,13 @@ fn mtec() -> Command {
     Command::new(env!("CARGO_BIN_EXE_mtec"))
 }
 
-fn on_path(name: &str) -> Option<PathBuf> {
-    std::env::var_os("PATH").and_then(|p| {
-        std::env::split_paths(&p)
-            .map(|d| d.join(name))
-            .find(|f| f.is_file())
-    })
-}
-
 /// Chromium, or None (skip) on a developer machine without it; CI must have it.
 fn browser() -> Option<PathBuf> {
-    let found = ["chromium", "chromium-browser", "google-chrome"]
-        .iter()
-        .find_map(|n| on_path(n));
-    if found.is_none() {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI needs chromium and poppler-utils (apt-get install chromium poppler-utils)"
-        );
-        eprintln!("skipped: no chromium on this machine");
-    }
-    found
+    support::tool_on_path(
+        &["chromium", "chromium-browser", "google-chrome"],
+        "chromium",
+        "the report's browser check skipped",
+    )
 }
 
 /// Headless Chromium with `args`, bounded in time; returns stdout.
