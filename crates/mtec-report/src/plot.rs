@@ -126,13 +126,21 @@ pub fn line_chart(
         .enumerate()
         .map(|(i, s)| Entry::new(s.name.clone(), colour(i), Swatch::Line))
         .collect();
-    entries.extend(bands.iter().enumerate().map(|(i, b)| {
-        Entry::new(
-            b.name.clone(),
-            colour(i + series.len()).mix(0.3),
-            Swatch::Box,
-        )
-    }));
+    // as many bands as series: band i belongs to series i and takes its colour (a mean and its
+    // ±2s band); otherwise the bands take colours of their own
+    let band_colour = |i: usize| {
+        if bands.len() == series.len() {
+            colour(i)
+        } else {
+            colour(i + series.len())
+        }
+    };
+    entries.extend(
+        bands
+            .iter()
+            .enumerate()
+            .map(|(i, b)| Entry::new(b.name.clone(), band_colour(i).mix(0.3), Swatch::Box)),
+    );
     let lw = legend::width(&entries);
     let mut svg = String::new();
     {
@@ -157,7 +165,7 @@ pub fn line_chart(
             return svg_error(title);
         };
         for (i, b) in bands.iter().enumerate() {
-            let c = colour(i + series.len()).mix(0.18);
+            let c = band_colour(i).mix(0.18);
             let mut poly: Vec<(f64, f64)> =
                 b.x.iter().zip(&b.upper).map(|(x, y)| (*x, *y)).collect();
             poly.extend(b.x.iter().zip(&b.lower).rev().map(|(x, y)| (*x, *y)));

@@ -351,17 +351,35 @@ pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> crate::Result<
             ["EAY", "EBY", "ECY"],
         ] {
             let mut series = Vec::new();
+            let mut bands = Vec::new();
             for n in group {
                 let Ok(el) = mtec_model::ErrorElement::parse(n) else {
                     continue;
                 };
                 let Some(f) = set.get(&el) else { continue };
                 let [lo, hi] = mach.travel(el.axis);
-                let pts = (0..=60).map(|k| {
-                    let q = lo + (hi - lo) * k as f64 / 60.0;
-                    ((q - lo) / (hi - lo), f.value(q))
-                });
-                series.push(Series::new(format!("{n} ({})", el.unit()), pts.collect()));
+                let pts: Vec<(f64, f64)> = (0..=60)
+                    .map(|k| {
+                        let q = lo + (hi - lo) * k as f64 / 60.0;
+                        ((q - lo) / (hi - lo), f.value(q))
+                    })
+                    .collect();
+                // ±2σ of the identification (its largest 1σ over the travel)
+                if let Some(u) = r
+                    .elements
+                    .iter()
+                    .find(|e| e.element == n)
+                    .map(|e| e.uncertainty_1sigma)
+                    .filter(|u| u.is_finite() && *u > 0.0)
+                {
+                    bands.push(mtec_report::Band {
+                        name: format!("{n} ± 2σ"),
+                        x: pts.iter().map(|p| p.0).collect(),
+                        lower: pts.iter().map(|p| p.1 - 2.0 * u).collect(),
+                        upper: pts.iter().map(|p| p.1 + 2.0 * u).collect(),
+                    });
+                }
+                series.push(Series::new(format!("{n} ({})", el.unit()), pts));
             }
             if !series.is_empty() {
                 sec.figure(
@@ -370,10 +388,12 @@ pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> crate::Result<
                         "position (fraction of travel)",
                         "error (µm or µrad)",
                         &series,
-                        &[],
+                        &bands,
                     ),
                     "Identified error functions over each axis' travel (linear errors in µm, \
-                     angular in µrad): the largest curve is where compensation gains most.",
+                     angular in µrad), each with its ±2σ band (the identification's largest 1σ \
+                     over the travel): the largest curve is where compensation gains most; a \
+                     band as wide as its curve means the element is not determined.",
                 );
             }
         }
