@@ -12,7 +12,7 @@
 
 use super::PredictOptions;
 use crate::{Error, Observer, Result};
-use mtec_io::{InputError, OutputGuard, Table};
+use mtec_io::{CsvWriter, InputError, OutputGuard, Table};
 use mtec_nn::metrics::{channel_metrics, ChannelMetrics};
 use mtec_nn::thermal_log::{self, LoadSpec, NnFitOptions, NnKind};
 use mtec_nn::{
@@ -376,35 +376,29 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
     };
     let meas = loaded.has_targets.then(|| loaded.data.rows().1);
     let metrics = meas.as_ref().map(|y| channel_metrics(targets, &pred, y));
-    let mut csv = String::from("experiment,time_min");
-    if let Some(c) = &seq_by {
-        csv.push(',');
-        csv.push_str(c);
-    }
-    for t in targets {
-        csv.push_str(&format!(",pred_{t}"));
-    }
+    let mut header = vec!["experiment".to_string(), "time_min".to_string()];
+    header.extend(seq_by.iter().cloned());
+    header.extend(targets.iter().map(|t| format!("pred_{t}")));
     if meas.is_some() {
-        for t in targets {
-            csv.push_str(&format!(",{t},res_{t}"));
-        }
+        header.extend(
+            targets
+                .iter()
+                .flat_map(|t| [t.to_string(), format!("res_{t}")]),
+        );
     }
-    csv.push('\n');
+    let mut csv = CsvWriter::new(header);
     for (i, l) in loaded.labels.iter().enumerate() {
-        csv.push_str(&format!("{},{}", l.experiment, l.time_min));
-        if let Some(s) = l.sequence {
-            csv.push_str(&format!(",{s}"));
-        }
-        for p in &pred[i] {
-            csv.push_str(&format!(",{p:.4}"));
-        }
+        let mut row = vec![l.experiment.to_string(), l.time_min.to_string()];
+        row.extend(l.sequence.iter().map(|s| s.to_string()));
+        row.extend(pred[i].iter().map(|p| format!("{p:.4}")));
         if let Some(y) = &meas {
             for (p, v) in pred[i].iter().zip(&y[i]) {
-                csv.push_str(&format!(",{v:.4},{:.4}", v - p));
+                row.extend([format!("{v:.4}"), format!("{:.4}", v - p)]);
             }
         }
-        csv.push('\n');
+        csv.row(row);
     }
+    let csv = csv.finish();
     if let Some(d) = &dest {
         d.write(csv.as_bytes())?;
     }
