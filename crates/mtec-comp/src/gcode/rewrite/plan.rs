@@ -18,32 +18,14 @@ use super::super::bound::{norm, PathBound};
 use super::super::lexer::Value;
 use super::super::solve::{correction_mm, SolveError};
 use super::interp::{Motion, OUT, PROG};
-use super::rotary_move::RotaryMove;
-use super::{rounding_um, GcodeError, OutsidePoint, ProblemKind, Rewriter, Units};
+use super::options::{rounding_um, Units};
+use super::piece::{dist, Piece, RotaryMove};
+use super::report::{GcodeError, OutsidePoint, ProblemKind};
+use super::rewriter::Rewriter;
 
 /// A point this far outside the model's box (mm) counts as outside (rounding of written words
 /// and of the solve stays inside).
 const OUTSIDE_MODEL_TOL_MM: f64 = 1e-3;
-
-/// The end of one output piece of a move.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Piece {
-    /// The target in machine axes (mm) at the piece's rotary angles.
-    pub(super) t: [f64; 3],
-    /// The correction (mm): the axes are commanded to `t + c`.
-    pub(super) c: [f64; 3],
-    /// The fraction of the original move's duration at the piece's end (1 for the last).
-    pub(super) s: f64,
-    /// The rotary axes' machine angles (deg) written at the piece's end, for a move that turns
-    /// a rotary axis.
-    pub(super) rot: Option<[f64; 3]>,
-}
-
-impl Piece {
-    pub(super) fn new(t: [f64; 3], c: [f64; 3], s: f64) -> Piece {
-        Piece { t, c, s, rot: None }
-    }
-}
 
 impl Rewriter<'_> {
     /// Refusals of a move the interpreter follows but the rewriter cannot compensate: U, V, W
@@ -849,8 +831,4 @@ fn arc_box(arc: &Arc) -> ([f64; 3], [f64; 3]) {
 fn arc_length(arc: &Arc) -> f64 {
     let n = arc.plane.normal;
     (arc.r_start * arc.sweep.abs()).hypot(arc.end[n] - arc.start[n])
-}
-
-pub(super) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
