@@ -19,6 +19,7 @@ use mtec_nn::{
     train_bpnn_baseline_monitored, train_cnn_lstm_monitored, Bpnn, CnnLstm, CnnLstmReport, NnError,
     StopReason, ThermalDataset, TrainReport,
 };
+use mtec_thermal::model_file::SplitBy;
 use serde::Serialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -40,6 +41,35 @@ pub struct FitOptions {
     pub output: PathBuf,
     /// The network and its training.
     pub nn: NnFitOptions,
+}
+
+impl FitOptions {
+    /// The neural fit that `thermal fit` options ask for: the data, target, sensors,
+    /// experiment split and output of `opts`, and the network `nn`. What goes with the
+    /// regression models only is refused (a ridge k, lag features, validation blocks, a split
+    /// by time): the networks are validated on whole experiments.
+    pub fn from_thermal_fit(opts: &super::FitOptions, nn: NnFitOptions) -> Result<FitOptions> {
+        let f = &opts.fit;
+        let (train, test) = match &opts.split {
+            SplitBy::Experiments { train, test }
+                if f.k.is_none() && !f.lag && f.block_min.is_none() =>
+            {
+                (train.clone(), test.clone())
+            }
+            _ => return Err(Error::usage(
+                "--k, --lag, --block-min and --train-until go with the regression models; the neural models split by --train/--test experiments",
+            )),
+        };
+        Ok(FitOptions {
+            data: opts.data.clone(),
+            target: opts.target.clone(),
+            sensors: f.sensors.clone(),
+            train,
+            test,
+            output: opts.output.clone(),
+            nn,
+        })
+    }
 }
 
 /// How the network trained.
