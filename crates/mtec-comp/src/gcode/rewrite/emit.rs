@@ -57,7 +57,7 @@ impl Rewriter<'_> {
                 // the byte-order mark stays the first bytes of the file
                 output.write_all(b"\xEF\xBB\xBF")?;
             }
-            let header = header_comment(self.view.model(), self.opt);
+            let header = header_comment(self.planner.view.model(), self.opt);
             output.write_all(header.as_bytes())?;
             output.write_all(if ending.is_empty() { b"\n" } else { ending })?;
             self.report.lines_written += 1;

@@ -11,11 +11,15 @@
 //! - `emit`: the pieces written as edits of the line and added lines (rounding, case,
 //!   separators), the header comment, the line length limit.
 //!
-//! `rewriter` holds the driver loop and the per-line buffers the three share (`Rewriter`); the
-//! types they all name are in leaf modules below them: `options` (the knobs), `report` (counts,
-//! diagnostics, errors), `piece` (the pieces of a move, rotary moves, written ends) and `words`
-//! (rounding and letter case of written words). The modules form layers: leaves, `interp`,
-//! `rewriter`, then `plan` / `rotary_move` / `emit` (whose `impl Rewriter` blocks name the
+//! Separate types: the interpreter's `State` (`interp`), the `Planner` (`planner`: corrections,
+//! path-error bounds, splitting; it owns the model's view and writes no text) and the driver
+//! `Rewriter` (`rewriter`: the line loop, the per-line buffers, and the `Planner` and `State` it
+//! owns). The orchestration of a motion block (`plan`, `rotary_move`) and the emitter (`emit`)
+//! are still `impl Rewriter` blocks: the emitter moves the output position that lives in
+//! `State`. The types they all name are in leaf modules: `options` (the knobs), `report`
+//! (counts, diagnostics, errors), `piece` (the pieces of a move, rotary moves, written ends)
+//! and `words` (rounding and letter case of written words). The modules form layers: leaves,
+//! `interp` and `planner`, `rewriter`, then `plan` / `rotary_move` / `emit` (which name the
 //! driver's type, never the other way round); this file only declares them and re-exports.
 
 use crate::ErrorModel;
@@ -27,6 +31,7 @@ mod interp;
 mod options;
 mod piece;
 mod plan;
+mod planner;
 mod report;
 mod rewriter;
 mod rotary_move;

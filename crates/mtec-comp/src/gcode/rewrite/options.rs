@@ -173,3 +173,11 @@ pub const LINUXCNC_MAX_LINE_CHARS: usize = 251;
 pub fn rounding_um(decimals: usize, units: Units) -> f64 {
     3f64.sqrt() * 0.5 * 10f64.powi(-(decimals as i32)) * units.mm_per_unit() * 1e3
 }
+
+/// [`rounding_um`] of the digits written in `units` (mm unless known to be inch).
+pub(super) fn rounding_in_effect_um(opt: &RewriteOptions, units: Option<Units>) -> f64 {
+    match units {
+        Some(Units::Inch) => rounding_um(opt.decimals_inch, Units::Inch),
+        _ => rounding_um(opt.decimals_mm, Units::Mm),
+    }
+}

@@ -1,19 +1,18 @@
 //! The driver: the [`Rewriter`] reads lines, evaluates parameters and hands each block to the
-//! interpreter (`interp`), the planner (`plan`, `rotary_move`) and the emitter (`emit`), whose
-//! methods are `impl Rewriter` blocks in those modules. It holds the per-line buffers the three
-//! share. The types every part names (options, report, pieces, rotary moves, word text) live in
+//! interpreter (`interp`, the [`State`] it owns), the planning of its move (`plan`,
+//! `rotary_move`, with the [`Planner`] it owns for the numbers) and the emitter (`emit`); those
+//! three are `impl Rewriter` blocks. It holds the per-line buffers they share. The types every part names (options, report, pieces, rotary moves, word text) live in
 //! leaf modules below all of them, so no module of the rewriter uses another in a cycle.
 
 use super::super::block::Block;
-use super::super::bound::PathBound;
 use super::super::code::GCode;
 use super::super::expr::{system_parameters_written_by, LineValues, Params};
 use super::super::format::Edit;
 use super::super::lexer::{lex_line, Token, TokenKind, Value};
-use super::super::rotary::RotaryView;
 use super::interp::{Interpreted, Motion, State};
-use super::options::{BlockDelete, OnUnsupported, RewriteOptions};
+use super::options::{rounding_in_effect_um, BlockDelete, OnUnsupported, RewriteOptions};
 use super::piece::{EmittedEnd, Piece, RotaryMove};
+use super::planner::{At, Planner};
 use super::report::{Diagnostic, GcodeError, ProblemKind, RewriteReport, MAX_WARNINGS_KEPT};
 use crate::ErrorModel;
 use std::io::{BufRead, Write};
@@ -37,15 +36,8 @@ pub(super) struct Rewriter<'a> {
     pub(super) pieces: Vec<Piece>,
     /// The current block's words (buffers reused from line to line).
     pub(super) block: Block,
-    /// Work list of the move splitting, kept to avoid an allocation per move.
-    pub(super) split_stack: Vec<(f64, [f64; 3], f64, [f64; 3])>,
-    /// Bounds the path error of each output piece (exact for grid maps).
-    pub(super) bound: PathBound,
-    /// The model seen at the rotary axes' current angles, in machine axes (identical to the
-    /// model when it has no rotary axes).
-    pub(super) view: RotaryView<'a>,
-    /// The model's box ([`ErrorModel::domain_mm`]).
-    pub(super) domain: Option<[[f64; 2]; 3]>,
+    /// Corrections, path-error bounds and splitting (`planner`).
+    pub(super) planner: Planner<'a>,
     /// The current block moves in machine coordinates (G53).
     pub(super) g53: bool,
     /// The current move's original-program offsets less the rewritten program's, mm: a word
@@ -80,10 +72,6 @@ impl<'a> Rewriter<'a> {
             seen_content: false,
             lower: false,
             emitted: false,
-            split_stack: Vec::new(),
-            bound: PathBound::new(opt.check_step_mm),
-            view: RotaryView::new(model),
-            domain: model.domain_mm(),
             g53: false,
             shift: [0.0; 3],
             params: Params::new(),
@@ -92,6 +80,7 @@ impl<'a> Rewriter<'a> {
             line_values: LineValues::default(),
             params_lost: false,
             block: Block::default(),
+            planner: Planner::new(model, opt),
             pieces: Vec::new(),
         }
     }
@@ -152,6 +141,37 @@ impl<'a> Rewriter<'a> {
                 Ok(())
             }
         }
+    }
+
+    /// The planner and where the current block is, for one planning step at column `col`.
+    pub(super) fn at(&mut self, col: usize) -> (&mut Planner<'a>, At<'_>) {
+        let at = At {
+            opt: self.opt,
+            units: self.st.units,
+            line: self.line_no,
+            col,
+            report: &mut self.report,
+        };
+        (&mut self.planner, at)
+    }
+
+    /// The correction at a target (mm), with the error located at the block.
+    pub(super) fn correct(&mut self, target: [f64; 3], col: usize) -> Result<[f64; 3], GcodeError> {
+        let (planner, mut at) = self.at(col);
+        planner.correct(target, &mut at)
+    }
+
+    /// Half a unit of the last written digit on three axes in the units in effect, µm.
+    pub(super) fn rounding_now_um(&self) -> f64 {
+        rounding_in_effect_um(self.opt, self.st.units)
+    }
+
+    pub(super) fn no_model_value(&mut self, col: usize) -> GcodeError {
+        self.at(col).1.no_model_value()
+    }
+
+    pub(super) fn too_many(&mut self, col: usize) -> GcodeError {
+        self.at(col).1.too_many()
     }
 
     fn line<W: Write>(
@@ -284,7 +304,7 @@ impl<'a> Rewriter<'a> {
     /// `extra_lines`. Returns false when the line is to be passed through unchanged because of
     /// an unsupported construct (already warned).
     fn block(&mut self, b: &Block, body: &[u8]) -> Result<bool, GcodeError> {
-        let kinematic = self.view.kinematics().is_some();
+        let kinematic = self.planner.view.kinematics().is_some();
         let Interpreted {
             mut issues,
             motion_word,

@@ -81,7 +81,8 @@ impl Rewriter<'_> {
                 pieces.clear();
                 let split = self.split_rotary(mv, c0, &mut pieces, col);
                 // the view stands at the move's end angles from here on
-                self.view
+                self.planner
+                    .view
                     .set_rotary(mv.r1)
                     .map_err(|msg| GcodeError::At(self.diag(col, ProblemKind::Correction, msg)))?;
                 split?;
@@ -133,7 +134,7 @@ impl Rewriter<'_> {
 
     /// The nominal tool tip at fraction `s` of the move (workpiece frame, mm).
     fn nominal_tip(&self, mv: &RotaryMove, s: f64) -> [f64; 3] {
-        match self.view.kinematics() {
+        match self.planner.view.kinematics() {
             Some(kin) => kin.tool_point(&Pose::new(lerp(mv.x0, mv.x1, s), lerp(mv.r0, mv.r1, s))),
             None => lerp(mv.x0, mv.x1, s),
         }
@@ -170,10 +171,11 @@ impl Rewriter<'_> {
             }
         });
         let n = self.nominal_tip(mv, s);
-        self.view
+        self.planner
+            .view
             .set_rotary(w)
             .map_err(|msg| GcodeError::At(self.diag(col, ProblemKind::Correction, msg)))?;
-        let t = self.view.machine_point(n);
+        let t = self.planner.view.machine_point(n);
         let c = self.correct(t, col)?;
         Ok(Piece {
             t,
@@ -187,10 +189,10 @@ impl Rewriter<'_> {
     /// (module docs: dense samples plus the rounding of the written X, Y, Z words). NaN when
     /// the model has no value somewhere.
     fn rotary_piece_bound_um(&self, mv: &RotaryMove, a: &Piece, b: &Piece) -> f64 {
-        let Some(kin) = self.view.kinematics() else {
+        let Some(kin) = self.planner.view.kinematics() else {
             return f64::NAN;
         };
-        let model = self.view.model();
+        let model = self.planner.view.model();
         let pa = [0, 1, 2].map(|i| a.t[i] + a.c[i]);
         let pb = [0, 1, 2].map(|i| b.t[i] + b.c[i]);
         let (wa, wb) = (a.rot.unwrap_or(mv.r0), b.rot.unwrap_or(mv.r1));
