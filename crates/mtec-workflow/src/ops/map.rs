@@ -3,10 +3,9 @@
 
 use crate::{Error, Observer, Result};
 use mtec_comp::map::{GridLimits, GridMap, Outside};
-use mtec_io::{CsvReader, Destination, InputError, OutputGuard};
+use mtec_io::{CsvReader, CsvWriter, Destination, InputError, OutputGuard};
 use serde::Serialize;
 use std::fmt;
-use std::fmt::Write as _;
 use std::path::PathBuf;
 
 /// The kind of map `fit` builds.
@@ -261,7 +260,7 @@ pub fn eval(opts: &EvalOptions, _obs: &mut dyn Observer) -> Result<EvalOutcome> 
         points.column("y_mm")?,
         points.column("z_mm")?,
     ];
-    let mut out = String::from("x_mm,y_mm,z_mm,ex_um,ey_um,ez_um\n");
+    let mut out = CsvWriter::new(["x_mm", "y_mm", "z_mm", "ex_um", "ey_um", "ez_um"]);
     let mut n = 0;
     while let Some(row) = points.next_row()? {
         let mut p = [0.0; 3];
@@ -281,19 +280,17 @@ pub fn eval(opts: &EvalOptions, _obs: &mut dyn Observer) -> Result<EvalOutcome> 
             )
             .into());
         }
-        let _ = writeln!(
-            out,
-            "{},{},{},{},{},{}",
-            row.str(cols[0]),
-            row.str(cols[1]),
-            row.str(cols[2]),
-            e[0],
-            e[1],
-            e[2]
-        );
+        out.row([
+            row.str(cols[0]).to_string(),
+            row.str(cols[1]).to_string(),
+            row.str(cols[2]).to_string(),
+            e[0].to_string(),
+            e[1].to_string(),
+            e[2].to_string(),
+        ]);
         n += 1;
     }
-    dest.write(out.as_bytes())?;
+    dest.write(out.finish().as_bytes())?;
     Ok(EvalOutcome {
         points: n,
         out: opts.out.clone(),

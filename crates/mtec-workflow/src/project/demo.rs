@@ -5,9 +5,9 @@
 use super::{run_with, Pipeline, RunOptions, RunOutcome};
 use crate::{Error, Observer, Result};
 use mtec_comp::{command_for_target, CorrectionOptions};
+use mtec_io::CsvWriter;
 use mtec_model::{Formalism, Order, VolumetricModel};
 use rand::{Rng, SeedableRng};
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// The demo's NC program: a rectangular pocket contour and a drilled pattern inside the travel.
@@ -140,7 +140,7 @@ fn compensation_rate_section(p: &mut Pipeline, data: &Path, seed: u64) -> Result
     }
     let rms = |v: f64| (v / n as f64).sqrt();
     let mut rows = Vec::new();
-    let mut csv = String::from("axis,rms_before_um,rms_after_um,compensation_rate\n");
+    let mut csv = CsvWriter::new(["axis", "rms_before_um", "rms_after_um", "compensation_rate"]);
     for (i, a) in ["X", "Y", "Z"].iter().enumerate() {
         let (b, af) = (rms(before[i]), rms(after[i]));
         rows.push(vec![
@@ -149,7 +149,7 @@ fn compensation_rate_section(p: &mut Pipeline, data: &Path, seed: u64) -> Result
             format!("{af:.2}"),
             format!("{:.1} %", 100.0 * (1.0 - af / b)),
         ]);
-        let _ = writeln!(csv, "{a},{b:.4},{af:.4},{:.4}", 1.0 - af / b);
+        csv.row(rate_row(a, b, af));
     }
     let (b, af) = (rms(before.iter().sum()), rms(after.iter().sum()));
     rows.push(vec![
@@ -158,8 +158,11 @@ fn compensation_rate_section(p: &mut Pipeline, data: &Path, seed: u64) -> Result
         format!("{af:.2}"),
         format!("{:.1} %", 100.0 * (1.0 - af / b)),
     ]);
-    let _ = writeln!(csv, "volumetric,{b:.4},{af:.4},{:.4}", 1.0 - af / b);
-    mtec_io::write_output(&p.out.join("compensation-rate.csv"), csv.as_bytes())?;
+    csv.row(rate_row("volumetric", b, af));
+    mtec_io::write_output(
+        &p.out.join("compensation-rate.csv"),
+        csv.finish().as_bytes(),
+    )?;
     let tol = p.tolerances.volumetric_after_rms_um;
     p.summary.figure(
         "Compensation",
@@ -256,4 +259,14 @@ fn error_arrows(
         .rfind(|r| *r <= top)
         .unwrap_or(p);
     Ok(([before, after], largest, reference))
+}
+
+/// One row of `compensation-rate.csv`: the RMS before and after (µm) and the rate, 4 decimals.
+fn rate_row(axis: &str, before: f64, after: f64) -> [String; 4] {
+    [
+        axis.to_string(),
+        format!("{before:.4}"),
+        format!("{after:.4}"),
+        format!("{:.4}", 1.0 - after / before),
+    ]
 }

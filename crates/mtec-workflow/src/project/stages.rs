@@ -10,6 +10,7 @@ use crate::ops;
 use crate::Collect;
 use crate::Error;
 use mtec_comp::kinematic::KinematicFile;
+use mtec_io::CsvWriter;
 use mtec_measure::circular::Diagnostics;
 use mtec_measure::iso230_2::TargetStats;
 use mtec_measure::positioning::PositioningData;
@@ -438,13 +439,7 @@ pub fn sensitivity(
     };
     // indices aggregated over a 3 × 3 × 3 grid of the workspace
     let mach = crate::inputs::read_machine(machine)?;
-    let mut pts = mach
-        .axes
-        .iter()
-        .map(|a| crate::inputs::pose_column(*a))
-        .collect::<Vec<_>>()
-        .join(",")
-        + "\n";
+    let mut pts = CsvWriter::new(mach.axes.iter().map(|a| crate::inputs::pose_column(*a)));
     let mut poses: Vec<Vec<f64>> = vec![vec![]];
     for a in &mach.axes {
         let [lo, hi] = mach.travel(*a);
@@ -454,16 +449,10 @@ pub fn sensitivity(
             .collect();
     }
     for q in &poses {
-        pts.push_str(
-            &(q.iter()
-                .map(|v| format!("{v}"))
-                .collect::<Vec<_>>()
-                .join(",")
-                + "\n"),
-        );
+        pts.row(q.iter().map(|v| format!("{v}")));
     }
     let points = p.out.join("sensitivity-points.csv");
-    mtec_io::write_output(&points, pts.as_bytes())?;
+    mtec_io::write_output(&points, pts.finish().as_bytes())?;
     let method = ops::sensitivity::MethodKind::from_name(&st.method).ok_or_else(|| {
         Error::usage(format!(
             "[sensitivity] method `{}`: expected efast, sobol or morris",
