@@ -13,6 +13,7 @@
 mod error;
 mod fields;
 pub mod notes;
+pub mod number;
 mod stream;
 mod table;
 mod write;
