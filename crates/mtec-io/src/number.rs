@@ -30,6 +30,11 @@ pub fn push_f64(out: &mut Vec<u8>, v: f64) {
     }
     let mut buf = ryu::Buffer::new();
     let s = buf.format_finite(v).as_bytes();
+    // ryu writes decimal exponents −5..15 positionally, like std but for an integer's `.0`
+    if !s.contains(&b'e') {
+        out.extend_from_slice(s.strip_suffix(b".0").unwrap_or(s));
+        return;
+    }
     let s = match s.split_first() {
         Some((b'-', rest)) => {
             out.push(b'-');
