@@ -749,14 +749,13 @@ mod tests {
         for map in [nonuniform, uniform, planar] {
             // every node, every mid-cell and border value per axis, and points outside
             let mut values: [Vec<f64>; 3] = Default::default();
-            for a in 0..3 {
-                let ax = &map.axes_mm()[a];
+            for (v, ax) in values.iter_mut().zip(map.axes_mm()) {
                 let (lo, hi) = (ax[0], ax[ax.len() - 1]);
-                values[a].extend(ax.iter().copied());
-                values[a].extend(ax.windows(2).map(|w| 0.5 * (w[0] + w[1])));
-                values[a].extend(ax.windows(2).map(|w| w[1] - 1e-13 * (w[1] - w[0])));
-                values[a].extend([lo - 5e-10, hi + 5e-10, lo - 1e-8, hi + 1e-8]);
-                values[a].extend([lo - 17.0, hi + 3.25, -1e6, 1e6]);
+                v.extend(ax.iter().copied());
+                v.extend(ax.windows(2).map(|w| 0.5 * (w[0] + w[1])));
+                v.extend(ax.windows(2).map(|w| w[1] - 1e-13 * (w[1] - w[0])));
+                v.extend([lo - 5e-10, hi + 5e-10, lo - 1e-8, hi + 1e-8]);
+                v.extend([lo - 17.0, hi + 3.25, -1e6, 1e6]);
             }
             let mut points = Vec::new();
             for &x in &values[0] {
