@@ -15,6 +15,7 @@ mod csv_writer;
 mod error;
 mod fields;
 pub mod notes;
+pub mod number;
 mod stream;
 mod table;
 mod write;
