@@ -1,6 +1,7 @@
 //! `mtec`: the command-line front of the toolkit. Each subcommand lives in `cmd/<name>.rs` and
 //! only wires files to the library crates; all numerical work happens in the libraries.
 
+mod choice;
 mod cmd;
 mod error;
 mod help;

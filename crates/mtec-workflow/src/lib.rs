@@ -14,6 +14,7 @@
 //! Conventions of an op: `pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome>`;
 //! outputs that would overwrite an input are refused before any work (`mtec_io::OutputGuard`).
 
+pub mod choice;
 pub mod error;
 pub mod inputs;
 pub mod observer;
@@ -22,6 +23,7 @@ pub mod project;
 pub mod rs274;
 pub mod state;
 
+pub use choice::Choice;
 pub use error::{Error, Result};
 pub use observer::{Collect, Observer, Silent};
 

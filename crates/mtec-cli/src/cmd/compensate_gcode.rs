@@ -1,5 +1,6 @@
 //! `mtec compensate gcode`: rewrites an NC program so the machine reaches the programmed points.
 
+use crate::choice::choice;
 use crate::error::CliError;
 use mtec_comp::gcode::tooltable::MachineUnits;
 use mtec_comp::gcode::{OnUnsupported, RewriteOptions, Units};
@@ -11,18 +12,6 @@ pub const LONG_ABOUT: &str = include_str!("../../help/compensate_gcode.long_abou
 
 const EXAMPLES: &str =
     crate::help::examples!(include_str!("../../help/compensate_gcode.examples.txt"));
-
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum OnUnsupportedArg {
-    Refuse,
-    PassThroughWithWarning,
-}
-
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum UnitsArg {
-    Mm,
-    Inch,
-}
 
 #[derive(clap::Args, Debug)]
 #[command(
@@ -59,14 +48,14 @@ pub struct Args {
     #[arg(long, default_value_t = 500.0)]
     pub max_correction_um: f64,
     /// What to do with constructs that cannot be compensated safely.
-    #[arg(long, value_enum, default_value = "refuse")]
-    pub on_unsupported: OnUnsupportedArg,
+    #[arg(long, value_parser = choice::<OnUnsupported>(), default_value = "refuse")]
+    pub on_unsupported: OnUnsupported,
     /// Work offsets and tool lengths (TOML, format mtec.gcode-offsets/1).
     #[arg(long, value_name = "CFG.toml")]
     pub offsets: Option<PathBuf>,
     /// Units before the program's first G20/G21 (the controller's power-on default).
-    #[arg(long, value_enum, default_value = "mm")]
-    pub default_units: UnitsArg,
+    #[arg(long, value_parser = choice::<Units>(), default_value = "mm")]
+    pub default_units: Units,
     /// Digits after the point of rewritten words in mm programs.
     #[arg(long, default_value_t = 4)]
     pub decimals_mm: usize,
@@ -110,13 +99,6 @@ pub enum OnOff {
     Off,
 }
 
-/// Units of a tool table's lengths.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum MachineUnitsArg {
-    Mm,
-    Inch,
-}
-
 /// The flattening options of `compensate gcode`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct FlattenArgs {
@@ -135,8 +117,13 @@ pub struct FlattenArgs {
     /// The machine's units (LinuxCNC's INI LINEAR_UNITS), in which tool tables and parameter
     /// files hold their lengths (not the program's G20/G21). Stand-alone rs274 reads both as
     /// inches, so with `mm` they are handed to it converted.
-    #[arg(long, value_enum, default_value = "mm", value_name = "mm|inch")]
-    pub machine_units: MachineUnitsArg,
+    #[arg(
+        long,
+        value_parser = choice::<MachineUnits>(),
+        default_value = "mm",
+        value_name = "mm|inch"
+    )]
+    pub machine_units: MachineUnits,
     /// Parameter file for rs274 (`-v`): work offsets and other parameters (copied, never written).
     #[arg(long, value_name = "FILE.var", requires = "flatten_with")]
     pub var_file: Option<PathBuf>,
@@ -175,14 +162,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
         max_segment_mm: args.max_segment_mm,
         chord_tolerance_um: args.chord_tolerance_um,
         max_correction_um: args.max_correction_um,
-        on_unsupported: match args.on_unsupported {
-            OnUnsupportedArg::Refuse => OnUnsupported::Refuse,
-            OnUnsupportedArg::PassThroughWithWarning => OnUnsupported::PassThroughWithWarning,
-        },
-        default_units: match args.default_units {
-            UnitsArg::Mm => Units::Mm,
-            UnitsArg::Inch => Units::Inch,
-        },
+        on_unsupported: args.on_unsupported,
+        default_units: args.default_units,
         decimals_mm: args.decimals_mm,
         decimals_inch: args.decimals_inch,
         check_step_mm: args.check_step_mm,
@@ -209,10 +190,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         rewrite,
         offsets: args.offsets,
         tool_table: f.tool_table,
-        machine_units: match f.machine_units {
-            MachineUnitsArg::Mm => MachineUnits::Mm,
-            MachineUnitsArg::Inch => MachineUnits::Inch,
-        },
+        machine_units: f.machine_units,
         block_delete: f.block_delete.map(|b| b == OnOff::On),
         flatten: f.flatten_with.map(|FlattenWith::Rs274| Rs274 {
             bin: f.rs274,

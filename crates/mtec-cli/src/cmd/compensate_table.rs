@@ -1,5 +1,6 @@
 //! `mtec compensate table`: controller compensation tables from an error model.
 
+use crate::choice::choice;
 use crate::error::CliError;
 use mtec_comp::table;
 use mtec_workflow::ops::compensate_table::{self as op, parse_at, parse_axis, Options, Range};
@@ -9,30 +10,6 @@ pub const HELP: &str = include_str!("../../help/compensate_table.help.txt");
 
 const EXAMPLES: &str =
     crate::help::examples!(include_str!("../../help/compensate_table.examples.txt"));
-
-/// Target controller format.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Format {
-    Linuxcnc,
-    SinumerikCec,
-    SinumerikLec,
-    Fanuc,
-    Heidenhain,
-    Beckhoff,
-}
-
-impl From<Format> for op::Format {
-    fn from(f: Format) -> Self {
-        match f {
-            Format::Linuxcnc => op::Format::Linuxcnc,
-            Format::SinumerikCec => op::Format::SinumerikCec,
-            Format::SinumerikLec => op::Format::SinumerikLec,
-            Format::Fanuc => op::Format::Fanuc,
-            Format::Heidenhain => op::Format::Heidenhain,
-            Format::Beckhoff => op::Format::Beckhoff,
-        }
-    }
-}
 
 /// `mtec compensate table`.
 #[derive(clap::Args)]
@@ -52,8 +29,8 @@ pub struct Args {
     #[arg(long, value_name = "LOG.csv")]
     state: Option<PathBuf>,
     /// Controller table format.
-    #[arg(long, value_enum)]
-    format: Format,
+    #[arg(long, value_parser = choice::<op::Format>())]
+    format: op::Format,
     /// Axis along which the table runs (input / base axis): X, Y or Z.
     #[arg(long, default_value = "X")]
     axis: String,
@@ -139,7 +116,7 @@ impl Args {
             model: self.model.unwrap_or_default(),
             from_iso230_2: self.from_iso230_2,
             state: self.state,
-            format: self.format.into(),
+            format: self.format,
             comp_type: self.comp_type,
             table_index: self.table_index,
             direction: self.direction,

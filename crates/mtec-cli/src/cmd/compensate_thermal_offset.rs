@@ -3,6 +3,7 @@
 //! `mtec_workflow::ops::compensate_thermal_offset` (the method `mtec_comp::thermal_offset`);
 //! this parses and prints.
 
+use crate::choice::choice;
 use crate::error::CliError;
 use mtec_comp::table::DEFAULT_MAX_CORRECTION_UM;
 use mtec_comp::thermal_offset::OutsidePolicy;
@@ -16,35 +17,6 @@ const EXAMPLES: &str = crate::help::examples!(include_str!(
     "../../help/compensate_thermal_offset.examples.txt"
 ));
 
-/// Output format.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Format {
-    G10,
-    Fanuc,
-    FanucMacro,
-    Sinumerik,
-    SinumerikSd,
-}
-
-impl From<Format> for op::Format {
-    fn from(f: Format) -> Self {
-        match f {
-            Format::G10 => op::Format::G10,
-            Format::Fanuc => op::Format::Fanuc,
-            Format::FanucMacro => op::Format::FanucMacro,
-            Format::Sinumerik => op::Format::Sinumerik,
-            Format::SinumerikSd => op::Format::SinumerikSd,
-        }
-    }
-}
-
-/// Policy outside the training envelope.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Outside {
-    Refuse,
-    Fade,
-}
-
 /// `mtec compensate thermal-offset`.
 #[derive(clap::Args)]
 #[command(after_long_help = EXAMPLES)]
@@ -57,8 +29,8 @@ pub struct Args {
     #[arg(long)]
     temps: PathBuf,
     /// Output format.
-    #[arg(long, value_enum, default_value = "g10")]
-    format: Format,
+    #[arg(long, value_parser = choice::<op::Format>(), default_value = "g10")]
+    format: op::Format,
     /// The axis whose offset is updated: X, Y or Z.
     #[arg(long, default_value = "Z")]
     axis: String,
@@ -81,8 +53,8 @@ pub struct Args {
     #[arg(long)]
     starts_at_rest: bool,
     /// Outside the training envelope: refuse, or fade the update to none (the safe fallback).
-    #[arg(long, value_enum, default_value = "refuse")]
-    outside: Outside,
+    #[arg(long, value_parser = choice::<OutsidePolicy>(), default_value = "refuse")]
+    outside: OutsidePolicy,
     /// Refuse an update larger than this (um).
     #[arg(long, default_value_t = DEFAULT_MAX_CORRECTION_UM)]
     max_correction_um: f64,
@@ -117,17 +89,14 @@ impl Args {
             travel_mm: self.travel_mm.as_deref().map(parse_travel).transpose()?,
             model: self.model,
             temps: self.temps,
-            format: self.format.into(),
+            format: self.format,
             offset: self.offset,
             base_mm: self.base_mm,
             at_mm: self.at_mm,
             position_origin_mm: self.position_origin_mm,
             zeroed_at_min: self.zeroed_at_min,
             starts_at_rest: self.starts_at_rest,
-            outside: match self.outside {
-                Outside::Refuse => OutsidePolicy::Refuse,
-                Outside::Fade => OutsidePolicy::Fade,
-            },
+            outside: self.outside,
             max_correction_um: self.max_correction_um,
             training: self.training,
             sign: self.sign,

@@ -1,5 +1,6 @@
 //! `mtec iso230-2`: ISO 230-2 positioning statistics of a linear axis (and VDI/DGQ 3441).
 
+use crate::choice::choice;
 use crate::error::CliError;
 use mtec_measure::air::{self, AirFormula};
 use mtec_workflow::ops::iso230_2::{self as op, Options};
@@ -8,24 +9,6 @@ use std::path::PathBuf;
 const LONG: &str = include_str!("../../help/iso230_2.long.txt");
 
 const EXAMPLES: &str = crate::help::examples!(include_str!("../../help/iso230_2.examples.txt"));
-
-/// Refractive-index equation of `--air-formula`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Formula {
-    /// Ciddor (1996)
-    Ciddor,
-    /// updated Edlén (Birch & Downs 1993/1994)
-    Edlen,
-}
-
-impl From<Formula> for AirFormula {
-    fn from(f: Formula) -> Self {
-        match f {
-            Formula::Ciddor => AirFormula::Ciddor,
-            Formula::Edlen => AirFormula::Edlen,
-        }
-    }
-}
 
 /// Arguments of `mtec iso230-2`.
 #[derive(clap::Args, Debug)]
@@ -66,11 +49,11 @@ pub struct Args {
     /// Refractive-index equation.
     #[arg(
         long,
-        value_enum,
+        value_parser = choice::<AirFormula>(),
         default_value = "ciddor",
         value_name = "ciddor|edlen"
     )]
-    pub air_formula: Formula,
+    pub air_formula: AirFormula,
     /// Index the laser used for its readings (default: the formula at 20 °C, 101325 Pa, 50 % RH).
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub laser_n: Option<f64>,
@@ -97,7 +80,7 @@ impl Args {
             humidity_pct: self.humidity_pct,
             co2_ppm: self.co2_ppm,
             wavelength_nm: self.wavelength_nm,
-            air_formula: self.air_formula.into(),
+            air_formula: self.air_formula,
             laser_n: self.laser_n,
             material_temp_c: self.material_temp_c,
             alpha_um_per_m_k: self.alpha_um_per_m_k,

@@ -1,6 +1,7 @@
 //! `mtec sensitivity`: global sensitivity of the volumetric error to the error elements
 //! (EFAST, Sobol or Morris), or of a standard test function.
 
+use crate::choice::choice;
 use crate::error::CliError;
 use mtec_workflow::ops::sensitivity::{self as op, MethodKind, Options};
 use std::path::PathBuf;
@@ -27,8 +28,8 @@ pub struct Args {
     #[arg(long)]
     pub function: Option<String>,
     /// Method.
-    #[arg(long, value_enum, default_value = "efast")]
-    pub method: MethodArg,
+    #[arg(long, value_parser = choice::<MethodKind>(), default_value = "efast")]
+    pub method: MethodKind,
     /// Design size: EFAST points per curve (default 1200), Sobol base points (1024), Morris
     /// trajectories (100).
     #[arg(long)]
@@ -70,30 +71,13 @@ pub struct Args {
     pub json: bool,
 }
 
-#[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub enum MethodArg {
-    Efast,
-    Sobol,
-    Morris,
-}
-
-impl From<MethodArg> for MethodKind {
-    fn from(m: MethodArg) -> Self {
-        match m {
-            MethodArg::Efast => MethodKind::Efast,
-            MethodArg::Sobol => MethodKind::Sobol,
-            MethodArg::Morris => MethodKind::Morris,
-        }
-    }
-}
-
 impl Args {
     fn options(&self) -> Options {
         Options {
             machine: self.machine.clone(),
             stats: self.stats.clone(),
             function: self.function.clone(),
-            method: self.method.into(),
+            method: self.method,
             samples: self.samples,
             interference: self.interference,
             resamples: self.resamples,

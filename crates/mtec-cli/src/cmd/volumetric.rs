@@ -1,5 +1,6 @@
 //! `mtec volumetric`: volumetric error of the tool tip at commanded points.
 
+use crate::choice::choice;
 use crate::error::CliError;
 use mtec_workflow::ops::volumetric::{self as op, Options};
 use std::path::PathBuf;
@@ -26,30 +27,11 @@ pub struct Args {
     #[arg(long)]
     pub points: PathBuf,
     /// Formalism and order.
-    #[arg(long, value_enum, default_value = "htm-exact")]
-    pub form: Form,
+    #[arg(long, value_parser = choice::<op::Form>(), default_value = "htm-exact")]
+    pub form: op::Form,
     /// Print JSON instead of CSV.
     #[arg(long)]
     pub json: bool,
-}
-
-#[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub enum Form {
-    HtmExact,
-    HtmFirst,
-    PoeExact,
-    PoeFirst,
-}
-
-impl From<Form> for op::Form {
-    fn from(f: Form) -> Self {
-        match f {
-            Form::HtmExact => op::Form::HtmExact,
-            Form::HtmFirst => op::Form::HtmFirst,
-            Form::PoeExact => op::Form::PoeExact,
-            Form::PoeFirst => op::Form::PoeFirst,
-        }
-    }
 }
 
 impl Args {
@@ -58,7 +40,7 @@ impl Args {
             machine: self.machine.clone(),
             errors: self.errors.clone(),
             points: self.points.clone(),
-            form: self.form.into(),
+            form: self.form,
         }
     }
 }

@@ -57,6 +57,14 @@ impl Format {
     }
 }
 
+impl crate::Choice for Format {
+    const ALL: &'static [Self] = &Format::ALL;
+
+    fn name(self) -> &'static str {
+        Format::name(self)
+    }
+}
+
 /// Positions FROM:TO:STEP along an axis, in mm.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Range {

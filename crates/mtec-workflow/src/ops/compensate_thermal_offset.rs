@@ -42,6 +42,20 @@ impl Format {
     }
 }
 
+impl crate::Choice for Format {
+    const ALL: &'static [Self] = &[
+        Format::G10,
+        Format::Fanuc,
+        Format::FanucMacro,
+        Format::Sinumerik,
+        Format::SinumerikSd,
+    ];
+
+    fn name(self) -> &'static str {
+        Format::name(self)
+    }
+}
+
 /// Options of [`run`].
 #[derive(Debug, Clone)]
 pub struct Options {

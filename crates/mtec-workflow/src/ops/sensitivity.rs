@@ -31,6 +31,18 @@ pub enum MethodKind {
     Morris,
 }
 
+impl crate::Choice for MethodKind {
+    const ALL: &'static [Self] = &[MethodKind::Efast, MethodKind::Sobol, MethodKind::Morris];
+
+    fn name(self) -> &'static str {
+        match self {
+            MethodKind::Efast => "efast",
+            MethodKind::Sobol => "sobol",
+            MethodKind::Morris => "morris",
+        }
+    }
+}
+
 impl MethodKind {
     /// `efast`, `sobol` or `morris`.
     pub fn from_name(name: &str) -> Option<MethodKind> {

@@ -27,6 +27,24 @@ pub enum Form {
     PoeFirst,
 }
 
+impl crate::Choice for Form {
+    const ALL: &'static [Self] = &[
+        Form::HtmExact,
+        Form::HtmFirst,
+        Form::PoeExact,
+        Form::PoeFirst,
+    ];
+
+    fn name(self) -> &'static str {
+        match self {
+            Form::HtmExact => "htm-exact",
+            Form::HtmFirst => "htm-first",
+            Form::PoeExact => "poe-exact",
+            Form::PoeFirst => "poe-first",
+        }
+    }
+}
+
 impl Form {
     /// The model's formalism and order.
     pub fn formalism_order(self) -> (Formalism, Order) {
