@@ -1,7 +1,6 @@
 //! `mtec circular`: ISO 230-4 values and ballbar diagnostics of a circular test.
 
 use crate::error::CliError;
-use mtec_measure::circular::Plane;
 use mtec_workflow::ops::circular::{self as op, Options};
 use std::path::PathBuf;
 
@@ -47,28 +46,12 @@ pub struct Args {
 
 impl Args {
     fn options(&self) -> Result<Options, CliError> {
-        let plane =
-            match &self.plane {
-                None => None,
-                Some(p) => Some(Plane::parse(p).ok_or_else(|| {
-                    CliError::usage(format!("--plane {p}: expected XY, YZ or ZX"))
-                })?),
-            };
-        let arc_deg = match (self.arc_start_deg, self.arc_end_deg) {
-            (None, None) => None,
-            (Some(a), Some(b)) => Some([a, b]),
-            _ => {
-                return Err(CliError::usage(
-                    "a partial arc needs both --arc-start-deg and --arc-end-deg",
-                ))
-            }
-        };
         Ok(Options {
             run: self.run.clone(),
-            arc_deg,
+            arc_deg: op::arc_deg(self.arc_start_deg, self.arc_end_deg)?,
             radius_mm: self.radius_mm,
             feed_mm_min: self.feed_mm_min,
-            plane,
+            plane: self.plane.as_deref().map(op::parse_plane).transpose()?,
             threshold_um: self.threshold_um,
             out: self.out.clone(),
         })
@@ -77,9 +60,5 @@ impl Args {
 
 pub fn run(args: Args) -> Result<(), CliError> {
     let outcome = op::run(&args.options()?, &mut crate::observer::Stderr::default())?;
-    if args.json {
-        super::emit(&format!("{}\n", outcome.to_json()?))
-    } else {
-        super::emit(&outcome.to_string())
-    }
+    super::report(&outcome, args.json, op::Outcome::to_json)
 }

@@ -143,20 +143,6 @@ pub struct FlattenArgs {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    let parse3 = |s: &str, what: &str, unit: &str| -> Result<[f64; 3], CliError> {
-        let v: Vec<f64> = s
-            .split(',')
-            .map(|x| x.trim().parse::<f64>())
-            .collect::<Result<_, _>>()
-            .map_err(|_| CliError::usage(format!("{what} '{s}': expected {unit}")))?;
-        if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
-            let names = unit.split(' ').next().unwrap_or("");
-            return Err(CliError::usage(format!(
-                "{what} '{s}': expected three numbers {names}"
-            )));
-        }
-        Ok([v[0], v[1], v[2]])
-    };
     let rewrite = RewriteOptions {
         tolerance_um: args.tolerance_um,
         max_segment_mm: args.max_segment_mm,
@@ -172,12 +158,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
         start_position_mm: args
             .start_position_mm
             .as_deref()
-            .map(|s| parse3(s, "--start-position-mm", "x,y,z in mm"))
+            .map(compensate_gcode::parse_start_position)
             .transpose()?,
         start_rotary_deg: args
             .start_rotary_deg
             .as_deref()
-            .map(|s| parse3(s, "--start-rotary-deg", "a,b,c in degrees"))
+            .map(compensate_gcode::parse_start_rotary)
             .transpose()?,
         ..RewriteOptions::default()
     };

@@ -35,27 +35,17 @@ pub struct Args {
 }
 
 impl Args {
-    /// Without --out, the text report writes into `<data stem>-ballbar`; --json alone writes
-    /// nothing.
     fn options(&self) -> Options {
         Options {
             setup: self.setup.clone(),
             data: self.data.clone(),
             temps: self.temps.clone(),
-            out: match (&self.out, self.json) {
-                (Some(d), _) => Some(d.clone()),
-                (None, false) => Some(op::default_out(&self.data)),
-                (None, true) => None,
-            },
+            out: op::out_folder(self.out.clone(), &self.data, self.json),
         }
     }
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
     let outcome = op::run(&args.options(), &mut crate::observer::Stderr::default())?;
-    if args.json {
-        super::emit(&format!("{}\n", outcome.to_json()?))
-    } else {
-        super::emit(&outcome.to_string())
-    }
+    super::report(&outcome, args.json, op::Outcome::to_json)
 }

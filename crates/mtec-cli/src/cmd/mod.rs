@@ -21,6 +21,19 @@ pub mod compensate;
 pub mod demo;
 pub mod run;
 
+/// Prints an outcome on stdout: its JSON with `--json`, else its text report.
+pub(crate) fn report<T: std::fmt::Display>(
+    outcome: &T,
+    json: bool,
+    to_json: fn(&T) -> Result<String, crate::error::CliError>,
+) -> Result<(), crate::error::CliError> {
+    if json {
+        emit(&format!("{}\n", to_json(outcome)?))
+    } else {
+        emit(&outcome.to_string())
+    }
+}
+
 /// Writes a report to stdout; a reader that closed the pipe early (`| head`) is not an error.
 pub(crate) fn emit(text: &str) -> Result<(), crate::error::CliError> {
     use std::io::Write as _;

@@ -94,9 +94,5 @@ impl Args {
 
 pub fn run(args: Args) -> Result<(), CliError> {
     let outcome = op::run(&args.options(), &mut crate::observer::Stderr::default())?;
-    if args.json {
-        super::emit(&format!("{}\n", outcome.to_json()?))
-    } else {
-        super::emit(&outcome.to_string())
-    }
+    super::report(&outcome, args.json, op::Outcome::to_json)
 }

@@ -81,6 +81,22 @@ pub struct Outcome {
     pub diagnostics: Diagnostics,
 }
 
+/// The plane named `s` (`--plane`: XY, YZ or ZX).
+pub fn parse_plane(s: &str) -> Result<Plane> {
+    Plane::parse(s).ok_or_else(|| Error::usage(format!("--plane {s}: expected XY, YZ or ZX")))
+}
+
+/// A partial arc from its start and end (`--arc-start-deg`, `--arc-end-deg`): both or neither.
+pub fn arc_deg(start: Option<f64>, end: Option<f64>) -> Result<Option<[f64; 2]>> {
+    match (start, end) {
+        (None, None) => Ok(None),
+        (Some(a), Some(b)) => Ok(Some([a, b])),
+        _ => Err(Error::usage(
+            "a partial arc needs both --arc-start-deg and --arc-end-deg",
+        )),
+    }
+}
+
 impl Outcome {
     /// The outcome as the pretty JSON text of `circular.json` (keys sorted).
     pub fn to_json(&self) -> Result<String> {

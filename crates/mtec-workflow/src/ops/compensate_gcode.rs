@@ -276,6 +276,32 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
     })
 }
 
+/// The machine position at program start from `x,y,z` in mm (`--start-position-mm`).
+pub fn parse_start_position(s: &str) -> Result<[f64; 3]> {
+    parse3(s, "--start-position-mm", "x,y,z in mm")
+}
+
+/// The rotary axes' angles at program start from `a,b,c` in degrees (`--start-rotary-deg`).
+pub fn parse_start_rotary(s: &str) -> Result<[f64; 3]> {
+    parse3(s, "--start-rotary-deg", "a,b,c in degrees")
+}
+
+/// Three finite comma-separated numbers; a usage error names `what` and the expected `unit`.
+fn parse3(s: &str, what: &str, unit: &str) -> Result<[f64; 3]> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| Error::usage(format!("{what} '{s}': expected {unit}")))?;
+    if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
+        let names = unit.split(' ').next().unwrap_or("");
+        return Err(Error::usage(format!(
+            "{what} '{s}': expected three numbers {names}"
+        )));
+    }
+    Ok([v[0], v[1], v[2]])
+}
+
 /// The files a run reads besides the program and the model (for callers that track inputs).
 pub fn extra_inputs(opts: &Options) -> Vec<&Path> {
     [&opts.state, &opts.offsets, &opts.tool_table]

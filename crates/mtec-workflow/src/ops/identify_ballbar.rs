@@ -43,6 +43,16 @@ pub fn default_out(data: &Path) -> PathBuf {
     data.with_file_name(format!("{stem}-ballbar"))
 }
 
+/// The output folder of a run: `out`, else [`default_out`] for a text report, else (JSON on
+/// stdout alone) none.
+pub fn out_folder(out: Option<PathBuf>, data: &Path, json: bool) -> Option<PathBuf> {
+    match (out, json) {
+        (Some(d), _) => Some(d),
+        (None, false) => Some(default_out(data)),
+        (None, true) => None,
+    }
+}
+
 /// The result: `mtec.ballbar-identification/1` (docs/formats.md).
 #[derive(Debug, Clone, Serialize)]
 pub struct Outcome {
