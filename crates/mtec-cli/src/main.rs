@@ -9,12 +9,16 @@ mod inputs;
 mod observer;
 
 use clap::{Parser, Subcommand};
+use help::text;
 use std::process::ExitCode;
 
-const WORKFLOW: &str = include_str!("../help/main.workflow.txt");
-
 #[derive(Parser)]
-#[command(name = "mtec", version, about = "Measure, identify, model and compensate machine-tool errors", long_about = WORKFLOW)]
+#[command(
+    name = "mtec",
+    version,
+    about = "Measure, identify, model and compensate machine-tool errors",
+    long_about = text!("main.workflow")
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -50,10 +54,10 @@ enum Command {
 #[derive(Subcommand)]
 enum Identify {
     /// Error elements of a 3-axis machine from line measurements (9-line method).
-    #[command(long_about = cmd::identify_lines::LONG_ABOUT)]
+    #[command(long_about = text!("identify_lines.long_about"))]
     Lines(cmd::identify_lines::Args),
     /// Rotary-axis error motions from ballbar readings in five installation modes.
-    #[command(long_about = cmd::identify_ballbar::LONG_ABOUT)]
+    #[command(long_about = text!("identify_ballbar.long_about"))]
     Ballbar(cmd::identify_ballbar::Args),
 }
 

@@ -1,19 +1,16 @@
 //! `mtec circular`: ISO 230-4 values and ballbar diagnostics of a circular test.
 
 use crate::error::CliError;
+use crate::help::{examples, text};
 use mtec_workflow::ops::circular::{self as op, Options};
 use std::path::PathBuf;
-
-const LONG: &str = include_str!("../../help/circular.long.txt");
-
-const EXAMPLES: &str = crate::help::examples!(include_str!("../../help/circular.examples.txt"));
 
 /// Arguments of `mtec circular`.
 #[derive(clap::Args, Debug)]
 #[command(
     about = "ISO 230-4 circular test (G, H) and ballbar diagnostics, ranked",
-    long_about = LONG,
-    after_long_help = EXAMPLES
+    long_about = text!("circular.long"),
+    after_long_help = examples!("circular.examples")
 )]
 pub struct Args {
     /// The trace file (angle_deg,direction,dl_um).

@@ -2,22 +2,18 @@
 
 use crate::choice::choice;
 use crate::error::CliError;
+use crate::help::{examples, text};
 use mtec_comp::gcode::tooltable::MachineUnits;
 use mtec_comp::gcode::{OnUnsupported, RewriteOptions, Units};
 use mtec_workflow::ops::compensate_gcode::{self, Options};
 use mtec_workflow::rs274::Rs274;
 use std::path::PathBuf;
 
-pub const LONG_ABOUT: &str = include_str!("../../help/compensate_gcode.long_about.txt");
-
-const EXAMPLES: &str =
-    crate::help::examples!(include_str!("../../help/compensate_gcode.examples.txt"));
-
 #[derive(clap::Args, Debug)]
 #[command(
     about = "Rewrite an NC program (G-code) so the machine reaches the programmed points",
-    long_about = LONG_ABOUT,
-    after_long_help = EXAMPLES
+    long_about = text!("compensate_gcode.long_about"),
+    after_long_help = examples!("compensate_gcode.examples")
 )]
 pub struct Args {
     /// Error model (JSON): any model file mtec writes (see below).

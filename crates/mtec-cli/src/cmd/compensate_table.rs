@@ -2,18 +2,14 @@
 
 use crate::choice::choice;
 use crate::error::CliError;
+use crate::help::examples;
 use mtec_comp::table;
 use mtec_workflow::ops::compensate_table::{self as op, parse_at, parse_axis, Options, Range};
 use std::path::PathBuf;
 
-pub const HELP: &str = include_str!("../../help/compensate_table.help.txt");
-
-const EXAMPLES: &str =
-    crate::help::examples!(include_str!("../../help/compensate_table.examples.txt"));
-
 /// `mtec compensate table`.
 #[derive(clap::Args)]
-#[command(after_long_help = EXAMPLES)]
+#[command(after_long_help = examples!("compensate_table.examples"))]
 pub struct Args {
     /// Error model JSON: a map (mtec.map/1), a kinematic model (mtec.kinematic-model/1), a BPNN
     /// map (mtec.bpnn/1), a machine error model (mtec.machine-error/1, with --state), or a

@@ -5,21 +5,16 @@
 
 use crate::choice::choice;
 use crate::error::CliError;
+use crate::help::examples;
 use mtec_comp::table::DEFAULT_MAX_CORRECTION_UM;
 use mtec_comp::thermal_offset::OutsidePolicy;
 use mtec_workflow::ops::compensate_table::parse_axis;
 use mtec_workflow::ops::compensate_thermal_offset::{self as op, parse_travel, Options};
 use std::path::PathBuf;
 
-pub const HELP: &str = include_str!("../../help/compensate_thermal_offset.help.txt");
-
-const EXAMPLES: &str = crate::help::examples!(include_str!(
-    "../../help/compensate_thermal_offset.examples.txt"
-));
-
 /// `mtec compensate thermal-offset`.
 #[derive(clap::Args)]
-#[command(after_long_help = EXAMPLES)]
+#[command(after_long_help = examples!("compensate_thermal_offset.examples"))]
 pub struct Args {
     /// A machine error model (mtec.machine-error/1: thermal parts with axis, sign, envelope) or
     /// a thermal model (mtec.thermal-model/1, with --training).

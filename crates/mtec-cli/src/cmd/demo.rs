@@ -3,19 +3,16 @@
 //! The run is `mtec_workflow::project::demo`.
 
 use crate::error::CliError;
+use crate::help::{examples, text};
 use mtec_workflow::project::demo;
 use std::path::PathBuf;
-
-const LONG: &str = include_str!("../../help/demo.long.txt");
-
-const EXAMPLES: &str = crate::help::examples!(include_str!("../../help/demo.examples.txt"));
 
 /// Arguments of `mtec demo`.
 #[derive(clap::Args, Debug)]
 #[command(
     about = "Simulate a machine, run the whole pipeline on it, write the report",
-    long_about = LONG,
-    after_long_help = EXAMPLES
+    long_about = text!("demo.long"),
+    after_long_help = examples!("demo.examples")
 )]
 pub struct Args {
     /// Output folder.

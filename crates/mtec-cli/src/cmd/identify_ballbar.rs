@@ -1,20 +1,16 @@
 //! `mtec identify ballbar`: rotary-axis error motions from ballbar readings in five modes.
 
 use crate::error::CliError;
+use crate::help::{examples, text};
 use mtec_workflow::ops::identify_ballbar::{self as op, Options};
 use std::path::PathBuf;
-
-pub const LONG_ABOUT: &str = include_str!("../../help/identify_ballbar.long_about.txt");
-
-const EXAMPLES: &str =
-    crate::help::examples!(include_str!("../../help/identify_ballbar.examples.txt"));
 
 /// Arguments of `mtec identify ballbar`.
 #[derive(clap::Args, Debug)]
 #[command(
     about = "Rotary-axis error motions from ballbar readings in five modes",
-    long_about = LONG_ABOUT,
-    after_long_help = EXAMPLES
+    long_about = text!("identify_ballbar.long_about"),
+    after_long_help = examples!("identify_ballbar.examples")
 )]
 pub struct Args {
     /// Setup TOML with the five [[mode]] tables.

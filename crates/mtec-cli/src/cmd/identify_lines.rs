@@ -1,21 +1,15 @@
 //! `mtec identify lines`: the error elements of a three-axis machine from line measurements.
 
 use crate::error::CliError;
+use crate::help::examples;
 use mtec_identify::lines::DEFAULT_DEGREE;
 use mtec_workflow::ops::identify_lines::{self as op, Options};
 use std::io::Write;
 use std::path::PathBuf;
 
-/// The long help of `mtec identify lines`.
-pub const LONG_ABOUT: &str = include_str!("../../help/identify_lines.long_about.txt");
-
-/// The examples that end the help of `mtec identify lines`.
-pub const EXAMPLES: &str =
-    crate::help::examples!(include_str!("../../help/identify_lines.examples.txt"));
-
-/// Options of `mtec identify lines` (its help text is [`LONG_ABOUT`]).
+/// Options of `mtec identify lines` (its help text is `help/identify_lines.long_about.txt`).
 #[derive(clap::Args, Debug)]
-#[command(after_long_help = EXAMPLES)]
+#[command(after_long_help = examples!("identify_lines.examples"))]
 pub struct Args {
     /// Machine description (TOML): chain, travels, tool offset of the measurement.
     #[arg(long)]

@@ -2,20 +2,17 @@
 
 use crate::choice::choice;
 use crate::error::CliError;
+use crate::help::{examples, text};
 use mtec_measure::air::{self, AirFormula};
 use mtec_workflow::ops::iso230_2::{self as op, Options};
 use std::path::PathBuf;
-
-const LONG: &str = include_str!("../../help/iso230_2.long.txt");
-
-const EXAMPLES: &str = crate::help::examples!(include_str!("../../help/iso230_2.examples.txt"));
 
 /// Arguments of `mtec iso230-2`.
 #[derive(clap::Args, Debug)]
 #[command(
     about = "ISO 230-2 positioning statistics (A, E, R, B, M) and VDI 3441 of a linear axis",
-    long_about = LONG,
-    after_long_help = EXAMPLES
+    long_about = text!("iso230_2.long"),
+    after_long_help = examples!("iso230_2.examples")
 )]
 pub struct Args {
     /// The run file (target_mm,run,direction,deviation_um).

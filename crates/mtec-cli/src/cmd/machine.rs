@@ -1,18 +1,9 @@
 //! `mtec machine build|replay`: the machine error model with a state (`mtec.machine-error/1`).
 
 use crate::error::CliError;
+use crate::help::{examples, text};
 use mtec_workflow::ops::machine::{self, BuildOptions, Part, ReplayOptions};
 use std::path::PathBuf;
-
-const BUILD_HELP: &str = include_str!("../../help/machine.build_help.txt");
-
-const REPLAY_HELP: &str = include_str!("../../help/machine.replay_help.txt");
-
-const BUILD_EXAMPLES: &str =
-    crate::help::examples!(include_str!("../../help/machine.build_examples.txt"));
-
-const REPLAY_EXAMPLES: &str =
-    crate::help::examples!(include_str!("../../help/machine.replay_examples.txt"));
 
 /// The machine error model with a state.
 #[derive(clap::Args)]
@@ -24,15 +15,15 @@ pub struct Args {
 #[derive(clap::Subcommand)]
 enum Sub {
     /// Build a machine error model file from a geometric model and fitted thermal models.
-    #[command(long_about = BUILD_HELP)]
+    #[command(long_about = text!("machine.build_help"))]
     Build(BuildArgs),
     /// Compensate a recorded day (state log + probe readings) through the real-time path.
-    #[command(long_about = REPLAY_HELP)]
+    #[command(long_about = text!("machine.replay_help"))]
     Replay(ReplayArgs),
 }
 
 #[derive(clap::Args)]
-#[command(after_long_help = BUILD_EXAMPLES)]
+#[command(after_long_help = examples!("machine.build_examples"))]
 struct BuildArgs {
     /// Static geometric model (map, kinematic model, BPNN).
     #[arg(long, value_name = "MAP.json")]
@@ -58,7 +49,7 @@ struct BuildArgs {
 }
 
 #[derive(clap::Args)]
-#[command(after_long_help = REPLAY_EXAMPLES)]
+#[command(after_long_help = examples!("machine.replay_examples"))]
 struct ReplayArgs {
     /// Model file (any; a machine error model to follow a state).
     #[arg(long)]

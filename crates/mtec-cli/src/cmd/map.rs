@@ -1,18 +1,10 @@
 //! `mtec map fit|eval`: volumetric error maps from a measured grid, and their values at points.
 
 use crate::error::CliError;
+use crate::help::{examples, text};
 use mtec_comp::map::Outside;
 use mtec_workflow::ops::map;
 use std::path::PathBuf;
-
-const FIT_HELP: &str = include_str!("../../help/map.fit_help.txt");
-
-const EVAL_HELP: &str = include_str!("../../help/map.eval_help.txt");
-
-const FIT_EXAMPLES: &str = crate::help::examples!(include_str!("../../help/map.fit_examples.txt"));
-
-const EVAL_EXAMPLES: &str =
-    crate::help::examples!(include_str!("../../help/map.eval_examples.txt"));
 
 /// `mtec map`: volumetric error maps.
 #[derive(clap::Args)]
@@ -24,10 +16,10 @@ pub struct Args {
 #[derive(clap::Subcommand)]
 enum MapCommand {
     /// Build a map (mtec.map/1 JSON) from a measured grid CSV.
-    #[command(long_about = FIT_HELP)]
+    #[command(long_about = text!("map.fit_help"))]
     Fit(FitArgs),
     /// Errors of a map (or any model) at points; CSV out.
-    #[command(long_about = EVAL_HELP)]
+    #[command(long_about = text!("map.eval_help"))]
     Eval(EvalArgs),
 }
 
@@ -42,7 +34,7 @@ pub enum MapModel {
 }
 
 #[derive(clap::Args)]
-#[command(after_long_help = FIT_EXAMPLES)]
+#[command(after_long_help = examples!("map.fit_examples"))]
 struct FitArgs {
     /// Grid CSV: x_mm,y_mm,z_mm,ex_um,ey_um,ez_um.
     #[arg(long)]
@@ -68,7 +60,7 @@ struct FitArgs {
 }
 
 #[derive(clap::Args)]
-#[command(after_long_help = EVAL_EXAMPLES)]
+#[command(after_long_help = examples!("map.eval_examples"))]
 struct EvalArgs {
     /// Model JSON (mtec.map/1, ...).
     #[arg(long)]

@@ -3,18 +3,15 @@
 //! as failed); this module parses the arguments and prints where the report went.
 
 use crate::error::CliError;
+use crate::help::{examples, text};
 use mtec_workflow::project;
-
-const LONG: &str = include_str!("../../help/run.long.txt");
-
-const EXAMPLES: &str = crate::help::examples!(include_str!("../../help/run.examples.txt"));
 
 /// Arguments of `mtec run`.
 #[derive(clap::Args, Debug)]
 #[command(
     about = "Run the whole pipeline of a project file and write an HTML report",
-    long_about = LONG,
-    after_long_help = EXAMPLES
+    long_about = text!("run.long"),
+    after_long_help = examples!("run.examples")
 )]
 pub struct Args {
     /// Project file (TOML).

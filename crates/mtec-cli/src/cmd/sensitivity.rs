@@ -3,19 +3,16 @@
 
 use crate::choice::choice;
 use crate::error::CliError;
+use crate::help::{examples, text};
 use mtec_workflow::ops::sensitivity::{self as op, MethodKind, Options};
 use std::path::PathBuf;
-
-const LONG: &str = include_str!("../../help/sensitivity.long.txt");
-
-const EXAMPLES: &str = crate::help::examples!(include_str!("../../help/sensitivity.examples.txt"));
 
 /// Arguments of `mtec sensitivity`.
 #[derive(clap::Args, Debug)]
 #[command(
     about = "Global sensitivity (EFAST, Sobol, Morris) of the volumetric error to the error elements",
-    long_about = LONG,
-    after_long_help = EXAMPLES
+    long_about = text!("sensitivity.long"),
+    after_long_help = examples!("sensitivity.examples")
 )]
 pub struct Args {
     /// Machine description (TOML).

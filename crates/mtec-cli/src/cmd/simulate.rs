@@ -1,20 +1,17 @@
 //! `mtec simulate SCENARIO --out DIR [--seed N]`: write a scenario's measurement files and truth.
 
 use crate::error::CliError;
+use crate::help::{examples, text};
 use mtec_workflow::ops::simulate::{self as op, Options, SCENARIOS};
 use std::path::PathBuf;
-
-const LONG: &str = include_str!("../../help/simulate.long.txt");
-
-const EXAMPLES: &str = crate::help::examples!(include_str!("../../help/simulate.examples.txt"));
 
 /// Arguments of `mtec simulate`.
 #[derive(clap::Args, Debug)]
 #[command(
     about = "Simulate measurements on the virtual machine (known truth)",
-    long_about = LONG,
+    long_about = text!("simulate.long"),
     after_help = scenario_list(),
-    after_long_help = format!("{}\n{EXAMPLES}", scenario_list())
+    after_long_help = format!("{}\n{}", scenario_list(), examples!("simulate.examples"))
 )]
 pub struct Args {
     /// Scenario name (see the list below).

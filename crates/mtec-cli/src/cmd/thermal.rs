@@ -8,32 +8,16 @@
 #[cfg(feature = "neural")]
 use super::terminal::{ctrl_c, Terminal};
 use crate::error::CliError;
+use crate::help::{examples, text};
 use clap::builder::{PossibleValue, PossibleValuesParser};
 use mtec_thermal::model_file::SplitBy;
 use mtec_workflow::ops::thermal as op;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-const FORMAT_HELP: &str = include_str!("../../help/thermal.format_help.txt");
-
-const SELECT_LONG: &str = include_str!("../../help/thermal.select_long.txt");
-const FIT_LONG: &str = include_str!("../../help/thermal.fit_long.txt");
-
-const SELECT_EXAMPLES: &str =
-    crate::help::examples!(include_str!("../../help/thermal.select_examples.txt"));
-
-const FIT_EXAMPLES: &str =
-    crate::help::examples!(include_str!("../../help/thermal.fit_examples.txt"));
-
-const PREDICT_EXAMPLES: &str =
-    crate::help::examples!(include_str!("../../help/thermal.predict_examples.txt"));
-
-const CV_EXAMPLES: &str =
-    crate::help::examples!(include_str!("../../help/thermal.cv_examples.txt"));
-
 /// Thermal error models: sensor selection, fitting and prediction.
 #[derive(clap::Args)]
-#[command(after_help = FORMAT_HELP)]
+#[command(after_help = text!("thermal.format_help"))]
 pub struct Args {
     #[command(subcommand)]
     cmd: Sub,
@@ -44,10 +28,10 @@ enum Sub {
     /// VIF table, ridge trace, sensor elimination by the ridge-trace rules, chosen k, and the
     /// comparison of full MLR, ridge-selected and simple-correlation models. Warns when the
     /// selection collapses (its R² falls well below that of all sensors).
-    #[command(long_about = SELECT_LONG)]
+    #[command(long_about = text!("thermal.select_long"))]
     Select(SelectArgs),
     /// Fits a model and writes it as JSON (`mtec.thermal-model/1`) with train/test metrics.
-    #[command(long_about = FIT_LONG)]
+    #[command(long_about = text!("thermal.fit_long"))]
     Fit(Box<FitArgs>),
     /// Predicts the drift with a model file; metrics when the data hold the target. Also reads
     /// the neural models (`mtec.cnn-lstm/1`, `mtec.bpnn/1`): then one `pred_<target>` column per
@@ -62,7 +46,7 @@ enum Sub {
 }
 
 #[derive(clap::Args)]
-#[command(after_long_help = SELECT_EXAMPLES)]
+#[command(after_long_help = examples!("thermal.select_examples"))]
 struct SelectArgs {
     /// Thermal log (CSV).
     #[arg(long)]
@@ -157,7 +141,7 @@ struct Common {
 }
 
 #[derive(clap::Args)]
-#[command(after_long_help = FIT_EXAMPLES)]
+#[command(after_long_help = examples!("thermal.fit_examples"))]
 struct FitArgs {
     #[command(flatten)]
     common: Common,
@@ -178,7 +162,7 @@ struct FitArgs {
 }
 
 #[derive(clap::Args)]
-#[command(after_long_help = PREDICT_EXAMPLES)]
+#[command(after_long_help = examples!("thermal.predict_examples"))]
 struct PredictArgs {
     /// Model file (JSON, `mtec.thermal-model/1`).
     #[arg(long)]
@@ -200,7 +184,7 @@ struct PredictArgs {
 }
 
 #[derive(clap::Args)]
-#[command(after_long_help = CV_EXAMPLES)]
+#[command(after_long_help = examples!("thermal.cv_examples"))]
 struct CvArgs {
     #[command(flatten)]
     common: Common,

@@ -2,19 +2,16 @@
 
 use crate::choice::choice;
 use crate::error::CliError;
+use crate::help::{examples, text};
 use mtec_workflow::ops::volumetric::{self as op, Options};
 use std::path::PathBuf;
-
-const LONG: &str = include_str!("../../help/volumetric.long.txt");
-
-const EXAMPLES: &str = crate::help::examples!(include_str!("../../help/volumetric.examples.txt"));
 
 /// Arguments of `mtec volumetric`.
 #[derive(clap::Args, Debug)]
 #[command(
     about = "Volumetric error at commanded points (HTM or POE, exact or first-order)",
-    long_about = LONG,
-    after_long_help = EXAMPLES
+    long_about = text!("volumetric.long"),
+    after_long_help = examples!("volumetric.examples")
 )]
 pub struct Args {
     /// Machine description (TOML).
