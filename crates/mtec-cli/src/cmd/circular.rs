@@ -41,21 +41,17 @@ pub struct Args {
     pub out: Option<PathBuf>,
 }
 
-impl Args {
-    fn options(&self) -> Result<Options, CliError> {
-        Ok(Options {
-            run: self.run.clone(),
-            arc_deg: op::arc_deg(self.arc_start_deg, self.arc_end_deg)?,
-            radius_mm: self.radius_mm,
-            feed_mm_min: self.feed_mm_min,
-            plane: self.plane.as_deref().map(op::parse_plane).transpose()?,
-            threshold_um: self.threshold_um,
-            out: self.out.clone(),
-        })
-    }
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
-    let outcome = op::run(&args.options()?, &mut crate::observer::Stderr::default())?;
+    let opts = Options {
+        run: args.run,
+        // the plane is checked before the arc
+        plane: args.plane.as_deref().map(op::parse_plane).transpose()?,
+        arc_deg: op::arc_deg(args.arc_start_deg, args.arc_end_deg)?,
+        radius_mm: args.radius_mm,
+        feed_mm_min: args.feed_mm_min,
+        threshold_um: args.threshold_um,
+        out: args.out,
+    };
+    let outcome = op::run(&opts, &mut crate::observer::Stderr::default())?;
     super::report(&outcome, args.json, op::Outcome::to_json)
 }

@@ -91,47 +91,38 @@ pub struct Args {
     out: Option<PathBuf>,
 }
 
-impl Args {
-    /// The job's options; a malformed axis, range or position is a usage error.
-    fn options(self) -> Result<Options, CliError> {
-        let range = |r: &Option<String>| r.as_deref().map(Range::parse).transpose();
-        Ok(Options {
-            axis: parse_axis("--axis", &self.axis)?,
-            output_axis: self
-                .output_axis
-                .as_deref()
-                .map(|s| parse_axis("--output-axis", s))
-                .transpose()?,
-            range: range(&self.range)?,
-            at: self.at.as_deref().map(parse_at).transpose()?,
-            grid: [
-                range(&self.x_range)?,
-                range(&self.y_range)?,
-                range(&self.z_range)?,
-            ],
-            model: self.model.unwrap_or_default(),
-            from_iso230_2: self.from_iso230_2,
-            state: self.state,
-            format: self.format,
-            comp_type: self.comp_type,
-            table_index: self.table_index,
-            direction: self.direction,
-            max_points: self.max_points,
-            reference_mm: self.reference_mm,
-            reference_number: self.reference_number,
-            magnification: self.magnification,
-            detection_unit_um: self.detection_unit_um,
-            max_increment: self.max_increment,
-            axis_number: self.axis_number,
-            cma_name: self.cma_name,
-            max_correction_um: self.max_correction_um,
-            out: self.out,
-        })
-    }
-}
-
 pub fn run(a: Args) -> Result<(), CliError> {
-    let done = op::run(&a.options()?, &mut crate::observer::Stderr::default())?;
+    // The job's options; a malformed axis, range or position is a usage error.
+    let range = |r: &Option<String>| r.as_deref().map(Range::parse).transpose();
+    let opts = Options {
+        axis: parse_axis("--axis", &a.axis)?,
+        output_axis: a
+            .output_axis
+            .as_deref()
+            .map(|s| parse_axis("--output-axis", s))
+            .transpose()?,
+        range: range(&a.range)?,
+        at: a.at.as_deref().map(parse_at).transpose()?,
+        grid: [range(&a.x_range)?, range(&a.y_range)?, range(&a.z_range)?],
+        model: a.model.unwrap_or_default(),
+        from_iso230_2: a.from_iso230_2,
+        state: a.state,
+        format: a.format,
+        comp_type: a.comp_type,
+        table_index: a.table_index,
+        direction: a.direction,
+        max_points: a.max_points,
+        reference_mm: a.reference_mm,
+        reference_number: a.reference_number,
+        magnification: a.magnification,
+        detection_unit_um: a.detection_unit_um,
+        max_increment: a.max_increment,
+        axis_number: a.axis_number,
+        cma_name: a.cma_name,
+        max_correction_um: a.max_correction_um,
+        out: a.out,
+    };
+    let done = op::run(&opts, &mut crate::observer::Stderr::default())?;
     eprint!("{done}");
     Ok(())
 }

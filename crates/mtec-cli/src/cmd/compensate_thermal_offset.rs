@@ -76,35 +76,30 @@ pub struct Args {
     out: Option<PathBuf>,
 }
 
-impl Args {
-    /// The job's options; a malformed axis or travel is a usage error.
-    fn options(self) -> Result<Options, CliError> {
-        Ok(Options {
-            axis: parse_axis("--axis", &self.axis)?,
-            travel_mm: self.travel_mm.as_deref().map(parse_travel).transpose()?,
-            model: self.model,
-            temps: self.temps,
-            format: self.format,
-            offset: self.offset,
-            base_mm: self.base_mm,
-            at_mm: self.at_mm,
-            position_origin_mm: self.position_origin_mm,
-            zeroed_at_min: self.zeroed_at_min,
-            starts_at_rest: self.starts_at_rest,
-            outside: self.outside,
-            max_correction_um: self.max_correction_um,
-            training: self.training,
-            sign: self.sign,
-            axis_number: self.axis_number,
-            machine_axis: self.machine_axis,
-            comp_add_velo_factor: self.comp_add_velo_factor,
-            out: self.out,
-        })
-    }
-}
-
 pub fn run(a: Args) -> Result<(), CliError> {
-    let done = op::run(&a.options()?, &mut crate::observer::Stderr::default())?;
+    // The job's options; a malformed axis or travel is a usage error.
+    let opts = Options {
+        axis: parse_axis("--axis", &a.axis)?,
+        travel_mm: a.travel_mm.as_deref().map(parse_travel).transpose()?,
+        model: a.model,
+        temps: a.temps,
+        format: a.format,
+        offset: a.offset,
+        base_mm: a.base_mm,
+        at_mm: a.at_mm,
+        position_origin_mm: a.position_origin_mm,
+        zeroed_at_min: a.zeroed_at_min,
+        starts_at_rest: a.starts_at_rest,
+        outside: a.outside,
+        max_correction_um: a.max_correction_um,
+        training: a.training,
+        sign: a.sign,
+        axis_number: a.axis_number,
+        machine_axis: a.machine_axis,
+        comp_add_velo_factor: a.comp_add_velo_factor,
+        out: a.out,
+    };
+    let done = op::run(&opts, &mut crate::observer::Stderr::default())?;
     eprint!("{done}");
     for n in &done.notes {
         eprintln!("note: {n}");

@@ -30,18 +30,13 @@ pub struct Args {
     pub json: bool,
 }
 
-impl Args {
-    fn options(&self) -> Options {
-        Options {
-            setup: self.setup.clone(),
-            data: self.data.clone(),
-            temps: self.temps.clone(),
-            out: op::out_folder(self.out.clone(), &self.data, self.json),
-        }
-    }
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
-    let outcome = op::run(&args.options(), &mut crate::observer::Stderr::default())?;
+    let opts = Options {
+        setup: args.setup,
+        data: args.data.clone(),
+        temps: args.temps,
+        out: op::out_folder(args.out, &args.data, args.json),
+    };
+    let outcome = op::run(&opts, &mut crate::observer::Stderr::default())?;
     super::report(&outcome, args.json, op::Outcome::to_json)
 }

@@ -40,22 +40,16 @@ pub struct Args {
     pub stats: Option<PathBuf>,
 }
 
-impl Args {
-    fn options(&self) -> Options {
-        Options {
-            machine: self.machine.clone(),
-            data: self.data.clone(),
-            design: self.design.clone(),
-            degree: self.degree,
-            output: self.output.clone(),
-            kinematic_model: self.kinematic_model.clone(),
-            stats: self.stats.clone(),
-        }
-    }
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
-    let opts = args.options();
+    let opts = Options {
+        machine: args.machine,
+        data: args.data,
+        design: args.design,
+        degree: args.degree,
+        output: args.output,
+        kinematic_model: args.kinematic_model,
+        stats: args.stats,
+    };
     let outcome = op::run(&opts, &mut crate::observer::Stderr::default())?;
     // with an output on stdout (`-o -`) the report goes to stderr; a closed pipe (`| head`)
     // is not an error worth a panic

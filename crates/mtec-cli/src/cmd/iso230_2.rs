@@ -67,26 +67,21 @@ pub struct Args {
     pub standard: String,
 }
 
-impl Args {
-    fn options(&self) -> Options {
-        Options {
-            run: self.run.clone(),
-            out: self.out.clone(),
-            air_temp_c: self.air_temp_c,
-            pressure_pa: self.pressure_pa,
-            humidity_pct: self.humidity_pct,
-            co2_ppm: self.co2_ppm,
-            wavelength_nm: self.wavelength_nm,
-            air_formula: self.air_formula,
-            laser_n: self.laser_n,
-            material_temp_c: self.material_temp_c,
-            alpha_um_per_m_k: self.alpha_um_per_m_k,
-            standard: self.standard.clone(),
-        }
-    }
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
-    let outcome = op::run(&args.options(), &mut crate::observer::Stderr::default())?;
+    let opts = Options {
+        run: args.run,
+        out: args.out,
+        air_temp_c: args.air_temp_c,
+        pressure_pa: args.pressure_pa,
+        humidity_pct: args.humidity_pct,
+        co2_ppm: args.co2_ppm,
+        wavelength_nm: args.wavelength_nm,
+        air_formula: args.air_formula,
+        laser_n: args.laser_n,
+        material_temp_c: args.material_temp_c,
+        alpha_um_per_m_k: args.alpha_um_per_m_k,
+        standard: args.standard,
+    };
+    let outcome = op::run(&opts, &mut crate::observer::Stderr::default())?;
     super::report(&outcome, args.json, op::Outcome::to_json)
 }

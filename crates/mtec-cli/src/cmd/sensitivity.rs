@@ -68,28 +68,23 @@ pub struct Args {
     pub json: bool,
 }
 
-impl Args {
-    fn options(&self) -> Options {
-        Options {
-            machine: self.machine.clone(),
-            stats: self.stats.clone(),
-            function: self.function.clone(),
-            method: self.method,
-            samples: self.samples,
-            interference: self.interference,
-            resamples: self.resamples,
-            levels: self.levels,
-            bootstrap: self.bootstrap,
-            seed: self.seed,
-            at: self.at.clone(),
-            points: self.points.clone(),
-            target_um: self.target_um,
-            coverage: self.coverage,
-        }
-    }
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
-    let outcome = op::run(&args.options(), &mut crate::observer::Stderr::default())?;
+    let opts = Options {
+        machine: args.machine,
+        stats: args.stats,
+        function: args.function,
+        method: args.method,
+        samples: args.samples,
+        interference: args.interference,
+        resamples: args.resamples,
+        levels: args.levels,
+        bootstrap: args.bootstrap,
+        seed: args.seed,
+        at: args.at,
+        points: args.points,
+        target_um: args.target_um,
+        coverage: args.coverage,
+    };
+    let outcome = op::run(&opts, &mut crate::observer::Stderr::default())?;
     super::report(&outcome, args.json, op::Outcome::to_json)
 }

@@ -32,17 +32,12 @@ fn scenario_list() -> String {
     s
 }
 
-impl Args {
-    fn options(&self) -> Options {
-        Options {
-            scenario: self.scenario.clone(),
-            out: self.out.clone(),
-            seed: self.seed,
-        }
-    }
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
-    let outcome = op::run(&args.options(), &mut crate::observer::Stderr::default())?;
+    let opts = Options {
+        scenario: args.scenario,
+        out: args.out,
+        seed: args.seed,
+    };
+    let outcome = op::run(&opts, &mut crate::observer::Stderr::default())?;
     super::emit(&outcome.to_string())
 }

@@ -31,18 +31,13 @@ pub struct Args {
     pub json: bool,
 }
 
-impl Args {
-    fn options(&self) -> Options {
-        Options {
-            machine: self.machine.clone(),
-            errors: self.errors.clone(),
-            points: self.points.clone(),
-            form: self.form,
-        }
-    }
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
-    let outcome = op::run(&args.options(), &mut crate::observer::Stderr::default())?;
+    let opts = Options {
+        machine: args.machine,
+        errors: args.errors,
+        points: args.points,
+        form: args.form,
+    };
+    let outcome = op::run(&opts, &mut crate::observer::Stderr::default())?;
     super::report(&outcome, args.json, op::Outcome::to_json)
 }
