@@ -15,9 +15,14 @@ pub fn choice<T: Choice>() -> Choices<T> {
 pub struct Choices<T>(PhantomData<T>);
 
 fn possible<T: Choice>(c: T) -> PossibleValue {
-    match c.help() {
-        "" => PossibleValue::new(c.name()),
-        help => PossibleValue::new(c.name()).help(help),
+    possible_value(c.name(), c.help())
+}
+
+/// The value `name` with its one line of `help` ("" for none).
+pub fn possible_value(name: &'static str, help: &'static str) -> PossibleValue {
+    match help {
+        "" => PossibleValue::new(name),
+        help => PossibleValue::new(name).help(help),
     }
 }
 

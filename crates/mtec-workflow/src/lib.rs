@@ -38,3 +38,11 @@ pub fn neural_unavailable(what: &str) -> Error {
          `cargo install --path crates/mtec-cli --features neural`"
     ))
 }
+
+/// An outcome as pretty JSON with its keys sorted (through a `serde_json::Value`): the
+/// `--json` of the commands whose outcome has no `to_json` of its own.
+pub fn pretty_json<T: serde::Serialize>(outcome: &T) -> Result<String> {
+    Ok(serde_json::to_string_pretty(&serde_json::to_value(
+        outcome,
+    )?)?)
+}

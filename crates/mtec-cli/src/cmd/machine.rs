@@ -107,15 +107,6 @@ fn replay_day(a: ReplayArgs) -> Result<(), CliError> {
         output: a.output,
     };
     let done = machine::replay(&opts, &mut crate::observer::Stderr::default())?;
-    if a.json {
-        // through a JSON value, as before: the keys in the order the command always printed
-        let doc = serde_json::to_value(&done).map_err(|e| CliError::Internal(e.into()))?;
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&doc).map_err(|e| CliError::Internal(e.into()))?
-        );
-    } else {
-        print!("{done}");
-    }
-    Ok(())
+    // through a JSON value, as before: the keys in the order the command always printed
+    super::report(&done, a.json, mtec_workflow::pretty_json)
 }

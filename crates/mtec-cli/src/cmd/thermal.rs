@@ -7,9 +7,10 @@
 
 #[cfg(feature = "neural")]
 use super::terminal::{ctrl_c, Terminal};
+use crate::choice::possible_value;
 use crate::error::CliError;
 use crate::help::{examples, text};
-use clap::builder::{PossibleValue, PossibleValuesParser};
+use clap::builder::PossibleValuesParser;
 use mtec_thermal::model_file::SplitBy;
 use mtec_workflow::ops::thermal as op;
 use std::io::Write;
@@ -65,26 +66,9 @@ struct SelectArgs {
     json: bool,
 }
 
-/// The `--model` values: every kind of the registry (`mtec_thermal::registry::KINDS`), then the
-/// neural models (refused with exit 2 by a build without them).
+/// The `--model` values: `op::model_choices()`.
 fn model_values() -> PossibleValuesParser {
-    let regression = mtec_thermal::registry::KINDS.iter().map(|k| {
-        let v = PossibleValue::new(k.name);
-        if k.help.is_empty() {
-            v
-        } else {
-            v.help(k.help)
-        }
-    });
-    let neural = [
-        PossibleValue::new("cnn-lstm").help(
-            "Neural (a build with `--features neural`): CNN-LSTM sequence model (several targets; --window, --sequence-by, ...)",
-        ),
-        PossibleValue::new("bpnn").help(
-            "Neural (a build with `--features neural`): one-hidden-layer BPNN on the current row (several targets; --hidden)",
-        ),
-    ];
-    PossibleValuesParser::new(regression.chain(neural))
+    PossibleValuesParser::new(op::model_choices().map(|(v, help)| possible_value(v, help)))
 }
 
 #[derive(clap::Args)]
@@ -270,14 +254,7 @@ fn select(a: SelectArgs) -> Result<(), CliError> {
     // the warnings follow the report, as they always did
     let mut obs = mtec_workflow::Collect::default();
     let outcome = op::select(&opts, &mut obs)?;
-    if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&serde_json::to_value(&outcome)?)?
-        );
-    } else {
-        print!("{outcome}");
-    }
+    super::report(&outcome, a.json, mtec_workflow::pretty_json)?;
     print_warnings(&obs);
     Ok(())
 }
@@ -382,14 +359,7 @@ fn cv(a: CvArgs) -> Result<(), CliError> {
     if let op::CvOutcome::LeaveOneBlockOut(o) = &outcome {
         eprintln!("note: {}", o.note);
     }
-    if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&serde_json::to_value(&outcome)?)?
-        );
-    } else {
-        print!("{outcome}");
-    }
+    super::report(&outcome, a.json, mtec_workflow::pretty_json)?;
     print_warnings(&obs);
     Ok(())
 }

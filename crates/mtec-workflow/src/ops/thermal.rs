@@ -29,6 +29,25 @@ pub mod neural;
 /// The `--model` values of the neural models (cargo feature `neural`; see [`neural`]).
 pub const NEURAL_KINDS: [&str; 2] = ["cnn-lstm", "bpnn"];
 
+/// Every `--model` value with its one line of help ("" for none): the registry's kinds
+/// (`mtec_thermal::registry::KINDS`), then the neural models (refused with exit 2 by a build
+/// without them).
+pub fn model_choices() -> impl Iterator<Item = (&'static str, &'static str)> {
+    let regression = mtec_thermal::registry::KINDS
+        .iter()
+        .map(|k| (k.name, k.help));
+    regression.chain([
+        (
+            "cnn-lstm",
+            "Neural (a build with `--features neural`): CNN-LSTM sequence model (several targets; --window, --sequence-by, ...)",
+        ),
+        (
+            "bpnn",
+            "Neural (a build with `--features neural`): one-hidden-layer BPNN on the current row (several targets; --hidden)",
+        ),
+    ])
+}
+
 /// Whether `model` names a neural model.
 pub fn is_neural(model: &str) -> bool {
     NEURAL_KINDS.contains(&model)
