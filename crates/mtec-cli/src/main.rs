@@ -5,7 +5,6 @@ mod choice;
 mod cmd;
 mod error;
 mod help;
-mod inputs;
 mod observer;
 
 use clap::{Parser, Subcommand};

@@ -83,6 +83,17 @@ pub enum SplitBy {
     },
 }
 
+impl SplitBy {
+    /// Rows up to `until` (the command line's `--train-until`) when given, else the `train` and
+    /// `test` experiments (`--train`, `--test`).
+    pub fn from_options(until: Option<f64>, train: Vec<String>, test: Vec<String>) -> SplitBy {
+        match until {
+            Some(t) => SplitBy::Until(t),
+            None => SplitBy::Experiments { train, test },
+        }
+    }
+}
+
 /// The rows of a split and how the model file records it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rows {

@@ -7,6 +7,7 @@
 
 use mtec_comp::gcode::tooltable::MachineUnits;
 use mtec_comp::gcode::{OnUnsupported, Units};
+use mtec_comp::map::Outside;
 use mtec_comp::thermal_offset::OutsidePolicy;
 use mtec_measure::air::AirFormula;
 
@@ -70,6 +71,14 @@ impl Choice for OutsidePolicy {
             OutsidePolicy::Refuse => "refuse",
             OutsidePolicy::Fade => "fade",
         }
+    }
+}
+
+impl Choice for Outside {
+    const ALL: &'static [Self] = &[Outside::Clamp, Outside::Extrapolate, Outside::Refuse];
+
+    fn name(self) -> &'static str {
+        Outside::name(self)
     }
 }
 

@@ -77,11 +77,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
 
 fn build(a: BuildArgs) -> Result<(), CliError> {
     let opts = BuildOptions {
-        thermal: a
-            .thermal
-            .iter()
-            .map(|s| Part::parse(s))
-            .collect::<Result<_, _>>()?,
+        thermal: Part::parse_all(&a.thermal)?,
         geometric: a.geometric,
         data: a.data,
         guard: a.guard,

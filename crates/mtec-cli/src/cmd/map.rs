@@ -1,5 +1,6 @@
 //! `mtec map fit|eval`: volumetric error maps from a measured grid, and their values at points.
 
+use crate::choice::choice;
 use crate::error::CliError;
 use crate::help::{examples, text};
 use mtec_comp::map::Outside;
@@ -43,8 +44,8 @@ struct FitArgs {
     #[arg(long, value_enum, default_value = "trilinear")]
     model: MapModel,
     /// Behaviour outside the grid box: clamp, extrapolate or refuse.
-    #[arg(long, default_value = "clamp", value_parser = ["clamp", "extrapolate", "refuse"])]
-    outside: String,
+    #[arg(long, default_value = "clamp", value_parser = choice::<Outside>())]
+    outside: Outside,
     /// Controller whose grid limits to check: none, fanuc-3d (≤ 25 equally spaced points per axis), linuxcnc (≤ 256).
     #[arg(long, default_value = "none", value_parser = ["none", "fanuc-3d", "linuxcnc"])]
     controller: String,
@@ -81,15 +82,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
 }
 
 fn fit(a: FitArgs) -> Result<(), CliError> {
-    let outside = Outside::parse(&a.outside)
-        .ok_or_else(|| CliError::usage(format!("unknown --outside `{}`", a.outside)))?;
     let opts = map::FitOptions {
         grid: a.grid,
         kind: match a.model {
             MapModel::Trilinear => map::MapKind::Trilinear,
             MapModel::Bpnn => map::MapKind::Bpnn { hidden: a.hidden },
         },
-        outside,
+        outside: a.outside,
         controller: a.controller,
         max_points_per_axis: a.max_points_per_axis,
         out: a.out,

@@ -26,23 +26,14 @@ pub struct Args {
 
 #[derive(clap::Subcommand)]
 enum Sub {
-    /// VIF table, ridge trace, sensor elimination by the ridge-trace rules, chosen k, and the
-    /// comparison of full MLR, ridge-selected and simple-correlation models. Warns when the
-    /// selection collapses (its R² falls well below that of all sensors).
-    #[command(long_about = text!("thermal.select_long"))]
+    #[command(about = text!("thermal.select_about"), long_about = text!("thermal.select_long"))]
     Select(SelectArgs),
     /// Fits a model and writes it as JSON (`mtec.thermal-model/1`) with train/test metrics.
     #[command(long_about = text!("thermal.fit_long"))]
     Fit(Box<FitArgs>),
-    /// Predicts the drift with a model file; metrics when the data hold the target. Also reads
-    /// the neural models (`mtec.cnn-lstm/1`, `mtec.bpnn/1`): then one `pred_<target>` column per
-    /// target (and `<target>,res_<target>` when the data hold it).
+    #[command(about = text!("thermal.predict_about"))]
     Predict(PredictArgs),
-    /// Forward (rolling-origin) validation: fit on every block before, score the next block,
-    /// step forward. Blocks follow the duty cycle (a new block where the --input column steps),
-    /// or experiments, or --block-min minutes. Each fold shows the error without compensation
-    /// and is flagged when the model is worse. --loo gives leave-one-block-out instead, which
-    /// trains on the future of the scored block and is optimistic.
+    #[command(about = text!("thermal.cv_about"))]
     Cv(CvArgs),
 }
 
@@ -222,13 +213,7 @@ impl FitArgs {
             target: self.common.target.clone(),
             model: self.common.model.clone(),
             fit: self.common.fit_options(),
-            split: match self.train_until {
-                Some(t) => SplitBy::Until(t),
-                None => SplitBy::Experiments {
-                    train: self.train.clone(),
-                    test: self.test.clone(),
-                },
-            },
+            split: SplitBy::from_options(self.train_until, self.train.clone(), self.test.clone()),
             output: self.output.clone(),
         }
     }

@@ -24,6 +24,11 @@ pub struct Part {
 }
 
 impl Part {
+    /// Parses every `--thermal` value; the first malformed one is the error.
+    pub fn parse_all(values: &[String]) -> Result<Vec<Part>> {
+        values.iter().map(|s| Part::parse(s)).collect()
+    }
+
     /// Parses `AXIS=MODEL.json[,sign=-1]` (the command line's `--thermal`).
     pub fn parse(s: &str) -> Result<Part> {
         let bad = |why: &str| {
