@@ -96,3 +96,30 @@ impl Choice for AirFormula {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every value's name is unique and names it back.
+    fn round_trip<T: Choice + PartialEq + std::fmt::Debug>() {
+        for (i, c) in T::ALL.iter().enumerate() {
+            assert_eq!(T::from_name(c.name()), Some(*c));
+            assert!(T::ALL[..i].iter().all(|o| o.name() != c.name()));
+        }
+    }
+
+    #[test]
+    fn names_round_trip() {
+        round_trip::<OnUnsupported>();
+        round_trip::<Units>();
+        round_trip::<MachineUnits>();
+        round_trip::<OutsidePolicy>();
+        round_trip::<Outside>();
+        round_trip::<AirFormula>();
+        round_trip::<crate::ops::compensate_table::Format>();
+        round_trip::<crate::ops::compensate_thermal_offset::Format>();
+        round_trip::<crate::ops::volumetric::Form>();
+        round_trip::<crate::ops::sensitivity::MethodKind>();
+    }
+}
