@@ -117,3 +117,31 @@ fn sweep_degrees() {
         }
     }
 }
+
+/// A degree the measured positions cannot support is flagged (`valid = false`, a warning naming
+/// the amplification between points), and so is a model too simple for the machine (residual
+/// several times the repeatability of the runs); the cross-validated choice is neither.
+#[test]
+fn unsupported_or_too_simple_models_are_flagged() {
+    let (m, data, _) = support::line_scenario("vmc-9line-realistic", 2);
+    let high = identify_with(&m, &data, Degree::Fixed(12)).unwrap().report;
+    println!(
+        "degree 12: amplification {:.2}, warnings {:?}",
+        high.amplification, high.warnings
+    );
+    assert!(!high.valid);
+    assert!(high.warnings.iter().any(|w| w.contains("amplify")));
+    let low = identify_with(&m, &data, Degree::Fixed(2)).unwrap().report;
+    println!(
+        "degree 2: residual/repeatability {:?}, warnings {:?}",
+        low.residual_to_repeatability, low.warnings
+    );
+    assert!(!low.valid);
+    assert!(low.warnings.iter().any(|w| w.contains("repeatability")));
+    let auto = identify_with(&m, &data, DEFAULT_DEGREE).unwrap().report;
+    println!(
+        "auto: residual/repeatability {:?}, amplification {:.2}, cond {:.1}",
+        auto.residual_to_repeatability, auto.amplification, auto.condition_number
+    );
+    assert!(auto.valid, "{:?}", auto.warnings);
+}
