@@ -28,10 +28,18 @@ pub fn legendre_all(n: usize, x: f64) -> Vec<f64> {
     p
 }
 
+/// P_p(−1) = (−1)^p.
+pub fn at_minus_one(p: usize) -> f64 {
+    if p.is_multiple_of(2) {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
 /// φ_p(x) = P_p(x) − (−1)^p (zero at x = −1).
 pub fn legendre_from_origin(p: usize, x: f64) -> f64 {
-    let sign = if p % 2 == 0 { 1.0 } else { -1.0 };
-    legendre_all(p, x)[p] - sign
+    legendre_all(p, x)[p] - at_minus_one(p)
 }
 
 /// Monomial coefficients (in x, ascending) of P_0 .. P_n, from the same recursion.
@@ -66,15 +74,14 @@ pub fn legendre_to_power_terms(orders: &[i32], coeffs: &[f64]) -> Vec<(i32, f64)
         for (i, m) in mono[p].iter().enumerate() {
             in_x[i] += c * m;
         }
-        in_x[0] -= c * if p % 2 == 0 { 1.0 } else { -1.0 };
+        in_x[0] -= c * at_minus_one(p);
     }
     // x^i = (2s − 1)^i = Σ_k C(i,k) 2^k s^k (−1)^(i−k)
     let mut in_s = vec![0.0; n + 1];
     for (i, &a) in in_x.iter().enumerate() {
         let mut binom = 1.0;
         for (k, o) in in_s.iter_mut().enumerate().take(i + 1) {
-            let sign = if (i - k) % 2 == 0 { 1.0 } else { -1.0 };
-            *o += a * binom * 2f64.powi(k as i32) * sign;
+            *o += a * binom * 2f64.powi(k as i32) * at_minus_one(i - k);
             binom = binom * (i - k) as f64 / (k + 1) as f64;
         }
     }

@@ -85,7 +85,7 @@ impl Block {
                     1.0
                 } else {
                     // φ_p = P_p(x) − (−1)^p
-                    p_all[p as usize] - if p % 2 == 0 { 1.0 } else { -1.0 }
+                    p_all[p as usize] - basis::at_minus_one(p as usize)
                 }
             })
             .chain(pitch.into_iter().flatten())
