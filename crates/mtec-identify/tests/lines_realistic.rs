@@ -58,11 +58,13 @@ fn evaluate(
 fn realistic_machine_is_predicted_within_1_um_and_compensated() {
     for seed in 1..=5u64 {
         let (m, data, truth) = support::line_scenario("vmc-9line-realistic", seed);
+        let t0 = std::time::Instant::now();
         let id = identify_with(&m, &data, DEFAULT_DEGREE).unwrap();
+        let took = t0.elapsed();
         let (p, r) = evaluate(&m, &truth, &id.errors, seed);
         let d = id.report.selection.as_ref().unwrap().chosen;
         println!(
-            "seed {seed}: degrees {d:?}, prediction RMS {p:.3?} um, rate {:.1?} %, valid {}",
+            "seed {seed}: degrees {d:?}, prediction RMS {p:.3?} um, rate {:.1?} %, valid {} ({took:.2?})",
             r.map(|v| v * 100.0),
             id.report.valid
         );

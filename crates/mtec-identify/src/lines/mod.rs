@@ -44,6 +44,9 @@ use nalgebra::{DMatrix, DVector};
 /// Default degree of the error functions: chosen by cross-validation ([`select`]).
 pub const DEFAULT_DEGREE: Degree = Degree::Auto;
 
+/// The degree `auto` means for a design analysed without readings.
+pub const AUTO_WITHOUT_READINGS: usize = 3;
+
 /// How the polynomial degree of the error functions is chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Degree {
@@ -140,6 +143,15 @@ pub fn identify_with(
 ) -> Result<LineIdentification, LinesError> {
     match degree {
         Degree::Fixed(d) => identify(machine, data, d),
+        // a design without readings (`--design` alone) has nothing to cross-validate
+        Degree::Auto
+            if data
+                .channels
+                .iter()
+                .all(|c| c.readings_um.iter().all(|r| *r == 0.0)) =>
+        {
+            identify(machine, data, AUTO_WITHOUT_READINGS)
+        }
         Degree::Auto => {
             model::check_machine(machine)?;
             let sel = select::select(machine, data, true)?;

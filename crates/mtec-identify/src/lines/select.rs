@@ -106,13 +106,18 @@ pub fn point_cv_score(
             fold_of.push(if k == 0 { usize::MAX } else { k % POINT_FOLDS });
         }
     }
+    // what the whole design cannot identify, once: a fold keeps the same positions, so the
+    // same elements are dropped and each fold needs only its QR
+    let Ok(full) = identifiability::analyse(&a, &y, &layout) else {
+        return Ok(None);
+    };
     let (mut ss, mut n) = (0.0, 0usize);
     for f in 0..POINT_FOLDS {
         let train: Vec<usize> = (0..y.len()).filter(|&i| fold_of[i] != f).collect();
         let test: Vec<usize> = (0..y.len()).filter(|&i| fold_of[i] == f).collect();
         let at = a.select_rows(train.iter());
         let yt = y.select_rows(train.iter());
-        let Ok(an) = identifiability::analyse(&at, &yt, &layout) else {
+        let Ok(an) = identifiability::analyse_with(&at, &yt, &layout, Some(&full.dropped)) else {
             return Ok(None);
         };
         let fit = solve::solve(&at, &yt, &an);
