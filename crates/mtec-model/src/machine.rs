@@ -273,3 +273,33 @@ impl Machine {
         .expect("built-in machine is valid")
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn with_period(p: Option<f64>, axis: &str) -> Result<Machine, MachineError> {
+        let mut m = Machine::vmc_xyfz(100.0).to_spec();
+        m.axes.get_mut(axis).expect("axis").period_mm = p;
+        Machine::from_spec(m)
+    }
+
+    #[test]
+    fn a_screw_lead_is_a_positive_length() {
+        assert_eq!(
+            with_period(Some(12.0), "X").unwrap().specs[&Axis::X].period_mm,
+            Some(12.0)
+        );
+        assert!(matches!(
+            with_period(Some(0.0), "Y"),
+            Err(MachineError::Period(..))
+        ));
+        assert!(matches!(
+            with_period(Some(f64::NAN), "Z"),
+            Err(MachineError::Period(..))
+        ));
+        // absent: not written back out (files without it stay byte for byte)
+        let spec = Machine::vmc_xyfz(100.0).to_spec();
+        assert!(spec.axes.values().all(|a| a.period_mm.is_none()));
+    }
+}
