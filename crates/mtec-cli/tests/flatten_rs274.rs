@@ -10,6 +10,8 @@
 //!
 //! Without rs274 the tests print a note and pass, unless `CI` is set: then they fail.
 
+mod support;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -27,18 +29,7 @@ fn text(o: &Output) -> String {
 
 /// rs274 on PATH; `None` (with a note) when absent and not in CI.
 fn rs274() -> Option<PathBuf> {
-    let path = std::env::var_os("PATH").unwrap_or_default();
-    let found = std::env::split_paths(&path)
-        .map(|d| d.join("rs274"))
-        .find(|p| p.is_file());
-    if found.is_none() {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "rs274 (LinuxCNC, package linuxcnc-uspace) is required in CI"
-        );
-        eprintln!("note: rs274 not installed (package linuxcnc-uspace): flattening not checked");
-    }
-    found
+    support::tool_on_path(&["rs274"], "linuxcnc-uspace", "flattening not checked")
 }
 
 fn data_dir() -> PathBuf {

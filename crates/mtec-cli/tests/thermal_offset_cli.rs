@@ -3,6 +3,8 @@
 //! with LinuxCNC's own interpreter, the exp-ambient line against its equation, the envelope
 //! rule, the bound, the history rule and refusals (exit 2, file:line:col).
 
+mod support;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -193,18 +195,11 @@ fn exp_ambient_offset_depends_on_where_it_is_used() {
 }
 
 fn rs274() -> Option<PathBuf> {
-    let path = std::env::var_os("PATH").unwrap_or_default();
-    let found = std::env::split_paths(&path)
-        .map(|d| d.join("rs274"))
-        .find(|p| p.is_file());
-    if found.is_none() {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "rs274 (LinuxCNC, package linuxcnc-uspace) is required in CI"
-        );
-        eprintln!("note: rs274 not installed: the G10 output is not checked by LinuxCNC");
-    }
-    found
+    support::tool_on_path(
+        &["rs274"],
+        "linuxcnc-uspace",
+        "the G10 output is not checked by LinuxCNC",
+    )
 }
 
 /// Machine Z of each STRAIGHT_TRAVERSE (canonical Z + the G5x Z offset in force, as rs274

@@ -338,6 +338,28 @@ impl ErrorModel for MachineErrorModel {
         e
     }
 
+    /// The geometric part's batch (a grid map's fast one) plus the thermal drift per point: the
+    /// same arithmetic as [`ErrorModel::error_um`], point by point.
+    fn eval_batch(&self, points: &[[f64; 3]], out: &mut [[f64; 3]]) {
+        assert_eq!(
+            points.len(),
+            out.len(),
+            "eval_batch: as many outputs as points"
+        );
+        match &self.geometric {
+            Some(g) => g.eval_batch(points, out),
+            None => out.fill([0.0; 3]),
+        }
+        if self.weight > 0.0 {
+            for (e, p) in out.iter_mut().zip(points) {
+                let t = self.thermal_um(*p);
+                for k in 0..3 {
+                    e[k] += self.weight * t[k];
+                }
+            }
+        }
+    }
+
     /// The geometric part's error at the pose plus the thermal drift, turned into the
     /// workpiece frame: a drift d along the machine axes moves the tool like a command change
     /// of d, so it reaches the workpiece frame through the chain's linear Jacobian J(θ)·d

@@ -496,15 +496,141 @@ impl GridMap {
     /// Trilinear interpolation of the error at `p_mm`, following the outside-grid policy.
     #[inline]
     pub fn try_error_um(&self, p_mm: [f64; 3]) -> Result<[f64; 3], OutsideGrid> {
-        let (i0, di, tx) = self.locate(0, p_mm)?;
-        let (j0, dj, ty) = self.locate(1, p_mm)?;
-        let (k0, dk, tz) = self.locate(2, p_mm)?;
+        let lookup = self.lookup();
+        match lookup.eval(&self.values_um, p_mm) {
+            Some(e) => Ok(e),
+            None => Err(self.outside_error(p_mm)),
+        }
+    }
+
+    /// Trilinear interpolation at many points at once: `out[i]` is
+    /// [`ErrorModel::error_um`](crate::ErrorModel::error_um) of `points[i]`, bit for bit (NaN
+    /// outside the grid when the policy is `refuse`). No allocation; the per-map constants (axis
+    /// ranges, steps, strides, the policy) are read once per call instead of once per point.
+    ///
+    /// Panics when `out` and `points` differ in length.
+    pub fn eval_batch(&self, points: &[[f64; 3]], out: &mut [[f64; 3]]) {
+        assert_eq!(
+            points.len(),
+            out.len(),
+            "eval_batch: as many outputs as points"
+        );
+        let lookup = self.lookup();
+        let v = self.values_um.as_slice();
+        for (o, p) in out.iter_mut().zip(points) {
+            *o = lookup.eval(v, *p).unwrap_or([f64::NAN; 3]);
+        }
+    }
+
+    /// The error of a point the policy refuses, naming the first axis outside.
+    #[cold]
+    fn outside_error(&self, p_mm: [f64; 3]) -> OutsideGrid {
+        let a = (0..3)
+            .find(|&a| {
+                let ax = &self.axes_mm[a];
+                ax.len() > 1
+                    && !(p_mm[a] >= ax[0] - INSIDE_SLACK_MM
+                        && p_mm[a] <= ax[ax.len() - 1] + INSIDE_SLACK_MM)
+            })
+            .unwrap_or(0);
+        let ax = &self.axes_mm[a];
+        OutsideGrid {
+            p_mm,
+            axis: AXIS_NAMES[a],
+            min_mm: ax[0],
+            max_mm: ax[ax.len() - 1],
+        }
+    }
+
+    /// The per-map constants of a lookup.
+    #[inline]
+    fn lookup(&self) -> Lookup<'_> {
         let ny = self.axes_mm[1].len();
         let nz = self.axes_mm[2].len();
+        let axis = |a: usize, stride: usize| {
+            let ax = self.axes_mm[a].as_slice();
+            AxisLookup {
+                ax,
+                lo: ax[0],
+                hi: ax[ax.len() - 1],
+                inv_step: self.inv_step[a],
+                last_cell: ax.len().saturating_sub(2),
+                stride: if ax.len() > 1 { stride } else { 0 },
+            }
+        };
+        Lookup {
+            axes: [axis(0, ny * nz), axis(1, nz), axis(2, 1)],
+            outside: self.outside,
+        }
+    }
+}
+
+/// One axis of a [`Lookup`]: the grid values, their range, 1 / step when equally spaced (else
+/// 0), the last cell, the index stride of one step (0 for a single-value axis).
+#[derive(Clone, Copy)]
+struct AxisLookup<'a> {
+    ax: &'a [f64],
+    lo: f64,
+    hi: f64,
+    inv_step: f64,
+    last_cell: usize,
+    stride: usize,
+}
+
+impl AxisLookup<'_> {
+    /// Lower node index of the cell holding `x` and the fraction of the way to the upper node;
+    /// `None` when the policy refuses `x`. A single-value axis: (0, 0.0) for any x.
+    #[inline(always)]
+    fn locate(&self, x: f64, outside: Outside) -> Option<(usize, f64)> {
+        if self.stride == 0 {
+            return Some((0, 0.0));
+        }
+        let (lo, hi) = (self.lo, self.hi);
+        let mut x = x;
+        if x < lo || x > hi {
+            let slack = x >= lo - INSIDE_SLACK_MM && x <= hi + INSIDE_SLACK_MM;
+            match outside {
+                _ if slack => x = x.clamp(lo, hi),
+                Outside::Clamp => x = x.clamp(lo, hi),
+                Outside::Extrapolate => {}
+                Outside::Refuse => return None,
+            }
+        }
+        // lower node of the cell: last grid value ≤ x, kept within 0..n−2 (direct for equal
+        // spacing, binary search otherwise). `as usize` truncates, which for the non-negative
+        // (or NaN → 0) value after `max(0.0)` is the floor, without a call to libm's floor.
+        let i = if self.inv_step > 0.0 {
+            (((x - lo) * self.inv_step).max(0.0) as usize).min(self.last_cell)
+        } else {
+            self.ax
+                .partition_point(|&v| v <= x)
+                .saturating_sub(1)
+                .min(self.last_cell)
+        };
+        let frac = (x - self.ax[i]) / (self.ax[i + 1] - self.ax[i]);
+        Some((i, frac))
+    }
+}
+
+/// What one trilinear evaluation needs of a map, gathered once per call of
+/// [`GridMap::try_error_um`] or per batch of [`GridMap::eval_batch`] (both go through
+/// [`Lookup::eval`], so they agree bit for bit).
+struct Lookup<'a> {
+    axes: [AxisLookup<'a>; 3],
+    outside: Outside,
+}
+
+impl Lookup<'_> {
+    /// The interpolated error at `p`, `None` when the policy refuses it.
+    #[inline(always)]
+    fn eval(&self, v: &[[f64; 3]], p: [f64; 3]) -> Option<[f64; 3]> {
+        let [ax, ay, az] = &self.axes;
+        let (i0, tx) = ax.locate(p[0], self.outside)?;
+        let (j0, ty) = ay.locate(p[1], self.outside)?;
+        let (k0, tz) = az.locate(p[2], self.outside)?;
         // the 8 corners of the cell: base index and the strides of a step in x, y, z
-        let base = (i0 * ny + j0) * nz + k0;
-        let (sx, sy, sz) = (di * ny * nz, dj * nz, dk);
-        let v = &self.values_um;
+        let base = i0 * ax.stride + j0 * ay.stride + k0;
+        let (sx, sy, sz) = (ax.stride, ay.stride, az.stride);
         let c = [
             v[base],
             v[base + sz],
@@ -534,44 +660,7 @@ impl GridMap {
             out[1] += wk * ck[1];
             out[2] += wk * ck[2];
         }
-        Ok(out)
-    }
-
-    /// Cell (lower node, 1 or 0 nodes to the upper one) and fraction along axis `a`.
-    #[inline]
-    fn locate(&self, a: usize, p: [f64; 3]) -> Result<(usize, usize, f64), OutsideGrid> {
-        let ax = &self.axes_mm[a];
-        let n = ax.len();
-        if n == 1 {
-            return Ok((0, 0, 0.0));
-        }
-        let (lo_mm, hi_mm) = (ax[0], ax[n - 1]);
-        let mut x = p[a];
-        if x < lo_mm || x > hi_mm {
-            let slack = x >= lo_mm - INSIDE_SLACK_MM && x <= hi_mm + INSIDE_SLACK_MM;
-            match self.outside {
-                _ if slack => x = x.clamp(lo_mm, hi_mm),
-                Outside::Clamp => x = x.clamp(lo_mm, hi_mm),
-                Outside::Extrapolate => {}
-                Outside::Refuse => {
-                    return Err(OutsideGrid {
-                        p_mm: p,
-                        axis: AXIS_NAMES[a],
-                        min_mm: lo_mm,
-                        max_mm: hi_mm,
-                    })
-                }
-            }
-        }
-        // lower node of the cell: last grid value ≤ x, kept within 0..n−2 (direct for equal
-        // spacing, binary search otherwise)
-        let i = if self.inv_step[a] > 0.0 {
-            (((x - lo_mm) * self.inv_step[a]).floor().max(0.0) as usize).min(n - 2)
-        } else {
-            ax.partition_point(|&v| v <= x).saturating_sub(1).min(n - 2)
-        };
-        let frac = (x - ax[i]) / (ax[i + 1] - ax[i]);
-        Ok((i, 1, frac))
+        Some(out)
     }
 }
 
@@ -628,6 +717,91 @@ mod tests {
         assert!(affine_map(Outside::Refuse)
             .try_error_um([30.0, 5.0, 1.0])
             .is_ok());
+    }
+
+    /// The batch gives what the per-point path gives, bit for bit (so also within 1e-12): on
+    /// nodes, on cell borders, inside cells, just outside (within the slack), far outside
+    /// under each policy, on equally and unequally spaced axes and a single-value axis.
+    #[test]
+    fn batch_equals_per_point_evaluation() {
+        let nonuniform = affine_map(Outside::Clamp); // x: 0, 10, 30 (unequal)
+        let uniform = {
+            let axes = [
+                vec![0.0, 25.0, 50.0, 75.0],
+                vec![-10.0, 0.0, 10.0],
+                vec![0.0, 0.5],
+            ];
+            let values = (0..4 * 3 * 2)
+                .map(|i| {
+                    let f = i as f64;
+                    [(f * 0.37).sin(), (f * 0.11).cos() * 3.0, f * f * 1e-3 - 0.2]
+                })
+                .collect();
+            GridMap::new(axes, values, Outside::Clamp, "").unwrap()
+        };
+        let planar = GridMap::new(
+            [vec![0.0, 1.0], vec![0.0, 1.0], vec![50.0]],
+            vec![[0.0; 3], [1.0; 3], [2.0; 3], [3.0; 3]],
+            Outside::Clamp,
+            "",
+        )
+        .unwrap();
+        for map in [nonuniform, uniform, planar] {
+            // every node, every mid-cell and border value per axis, and points outside
+            let mut values: [Vec<f64>; 3] = Default::default();
+            for (v, ax) in values.iter_mut().zip(map.axes_mm()) {
+                let (lo, hi) = (ax[0], ax[ax.len() - 1]);
+                v.extend(ax.iter().copied());
+                v.extend(ax.windows(2).map(|w| 0.5 * (w[0] + w[1])));
+                v.extend(ax.windows(2).map(|w| w[1] - 1e-13 * (w[1] - w[0])));
+                v.extend([lo - 5e-10, hi + 5e-10, lo - 1e-8, hi + 1e-8]);
+                v.extend([lo - 17.0, hi + 3.25, -1e6, 1e6]);
+            }
+            let mut points = Vec::new();
+            for &x in &values[0] {
+                for &y in &values[1] {
+                    for &z in &values[2] {
+                        points.push([x, y, z]);
+                    }
+                }
+            }
+            for outside in [Outside::Clamp, Outside::Extrapolate, Outside::Refuse] {
+                let m = map.clone().with_outside(outside);
+                let mut batch = vec![[0.0; 3]; points.len()];
+                m.eval_batch(&points, &mut batch);
+                let mut through_trait = vec![[0.0; 3]; points.len()];
+                ErrorModel::eval_batch(&m, &points, &mut through_trait);
+                let mut refused = 0;
+                for ((p, b), t) in points.iter().zip(&batch).zip(&through_trait) {
+                    let one = m.error_um(*p);
+                    let same = |a: &[f64; 3]| {
+                        a.iter()
+                            .zip(one)
+                            .all(|(u, v)| u.to_bits() == v.to_bits() || (u.is_nan() && v.is_nan()))
+                    };
+                    assert!(same(b) && same(t), "{outside:?} at {p:?}: {b:?} vs {one:?}");
+                    match m.try_error_um(*p) {
+                        Ok(e) => assert_eq!(e.map(f64::to_bits), one.map(f64::to_bits)),
+                        Err(_) => {
+                            assert!(one.iter().all(|v| v.is_nan()));
+                            refused += 1;
+                        }
+                    }
+                }
+                // only `refuse` refuses, and it does refuse the far points
+                assert_eq!(refused > 0, outside == Outside::Refuse, "{outside:?}");
+            }
+        }
+    }
+
+    /// The refusal names the first axis outside (x before y before z), as before the batch.
+    #[test]
+    fn refusal_names_the_first_axis_outside() {
+        let m = affine_map(Outside::Refuse);
+        assert_eq!(m.try_error_um([5.0, 9.0, 7.0]).unwrap_err().axis, "y_mm");
+        assert_eq!(m.try_error_um([5.0, 2.0, 7.0]).unwrap_err().axis, "z_mm");
+        let e = m.try_error_um([-1.0, 9.0, 7.0]).unwrap_err();
+        assert_eq!((e.axis, e.min_mm, e.max_mm), ("x_mm", 0.0, 30.0));
     }
 
     #[test]

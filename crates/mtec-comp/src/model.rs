@@ -64,6 +64,23 @@ pub trait ErrorModel: Send + Sync {
     /// Volumetric error [Ex, Ey, Ez] in µm at the commanded position `p_mm` [x, y, z] in mm
     /// (any rotary axes at 0°).
     fn error_um(&self, p_mm: [f64; 3]) -> [f64; 3];
+    /// [`ErrorModel::error_um`] at many points in one call: `out[i]` is the error at
+    /// `points[i]`, equal to `error_um(points[i])` (a model may reorder its arithmetic only
+    /// within 1e-12 relative; the grid map's batch is bit-identical). The batch form is for
+    /// callers with many points at hand (`mtec map eval`, the Python module): a model can read
+    /// its constants once per call and keep its loop free of dispatch. The default is the loop.
+    ///
+    /// Panics when `out` and `points` differ in length. Must not allocate.
+    fn eval_batch(&self, points: &[[f64; 3]], out: &mut [[f64; 3]]) {
+        assert_eq!(
+            points.len(),
+            out.len(),
+            "eval_batch: as many outputs as points"
+        );
+        for (o, p) in out.iter_mut().zip(points) {
+            *o = self.error_um(*p);
+        }
+    }
     /// The error at a pose of every axis, in the workpiece frame (see [`crate::pose`]). Must
     /// not allocate.
     fn pose_error(&self, pose: &Pose) -> PoseError {
@@ -122,6 +139,10 @@ impl ErrorModel for GridMap {
     /// The interpolated error; NaN outside the grid when the policy is `refuse`.
     fn error_um(&self, p_mm: [f64; 3]) -> [f64; 3] {
         self.try_error_um(p_mm).unwrap_or([f64::NAN; 3])
+    }
+
+    fn eval_batch(&self, points: &[[f64; 3]], out: &mut [[f64; 3]]) {
+        GridMap::eval_batch(self, points, out)
     }
 
     fn as_grid(&self) -> Option<&GridMap> {

@@ -233,30 +233,38 @@ fn summarise(s: &[ReplaySample], state_rows: usize) -> ReplaySummary {
 /// The samples as CSV: `time_min,probe,x_mm,y_mm,z_mm,ex_um,ey_um,ez_um,cx_um,cy_um,cz_um,
 /// ex_after_um,ey_after_um,ez_after_um,thermal_weight,outside`.
 pub fn to_csv(samples: &[ReplaySample], provenance: &str) -> String {
-    let mut out = format!(
-        "# mtec machine replay: {}\ntime_min,probe,x_mm,y_mm,z_mm,ex_um,ey_um,ez_um,cx_um,cy_um,cz_um,ex_after_um,ey_after_um,ez_after_um,thermal_weight,outside\n",
-        provenance.replace('\n', " ")
+    let mut w = mtec_io::CsvWriter::commented(
+        [format!("mtec machine replay: {provenance}")],
+        [
+            "time_min",
+            "probe",
+            "x_mm",
+            "y_mm",
+            "z_mm",
+            "ex_um",
+            "ey_um",
+            "ez_um",
+            "cx_um",
+            "cy_um",
+            "cz_um",
+            "ex_after_um",
+            "ey_after_um",
+            "ez_after_um",
+            "thermal_weight",
+            "outside",
+        ],
     );
     for r in samples {
-        out.push_str(&format!(
-            "{},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{}\n",
-            r.time_min,
-            r.probe,
-            r.position_mm[0],
-            r.position_mm[1],
-            r.position_mm[2],
-            r.before_um[0],
-            r.before_um[1],
-            r.before_um[2],
-            r.correction_um[0],
-            r.correction_um[1],
-            r.correction_um[2],
-            r.after_um[0],
-            r.after_um[1],
-            r.after_um[2],
-            r.thermal_weight,
-            r.outside.as_deref().unwrap_or("")
-        ));
+        let mut row = vec![r.time_min.to_string(), r.probe.to_string()];
+        row.extend(r.position_mm.iter().map(|v| v.to_string()));
+        let um = r
+            .before_um
+            .iter()
+            .chain(&r.correction_um)
+            .chain(&r.after_um);
+        row.extend(um.chain([&r.thermal_weight]).map(|v| format!("{v:.4}")));
+        row.push(r.outside.clone().unwrap_or_default());
+        w.row(row);
     }
-    out
+    w.finish()
 }

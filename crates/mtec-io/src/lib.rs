@@ -2,7 +2,8 @@
 //!
 //! What it is for: reading CSV tables (with `#` comments, unit-suffixed column names), TOML and
 //! JSON documents into typed values, with every failure reported as an [`InputError`] that names
-//! the file, the line and the column; writing every output through one routine (a file
+//! the file, the line and the column; building every CSV output with the `csv` crate
+//! ([`CsvWriter`]); writing every output through one routine (a file
 //! atomically by temporary file + rename, a device, FIFO or `-` straight through, a symlink's
 //! target beside that target) and refusing to overwrite an input.
 //!
@@ -10,13 +11,16 @@
 //! values must satisfy is decided by the crate that owns the measurement (`mtec-measure`,
 //! `mtec-thermal`, ...), using the typed accessors of [`Table`].
 
+mod csv_writer;
 mod error;
 mod fields;
 pub mod notes;
+pub mod number;
 mod stream;
 mod table;
 mod write;
 
+pub use csv_writer::CsvWriter;
 pub use error::{InputError, Located};
 pub use stream::{CsvReader, Row, MAX_RECORD_BYTES};
 pub use table::{Table, TableRow};

@@ -163,24 +163,22 @@ impl ThermalDataset {
     /// Every row as CSV `experiment,sequence,step,<features>,<targets>` (sequence and step
     /// counted from 0): the exchange format of `bench/cnn_lstm.sh` with its PyTorch peer.
     pub fn to_csv(&self) -> String {
-        use std::fmt::Write as _;
-        let mut s = format!(
-            "experiment,sequence,step,{},{}\n",
-            self.feature_names.join(","),
-            self.target_names.join(",")
-        );
+        let header = ["experiment", "sequence", "step"]
+            .iter()
+            .map(|s| s.to_string())
+            .chain(self.feature_names.iter().cloned())
+            .chain(self.target_names.iter().cloned());
+        let mut w = mtec_io::CsvWriter::new(header);
         for e in &self.experiments {
             for (k, seq) in e.sequences.iter().enumerate() {
                 for t in 0..seq.len() {
-                    let _ = write!(s, "{},{k},{t}", e.id);
-                    for v in seq.features[t].iter().chain(&seq.targets[t]) {
-                        let _ = write!(s, ",{v}");
-                    }
-                    s.push('\n');
+                    let ids = [e.id.to_string(), k.to_string(), t.to_string()];
+                    let values = seq.features[t].iter().chain(&seq.targets[t]);
+                    w.row(ids.into_iter().chain(values.map(|v| v.to_string())));
                 }
             }
         }
-        s
+        w.finish()
     }
 
     /// Scored rows flattened (features at time t → targets at t): the BPNN baseline's data.

@@ -5,11 +5,14 @@
 //! What it is not for: computing results; every number it shows is handed to it.
 
 pub mod html;
+pub mod legend;
 pub mod plot;
 pub mod ridge_trace;
 pub mod rotary;
 
-pub use html::{Report, Section};
-pub use plot::{bar_chart, line_chart, scatter_chart, Band, Series};
+pub use html::{KeyFigure, Report, Section, Verdict};
+pub use plot::{
+    bar_chart, bar_chart_with_errors, line_chart, quiver_chart, scatter_chart, Arrow, Band, Series,
+};
 
 pub mod polar;

@@ -8,6 +8,7 @@
 //! outward deviations therefore stay readable and the centre of the plot is not the machine's
 //! circle centre but the reference circle's (as on every ballbar plot).
 
+use crate::legend::{self, Entry, Swatch};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -120,7 +121,19 @@ pub fn polar_svg(traces: &[PolarTrace], opts: &PolarOptions) -> Result<String, P
 
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (opts.width, opts.height)).into_drawing_area();
+        let entries: Vec<Entry> = traces
+            .iter()
+            .map(|t| {
+                Entry::new(
+                    t.label,
+                    RGBColor(t.color.0, t.color.1, t.color.2),
+                    Swatch::Line,
+                )
+            })
+            .collect();
+        let lw = legend::width(&entries);
+        let root =
+            SVGBackend::with_string(&mut svg, (opts.width + lw, opts.height)).into_drawing_area();
         root.fill(&WHITE).map_err(backend)?;
         // title on top, scale note at the bottom, a square plot area between (so circles stay round)
         let (title, rest) = root.split_vertically(36);
@@ -133,6 +146,7 @@ pub fn polar_svg(traces: &[PolarTrace], opts: &PolarOptions) -> Result<String, P
                     .pos(Pos::new(HPos::Center, VPos::Top)),
             ))
             .map_err(backend)?;
+        let (body, strip) = body.split_horizontally(opts.width);
         let (w, h) = body.dim_in_pixel();
         let side = w.min(h);
         let square = body.shrink(((w - side) / 2, (h - side) / 2), (side, side));
@@ -199,17 +213,10 @@ pub fn polar_svg(traces: &[PolarTrace], opts: &PolarOptions) -> Result<String, P
                     pts,
                     ShapeStyle::from(&color).stroke_width(2),
                 ))
-                .map_err(backend)?
-                .label(tr.label)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+                .map_err(backend)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(backend)?;
+        // the legend beside the square plot, never over the traces
+        legend::draw(&strip, &entries, 20);
         footer
             .draw(&Text::new(
                 format!("scale {div} um/div; reference circle = least-squares circle"),

@@ -2,6 +2,7 @@
 //! against k on a log axis, with the chosen k marked (Hoerl & Kennard 1970, the trace of
 //! `mtec_thermal::select::RidgeTrace`).
 
+use crate::legend::{self, Entry, Swatch};
 use plotters::prelude::*;
 
 /// A ridge trace as plain numbers: `coefficients[i][j]` is sensor j's standardised coefficient
@@ -16,8 +17,21 @@ pub struct RidgeTrace<'a> {
 pub fn ridge_trace_svg(trace: &RidgeTrace, chosen_k: f64) -> Result<String, String> {
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (900, 560)).into_drawing_area();
+        let mut entries: Vec<Entry> = trace
+            .sensors
+            .iter()
+            .enumerate()
+            .map(|(j, name)| Entry::new(name.clone(), Palette99::pick(j), Swatch::Line))
+            .collect();
+        entries.push(Entry::new(
+            format!("chosen k = {chosen_k:.4}"),
+            BLACK,
+            Swatch::Line,
+        ));
+        let lw = legend::width(&entries);
+        let root = SVGBackend::with_string(&mut svg, (900 + lw, 560)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let (plot, strip) = root.split_horizontally(900);
         let pts: Vec<(usize, f64)> = trace
             .k
             .iter()
@@ -36,7 +50,7 @@ pub fn ridge_trace_svg(trace: &RidgeTrace, chosen_k: f64) -> Result<String, Stri
                 (l.min(*v), h.max(*v))
             });
         let pad = 0.05 * (hi - lo).max(1e-9);
-        let mut chart = ChartBuilder::on(&root)
+        let mut chart = ChartBuilder::on(&plot)
             .caption(
                 "Ridge trace (standardised coefficients)",
                 ("sans-serif", 20),
@@ -49,38 +63,28 @@ pub fn ridge_trace_svg(trace: &RidgeTrace, chosen_k: f64) -> Result<String, Stri
             .map_err(|e| e.to_string())?;
         chart
             .configure_mesh()
-            .x_desc("k")
+            .x_desc("ridge parameter k")
             .y_desc("standardised coefficient")
+            .label_style(("sans-serif", 13))
+            .axis_desc_style(("sans-serif", 14))
             .draw()
             .map_err(|e| e.to_string())?;
-        for (j, name) in trace.sensors.iter().enumerate() {
+        for j in 0..trace.sensors.len() {
             let color = Palette99::pick(j).to_rgba();
             chart
                 .draw_series(LineSeries::new(
                     pts.iter().map(|(i, k)| (*k, trace.coefficients[*i][j])),
                     color.stroke_width(2),
                 ))
-                .map_err(|e| e.to_string())?
-                .label(name.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                });
+                .map_err(|e| e.to_string())?;
         }
         chart
             .draw_series(LineSeries::new(
                 vec![(chosen_k, lo - pad), (chosen_k, hi + pad)],
                 BLACK.stroke_width(1),
             ))
-            .map_err(|e| e.to_string())?
-            .label(format!("chosen k = {chosen_k:.4}"))
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK));
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
             .map_err(|e| e.to_string())?;
+        legend::draw(&strip, &entries, 50);
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)

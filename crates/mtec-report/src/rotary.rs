@@ -37,7 +37,8 @@ pub fn polar_chart(title: &str, unit: &str, series: &[Series]) -> String {
         .fold(0.0, f64::max);
     let peak = if peak > 0.0 { peak } else { 1.0 };
     let r0 = 1.5 * peak;
-    let lim = r0 + peak * 1.15;
+    // the angle labels sit 0.3·peak outside the outer circle: clear of the curves they name
+    let lim = r0 + peak * 1.45;
     let to_xy = |a_deg: f64, v: f64| {
         let r = r0 + v;
         let a = a_deg.to_radians();
@@ -82,7 +83,7 @@ pub fn polar_chart(title: &str, unit: &str, series: &[Series]) -> String {
             )));
             let style = TextStyle::from(("sans-serif", 11).into_font())
                 .pos(Pos::new(HPos::Center, VPos::Center));
-            let rl = r0 + peak * 1.08;
+            let rl = r0 + peak * 1.3;
             let _ = chart.draw_series(std::iter::once(Text::new(
                 format!("{a}°"),
                 (rl * c, rl * s),

@@ -177,19 +177,27 @@ impl ErrorStatistics {
     /// The CSV text of [`Self::of_identified`]'s statistics, headed by a comment that says
     /// how they were made.
     pub fn to_identified_csv(&self) -> String {
-        format!(
-            "# statistics of each identified error function over its axis travel (mean, population std of {IDENTIFIED_SAMPLES} evenly spaced positions); a constant element (squareness, location) has no spread over the travel, so its std is its magnitude |value|\n{}",
-            self.to_csv()
-        )
+        self.csv_with(&[format!(
+            "statistics of each identified error function over its axis travel (mean, population std of {IDENTIFIED_SAMPLES} evenly spaced positions); a constant element (squareness, location) has no spread over the travel, so its std is its magnitude |value|"
+        )])
     }
 
     /// The CSV text of the statistics.
     pub fn to_csv(&self) -> String {
-        let mut s = String::from("element,mean,std,unit\n");
+        self.csv_with(&[])
+    }
+
+    fn csv_with(&self, comments: &[String]) -> String {
+        let mut w = mtec_io::CsvWriter::commented(comments, ["element", "mean", "std", "unit"]);
         for e in &self.elements {
-            s.push_str(&format!("{},{},{},{}\n", e.element, e.mean, e.std, e.unit));
+            w.row([
+                e.element.to_string(),
+                e.mean.to_string(),
+                e.std.to_string(),
+                e.unit.to_string(),
+            ]);
         }
-        s
+        w.finish()
     }
 }
 

@@ -16,11 +16,11 @@
 //! partial arc is recorded ccw from its start to its end and cw from its end to its start,
 //! both ends included.
 
+use mtec_io::CsvWriter;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use serde_json::json;
 use std::f64::consts::PI;
-use std::fmt::Write;
 
 /// The faults injected into the two axes of the plane (names follow the ballbar diagnostics).
 /// `x` is the plane's axis 1 and `y` its axis 2: X and Y in XY, Y and Z in YZ, Z and X in ZX.
@@ -342,25 +342,26 @@ pub fn simulate(
     seed: u64,
 ) -> (String, serde_json::Value) {
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
-    let mut csv = String::new();
-    let _ = writeln!(
-        csv,
-        "# ISO 230-4 circular test simulated by mtec (scenario {}, seed {seed})",
-        setup.scenario
-    );
-    let _ = writeln!(csv, "# radius_mm = {}", setup.radius_mm);
-    let _ = writeln!(csv, "# plane = {}", setup.plane);
-    let _ = writeln!(csv, "# feed_mm_min = {}", setup.feed_mm_min);
+    let mut comments = vec![
+        format!(
+            "ISO 230-4 circular test simulated by mtec (scenario {}, seed {seed})",
+            setup.scenario
+        ),
+        format!("radius_mm = {}", setup.radius_mm),
+        format!("plane = {}", setup.plane),
+        format!("feed_mm_min = {}", setup.feed_mm_min),
+    ];
     if let Some([a, b]) = setup.arc_deg {
-        let _ = writeln!(csv, "# arc_start_deg = {a}");
-        let _ = writeln!(csv, "# arc_end_deg = {b}");
+        comments.push(format!("arc_start_deg = {a}"));
+        comments.push(format!("arc_end_deg = {b}"));
     }
-    let _ = writeln!(csv, "angle_deg,direction,dl_um");
+    let mut w = CsvWriter::commented(comments, ["angle_deg", "direction", "dl_um"]);
     for (d, name) in [(1.0, "ccw"), (-1.0, "cw")] {
         for (a, dl) in run_direction(setup, f, d, &mut rng) {
-            let _ = writeln!(csv, "{a:.4},{name},{dl:.4}");
+            w.row([format!("{a:.4}"), name.to_string(), format!("{dl:.4}")]);
         }
     }
+    let csv = w.finish();
     let [a1, a2] = setup.axes();
     let mut diagnostics = serde_json::Map::new();
     let mut put = |k: String, v: f64| {

@@ -36,6 +36,7 @@
 
 use crate::output::{OutputFile, ScenarioOutput, SimError};
 use crate::thermal_network::{AmbientProfile, Body, DutyCycle, HeatSource, Link, ThermalNetwork};
+use mtec_io::CsvWriter;
 use mtec_model::Htm;
 use nalgebra::Vector3;
 use rand::rngs::StdRng;
@@ -43,6 +44,9 @@ use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 use std::f64::consts::PI;
 use std::fmt::Write;
+
+/// The columns of `dbb.csv`.
+const DBB_HEADER: [&str; 5] = ["experiment", "time_min", "mode", "angle_deg", "dl_um"];
 
 /// Speeds of the four experiments (rpm).
 pub const SPEEDS_RPM: [f64; 4] = [10.0, 20.0, 30.0, 40.0];
@@ -260,12 +264,14 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
     let n_angles = (360.0 / ANGLE_STEP_DEG).round() as usize;
     let angles: Vec<f64> = (0..n_angles).map(|i| i as f64 * ANGLE_STEP_DEG).collect();
 
-    let mut dbb = String::from("experiment,time_min,mode,angle_deg,dl_um\n");
-    let mut temps = String::from("experiment,time_min");
-    for k in 1..=9 {
-        write!(temps, ",T{k}_c").ok();
-    }
-    temps.push('\n');
+    let mut dbb = CsvWriter::new(DBB_HEADER);
+    let sensor_columns = (1..=9).map(|k| format!("T{k}_c"));
+    let mut temps = CsvWriter::new(
+        ["experiment", "time_min"]
+            .map(String::from)
+            .into_iter()
+            .chain(sensor_columns),
+    );
     let names = [
         "EXC_um", "EYC_um", "EZC_um", "EAC_urad", "EBC_urad", "ECC_urad",
     ];
@@ -289,12 +295,12 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
             let tb = &hist.temps_c[ti];
             let amb = hist.ambient_c[ti];
             body_rows.push(serde_json::json!({"time_min": time, "motor_c": tb[0], "bearing_c": tb[1], "axis_housing_c": tb[2], "table_c": tb[3], "bed_c": tb[4], "ambient_c": amb}));
-            write!(temps, "{exp},{time}").ok();
+            let mut row = vec![exp.to_string(), time.to_string()];
             for w in SENSORS {
                 let v: f64 = (0..5).map(|i| w[i] * tb[i]).sum::<f64>() + w[5] * amb;
-                write!(temps, ",{:.3}", v + tnoise.sample(&mut rng)).ok();
+                row.push(format!("{:.3}", v + tnoise.sample(&mut rng)));
             }
-            temps.push('\n');
+            temps.row(row);
             let (db, dt, dm) = (tb[1] - start[1], tb[3] - start[3], tb[0] - start[0]);
             // The spindle head holding the tool cup drifts with the bed/column (µm/°C).
             let head_drift_mm = Vector3::new(0.3, -0.2, -1.2) * (tb[4] - start[4]) * 1e-3;
@@ -325,7 +331,13 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
                         &motions[ai],
                     ) + zero_um
                         + noise.sample(&mut rng);
-                    writeln!(dbb, "{exp},{time},{id},{c},{dl:.4}").ok();
+                    dbb.row([
+                        exp.to_string(),
+                        time.to_string(),
+                        id.to_string(),
+                        c.to_string(),
+                        format!("{dl:.4}"),
+                    ]);
                 }
             }
         }
@@ -379,11 +391,11 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
             },
             OutputFile {
                 name: "dbb.csv".into(),
-                contents: dbb,
+                contents: dbb.finish(),
             },
             OutputFile {
                 name: "temps.csv".into(),
-                contents: temps,
+                contents: temps.finish(),
             },
         ],
         truth,
@@ -449,7 +461,7 @@ pub fn five_axis_calibration(seed: u64) -> Result<FiveAxisCalibration, SimError>
     let noise = Normal::new(0.0, BALLBAR_NOISE_UM).map_err(|e| SimError::Invalid(e.to_string()))?;
     let n_angles = (360.0 / ANGLE_STEP_DEG).round() as usize;
     let modes = supplement_modes();
-    let mut dbb = String::from("experiment,time_min,mode,angle_deg,dl_um\n");
+    let mut dbb = CsvWriter::new(DBB_HEADER);
     for (id, pw, pt) in &modes {
         let ew_mm = ball_offset_mm(&mut rng);
         let et_mm = ball_offset_mm(&mut rng);
@@ -460,7 +472,13 @@ pub fn five_axis_calibration(seed: u64) -> Result<FiveAxisCalibration, SimError>
             let dl = exact_reading_um(Vector3::from(*pw), Vector3::from(*pt), ew_mm, et_mm, c, &e)
                 + zero_um
                 + noise.sample(&mut rng);
-            writeln!(dbb, "1,0,{id},{c},{dl:.4}").ok();
+            dbb.row([
+                "1".into(),
+                "0".into(),
+                id.to_string(),
+                c.to_string(),
+                format!("{dl:.4}"),
+            ]);
         }
     }
     // rotary positioning: the instrument's own error, then the runs
@@ -498,7 +516,7 @@ pub fn five_axis_calibration(seed: u64) -> Result<FiveAxisCalibration, SimError>
     let down = runs(&mut rng);
     Ok(FiveAxisCalibration {
         modes,
-        dbb_csv: dbb,
+        dbb_csv: dbb.finish(),
         positioning_targets_deg: targets,
         positioning_up_urad: up,
         positioning_down_urad: down,

@@ -19,6 +19,7 @@
 
 use crate::output::{OutputFile, ScenarioOutput, SimError};
 use crate::thermal_network::{AmbientProfile, Body, DutyCycle, HeatSource, Link, ThermalNetwork};
+use mtec_io::CsvWriter;
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -84,10 +85,20 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
     let mut rng = StdRng::seed_from_u64(seed);
     let temp_noise = Normal::new(0.0, 0.02).map_err(|e| SimError::Invalid(e.to_string()))?;
     let laser_noise = Normal::new(0.0, 0.3).map_err(|e| SimError::Invalid(e.to_string()))?;
-    let mut csv = String::from(
-        "# feed-axis-ambient: Z-axis thermal error at four ambient temperatures (mtec-sim)\n",
+    let mut csv = CsvWriter::commented(
+        ["feed-axis-ambient: Z-axis thermal error at four ambient temperatures (mtec-sim)"],
+        [
+            "experiment",
+            "time_min",
+            "up_c",
+            "nut_c",
+            "motor_c",
+            "column_c",
+            "ambient_c",
+            "position_mm",
+            "ez_um",
+        ],
     );
-    csv.push_str("experiment,time_min,up_c,nut_c,motor_c,column_c,ambient_c,position_mm,ez_um\n");
     let mut runs = Vec::new();
     for (e, &amb) in AMBIENT_LEVELS_C.iter().enumerate() {
         let net = network(amb);
@@ -117,14 +128,12 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
                 let x = 50.0 * p as f64;
                 let d = error_um(x, &rise);
                 truth_rows.push([*t, x, d]);
-                csv.push_str(&format!("{},{t:.1}", e + 1));
-                for s in &sensors {
-                    csv.push_str(&format!(",{s:.3}"));
-                }
-                csv.push_str(&format!(
-                    ",{amb_read:.3},{x:.1},{:.3}\n",
-                    d + laser_noise.sample(&mut rng)
-                ));
+                let mut row = vec![(e + 1).to_string(), format!("{t:.1}")];
+                row.extend(sensors.iter().map(|s| format!("{s:.3}")));
+                row.push(format!("{amb_read:.3}"));
+                row.push(format!("{x:.1}"));
+                row.push(format!("{:.3}", d + laser_noise.sample(&mut rng)));
+                csv.row(row);
             }
         }
         runs.push(serde_json::json!({
@@ -137,7 +146,7 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
     Ok(ScenarioOutput {
         files: vec![OutputFile {
             name: "thermal.csv".into(),
-            contents: csv,
+            contents: csv.finish(),
         }],
         truth: serde_json::json!({
             "scenario": "feed-axis-ambient",

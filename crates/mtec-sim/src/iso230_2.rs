@@ -7,10 +7,10 @@
 //! screw and a slight bow), lost motion b (the table stops short of each target by b/2 in the
 //! direction of approach), a slow run-to-run drift, and interferometer noise.
 
+use mtec_io::CsvWriter;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use serde_json::json;
-use std::fmt::Write;
 
 /// The simulated axis and measurement.
 #[derive(Debug, Clone, PartialEq)]
@@ -79,26 +79,34 @@ pub fn simulate(axis: &PositioningAxis, seed: u64) -> (String, serde_json::Value
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
     let noise = Normal::new(0.0, axis.noise_um).expect("finite noise");
     let targets = targets_mm(axis.travel_mm);
-    let mut csv = String::new();
-    let _ = writeln!(
-        csv,
-        "# ISO 230-2 positioning runs of axis X simulated by mtec (scenario iso230-2, seed {seed})"
+    let mut w = CsvWriter::commented(
+        [
+            format!("ISO 230-2 positioning runs of axis X simulated by mtec (scenario iso230-2, seed {seed})"),
+            "linear cycle: each run goes up through all targets, then down".to_string(),
+        ],
+        ["target_mm", "run", "direction", "deviation_um"],
     );
-    let _ = writeln!(
-        csv,
-        "# linear cycle: each run goes up through all targets, then down"
-    );
-    let _ = writeln!(csv, "target_mm,run,direction,deviation_um");
     for run in 1..=axis.runs {
         for &t in &targets {
             let v = axis.deviation_um(t, true) + noise.sample(&mut rng);
-            let _ = writeln!(csv, "{t},{run},+,{v:.4}");
+            w.row([
+                t.to_string(),
+                run.to_string(),
+                "+".into(),
+                format!("{v:.4}"),
+            ]);
         }
         for &t in targets.iter().rev() {
             let v = axis.deviation_um(t, false) + noise.sample(&mut rng);
-            let _ = writeln!(csv, "{t},{run},-,{v:.4}");
+            w.row([
+                t.to_string(),
+                run.to_string(),
+                "-".into(),
+                format!("{v:.4}"),
+            ]);
         }
     }
+    let csv = w.finish();
     let up: Vec<f64> = targets
         .iter()
         .map(|&t| axis.deviation_um(t, true))

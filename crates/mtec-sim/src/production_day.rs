@@ -49,6 +49,7 @@
 
 use crate::output::{OutputFile, ScenarioOutput, SimError};
 use crate::thermal_network::{Body, Link, ThermalHistory, ThermalNetwork};
+use mtec_io::CsvWriter;
 use nalgebra::DVector;
 use rand::rngs::StdRng;
 use rand::seq::SliceRandom;
@@ -539,22 +540,22 @@ fn day_rows(h: &ThermalHistory, d: usize) -> Vec<usize> {
         .collect()
 }
 
-fn header_inputs() -> String {
-    let names: Vec<&str> = SENSORS.iter().map(|s| s.0).collect();
-    format!(
-        "{},spindle_rpm,x_feed_mm_min,y_feed_mm_min,z_feed_mm_min",
-        names.join(",")
-    )
+/// The columns of the controller's state: the sensors, the spindle speed and the feeds.
+fn header_inputs() -> impl Iterator<Item = &'static str> {
+    let duty = [
+        "spindle_rpm",
+        "x_feed_mm_min",
+        "y_feed_mm_min",
+        "z_feed_mm_min",
+    ];
+    SENSORS.iter().map(|s| s.0).chain(duty)
 }
 
-fn push_inputs(csv: &mut String, sensors: &[f64], d: &Duty) {
-    for s in sensors {
-        csv.push_str(&format!(",{s:.2}"));
-    }
-    csv.push_str(&format!(
-        ",{:.0},{:.0},{:.0},{:.0}",
-        d.rpm, d.feed_mm_min[0], d.feed_mm_min[1], d.feed_mm_min[2]
-    ));
+/// The fields of [`header_inputs`]: temperatures to 0.01 °C, speed and feeds to units.
+fn inputs<'a>(sensors: &'a [f64], d: &Duty) -> impl Iterator<Item = String> + 'a {
+    let duty = [d.rpm, d.feed_mm_min[0], d.feed_mm_min[1], d.feed_mm_min[2]];
+    let temps = sensors.iter().map(|s| format!("{s:.2}"));
+    temps.chain(duty.map(|v| format!("{v:.0}")))
 }
 
 /// The unseen day's files: state log, probe readings, noise-free drift `[record][probe][axis]`.
@@ -574,12 +575,15 @@ fn unseen_day_files(
 ) -> Result<DayFiles, SimError> {
     let tn = Normal::new(0.0, TEMP_NOISE_C).map_err(|e| SimError::Invalid(e.to_string()))?;
     let pn = Normal::new(0.0, PROBE_NOISE_UM).map_err(|e| SimError::Invalid(e.to_string()))?;
-    let mut state = format!(
-        "# {comment}: the controller's state log (mtec-sim production-day)\ntime_min,{}\n",
-        header_inputs()
+    let mut state = CsvWriter::commented(
+        [format!(
+            "{comment}: the controller's state log (mtec-sim production-day)"
+        )],
+        std::iter::once("time_min").chain(header_inputs()),
     );
-    let mut probes = format!(
-        "# {comment}: tool-tip drift probed at five points, actual - commanded (mtec-sim production-day)\ntime_min,probe,x_mm,y_mm,z_mm,ex_um,ey_um,ez_um\n"
+    let mut probes = CsvWriter::commented(
+        [format!("{comment}: tool-tip drift probed at five points, actual - commanded (mtec-sim production-day)")],
+        ["time_min", "probe", "x_mm", "y_mm", "z_mm", "ex_um", "ey_um", "ez_um"],
     );
     let mut truth = Vec::new();
     let day0 = UNSEEN_DAY as f64 * DAY_MIN;
@@ -587,28 +591,23 @@ fn unseen_day_files(
         let tm = h.time_min[k] - day0;
         let temps = &h.temps_c[k];
         let s = read_sensors(temps, h.ambient_c[k], offsets, &tn, rng);
-        state.push_str(&format!("{tm:.0}"));
-        push_inputs(&mut state, &s, &t.plan.duty_before(h.time_min[k]));
-        state.push('\n');
+        let duty = t.plan.duty_before(h.time_min[k]);
+        state.row(std::iter::once(format!("{tm:.0}")).chain(inputs(&s, &duty)));
         let mut at = Vec::new();
         for (name, p) in PROBES {
             let e = drift_um(temps, p);
-            probes.push_str(&format!(
-                "{tm:.0},{name},{:.1},{:.1},{:.1},{:.2},{:.2},{:.2}\n",
-                p[0],
-                p[1],
-                p[2],
-                e[0] + pn.sample(rng),
-                e[1] + pn.sample(rng),
-                e[2] + pn.sample(rng)
-            ));
+            let mut row = vec![format!("{tm:.0}"), name.to_string()];
+            row.extend(p.iter().map(|v| format!("{v:.1}")));
+            // the noise of x, then y, then z
+            row.extend(e.map(|v| format!("{:.2}", v + pn.sample(rng))));
+            probes.row(row);
             at.push(e);
         }
         truth.push(at);
     }
     Ok(DayFiles {
-        state,
-        probes,
+        state: state.finish(),
+        probes: probes.finish(),
         truth,
     })
 }
@@ -668,9 +667,12 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
     let pn = Normal::new(0.0, PROBE_NOISE_UM).map_err(|e| SimError::Invalid(e.to_string()))?;
 
     // training days: one experiment each, the drift at the table-centre probe
-    let mut train = format!(
-        "# production-day (seed {seed}): {TRAINING_DAYS} training days of a VMC, drift at the table-centre probe (mtec-sim)\nexperiment,time_min,{},dx_um,dy_um,dz_um\n",
-        header_inputs()
+    let mut train = CsvWriter::commented(
+        [format!("production-day (seed {seed}): {TRAINING_DAYS} training days of a VMC, drift at the table-centre probe (mtec-sim)")],
+        ["experiment", "time_min"]
+            .into_iter()
+            .chain(header_inputs())
+            .chain(["dx_um", "dy_um", "dz_um"]),
     );
     let mut train_air = (f64::INFINITY, f64::NEG_INFINITY);
     let mut train_truth = Vec::new();
@@ -682,18 +684,14 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
             let s = read_sensors(temps, h.ambient_c[k], &offsets, &tn, &mut rng);
             train_air = (train_air.0.min(s[7]), train_air.1.max(s[7]));
             let e = drift_um(temps, PROBES[0].1);
-            train.push_str(&format!(
-                "day{},{:.0}",
-                d - FIRST_TRAINING_DAY + 1,
-                h.time_min[k] - day0
-            ));
-            push_inputs(&mut train, &s, &t.plan.duty_before(h.time_min[k]));
-            train.push_str(&format!(
-                ",{:.2},{:.2},{:.2}\n",
-                e[0] + pn.sample(&mut rng),
-                e[1] + pn.sample(&mut rng),
-                e[2] + pn.sample(&mut rng)
-            ));
+            let mut row = vec![
+                format!("day{}", d - FIRST_TRAINING_DAY + 1),
+                format!("{:.0}", h.time_min[k] - day0),
+            ];
+            row.extend(inputs(&s, &t.plan.duty_before(h.time_min[k])));
+            // the noise of x, then y, then z
+            row.extend(e.map(|v| format!("{:.2}", v + pn.sample(&mut rng))));
+            train.row(row);
             rows.push(e);
         }
         train_truth.push(rows);
@@ -736,7 +734,7 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
         .collect();
     Ok(ScenarioOutput {
         files: vec![
-            file("train.csv", train),
+            file("train.csv", train.finish()),
             file("day-state.csv", day.state),
             file("day-probes.csv", day.probes),
             file("day-hot-state.csv", hot_day.state),

@@ -18,6 +18,7 @@
 
 use crate::output::{OutputFile, ScenarioOutput, SimError};
 use crate::thermal_network::{AmbientProfile, Body, DutyCycle, HeatSource, Link, ThermalNetwork};
+use mtec_io::CsvWriter;
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -106,11 +107,22 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
             -0.6,
         ),
     ];
-    let mut csv = String::from(
-        "# spindle-sensors: radial spindle drift and 8 collinear temperature sensors (mtec-sim)\n",
-    );
-    csv.push_str(
-        "experiment,time_min,s1_c,s2_c,s3_c,s4_c,s5_c,s6_c,s7_c,s8_c,ambient_c,radial_um\n",
+    let mut csv = CsvWriter::commented(
+        ["spindle-sensors: radial spindle drift and 8 collinear temperature sensors (mtec-sim)"],
+        [
+            "experiment",
+            "time_min",
+            "s1_c",
+            "s2_c",
+            "s3_c",
+            "s4_c",
+            "s5_c",
+            "s6_c",
+            "s7_c",
+            "s8_c",
+            "ambient_c",
+            "radial_um",
+        ],
     );
     let mut truth_runs = Vec::new();
     let amb_c = &21.0;
@@ -129,16 +141,18 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
             let rise: Vec<f64> = temps.iter().zip(&init).map(|(a, b)| a - b).collect();
             let d = drift_um(&rise);
             drift.push(d);
-            csv.push_str(&format!("{id},{t:.1}"));
+            let mut row = vec![id.to_string(), format!("{t:.1}")];
             for w in SENSOR_WEIGHTS {
                 let s: f64 = w.iter().zip(temps).map(|(w, t)| w * t).sum();
-                csv.push_str(&format!(",{:.3}", s + temp_noise.sample(&mut rng)));
+                row.push(format!("{:.3}", s + temp_noise.sample(&mut rng)));
             }
-            csv.push_str(&format!(
-                ",{:.3},{:.3}\n",
-                hist.ambient_c[k] + temp_noise.sample(&mut rng),
-                d + probe_noise.sample(&mut rng)
+            // the ambient reading's noise is drawn before the probe's
+            row.push(format!(
+                "{:.3}",
+                hist.ambient_c[k] + temp_noise.sample(&mut rng)
             ));
+            row.push(format!("{:.3}", d + probe_noise.sample(&mut rng)));
+            csv.row(row);
         }
         truth_runs.push(serde_json::json!({
             "experiment": id,
@@ -151,7 +165,7 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
     Ok(ScenarioOutput {
         files: vec![OutputFile {
             name: "thermal.csv".into(),
-            contents: csv,
+            contents: csv.finish(),
         }],
         truth: serde_json::json!({
             "scenario": "spindle-sensors",

@@ -12,10 +12,10 @@ use crate::instruments::{exact_error_um, gauss, LaserInterferometer};
 use crate::output::{OutputFile, ScenarioOutput};
 use crate::realistic_truth::realistic_truth;
 use crate::truth::geometric_truth;
+use mtec_io::CsvWriter;
 use mtec_model::{line_preset, Axis, LineSpec, Machine, VolumetricModel};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
-use std::fmt::Write;
 
 /// Tool length of the scenario's measurements, mm.
 pub const TOOL_LENGTH_MM: f64 = 100.0;
@@ -32,19 +32,22 @@ pub fn measure_runs(
     seed: u64,
     runs: usize,
 ) -> (String, Vec<(String, f64)>) {
-    let mut csv = String::from("line,run,step,x_mm,y_mm,z_mm,ux,uy,uz,reading_um\n");
+    let header = LINES_HEADER[..1]
+        .iter()
+        .chain(&["run"])
+        .chain(&LINES_HEADER[1..]);
+    let mut csv = CsvWriter::new(header);
     let mut alignments = Vec::new();
     for run in 1..=runs {
-        let (one, slopes) = measure_lines(
+        let (rows, slopes) = line_rows(
             machine,
             truth,
             lines,
             laser,
             seed.wrapping_add(7919 * (run as u64 - 1)),
         );
-        for row in one.lines().skip(1) {
-            let (name, rest) = row.split_once(',').unwrap_or((row, ""));
-            let _ = writeln!(csv, "{name},{run},{rest}");
+        for [name, rest @ ..] in rows {
+            csv.row([name, run.to_string()].into_iter().chain(rest));
         }
         alignments.extend(slopes.into_iter().map(|(n, a)| {
             (
@@ -57,8 +60,21 @@ pub fn measure_runs(
             )
         }));
     }
-    (csv, alignments)
+    (csv.finish(), alignments)
 }
+
+/// The columns of one run's line readings.
+const LINES_HEADER: [&str; 9] = [
+    "line",
+    "step",
+    "x_mm",
+    "y_mm",
+    "z_mm",
+    "ux",
+    "uy",
+    "uz",
+    "reading_um",
+];
 
 /// Simulates a line design on a machine with its truth: the CSV text and the alignment slopes
 /// (µrad) given to each straightness channel.
@@ -69,9 +85,27 @@ pub fn measure_lines(
     laser: &LaserInterferometer,
     seed: u64,
 ) -> (String, Vec<(String, f64)>) {
+    let (rows, alignments) = line_rows(machine, truth, lines, laser, seed);
+    let mut csv = CsvWriter::new(LINES_HEADER);
+    for row in rows {
+        csv.row(row);
+    }
+    (csv.finish(), alignments)
+}
+
+/// The rows of [`measure_lines`] (fields formatted as written) and the alignment slopes.
+type LineRows = (Vec<[String; 9]>, Vec<(String, f64)>);
+
+fn line_rows(
+    machine: &Machine,
+    truth: &mtec_model::ErrorSet,
+    lines: &[LineSpec],
+    laser: &LaserInterferometer,
+    seed: u64,
+) -> LineRows {
     let vm = VolumetricModel::new(machine, truth);
     let mut rng = StdRng::seed_from_u64(seed ^ 0x6c61_7365);
-    let mut csv = String::from("line,step,x_mm,y_mm,z_mm,ux,uy,uz,reading_um\n");
+    let mut rows = Vec::new();
     let mut alignments = Vec::new();
     for line in lines {
         let pts = line.points();
@@ -109,15 +143,21 @@ pub fn measure_lines(
                     + u[2] * de[2]
                     + slope * 1e-3 * dist_mm
                     + gauss(&mut rng, noise);
-                let _ = writeln!(
-                    csv,
-                    "{name},{k},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{:.4}",
-                    p[0], p[1], p[2], u[0], u[1], u[2], reading
-                );
+                rows.push([
+                    name.clone(),
+                    k.to_string(),
+                    format!("{:.4}", p[0]),
+                    format!("{:.4}", p[1]),
+                    format!("{:.4}", p[2]),
+                    format!("{:.6}", u[0]),
+                    format!("{:.6}", u[1]),
+                    format!("{:.6}", u[2]),
+                    format!("{reading:.4}"),
+                ]);
             }
         }
     }
-    (csv, alignments)
+    (rows, alignments)
 }
 
 /// The scenario.

@@ -7,10 +7,10 @@
 use crate::instruments::{exact_error_um, gauss, Tracker};
 use crate::output::{OutputFile, ScenarioOutput};
 use crate::truth::geometric_truth;
+use mtec_io::CsvWriter;
 use mtec_model::{Axis, Machine, VolumetricModel};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
-use std::fmt::Write;
 
 /// Points per axis of the grid.
 pub const GRID_POINTS: usize = 11;
@@ -31,7 +31,13 @@ pub fn run(seed: u64) -> ScenarioOutput {
     let tracker = Tracker { noise_um: 0.3 };
     let mut rng = StdRng::seed_from_u64(seed ^ 0x7472_6163);
     let tr = [Axis::X, Axis::Y, Axis::Z].map(|a| machine.travel(a));
-    let mut grid = String::from("x_mm,y_mm,z_mm,ex_um,ey_um,ez_um\n");
+    let mut grid = CsvWriter::commented(
+        [format!(
+            "volumetric-grid: laser tracker, {GRID_POINTS}^3 points, noise {} um, seed {seed}",
+            tracker.noise_um
+        )],
+        ["x_mm", "y_mm", "z_mm", "ex_um", "ey_um", "ez_um"],
+    );
     let n = GRID_POINTS - 1;
     for i in 0..=n {
         for j in 0..=n {
@@ -43,17 +49,24 @@ pub fn run(seed: u64) -> ScenarioOutput {
                     .collect::<Vec<_>>();
                 let e = exact_error_um(&vm, &p);
                 let m = e.map(|v| v + gauss(&mut rng, tracker.noise_um));
-                let _ = writeln!(
-                    grid,
-                    "{:.3},{:.3},{:.3},{:.4},{:.4},{:.4}",
-                    p[0], p[1], p[2], m[0], m[1], m[2]
-                );
+                let mut row: Vec<String> = p.iter().map(|v| format!("{v:.3}")).collect();
+                row.extend(m.map(|v| format!("{v:.4}")));
+                grid.row(row);
             }
         }
     }
-    let mut diag = String::from(
-        "diagonal,x_mm,y_mm,z_mm,ex_um,ey_um,ez_um,true_ex_um,true_ey_um,true_ez_um\n",
-    );
+    let mut diag = CsvWriter::new([
+        "diagonal",
+        "x_mm",
+        "y_mm",
+        "z_mm",
+        "ex_um",
+        "ey_um",
+        "ez_um",
+        "true_ex_um",
+        "true_ey_um",
+        "true_ez_um",
+    ]);
     for (name, s, e) in DIAGONALS {
         for k in 0..=50 {
             let t = k as f64 / 50.0;
@@ -62,19 +75,27 @@ pub fn run(seed: u64) -> ScenarioOutput {
                 .collect();
             let te = exact_error_um(&vm, &p);
             let m = te.map(|v| v + gauss(&mut rng, tracker.noise_um));
-            let _ = writeln!(
-                diag,
-                "{name},{:.3},{:.3},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
-                p[0], p[1], p[2], m[0], m[1], m[2], te[0], te[1], te[2]
-            );
+            let mut row = vec![name.to_string()];
+            row.extend(p.iter().map(|v| format!("{v:.3}")));
+            row.extend(m.iter().chain(&te).map(|v| format!("{v:.4}")));
+            diag.row(row);
         }
     }
     let machine_toml = toml::to_string(&machine.to_spec()).expect("machine spec serialises");
     ScenarioOutput {
         files: vec![
-            OutputFile { name: "machine.toml".into(), contents: machine_toml },
-            OutputFile { name: "grid.csv".into(), contents: format!("# volumetric-grid: laser tracker, {GRID_POINTS}^3 points, noise {} um, seed {seed}\n{grid}", tracker.noise_um) },
-            OutputFile { name: "diagonals.csv".into(), contents: diag },
+            OutputFile {
+                name: "machine.toml".into(),
+                contents: machine_toml,
+            },
+            OutputFile {
+                name: "grid.csv".into(),
+                contents: grid.finish(),
+            },
+            OutputFile {
+                name: "diagonals.csv".into(),
+                contents: diag.finish(),
+            },
         ],
         truth: serde_json::json!({ "format": "mtec.truth/1", "scenario": "volumetric-grid", "seed": seed, "errors": truth, "tracker_noise_um": tracker.noise_um }),
     }

@@ -141,15 +141,13 @@ impl RidgeTrace {
 
     /// CSV text: `k,<sensor>…` with one row per k.
     pub fn to_csv(&self) -> String {
-        let mut s = format!("k,{}\n", self.sensors.join(","));
+        let header = std::iter::once("k").chain(self.sensors.iter().map(|s| s.as_str()));
+        let mut w = mtec_io::CsvWriter::new(header);
         for (k, row) in self.k.iter().zip(&self.coefficients) {
-            s.push_str(&format!("{k:.6e}"));
-            for v in row {
-                s.push_str(&format!(",{v:.9e}"));
-            }
-            s.push('\n');
+            let k = format!("{k:.6e}");
+            w.row(std::iter::once(k).chain(row.iter().map(|v| format!("{v:.9e}"))));
         }
-        s
+        w.finish()
     }
 }
 

@@ -66,3 +66,30 @@ pub struct NnArgs {
     #[arg(long)]
     pub quiet: bool,
 }
+
+#[cfg(feature = "neural")]
+impl NnArgs {
+    /// The network and its training as `mtec_nn` takes them, for a model of `kind`.
+    pub fn fit_options(
+        &self,
+        kind: mtec_nn::thermal_log::NnKind,
+    ) -> mtec_nn::thermal_log::NnFitOptions {
+        mtec_nn::thermal_log::NnFitOptions {
+            sequence_by: self.sequence_by.clone(),
+            features: self.features.clone(),
+            angle_harmonics: self.angle_harmonics,
+            rises: self.rises,
+            epochs: self.epochs,
+            patience: self.patience,
+            window: self.window,
+            conv_channels: self.conv_channels,
+            lstm_hidden: self.lstm_hidden,
+            learning_rate: self.learning_rate,
+            final_lr_fraction: self.final_lr_fraction,
+            batch_size: self.batch_size,
+            hidden: self.hidden,
+            seed: self.seed,
+            ..mtec_nn::thermal_log::NnFitOptions::new(kind)
+        }
+    }
+}

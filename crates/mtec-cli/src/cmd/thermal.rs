@@ -16,6 +16,9 @@ use std::path::{Path, PathBuf};
 
 const FORMAT_HELP: &str = include_str!("../../help/thermal.format_help.txt");
 
+const SELECT_LONG: &str = include_str!("../../help/thermal.select_long.txt");
+const FIT_LONG: &str = include_str!("../../help/thermal.fit_long.txt");
+
 const SELECT_EXAMPLES: &str =
     crate::help::examples!(include_str!("../../help/thermal.select_examples.txt"));
 
@@ -41,48 +44,10 @@ enum Sub {
     /// VIF table, ridge trace, sensor elimination by the ridge-trace rules, chosen k, and the
     /// comparison of full MLR, ridge-selected and simple-correlation models. Warns when the
     /// selection collapses (its R² falls well below that of all sensors).
-    ///
-    /// --out DIR writes DIR/ridge_trace.csv, DIR/ridge_trace.svg and DIR/selection.json besides
-    /// printing the report; without --out nothing is written; `--json` prints the selection as
-    /// JSON instead.
+    #[command(long_about = SELECT_LONG)]
     Select(SelectArgs),
     /// Fits a model and writes it as JSON (`mtec.thermal-model/1`) with train/test metrics.
-    ///
-    /// Every regression model is validated forward in time on its training rows (fit on the
-    /// blocks before, score the next; blocks follow the --input steps); the model file keeps
-    /// the folds, their pooled RMSE (the uncertainty `predict` reports) and the training range
-    /// of every input (`predict` flags rows outside it).
-    ///
-    /// auto: candidate families mlr, ridge, heat-input, lagged-ridge, dynamic (temperatures,
-    /// their first-order lags and lags of the spindle power, time constants fitted with the
-    /// coefficients), exp-ambient when its columns exist; every choice inside each family made
-    /// by forward folds of the fold's training rows (nested); a family worse than no
-    /// compensation on any fold is never chosen; the simplest within one standard error of the
-    /// best wins; at most --max-sensors temperature sensors (default 6) plus the --input column.
-    ///
-    /// Models: mlr (all or --sensors), ridge (k by forward folds, or --k), ridge-select
-    /// (sensors chosen by the ridge trace), exp-ambient (δ = k·x + b with exponential
-    /// saturation in the temperature rises of --sensors UP,NUT, or of the first principal
-    /// components of --up-sensors A,B --nut-sensors C,D, and cubic-in-ambient coefficients, b_b
-    /// and k_b kept positive; needs ambient_c and position_mm; warns when the rises stay in the
-    /// exponential's linear range, where b_a and b_b cannot be told apart), lag-select (forward selection of up to
-    /// --max-sensors sensors, each with a first-order lag of fitted time constant, scored by
-    /// leaving out whole blocks of --block-min minutes or experiments), heat-input (drift =
-    /// response to the spindle power: δ = b₀ + Σ c_m·L_τm[(n/1000)^α] + ambient sensors, n from
-    /// the --input column, time constants s·τ at rest (s = 1…4: a turning spindle cools faster),
-    /// α, τ bank, s, ridge k and ambient sensors chosen by leaving out blocks of the training
-    /// rows). --lag adds a first-order lag of each sensor, its time constant chosen by how the
-    /// model predicts forward folds of the training rows (mlr, ridge, ridge-select).
-    ///
-    /// Neural models (in a build with the cargo feature `neural`; any number of comma-separated
-    /// --target columns; the model file is
-    /// `mtec.cnn-lstm/1` or `mtec.bpnn/1`): cnn-lstm (1-D convolution over the features of each
-    /// time step, max pooling, LSTM over --window steps, dense output; one sequence per
-    /// experiment, or per value of --sequence-by within it) and bpnn (one hidden layer of
-    /// --hidden sigmoid units on the current row, Levenberg–Marquardt). Features: the sensors,
-    /// then --features columns. Training shows epoch, loss and validation loss (the tail of
-    /// every training sequence), stops early when the validation loss no longer improves, and
-    /// on Ctrl-C keeps the best epoch so far.
+    #[command(long_about = FIT_LONG)]
     Fit(Box<FitArgs>),
     /// Predicts the drift with a model file; metrics when the data hold the target. Also reads
     /// the neural models (`mtec.cnn-lstm/1`, `mtec.bpnn/1`): then one `pred_<target>` column per
@@ -362,45 +327,15 @@ fn fit_neural(a: FitArgs) -> Result<(), CliError> {
     )))
 }
 
-/// `--model cnn-lstm|bpnn`: the options the neural fit does not take are refused here.
+/// `--model cnn-lstm|bpnn`: the neural fit of the same options (what goes with the regression
+/// models only is refused by `from_thermal_fit`).
 #[cfg(feature = "neural")]
 fn fit_neural(a: FitArgs) -> Result<(), CliError> {
-    use mtec_nn::thermal_log::{NnFitOptions, NnKind};
-    let c = &a.common;
-    if c.k.is_some() || c.lag || c.block_min.is_some() || a.train_until.is_some() {
-        return Err(CliError::usage(
-            "--k, --lag, --block-min and --train-until go with the regression models; the neural models split by --train/--test experiments",
-        ));
-    }
-    let kind = NnKind::from_name(&c.model).ok_or_else(|| CliError::usage("not a neural model"))?;
-    let nn = &a.nn;
-    let opts = op::neural::FitOptions {
-        data: c.data.clone(),
-        target: c.target.clone(),
-        sensors: c.sensors.clone(),
-        train: a.train.clone(),
-        test: a.test.clone(),
-        output: a.output.clone(),
-        nn: NnFitOptions {
-            sequence_by: nn.sequence_by.clone(),
-            features: nn.features.clone(),
-            angle_harmonics: nn.angle_harmonics,
-            rises: nn.rises,
-            epochs: nn.epochs,
-            patience: nn.patience,
-            window: nn.window,
-            conv_channels: nn.conv_channels,
-            lstm_hidden: nn.lstm_hidden,
-            learning_rate: nn.learning_rate,
-            final_lr_fraction: nn.final_lr_fraction,
-            batch_size: nn.batch_size,
-            hidden: nn.hidden,
-            seed: nn.seed,
-            ..NnFitOptions::new(kind)
-        },
-    };
+    let kind = mtec_nn::thermal_log::NnKind::from_name(&a.common.model)
+        .ok_or_else(|| CliError::usage("not a neural model"))?;
+    let opts = op::neural::FitOptions::from_thermal_fit(&a.options(), a.nn.fit_options(kind))?;
     single_candle_thread();
-    let mut term = Terminal::new(nn.quiet);
+    let mut term = Terminal::new(a.nn.quiet);
     let outcome = ctrl_c::during(|| op::neural::fit(&opts, &mut term));
     term.done();
     let _ = write!(say_for(&opts.output), "{}", outcome?);

@@ -53,21 +53,33 @@ pub fn identify_ballbar(dir: &Path) -> Output {
     ])
 }
 
-/// LinuxCNC's stand-alone interpreter `rs274` on PATH; `None` (with a note) when it is absent
-/// and `CI` is not set (in CI it is required: `.ci/run` installs `linuxcnc-uspace`).
-pub fn rs274() -> Option<std::path::PathBuf> {
+/// The first of `names` found on PATH; `None` (with `note`) when none is there and `CI` is not
+/// set. In CI it is required (`.ci/run` installs `package`): its absence fails the test.
+pub fn tool_on_path(names: &[&str], package: &str, note: &str) -> Option<std::path::PathBuf> {
     let path = std::env::var_os("PATH").unwrap_or_default();
-    let found = std::env::split_paths(&path)
-        .map(|d| d.join("rs274"))
-        .find(|p| p.is_file());
+    let found = names.iter().find_map(|n| {
+        std::env::split_paths(&path)
+            .map(|d| d.join(n))
+            .find(|p| p.is_file())
+    });
     if found.is_none() {
         assert!(
             std::env::var_os("CI").is_none(),
-            "rs274 (LinuxCNC, package linuxcnc-uspace) is required in CI"
+            "{} (package {package}) is required in CI",
+            names[0]
         );
-        eprintln!("note: rs274 not installed (package linuxcnc-uspace): check skipped");
+        eprintln!(
+            "note: {} not installed (package {package}): {note}",
+            names[0]
+        );
     }
     found
+}
+
+/// LinuxCNC's stand-alone interpreter `rs274` on PATH; `None` (with a note) when it is absent
+/// and `CI` is not set (in CI it is required: `.ci/run` installs `linuxcnc-uspace`).
+pub fn rs274() -> Option<std::path::PathBuf> {
+    tool_on_path(&["rs274"], "linuxcnc-uspace", "check skipped")
 }
 
 /// `rs274 -g FILE` in a folder of its own that is also its HOME (rs274 maps

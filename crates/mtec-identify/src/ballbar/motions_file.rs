@@ -3,9 +3,9 @@
 
 use super::identify::Identification;
 use super::temps::TemperatureLog;
+use mtec_io::CsvWriter;
 use serde::Serialize;
 use std::collections::BTreeMap;
-use std::fmt::Write as _;
 
 /// The header of `motions.csv` before the temperature columns.
 pub const MOTIONS_HEADER: &str =
@@ -69,37 +69,28 @@ pub fn motion_records(
 /// to 0.1 nm, rotations to 1 nrad, temperatures as read. An (experiment, time) the log does not
 /// hold gets empty temperature cells.
 pub fn motions_csv(result: &Identification, temps: Option<&TemperatureLog>) -> String {
-    let mut s = String::from(MOTIONS_HEADER);
-    if let Some(t) = temps {
-        for n in &t.sensor_names {
-            s.push(',');
-            s.push_str(n);
-        }
-    }
-    s.push('\n');
+    let sensors = temps.map_or(&[][..], |t| &t.sensor_names[..]);
+    let mut w = CsvWriter::new(
+        MOTIONS_HEADER
+            .split(',')
+            .chain(sensors.iter().map(|s| s.as_str())),
+    );
     for r in &result.rows {
         let m = &r.motions;
-        let _ = write!(
-            s,
-            "{},{},{},{:.4},{:.4},{:.4},{:.3},{:.3}",
-            r.experiment,
-            r.time_min,
-            r.angle_deg,
-            m.exc_um,
-            m.eyc_um,
-            m.ezc_um,
-            m.eac_urad,
-            m.ebc_urad
-        );
+        let mut row = vec![
+            r.experiment.to_string(),
+            r.time_min.to_string(),
+            r.angle_deg.to_string(),
+        ];
+        row.extend([m.exc_um, m.eyc_um, m.ezc_um].map(|v| format!("{v:.4}")));
+        row.extend([m.eac_urad, m.ebc_urad].map(|v| format!("{v:.3}")));
         if let Some(t) = temps {
             match t.at(r.experiment, r.time_min) {
-                Some(v) => v.iter().for_each(|v| {
-                    let _ = write!(s, ",{v}");
-                }),
-                None => t.sensor_names.iter().for_each(|_| s.push(',')),
+                Some(v) => row.extend(v.iter().map(|v| v.to_string())),
+                None => row.extend(sensors.iter().map(|_| String::new())),
             }
         }
-        s.push('\n');
+        w.row(row);
     }
-    s
+    w.finish()
 }

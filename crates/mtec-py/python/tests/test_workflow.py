@@ -16,7 +16,9 @@ def _files(folder: Path) -> dict[str, bytes]:
     }
 
 
-def test_project_from_python_writes_the_clis_files(cli, tmp_path):
+def test_project_from_python_writes_the_clis_files(cli, tmp_path, monkeypatch):
+    # the report's date: the same for both runs, even across midnight
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1800000000")
     project = EXAMPLES / "vmc" / "project.toml"
     ours, theirs = tmp_path / "py", tmp_path / "cli"
     r = mtec.run_project(project, out=ours)

@@ -6,7 +6,7 @@ use mtec_comp::map::{GridLimits, GridMap, Outside};
 use mtec_io::{CsvReader, Destination, InputError, OutputGuard};
 use serde::Serialize;
 use std::fmt;
-use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::PathBuf;
 
 /// The kind of map `fit` builds.
@@ -246,8 +246,19 @@ pub struct EvalOutcome {
     pub out: Option<PathBuf>,
 }
 
+/// Rows `eval` reads, evaluates ([`mtec_comp::ErrorModel::eval_batch`]) and writes at a time:
+/// large enough that the batch and the write calls pay off, small enough (≈ 300 kB of text)
+/// to stay in cache.
+const EVAL_CHUNK_ROWS: usize = 4096;
+
 /// Evaluates an error model at the points of a CSV file and writes
 /// x_mm,y_mm,z_mm,ex_um,ey_um,ez_um, one row per input row, in the same order.
+///
+/// Streamed in chunks of [`EVAL_CHUNK_ROWS`] rows: memory does not grow with the file. A bad
+/// row is reported at its line and column as soon as its chunk is read (a point the model has
+/// no value at before a later unreadable row); the output file is then left untouched. To
+/// standard output the rows before a bad one have been written already (as `compensate gcode`
+/// does).
 pub fn eval(opts: &EvalOptions, _obs: &mut dyn Observer) -> Result<EvalOutcome> {
     let dest = match &opts.out {
         Some(path) => OutputGuard::new(&[&opts.model, &opts.points]).check(path)?,
@@ -261,19 +272,114 @@ pub fn eval(opts: &EvalOptions, _obs: &mut dyn Observer) -> Result<EvalOutcome> 
         points.column("y_mm")?,
         points.column("z_mm")?,
     ];
-    let mut out = String::from("x_mm,y_mm,z_mm,ex_um,ey_um,ez_um\n");
+    // dropped on error, an unfinished output leaves the target untouched
+    let mut out = dest.open()?;
+    let mut chunk = EvalChunk::default();
+    chunk
+        .text
+        .extend_from_slice(b"x_mm,y_mm,z_mm,ex_um,ey_um,ez_um\n");
     let mut n = 0;
-    while let Some(row) = points.next_row()? {
-        let mut p = [0.0; 3];
-        for (pa, &c) in p.iter_mut().zip(&cols) {
-            *pa = row.f64(c)?;
+    loop {
+        // a row read and parsed, or the error it gave (reported after the points before it)
+        let read: std::result::Result<bool, InputError> = match points.next_row() {
+            Ok(None) => Ok(false),
+            Err(e) => Err(e),
+            Ok(Some(row)) => {
+                let mut p = [0.0; 3];
+                let mut bad = None;
+                for (pa, &c) in p.iter_mut().zip(&cols) {
+                    match row.f64(c) {
+                        Ok(v) => *pa = v,
+                        Err(e) => {
+                            bad = Some(e);
+                            break;
+                        }
+                    }
+                }
+                match bad {
+                    Some(e) => Err(e),
+                    None => {
+                        chunk.push(
+                            row.line(),
+                            p,
+                            [row.str(cols[0]), row.str(cols[1]), row.str(cols[2])],
+                        );
+                        Ok(true)
+                    }
+                }
+            }
+        };
+        match read {
+            Ok(true) if chunk.points.len() < EVAL_CHUNK_ROWS => continue,
+            Ok(more) => {
+                n += chunk.write(model.as_ref(), &opts.points, cols[0], &mut out)?;
+                if !more {
+                    break;
+                }
+            }
+            Err(e) => {
+                chunk.write(model.as_ref(), &opts.points, cols[0], &mut out)?;
+                return Err(e.into());
+            }
         }
-        let e = model.error_um(p);
-        if !e.iter().all(|v| v.is_finite()) {
+    }
+    out.commit()?;
+    Ok(EvalOutcome {
+        points: n,
+        out: opts.out.clone(),
+    })
+}
+
+/// The rows of `eval` read but not yet written: their lines, points, and the output text up
+/// to the errors (`x,y,z,` as given in the file).
+#[derive(Default)]
+struct EvalChunk {
+    lines: Vec<usize>,
+    points: Vec<[f64; 3]>,
+    errors: Vec<[f64; 3]>,
+    /// The echoed `x,y,z,` of all rows, row i ending at `echo_end[i]`.
+    echo: Vec<u8>,
+    echo_end: Vec<usize>,
+    /// Output bytes waiting to be written.
+    text: Vec<u8>,
+}
+
+impl EvalChunk {
+    fn push(&mut self, line: usize, p: [f64; 3], given: [&str; 3]) {
+        self.lines.push(line);
+        self.points.push(p);
+        for s in given {
+            self.echo.extend_from_slice(s.as_bytes());
+            self.echo.push(b',');
+        }
+        self.echo_end.push(self.echo.len());
+    }
+
+    /// Evaluates the chunk's points, writes their rows (refusing the first point the model has
+    /// no value at, located at line and `x_col`), empties the chunk; returns the rows written.
+    fn write(
+        &mut self,
+        model: &dyn mtec_comp::ErrorModel,
+        path: &std::path::Path,
+        x_col: usize,
+        out: &mut mtec_io::Output,
+    ) -> Result<usize> {
+        let n = self.points.len();
+        if n == 0 {
+            return Ok(0);
+        }
+        self.errors.resize(n, [0.0; 3]);
+        model.eval_batch(&self.points, &mut self.errors);
+        if let Some(i) = self
+            .errors
+            .iter()
+            .position(|e| !e.iter().all(|v| v.is_finite()))
+        {
+            let p = self.points[i];
             return Err(InputError::at(
-                &opts.points,
-                row.line(),
-                cols[0] + 1,
+                path,
+                self.lines[i],
+                x_col + 1,
                 format!(
                     "the model has no value at ({}, {}, {}) mm (outside the map's grid, whose policy is refuse; see `mtec map fit --outside`)",
                     p[0], p[1], p[2]
@@ -281,21 +387,27 @@ pub fn eval(opts: &EvalOptions, _obs: &mut dyn Observer) -> Result<EvalOutcome> 
             )
             .into());
         }
-        let _ = writeln!(
-            out,
-            "{},{},{},{},{},{}",
-            row.str(cols[0]),
-            row.str(cols[1]),
-            row.str(cols[2]),
-            e[0],
-            e[1],
-            e[2]
-        );
-        n += 1;
+        let mut start = 0;
+        for (e, &end) in self.errors.iter().zip(&self.echo_end) {
+            self.text.extend_from_slice(&self.echo[start..end]);
+            start = end;
+            mtec_io::number::push_f64(&mut self.text, e[0]);
+            self.text.push(b',');
+            mtec_io::number::push_f64(&mut self.text, e[1]);
+            self.text.push(b',');
+            mtec_io::number::push_f64(&mut self.text, e[2]);
+            self.text.push(b'\n');
+        }
+        out.write_all(&self.text)
+            .map_err(|source| mtec_io::OutputError::Io {
+                path: out.path().to_path_buf(),
+                source,
+            })?;
+        self.text.clear();
+        self.lines.clear();
+        self.points.clear();
+        self.echo.clear();
+        self.echo_end.clear();
+        Ok(n)
     }
-    dest.write(out.as_bytes())?;
-    Ok(EvalOutcome {
-        points: n,
-        out: opts.out.clone(),
-    })
 }

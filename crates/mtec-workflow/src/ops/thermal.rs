@@ -6,7 +6,7 @@
 //! (`cnn-lstm`, `bpnn`) are [`neural`], behind the cargo feature `neural`.
 
 use crate::{Error, Observer, Result};
-use mtec_io::{InputError, OutputGuard, Table};
+use mtec_io::{CsvWriter, InputError, OutputGuard, Table};
 use mtec_thermal::auto::CandidateScore;
 use mtec_thermal::features::{design, temp_features};
 use mtec_thermal::guard::{model_columns, outside_envelope};
@@ -751,27 +751,31 @@ pub fn predict_table(
     }
     let y = data.target_um().ok();
     let metrics = y.map(|y| Metrics::new(y, &pred, file.model.predictors()));
-    let mut csv = String::from("experiment,time_min,predicted_um");
+    let mut header = vec!["experiment", "time_min", "predicted_um"];
     if y.is_some() {
-        csv.push_str(",measured_um,residual_um");
+        header.extend(["measured_um", "residual_um"]);
     }
     if uncertainty.is_some() {
-        csv.push_str(",uncertainty_um");
+        header.push("uncertainty_um");
     }
-    csv.push_str(",outside_training_range\n");
+    header.push("outside_training_range");
+    let mut csv = CsvWriter::new(header);
     for i in 0..pred.len() {
-        csv.push_str(&format!(
-            "{},{},{:.4}",
-            data.experiment[i], data.time_min[i], pred[i]
-        ));
+        let mut row = vec![
+            data.experiment[i].to_string(),
+            data.time_min[i].to_string(),
+            format!("{:.4}", pred[i]),
+        ];
         if let Some(y) = y {
-            csv.push_str(&format!(",{:.4},{:.4}", y[i], y[i] - pred[i]));
+            row.extend([format!("{:.4}", y[i]), format!("{:.4}", y[i] - pred[i])]);
         }
         if let Some(u) = uncertainty {
-            csv.push_str(&format!(",{u:.4}"));
+            row.push(format!("{u:.4}"));
         }
-        csv.push_str(&format!(",{}\n", outside[i].join(";")));
+        row.push(outside[i].join(";"));
+        csv.row(row);
     }
+    let csv = csv.finish();
     Ok(Prediction {
         format: "mtec.thermal-prediction/1".into(),
         target: file.target.clone(),

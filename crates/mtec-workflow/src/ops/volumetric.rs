@@ -4,6 +4,7 @@
 
 use crate::inputs::{pose_column, read_errors, read_machine, read_poses};
 use crate::{Observer, Result};
+use mtec_io::CsvWriter;
 use mtec_model::{Formalism, Order, VolumetricModel};
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
@@ -158,26 +159,21 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
 /// rotary axis, `eax_urad,eay_urad,eaz_urad` (3 decimals).
 impl fmt::Display for Outcome {
     fn fmt(&self, o: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(o, "{},ex_um,ey_um,ez_um", self.columns.join(","))?;
+        let mut header = self.columns.clone();
+        header.extend(["ex_um", "ey_um", "ez_um"].map(String::from));
         if self.rotary {
-            write!(o, ",eax_urad,eay_urad,eaz_urad")?;
+            header.extend(["eax_urad", "eay_urad", "eaz_urad"].map(String::from));
         }
-        writeln!(o)?;
+        let mut csv = CsvWriter::new(header);
         for p in &self.points {
-            let cols: Vec<String> = p.pose.0.iter().map(|(_, x)| format!("{x}")).collect();
-            write!(
-                o,
-                "{},{:.4},{:.4},{:.4}",
-                cols.join(","),
-                p.ex_um,
-                p.ey_um,
-                p.ez_um
-            )?;
+            let mut row: Vec<String> = p.pose.0.iter().map(|(_, x)| format!("{x}")).collect();
+            row.extend([p.ex_um, p.ey_um, p.ez_um].map(|v| format!("{v:.4}")));
             if let Some(r) = p.orientation_urad {
-                write!(o, ",{:.3},{:.3},{:.3}", r[0], r[1], r[2])?;
+                row.extend(r.map(|v| format!("{v:.3}")));
             }
-            writeln!(o)?;
+            csv.row(row);
         }
+        o.write_str(&csv.finish())?;
         Ok(())
     }
 }

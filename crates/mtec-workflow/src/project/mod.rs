@@ -41,10 +41,12 @@
 //! ```
 
 pub mod demo;
+mod labels;
 mod machine_stage;
 mod pipeline;
 mod spec;
 mod stages;
+mod summary;
 mod thermal_section;
 
 pub use pipeline::Pipeline;
@@ -191,6 +193,8 @@ fn run_project_with(
         step: 0,
         steps,
         current: String::new(),
+        summary: Default::default(),
+        tolerances: project.tolerances.clone(),
     };
     // every file the project names is an input that no output may overwrite
     let check = |f: &Path, what: &str| -> std::result::Result<PathBuf, InputError> {
@@ -341,7 +345,34 @@ fn run_project_with(
         sec.note(format!(
             "This stage failed, so the run stopped here and the stages after it did not run: {e}"
         ));
+    } else if !p.current.is_empty() {
+        p.summary.completed.push(std::mem::take(&mut p.current));
     }
+    // the summary, read first: the verdict, the files, every stage's key figures
+    let mut files: Vec<(String, PathBuf)> = Vec::new();
+    for f in &inputs {
+        // a file several stages read is listed once
+        if !files.iter().any(|(_, g)| g == f) {
+            let shown = f.strip_prefix(base).unwrap_or(f).display().to_string();
+            files.push((shown, f.clone()));
+        }
+    }
+    let failed = ran
+        .as_ref()
+        .err()
+        .map(|e| (p.current.clone(), e.to_string()));
+    let not_run = if failed.is_some() {
+        p.steps.saturating_sub(p.step)
+    } else {
+        0
+    };
+    let summary = p.summary.section(
+        name,
+        &files,
+        failed.as_ref().map(|(s, e)| (s.as_str(), e.clone())),
+        not_run,
+    );
+    p.report.insert_first(summary);
     let html = p.report.to_html();
     let report = p.save("report.html", &html)?;
     if ran.is_err() {

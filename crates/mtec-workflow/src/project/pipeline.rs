@@ -24,6 +24,10 @@ pub struct Pipeline<'o> {
     pub(super) steps: usize,
     /// The stage running now (its progress line).
     pub(super) current: String,
+    /// What the report's first section says (filled by the stages).
+    pub summary: super::summary::Summary,
+    /// The project's `[tolerances]`.
+    pub tolerances: super::spec::Tolerances,
 }
 
 impl Pipeline<'_> {
@@ -38,6 +42,12 @@ impl Pipeline<'_> {
 
     /// The next stage starts: `[i/n] what` to the observer.
     pub fn progress_of(&mut self, what: &str) {
+        // the stage before this one ran to its end
+        if !self.current.is_empty() {
+            self.summary
+                .completed
+                .push(std::mem::take(&mut self.current));
+        }
         self.step += 1;
         self.current = what.to_string();
         self.obs

@@ -23,6 +23,45 @@ pub struct Project {
     pub machine_model: Option<MachineModelStage>,
     #[serde(default)]
     pub replay: Vec<ReplayStage>,
+    /// Limits the summary judges the results against (none: reported, not judged).
+    #[serde(default)]
+    pub tolerances: Tolerances,
+}
+
+/// `[tolerances]`: acceptance limits on magnitudes, in the unit their names end in. Every one
+/// is optional; a figure without a limit is reported and not judged.
+#[derive(Debug, Default, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tolerances {
+    /// ISO 230-2 axis values A, E, R, B and M.
+    #[serde(default)]
+    pub iso230_2: Iso230_2Tolerances,
+    /// ISO 230-4 circular deviation G(b) and circular hysteresis H.
+    #[serde(default)]
+    pub circular: CircularTolerances,
+    /// RMS of the thermal drift left after the model (measured − predicted), per [[thermal]].
+    pub thermal_residual_rms_um: Option<f64>,
+    /// RMS difference of the volumetric map from the check measurements.
+    pub map_check_rms_um: Option<f64>,
+    /// RMS of the volumetric error left after compensation (the demo's virtual machine).
+    pub volumetric_after_rms_um: Option<f64>,
+}
+
+#[derive(Debug, Default, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Iso230_2Tolerances {
+    pub a_um: Option<f64>,
+    pub e_um: Option<f64>,
+    pub r_um: Option<f64>,
+    pub b_um: Option<f64>,
+    pub m_um: Option<f64>,
+}
+
+#[derive(Debug, Default, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CircularTolerances {
+    pub g_um: Option<f64>,
+    pub h_um: Option<f64>,
 }
 
 /// `[machine_model]`: `mtec machine build` over the models of the [[thermal]] stages.

@@ -10,10 +10,11 @@ use crate::ops;
 use crate::Collect;
 use crate::Error;
 use mtec_comp::kinematic::KinematicFile;
+use mtec_io::CsvWriter;
 use mtec_measure::circular::Diagnostics;
 use mtec_measure::iso230_2::TargetStats;
 use mtec_measure::positioning::PositioningData;
-use mtec_report::{bar_chart, line_chart, scatter_chart, Section, Series};
+use mtec_report::{bar_chart_with_errors, line_chart, scatter_chart, Section, Series};
 use mtec_sensitivity::error_model::ErrorStatistics;
 use mtec_thermal::model_file::SplitBy;
 use mtec_thermal::select::RidgeTrace;
@@ -30,7 +31,7 @@ fn fmt(v: &Value) -> String {
         Value::Number(n) => match n.as_f64() {
             Some(x) if x.fract() == 0.0 && x.abs() < 1e9 => format!("{x:.0}"),
             Some(x) if x.abs() >= 1e4 || (x != 0.0 && x.abs() < 1e-3) => format!("{x:.4e}"),
-            Some(x) => format!("{x:.4}"),
+            Some(x) => format!("{x:.3}"),
             None => n.to_string(),
         },
         Value::String(s) => s.clone(),
@@ -39,8 +40,25 @@ fn fmt(v: &Value) -> String {
         Value::Array(a) if a.iter().all(|x| !x.is_object() && !x.is_array()) && a.len() <= 12 => {
             a.iter().map(fmt).collect::<Vec<_>>().join(", ")
         }
-        Value::Array(a) => format!("[{} values]", a.len()),
-        Value::Object(_) => "{…}".into(),
+        // a long list of numbers: its range (the whole list is in the stage's JSON file)
+        Value::Array(a) if a.iter().all(Value::is_number) => {
+            let xs: Vec<f64> = a.iter().filter_map(Value::as_f64).collect();
+            let lo = xs.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            format!(
+                "{} values from {} to {}",
+                a.len(),
+                fmt(&serde_json::json!(lo)),
+                fmt(&serde_json::json!(hi))
+            )
+        }
+        Value::Array(a) => format!("{} entries (in the JSON file)", a.len()),
+        // a small record inline: `label: value; …`
+        Value::Object(o) => o
+            .iter()
+            .map(|(k, x)| format!("{}: {}", super::labels::label(k), fmt(x)))
+            .collect::<Vec<_>>()
+            .join("; "),
     }
 }
 
@@ -57,7 +75,7 @@ pub fn json_tables(sec: &mut Section, v: &Value, depth: usize) {
                     && x.as_array()
                         .is_some_and(|a| a.iter().any(|e| e.is_object())))
         })
-        .map(|(k, x)| vec![k.clone(), fmt(x)])
+        .map(|(k, x)| vec![super::labels::label(k), fmt(x)])
         .collect();
     if !scalars.is_empty() {
         sec.table(&["quantity", "value"], scalars);
@@ -66,7 +84,11 @@ pub fn json_tables(sec: &mut Section, v: &Value, depth: usize) {
         match x {
             Value::Array(a) if !a.is_empty() && a.iter().all(|e| e.is_object()) => {
                 if a.len() > 60 {
-                    sec.text(format!("{k}: {} records (see the JSON file).", a.len()));
+                    sec.text(format!(
+                        "{}: {} records (in the stage's JSON file).",
+                        super::labels::label(k),
+                        a.len()
+                    ));
                     continue;
                 }
                 let mut cols: Vec<String> = Vec::new();
@@ -85,12 +107,13 @@ pub fn json_tables(sec: &mut Section, v: &Value, depth: usize) {
                             .collect()
                     })
                     .collect();
-                sec.text(k.replace('_', " "));
-                let header: Vec<&str> = cols.iter().map(String::as_str).collect();
+                sec.text(capitalised(&super::labels::label(k)));
+                let header: Vec<String> = cols.iter().map(|c| super::labels::label(c)).collect();
+                let header: Vec<&str> = header.iter().map(String::as_str).collect();
                 sec.table(&header, rows);
             }
             Value::Object(_) if depth < 1 && k != "options" => {
-                sec.text(k.replace('_', " "));
+                sec.text(capitalised(&super::labels::label(k)));
                 json_tables(sec, x, depth + 1);
             }
             _ => {}
@@ -98,10 +121,20 @@ pub fn json_tables(sec: &mut Section, v: &Value, depth: usize) {
     }
 }
 
+/// `text` with its first letter in capitals (a table's caption).
+fn capitalised(text: &str) -> String {
+    let mut c = text.chars();
+    match c.next() {
+        Some(f) => f.to_uppercase().chain(c).collect(),
+        None => String::new(),
+    }
+}
+
 /// Machine summary.
 pub fn machine_section(p: &mut Pipeline, machine: Option<&Path>) -> crate::Result<()> {
     let Some(m) = machine else { return Ok(()) };
     let mach = crate::inputs::read_machine(m)?;
+    p.summary.machine = Some(format!("{} (chain {})", mach.name, mach.chain.text));
     let sec = p.report.section("Machine");
     let mut rows = vec![
         vec!["name".into(), mach.name.clone()],
@@ -135,6 +168,20 @@ pub fn iso230_2(p: &mut Pipeline, data: &Path) -> crate::Result<()> {
     let mut obs = Collect::default();
     let done = ops::iso230_2::run(&ops::iso230_2::Options::new(&f), &mut obs)?;
     let v = p.json_result(&name, &format!("{}\n", done.to_json()?))?;
+    let stage = format!("ISO 230-2 {}", stem(&f));
+    let tol = p.tolerances.iso230_2.clone();
+    let ax = &done.axis;
+    p.summary
+        .standard("ISO 230-2:2014 (positioning), with VDI/DGQ 3441 alongside");
+    for (q, v, t) in [
+        ("bidirectional accuracy A", ax.a_um, tol.a_um),
+        ("bidirectional systematic error E", ax.e_um, tol.e_um),
+        ("bidirectional repeatability R", ax.r_um, tol.r_um),
+        ("reversal value B", ax.b_um, tol.b_um),
+        ("mean bidirectional error M", ax.m_um, tol.m_um),
+    ] {
+        p.summary.figure(&stage, q, v, "µm", 2, t);
+    }
     let sec = p
         .report
         .section(format!("Positioning (ISO 230-2): {}", stem(&f)));
@@ -184,7 +231,8 @@ pub fn iso230_2(p: &mut Pipeline, data: &Path) -> crate::Result<()> {
             "deviation (µm)",
             &[Series::new("readings", raw)],
         ),
-        "Every reading of every run.",
+        "Every reading of every run: the vertical spread at a target is the repeatability R, \
+         the gap between the two clusters of a target the reversal value B.",
     );
     json_tables(sec, &v, 0);
     Ok(())
@@ -265,6 +313,29 @@ pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> crate::Result<
     let done = ops::identify_lines::run(&opts, &mut obs)?;
     let v = p.json_result("identify-lines.json", &format!("{}\n", done.to_json()?))?;
     p.outputs.push(s(&errors));
+    let stage = "Line identification";
+    p.summary
+        .standard("ISO 230-1 error elements, identified from line measurements (9-line method)");
+    let r = &done.report;
+    p.summary.fact(
+        stage,
+        "error elements identified",
+        format!(
+            "{} (rank {} of {} parameters)",
+            r.elements.len(),
+            r.rank,
+            r.parameters
+        ),
+    );
+    p.summary.figure(
+        stage,
+        "residual RMS of the fit",
+        r.residual_rms_um,
+        "µm",
+        3,
+        None,
+    );
+    p.summary.fact(stage, "validity", r.validity.clone());
     let sec = p
         .report
         .section("Identified geometric errors (line measurements)");
@@ -281,17 +352,35 @@ pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> crate::Result<
             ["EAY", "EBY", "ECY"],
         ] {
             let mut series = Vec::new();
+            let mut bands = Vec::new();
             for n in group {
                 let Ok(el) = mtec_model::ErrorElement::parse(n) else {
                     continue;
                 };
                 let Some(f) = set.get(&el) else { continue };
                 let [lo, hi] = mach.travel(el.axis);
-                let pts = (0..=60).map(|k| {
-                    let q = lo + (hi - lo) * k as f64 / 60.0;
-                    ((q - lo) / (hi - lo), f.value(q))
-                });
-                series.push(Series::new(format!("{n} ({})", el.unit()), pts.collect()));
+                let pts: Vec<(f64, f64)> = (0..=60)
+                    .map(|k| {
+                        let q = lo + (hi - lo) * k as f64 / 60.0;
+                        ((q - lo) / (hi - lo), f.value(q))
+                    })
+                    .collect();
+                // ±2σ of the identification (its largest 1σ over the travel)
+                if let Some(u) = r
+                    .elements
+                    .iter()
+                    .find(|e| e.element == n)
+                    .map(|e| e.uncertainty_1sigma)
+                    .filter(|u| u.is_finite() && *u > 0.0)
+                {
+                    bands.push(mtec_report::Band {
+                        name: format!("{n} ± 2σ"),
+                        x: pts.iter().map(|p| p.0).collect(),
+                        lower: pts.iter().map(|p| p.1 - 2.0 * u).collect(),
+                        upper: pts.iter().map(|p| p.1 + 2.0 * u).collect(),
+                    });
+                }
+                series.push(Series::new(format!("{n} ({})", el.unit()), pts));
             }
             if !series.is_empty() {
                 sec.figure(
@@ -300,9 +389,12 @@ pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> crate::Result<
                         "position (fraction of travel)",
                         "error (µm or µrad)",
                         &series,
-                        &[],
+                        &bands,
                     ),
-                    "Identified error functions over each axis' travel.",
+                    "Identified error functions over each axis' travel (linear errors in µm, \
+                     angular in µrad), each with its ±2σ band (the identification's largest 1σ \
+                     over the travel): the largest curve is where compensation gains most; a \
+                     band as wide as its curve means the element is not determined.",
                 );
             }
         }
@@ -347,13 +439,7 @@ pub fn sensitivity(
     };
     // indices aggregated over a 3 × 3 × 3 grid of the workspace
     let mach = crate::inputs::read_machine(machine)?;
-    let mut pts = mach
-        .axes
-        .iter()
-        .map(|a| crate::inputs::pose_column(*a))
-        .collect::<Vec<_>>()
-        .join(",")
-        + "\n";
+    let mut pts = CsvWriter::new(mach.axes.iter().map(|a| crate::inputs::pose_column(*a)));
     let mut poses: Vec<Vec<f64>> = vec![vec![]];
     for a in &mach.axes {
         let [lo, hi] = mach.travel(*a);
@@ -363,16 +449,10 @@ pub fn sensitivity(
             .collect();
     }
     for q in &poses {
-        pts.push_str(
-            &(q.iter()
-                .map(|v| format!("{v}"))
-                .collect::<Vec<_>>()
-                .join(",")
-                + "\n"),
-        );
+        pts.row(q.iter().map(|v| format!("{v}")));
     }
     let points = p.out.join("sensitivity-points.csv");
-    mtec_io::write_output(&points, pts.as_bytes())?;
+    mtec_io::write_output(&points, pts.finish().as_bytes())?;
     let method = ops::sensitivity::MethodKind::from_name(&st.method).ok_or_else(|| {
         Error::usage(format!(
             "[sensitivity] method `{}`: expected efast, sobol or morris",
@@ -396,25 +476,114 @@ pub fn sensitivity(
     warnings(sec, &obs, &mut *p.obs);
     sec.text("First-order index S1 (key errors) and total index ST (ST − S1: coupling) of each error element for the volumetric error, inputs drawn from the statistics of the error functions.");
     // one chart per output (Ex, Ey, Ez, |E|) with S1 and ST per input; Morris gives μ*, σ
+    let mut rest = v.clone();
     if let ops::sensitivity::Outcome::Machine(m) = &done {
-        for idx in &m.report.outputs {
+        let r = &m.report;
+        let names = |l: &[mtec_sensitivity::error_model::Ranked]| {
+            l.iter()
+                .take(5)
+                .map(|k| k.element.clone())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let key = names(&r.key_errors);
+        let coupled = names(&r.coupled_errors);
+        p.summary.standard(&format!(
+            "global sensitivity by {} (Saltelli et al.)",
+            r.method
+        ));
+        p.summary.fact(
+            "Sensitivity",
+            "key error elements (largest first)",
+            if key.is_empty() {
+                "—".into()
+            } else {
+                key.clone()
+            },
+        );
+        p.summary.fact(
+            "Sensitivity",
+            "coupled error elements",
+            if coupled.is_empty() {
+                "none".into()
+            } else {
+                coupled.clone()
+            },
+        );
+        for idx in &r.outputs {
             if let (Some(s1), Some(st)) = (&idx.s1, &idx.st) {
+                let mark = |n: &String| {
+                    let k = r.key_errors.iter().take(5).any(|k| &k.element == n);
+                    let c = r.coupled_errors.iter().any(|k| &k.element == n);
+                    // short marks, so that 17 names fit under their bars
+                    format!(
+                        "{n}{}{}",
+                        if k { "*" } else { "" },
+                        if c { "†" } else { "" }
+                    )
+                };
+                let cats: Vec<String> = r.inputs.iter().map(mark).collect();
+                let whiskers = [idx.s1_conf.clone(), idx.st_conf.clone()];
                 sec.figure(
-                    bar_chart(
+                    bar_chart_with_errors(
                         &format!("Sensitivity of {}", idx.output),
-                        "index",
-                        &m.report.inputs,
+                        "index (share of the variance)",
+                        &cats,
                         &[("S1".into(), s1.clone()), ("ST".into(), st.clone())],
+                        &whiskers,
                     ),
                     format!(
-                        "First-order (S1) and total (ST) indices for {}.",
-                        idx.output
+                        "First-order (S1) and total (ST) indices for {}: a tall S1 bar is a key \
+                         error (it alone drives the output); a gap between ST and S1 is coupling \
+                         with other elements{}. * key: {}. † coupled: {}.",
+                        idx.output,
+                        if whiskers.iter().any(Option::is_some) {
+                            "; whiskers: the confidence interval of each index"
+                        } else {
+                            ""
+                        },
+                        if key.is_empty() { "—" } else { &key },
+                        if coupled.is_empty() { "none" } else { &coupled }
                     ),
                 );
             }
         }
+        // the indices as a table: one row per element, S1 and ST of every output
+        let with: Vec<&mtec_sensitivity::error_model::ChannelIndices> = r
+            .outputs
+            .iter()
+            .filter(|o| o.s1.is_some() && o.st.is_some())
+            .collect();
+        if !with.is_empty() {
+            let mut header = vec!["element".to_string()];
+            for o in &with {
+                header.push(format!("S1 {}", o.output));
+                header.push(format!("ST {}", o.output));
+            }
+            let rows = r
+                .inputs
+                .iter()
+                .enumerate()
+                .map(|(i, n)| {
+                    let mut row = vec![n.clone()];
+                    for o in &with {
+                        for v in [&o.s1, &o.st].into_iter().flatten() {
+                            row.push(format!("{:.3}", v[i]));
+                        }
+                    }
+                    row
+                })
+                .collect();
+            let header: Vec<&str> = header.iter().map(String::as_str).collect();
+            sec.text("Indices of every error element:");
+            sec.table(&header, rows);
+        }
+        if let Some(o) = rest.as_object_mut() {
+            o.remove("outputs");
+            o.remove("inputs");
+        }
     }
-    json_tables(sec, &v, 0);
+    json_tables(sec, &rest, 0);
     Ok(())
 }
 
@@ -432,6 +601,37 @@ pub fn circular(p: &mut Pipeline, data: &Path) -> crate::Result<()> {
         &format!("circular-{}.json", stem(&f)),
         &format!("{}\n", done.to_json()?),
     )?;
+    let stage = format!("ISO 230-4 {}", stem(&f));
+    let tol = p.tolerances.circular.clone();
+    p.summary
+        .standard("ISO 230-4 (circular test), ballbar diagnostics");
+    let iso = &done.iso230_4;
+    p.summary.figure(
+        &stage,
+        "bidirectional circular deviation G(b)",
+        iso.g_bidirectional_um,
+        "µm",
+        2,
+        tol.g_um,
+    );
+    p.summary
+        .figure(&stage, "circular hysteresis H", iso.h_um, "µm", 2, tol.h_um);
+    if let Some(top) = done
+        .diagnostics
+        .faults
+        .iter()
+        .filter(|f| f.present)
+        .max_by(|a, b| a.contribution_um.total_cmp(&b.contribution_um))
+    {
+        p.summary.fact(
+            &stage,
+            "largest diagnosed fault",
+            format!(
+                "{} ({:.2} µm of the circularity)",
+                top.label, top.contribution_um
+            ),
+        );
+    }
     let sec = p
         .report
         .section(format!("Circular test (ISO 230-4): {}", stem(&f)));
@@ -534,6 +734,33 @@ pub fn ballbar(p: &mut Pipeline, b: &BallbarStage) -> crate::Result<()> {
     let mut obs = Collect::default();
     let done = ops::identify_ballbar::run(&opts, &mut obs)?;
     p.json_result("ballbar.json", &format!("{}\n", done.to_json()?))?;
+    p.summary
+        .standard("rotary-axis error motions from five ballbar installation modes");
+    let peak = |f: fn(&mtec_identify::ballbar::motions_file::MotionRecord) -> f64| {
+        done.motions
+            .iter()
+            .map(f)
+            .fold(0.0_f64, |m, v| m.max(v.abs()))
+    };
+    let stage = "Rotary axis (ballbar)";
+    p.summary.figure(
+        stage,
+        "largest radial/axial error motion |EXC|, |EYC|, |EZC|",
+        peak(|m| m.exc_um)
+            .max(peak(|m| m.eyc_um))
+            .max(peak(|m| m.ezc_um)),
+        "µm",
+        2,
+        None,
+    );
+    p.summary.figure(
+        stage,
+        "largest tilt error motion |EAC|, |EBC|",
+        peak(|m| m.eac_urad).max(peak(|m| m.ebc_urad)),
+        "µrad",
+        1,
+        None,
+    );
     let sec = p
         .report
         .section("Rotary axis: ballbar identification (5 installation modes)");
@@ -550,7 +777,7 @@ pub fn ballbar(p: &mut Pipeline, b: &BallbarStage) -> crate::Result<()> {
     svgs.sort();
     for f in svgs {
         let svg = std::fs::read_to_string(&f)?;
-        sec.figure(svg, stem(&f).replace('_', " "));
+        sec.figure(svg, rotary_caption(&stem(&f)));
     }
     let c = &done.conditioning;
     sec.text("Conditioning of the five-mode identification (the worst angle):");
@@ -580,6 +807,24 @@ pub fn ballbar(p: &mut Pipeline, b: &BallbarStage) -> crate::Result<()> {
     sec.text("revolution");
     json_tables(sec, &serde_json::to_value(&c.revolution)?, 1);
     Ok(())
+}
+
+/// What a figure of `identify ballbar --out` shows and what to look at, from its file name
+/// (`polar_EXC`, `time_EAC`).
+fn rotary_caption(name: &str) -> String {
+    let (kind, motion) = name.split_once('_').unwrap_or(("", name));
+    match kind {
+        "polar" => format!(
+            "{motion} over one revolution of the table, drawn about the dashed reference circle, \
+             at the first and the last measurement of every experiment: the gap between them is \
+             what warming up changed."
+        ),
+        "time" => format!(
+            "Peak-to-valley of {motion} over the revolution against time, one line per \
+             experiment: how the error motion grows as the axis warms and settles."
+        ),
+        _ => format!("{motion}: identified rotary-axis error motion."),
+    }
 }
 
 /// A thermal model: sensor selection, fit, prediction; returns the model file.
@@ -637,6 +882,13 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> crate::Result<PathBuf> {
     )?;
     let model_json: Value = mtec_io::read_json(&model)?;
     let table = mtec_io::Table::read(&data)?;
+    thermal_figures(
+        p,
+        t,
+        &model_json,
+        &table,
+        done.predictions_of(&t.target).as_deref(),
+    );
     let sec = p
         .report
         .section(format!("Thermal model: {} from {}", t.target, stem(&data)));
@@ -650,6 +902,7 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> crate::Result<PathBuf> {
     );
     {
         let tab = &table;
+        let (xs, x_label) = super::thermal_section::time_axis(tab, tab.rows.len());
         let temps: Vec<Series> = tab
             .columns_with_suffix("_c")
             .iter()
@@ -658,14 +911,15 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> crate::Result<PathBuf> {
                 let v = tab.f64_column(c)?;
                 Ok(Series::new(
                     c.clone(),
-                    v.iter().enumerate().map(|(i, t)| (i as f64, *t)).collect(),
+                    xs.iter().zip(&v).map(|(x, t)| (*x, *t)).collect(),
                 ))
             })
             .collect::<crate::Result<_>>()?;
         if !temps.is_empty() {
             sec.figure(
-                line_chart("Temperatures", "sample", "°C", &temps, &[]),
-                "Temperature sensors (up to 8 shown).",
+                line_chart("Temperatures", x_label, "temperature (°C)", &temps, &[]),
+                "The temperature sensors (up to 8 shown): compare their rise and lag with the \
+                 drift above; a sensor that moves with the drift is a candidate input.",
             );
         }
     }
@@ -708,6 +962,77 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> crate::Result<PathBuf> {
     Ok(model)
 }
 
+/// The thermal stage's key figures: the measured drift, what the model leaves of it, and the
+/// out-of-sample error the tolerance is judged on (test rows, else the forward validation; the
+/// in-sample residual only when neither exists).
+fn thermal_figures(
+    p: &mut Pipeline,
+    t: &ThermalStage,
+    model: &Value,
+    table: &mtec_io::Table,
+    predictions: Option<&[f64]>,
+) {
+    let stage = format!("Thermal {}", t.target);
+    p.summary
+        .standard("thermal drift models validated forward in time (rolling origin)");
+    let column = mtec_thermal::data::target_column(&t.target);
+    let (Ok(y), Some(pred)) = (table.f64_column(&column), predictions) else {
+        return;
+    };
+    if y.len() != pred.len() || y.is_empty() {
+        return;
+    }
+    let rms = |v: &mut dyn Iterator<Item = f64>| {
+        let (s, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x * x, n + 1));
+        (s / n.max(1) as f64).sqrt()
+    };
+    let before = rms(&mut y.iter().copied());
+    let after = rms(&mut y.iter().zip(pred).map(|(a, b)| a - b));
+    let tol = p.tolerances.thermal_residual_rms_um;
+    p.summary.figure(
+        &stage,
+        "measured drift RMS (all rows)",
+        before,
+        "µm",
+        2,
+        None,
+    );
+    let test = model
+        .pointer("/test_metrics/rmse_um")
+        .and_then(Value::as_f64);
+    let forward = model
+        .pointer("/validation/pooled_rmse_um")
+        .and_then(Value::as_f64);
+    match (test, forward) {
+        (Some(e), _) => {
+            p.summary
+                .figure(&stage, "residual RMS on the test rows", e, "µm", 2, tol);
+            p.summary
+                .figure(&stage, "residual RMS (all rows)", after, "µm", 2, None);
+        }
+        (None, Some(e)) => {
+            p.summary
+                .figure(&stage, "residual RMS, forward-validated", e, "µm", 2, tol);
+            p.summary.figure(
+                &stage,
+                "residual RMS in-sample (all rows)",
+                after,
+                "µm",
+                2,
+                None,
+            );
+        }
+        (None, None) => p.summary.figure(
+            &stage,
+            "residual RMS in-sample (all rows)",
+            after,
+            "µm",
+            2,
+            tol,
+        ),
+    }
+}
+
 /// The ridge trace of the selection: one line per sensor over log10 k (k > 0).
 fn ridge_trace_figure(trace: &RidgeTrace) -> Option<String> {
     let series = ridge_trace_series(trace);
@@ -748,6 +1073,8 @@ fn ridge_trace_series(trace: &RidgeTrace) -> Vec<Series> {
 pub fn map(p: &mut Pipeline, m: &MapStage) -> crate::Result<PathBuf> {
     let grid = p.path_of(&m.grid);
     p.progress_of("volumetric map (trilinear)");
+    p.summary
+        .standard("volumetric error map, trilinear interpolation");
     let map = p.out.join("map.json");
     let mut obs = Collect::default();
     ops::map::fit(&ops::map::FitOptions::trilinear(&grid, &map), &mut obs)?;
@@ -777,6 +1104,15 @@ pub fn map(p: &mut Pipeline, m: &MapStage) -> crate::Result<PathBuf> {
             let rms = (a.iter().zip(&b).map(|(x, y)| (x - y).powi(2)).sum::<f64>()
                 / a.len() as f64)
                 .sqrt();
+            let tol = p.tolerances.map_check_rms_um;
+            p.summary.figure(
+                "Volumetric map",
+                &format!("{name}: map against the check measurements, RMS"),
+                rms,
+                "µm",
+                2,
+                tol,
+            );
             let xs = 0..a.len();
             figures.push((
                 line_chart(
@@ -882,6 +1218,15 @@ pub fn compensation(
             .join(" | ");
         tables.push(vec![f.clone(), s(&out), head]);
     }
+    p.summary.fact(
+        "Compensation",
+        "outputs written",
+        format!(
+            "{} NC program(s), {} controller table(s)",
+            rows.len(),
+            tables.len()
+        ),
+    );
     let sec = p.report.section("Compensation outputs");
     warnings(sec, &obs, &mut *p.obs);
     sec.text(format!("Model used: {}. NC programs are rewritten so that every commanded point is corrected (long moves split where the correction changes); controller tables carry the negative of the predicted error.", model.display()));

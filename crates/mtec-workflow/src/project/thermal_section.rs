@@ -152,6 +152,24 @@ pub fn section(
 }
 
 /// Measured and predicted drift and the residual, the test rows shaded.
+/// The x axis of a thermal record's plots: its time when `time_min` runs forward through the
+/// whole file (hours past 10 h), else the row number (several experiments restart their time).
+pub fn time_axis(table: &mtec_io::Table, rows: usize) -> (Vec<f64>, &'static str) {
+    if let Ok(t) = table.f64_column("time_min") {
+        if t.len() == rows && t.windows(2).all(|w| w[1] > w[0]) {
+            return if t.last().is_some_and(|l| l - t[0] > 600.0) {
+                (t.iter().map(|m| m / 60.0).collect(), "time (h)")
+            } else {
+                (t, "time (min)")
+            };
+        }
+    }
+    (
+        (0..rows).map(|i| i as f64).collect(),
+        "row of the data file",
+    )
+}
+
 fn drift_figure(
     sec: &mut Section,
     table: &mtec_io::Table,
@@ -165,7 +183,7 @@ fn drift_figure(
     if y.len() != pred.len() || (!test.is_empty() && test.len() != y.len()) {
         return;
     }
-    let xs: Vec<f64> = (0..y.len()).map(|i| i as f64).collect();
+    let (xs, x_label) = time_axis(table, y.len());
     let series = [
         Series::new(
             "measured",
@@ -202,7 +220,7 @@ fn drift_figure(
         .into_iter()
         .map(|(a, b)| Band {
             name: "test rows".into(),
-            x: vec![a as f64, b as f64],
+            x: vec![xs[a], xs[b]],
             lower: vec![all.0; 2],
             upper: vec![all.1; 2],
         })
@@ -217,7 +235,7 @@ fn drift_figure(
     sec.figure(
         line_chart(
             "Measured and predicted drift",
-            "sample",
+            x_label,
             "drift (µm)",
             &series,
             &bands,

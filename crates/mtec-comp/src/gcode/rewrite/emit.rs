@@ -16,14 +16,14 @@
 use super::super::arc::Arc;
 use super::super::block::Block;
 use super::super::code::GCode;
-use super::super::format::{
-    apply_edits, decimal_value, format_number, to_decimal, write_decimal, Edit,
-};
+use super::super::format::{apply_edits, decimal_value, write_decimal, Edit};
 use super::super::lexer::{TokenKind, Value};
 use super::interp::Motion;
-use super::plan::Piece;
-use super::rotary_move::{EmittedEnd, ROTARY_DECIMALS};
-use super::{GcodeError, ProblemKind, RewriteOptions, Rewriter, Units};
+use super::options::{RewriteOptions, Units};
+use super::piece::{EmittedEnd, Piece, ROTARY_DECIMALS};
+use super::report::{GcodeError, ProblemKind};
+use super::rewriter::Rewriter;
+use super::words::{case, case_letter, rounded, write_rounded};
 use crate::ErrorModel;
 use std::io::Write;
 
@@ -57,7 +57,7 @@ impl Rewriter<'_> {
                 // the byte-order mark stays the first bytes of the file
                 output.write_all(b"\xEF\xBB\xBF")?;
             }
-            let header = header_comment(self.view.model(), self.opt);
+            let header = header_comment(self.planner.view.model(), self.opt);
             output.write_all(header.as_bytes())?;
             output.write_all(if ending.is_empty() { b"\n" } else { ending })?;
             self.report.lines_written += 1;
@@ -481,37 +481,6 @@ impl Rewriter<'_> {
                 }
             }
         }
-    }
-}
-
-/// `v` rounded to `decimals` digits: the value the written word stands for, and its count.
-pub(super) fn rounded(v: f64, decimals: usize) -> (f64, Option<i64>) {
-    match to_decimal(v, decimals) {
-        Some(n) => (decimal_value(n, decimals), Some(n)),
-        None => (v, None),
-    }
-}
-
-pub(super) fn write_rounded(v: f64, decimals: usize, n: Option<i64>, out: &mut String) {
-    match n {
-        Some(n) => write_decimal(n, decimals, out),
-        None => format_number(v, decimals, out),
-    }
-}
-
-pub(super) fn case(code: &str, lower: bool) -> String {
-    if lower {
-        code.to_ascii_lowercase()
-    } else {
-        code.to_string()
-    }
-}
-
-pub(super) fn case_letter(l: u8, lower: bool) -> u8 {
-    if lower {
-        l.to_ascii_lowercase()
-    } else {
-        l
     }
 }
 

@@ -21,7 +21,7 @@ use super::super::code::GCode;
 use super::super::lexer::Value;
 use super::super::modal;
 use super::super::offsets::work_system_index;
-use super::{BlockDelete, RewriteOptions, Units};
+use super::options::{BlockDelete, RewriteOptions, Units};
 use std::collections::BTreeMap;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

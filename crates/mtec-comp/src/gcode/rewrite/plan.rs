@@ -1,11 +1,12 @@
-//! The planner: one motion block turned into corrected pieces.
+//! Planning a motion block: one block turned into corrected pieces.
 //!
 //! **What it is for**: the target of a move in machine coordinates (from its words and the
-//! interpreter's state), the correction at its end and along it ([`correction_mm`]), and the
-//! pieces it is written as: a straight move split until the bound of each piece's path error
-//! ([`PathBound`]) is within `--tolerance-um`, an arc kept whole when its bound allows it or
-//! else cut into chords, a move of a rotary axis handed to `rotary_move`; also the refusals of
-//! moves the model cannot compensate ([`Rewriter::check_compensable`]).
+//! interpreter's state) and the pieces it is written as: the correction at its end and along
+//! it, a straight move split until the bound of each piece's path error is within
+//! `--tolerance-um`, an arc kept whole when its bound allows it or else cut into chords (the
+//! numbers are the [`Planner`](super::planner::Planner)'s), a move of a rotary axis handed to
+//! `rotary_move`; also the refusals of moves the model cannot compensate
+//! ([`Rewriter::check_compensable`]).
 //! **Not for**: the modal state and how a block changes it (`interp`), or the text of the
 //! pieces (`emit`: the planner hands them to [`Rewriter::emit_pieces`]).
 
@@ -14,36 +15,11 @@
 
 use super::super::arc::Arc;
 use super::super::block::{Block, Issue};
-use super::super::bound::{norm, PathBound};
 use super::super::lexer::Value;
-use super::super::solve::{correction_mm, SolveError};
 use super::interp::{Motion, OUT, PROG};
-use super::rotary_move::RotaryMove;
-use super::{rounding_um, GcodeError, OutsidePoint, ProblemKind, Rewriter, Units};
-
-/// A point this far outside the model's box (mm) counts as outside (rounding of written words
-/// and of the solve stays inside).
-const OUTSIDE_MODEL_TOL_MM: f64 = 1e-3;
-
-/// The end of one output piece of a move.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Piece {
-    /// The target in machine axes (mm) at the piece's rotary angles.
-    pub(super) t: [f64; 3],
-    /// The correction (mm): the axes are commanded to `t + c`.
-    pub(super) c: [f64; 3],
-    /// The fraction of the original move's duration at the piece's end (1 for the last).
-    pub(super) s: f64,
-    /// The rotary axes' machine angles (deg) written at the piece's end, for a move that turns
-    /// a rotary axis.
-    pub(super) rot: Option<[f64; 3]>,
-}
-
-impl Piece {
-    pub(super) fn new(t: [f64; 3], c: [f64; 3], s: f64) -> Piece {
-        Piece { t, c, s, rot: None }
-    }
-}
+use super::piece::{dist, Piece, RotaryMove};
+use super::report::{GcodeError, ProblemKind};
+use super::rewriter::Rewriter;
 
 impl Rewriter<'_> {
     /// Refusals of a move the interpreter follows but the rewriter cannot compensate: U, V, W
@@ -60,7 +36,7 @@ impl Rewriter<'_> {
         let mut why: Option<String> = None;
         // the word a refusal points at, when it is not the first axis word
         let mut why_tok: Option<usize> = None;
-        let rotary = self.view.rotary_axes();
+        let rotary = self.planner.view.rotary_axes();
         let moved_rotary = [b'A', b'B', b'C']
             .into_iter()
             .enumerate()
@@ -77,7 +53,7 @@ impl Rewriter<'_> {
         } else if let Some((k, l)) = moved_rotary {
             why_tok = b.word(l).map(|w| w.token);
             if !rotary[k] {
-                why = Some(match self.view.kinematics() {
+                why = Some(match self.planner.view.kinematics() {
                     Some(kin) => format!(
                         "axis {} moves but the model's machine (chain `{}`) has no {} axis",
                         l as char,
@@ -232,7 +208,7 @@ impl Rewriter<'_> {
             }
         }
         // the rotary axes: degrees in every unit system, machine = program + rotary offset
-        let rot_axes = self.view.rotary_axes();
+        let rot_axes = self.planner.view.rotary_axes();
         let rot_start = self.st.rot;
         let mut rot_target = rot_start;
         let mut rot_words: [Option<(f64, usize)>; 3] = [None; 3];
@@ -328,7 +304,7 @@ impl Rewriter<'_> {
         let rot_target = rot_target.map(|r| r.unwrap_or(0.0));
         // an unknown start angle: the move is corrected at its end only (no c_start below)
         let rot_start = [0, 1, 2].map(|k| rot_start[k].unwrap_or(rot_target[k]));
-        if let Some(kin) = self.view.kinematics() {
+        if let Some(kin) = self.planner.view.kinematics() {
             if kin.has_tool_side_rotary()
                 && !g53
                 && self.st.tool_length_mm.is_some_and(|l| l != 0.0)
@@ -346,7 +322,7 @@ impl Rewriter<'_> {
             }
         }
         let rot_moves = (0..3).any(|k| rot_axes[k] && rot_target[k] != rot_start[k]);
-        if let Err(msg) = self.view.set_rotary(rot_target) {
+        if let Err(msg) = self.planner.view.set_rotary(rot_target) {
             let d = self.diag(col, ProblemKind::Unsupported, msg);
             self.unsupported(d)?;
             self.st.prog = [None; 3];
@@ -402,7 +378,16 @@ impl Rewriter<'_> {
                 let start_xyz = self.st.out.map(|o| o.unwrap_or(0.0));
                 let mut pieces = std::mem::take(&mut self.pieces);
                 pieces.clear();
-                self.split_linear(start_p, target, c0, c_end, (0.0, 1.0), &mut pieces, col)?;
+                let (planner, mut at) = self.at(col);
+                planner.split_linear(
+                    start_p,
+                    target,
+                    c0,
+                    c_end,
+                    (0.0, 1.0),
+                    &mut pieces,
+                    &mut at,
+                )?;
                 self.emit_pieces(
                     b,
                     body,
@@ -449,7 +434,8 @@ impl Rewriter<'_> {
                 };
                 // kept as an arc when the bound of its path error allows it (NaN: linearised,
                 // where the pieces report the missing model value)
-                let keep = self.arc_bound_um(&arc, c0, c_end) <= self.opt.tolerance_um;
+                let (planner, at) = self.at(col);
+                let keep = planner.arc_bound_um(&arc, c0, c_end, &at) <= self.opt.tolerance_um;
                 if keep {
                     let moved = c0 != [0.0; 3] || c_end != [0.0; 3];
                     if let Some(rw) = b.word(b'R').filter(|_| moved) {
@@ -484,7 +470,8 @@ impl Rewriter<'_> {
                         let v = arc.point(k as f64 / n as f64);
                         let cv = if k == n { c_end } else { self.correct(v, col)? };
                         let s_range = ((k - 1) as f64 / n as f64, k as f64 / n as f64);
-                        self.split_linear(prev, v, c_prev, cv, s_range, &mut pieces, col)?;
+                        let (planner, mut at) = self.at(col);
+                        planner.split_linear(prev, v, c_prev, cv, s_range, &mut pieces, &mut at)?;
                         prev = v;
                         c_prev = cv;
                     }
@@ -535,223 +522,6 @@ impl Rewriter<'_> {
         }
         self.st.prog = target.map(Some);
         Ok(())
-    }
-
-    /// A bound (µm) on the tool's distance from the nominal arc when the arc is written as an
-    /// arc with its start corrected by `c0` and its end by `c1`: the centre moves with `c0`, so
-    /// the path error is at most twice the model's variation over the arc (once along the
-    /// way, once through the end radius), plus the solve residuals and the rounding of the end
-    /// point and the centre.
-    fn arc_bound_um(&mut self, arc: &Arc, c0: [f64; 3], c1: [f64; 3]) -> f64 {
-        let (mut lo, mut hi) = arc_box(arc);
-        let margin = norm(c0).max(norm(c1));
-        for i in 0..3 {
-            lo[i] -= margin;
-            hi[i] += margin;
-        }
-        let r = arc.r_start.max(arc.r_end);
-        let n_normal = arc.end[arc.plane.normal] - arc.start[arc.plane.normal];
-        let length = (arc.sweep.abs() * r).hypot(n_normal);
-        let n = ((length / self.opt.check_step_mm).ceil() as usize).clamp(16, 1_000_000);
-        let mut samples = (0..=n).map(|k| {
-            let p = arc.point(k as f64 / n as f64);
-            [0, 1, 2].map(|i| p[i] + c0[i])
-        });
-        let v = self.bound.variation_um(&self.view, lo, hi, &mut samples);
-        let (a, b) = (
-            PathBound::end(&self.view, arc.start, c0),
-            PathBound::end(&self.view, arc.end, c1),
-        );
-        2.0 * v + a.residual_um + b.residual_um + 2.0 * self.rounding_now_um()
-    }
-
-    /// The correction at a target (mm), with the error located at the block.
-    pub(super) fn correct(&mut self, target: [f64; 3], col: usize) -> Result<[f64; 3], GcodeError> {
-        match correction_mm(&self.view, target, self.opt.max_correction_um) {
-            Ok(c) => {
-                let n = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() * 1e3;
-                if n > self.report.max_correction_um {
-                    self.report.max_correction_um = n;
-                }
-                self.note_if_outside_model(target, col);
-                Ok(c)
-            }
-            Err(e) => {
-                let msg = match e {
-                    SolveError::NotFinite { .. }
-                    | SolveError::NotConverged { .. }
-                    | SolveError::TooLarge { .. } => {
-                        format!(
-                            "{e} (target [{:.4}, {:.4}, {:.4}] mm, machine frame)",
-                            target[0], target[1], target[2]
-                        )
-                    }
-                };
-                Err(GcodeError::At(self.diag(col, ProblemKind::Correction, msg)))
-            }
-        }
-    }
-
-    /// Counts `target` when it lies outside the model's box (the first one with its place).
-    fn note_if_outside_model(&mut self, target: [f64; 3], col: usize) {
-        let Some(domain_mm) = self.domain else {
-            return;
-        };
-        let outside = (0..3).any(|a| {
-            target[a] < domain_mm[a][0] - OUTSIDE_MODEL_TOL_MM
-                || target[a] > domain_mm[a][1] + OUTSIDE_MODEL_TOL_MM
-        });
-        if outside {
-            self.report.points_outside_model += 1;
-            if self.report.first_outside_model.is_none() {
-                self.report.first_outside_model = Some(OutsidePoint {
-                    line: self.line_no,
-                    column: col,
-                    point_mm: target,
-                    domain_mm,
-                });
-            }
-        }
-    }
-
-    /// Half a unit of the last written digit on three axes, µm (see [`rounding_um`]).
-    pub(super) fn rounding_now_um(&self) -> f64 {
-        match self.st.units {
-            Some(Units::Inch) => rounding_um(self.opt.decimals_inch, Units::Inch),
-            _ => rounding_um(self.opt.decimals_mm, Units::Mm),
-        }
-    }
-
-    /// A bound (µm) on the tool's distance from the nominal segment ta→tb while the axes move
-    /// straight from ta + ca to tb + cb: the solve residuals at the ends, the model's departure
-    /// from its chord between them ([`PathBound`]) and the rounding of the written words.
-    pub(super) fn piece_bound_um(
-        &mut self,
-        ta: [f64; 3],
-        ca: [f64; 3],
-        tb: [f64; 3],
-        cb: [f64; 3],
-    ) -> f64 {
-        let (a, b) = (
-            PathBound::end(&self.view, ta, ca),
-            PathBound::end(&self.view, tb, cb),
-        );
-        self.bound
-            .chord_departure_um(&self.view, a.p, b.p, a.e, b.e)
-            + a.residual_um.max(b.residual_um)
-            + self.rounding_now_um()
-    }
-
-    pub(super) fn no_model_value(&self, col: usize) -> GcodeError {
-        GcodeError::At(self.diag(
-            col,
-            ProblemKind::Correction,
-            "the error model has no finite value along this move (a map with outside = refuse, and the move leaves its grid?)".into(),
-        ))
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    /// Splits the straight move a→b into pieces whose path error, bounded by
-    /// [`Self::piece_bound_um`], is at most `--tolerance-um`; no piece of a compensated move is
-    /// longer than `max_segment_mm`. Pushes (target, correction) of each piece's end; the last
-    /// is exactly (b, c_b).
-    fn split_linear(
-        &mut self,
-        a: [f64; 3],
-        b: [f64; 3],
-        c_a: [f64; 3],
-        c_b: [f64; 3],
-        s_range: (f64, f64),
-        pieces: &mut Vec<Piece>,
-        col: usize,
-    ) -> Result<(), GcodeError> {
-        let tol = self.opt.tolerance_um;
-        let len = dist(a, b);
-        let lerp = |t: f64| -> [f64; 3] {
-            if t >= 1.0 {
-                b
-            } else {
-                [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * t)
-            }
-        };
-        let zero = [0.0; 3];
-        if c_a == zero && c_b == zero {
-            // nothing to correct at the ends: the move stays whole when the model is flat along it
-            let bound = self.piece_bound_um(a, c_a, b, c_b);
-            if bound.is_nan() {
-                return Err(self.no_model_value(col));
-            }
-            if bound <= tol {
-                pieces.push(Piece::new(b, c_b, s_range.1));
-                return Ok(());
-            }
-        }
-        let n0 = ((len / self.opt.max_segment_mm).ceil() as usize).max(1);
-        if n0 > self.opt.max_pieces_per_move {
-            return Err(self.too_many(col));
-        }
-        let mut t_prev = 0.0;
-        let mut c_prev = c_a;
-        for k in 1..=n0 {
-            let t1 = if k == n0 { 1.0 } else { k as f64 / n0 as f64 };
-            let c1 = if k == n0 {
-                c_b
-            } else {
-                self.correct(lerp(t1), col)?
-            };
-            // depth-first bisection of [t_prev, t1], left half first
-            let mut stack = std::mem::take(&mut self.split_stack);
-            stack.clear();
-            stack.push((t_prev, c_prev, t1, c1));
-            while let Some((t0, c0, t1, c1)) = stack.pop() {
-                let bound = self.piece_bound_um(lerp(t0), c0, lerp(t1), c1);
-                if bound.is_nan() {
-                    self.split_stack = stack;
-                    return Err(self.no_model_value(col));
-                }
-                if bound <= tol {
-                    let s = s_range.0 + (s_range.1 - s_range.0) * t1;
-                    pieces.push(Piece::new(
-                        lerp(t1),
-                        c1,
-                        if t1 >= 1.0 { s_range.1 } else { s },
-                    ));
-                    if pieces.len() > self.opt.max_pieces_per_move {
-                        self.split_stack = stack;
-                        return Err(self.too_many(col));
-                    }
-                } else if (t1 - t0) * len < 1e-6 {
-                    self.split_stack = stack;
-                    return Err(GcodeError::At(self.diag(
-                        col,
-                        ProblemKind::Correction,
-                        format!(
-                            "the path cannot be kept within --tolerance-um {tol}: {bound:.3} um on a piece shorter than 1 nm (is the error model continuous here?)"
-                        ),
-                    )));
-                } else {
-                    let tm = 0.5 * (t0 + t1);
-                    let cm = self.correct(lerp(tm), col)?;
-                    stack.push((tm, cm, t1, c1));
-                    stack.push((t0, c0, tm, cm));
-                }
-            }
-            self.split_stack = stack;
-            t_prev = t1;
-            c_prev = c1;
-        }
-        Ok(())
-    }
-
-    pub(super) fn too_many(&self, col: usize) -> GcodeError {
-        GcodeError::At(self.diag(
-            col,
-            ProblemKind::Correction,
-            format!(
-                "the move would need more than {} pieces: the error model changes too fast for --tolerance-um",
-                self.opt.max_pieces_per_move
-            ),
-        ))
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -810,47 +580,9 @@ impl Rewriter<'_> {
     }
 }
 
-/// An axis-aligned box (mm) holding every point of the arc: its end points and, at both radii,
-/// the in-plane extremes (multiples of 90°) its sweep passes.
-fn arc_box(arc: &Arc) -> ([f64; 3], [f64; 3]) {
-    let mut lo = [0.0; 3];
-    let mut hi = [0.0; 3];
-    for i in 0..3 {
-        lo[i] = arc.start[i].min(arc.end[i]);
-        hi[i] = arc.start[i].max(arc.end[i]);
-    }
-    let (f, s) = (arc.plane.first, arc.plane.second);
-    let (a0, a1) = if arc.sweep >= 0.0 {
-        (arc.theta_start, arc.theta_start + arc.sweep)
-    } else {
-        (arc.theta_start + arc.sweep, arc.theta_start)
-    };
-    let half_pi = std::f64::consts::FRAC_PI_2;
-    let mut k = (a0 / half_pi).ceil();
-    let mut angles = vec![a0, a1];
-    while k * half_pi <= a1 && angles.len() < 12 {
-        angles.push(k * half_pi);
-        k += 1.0;
-    }
-    for th in angles {
-        for r in [arc.r_start, arc.r_end] {
-            let p = [arc.center[0] + r * th.cos(), arc.center[1] + r * th.sin()];
-            lo[f] = lo[f].min(p[0]);
-            hi[f] = hi[f].max(p[0]);
-            lo[s] = lo[s].min(p[1]);
-            hi[s] = hi[s].max(p[1]);
-        }
-    }
-    (lo, hi)
-}
-
 /// Length (mm) of an arc as LinuxCNC's interpreter measures it for inverse-time feeds
 /// (`find_arc_length`): the helix over the start radius, √((r·|θ|)² + Δnormal²).
 fn arc_length(arc: &Arc) -> f64 {
     let n = arc.plane.normal;
     (arc.r_start * arc.sweep.abs()).hypot(arc.end[n] - arc.start[n])
-}
-
-pub(super) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }

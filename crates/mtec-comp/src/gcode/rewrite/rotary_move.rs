@@ -40,118 +40,20 @@
 use super::super::block::Block;
 use super::super::bound::norm;
 use super::super::code::GCode;
-use super::super::format::{decimal_value, format_number, to_decimal, write_decimal, Edit};
-use super::super::lexer::{Token, TokenKind, Value};
-use super::emit::case;
+use super::super::format::{format_number, Edit};
+use super::super::lexer::{TokenKind, Value};
 use super::interp::Motion;
-use super::plan::{dist, Piece};
-use super::{GcodeError, ProblemKind, Rewriter};
+use super::piece::{dist, EmittedEnd, Piece, RotaryMove};
+use super::report::{GcodeError, ProblemKind};
+use super::rewriter::Rewriter;
+use super::words::case;
 use crate::pose::Pose;
 
-/// Digits after the point of a rotary word written for a piece (degrees): 10⁻⁴° turns a point
-/// 500 mm from the axis by 0.9 µm, which the linear axes absorb at the piece's end.
-pub(super) const ROTARY_DECIMALS: usize = 4;
 /// Largest relative change of a piece's duration for which a G94/G95 move keeps its F (1 %).
 pub const FEED_TOLERANCE: f64 = 0.01;
 
-/// A move that turns a rotary axis: start and end in machine axes (mm, deg).
-#[derive(Debug, Clone, Copy)]
-pub(super) struct RotaryMove {
-    pub x0: [f64; 3],
-    pub x1: [f64; 3],
-    pub r0: [f64; 3],
-    pub r1: [f64; 3],
-    /// The correction at the start (None: the start is not known).
-    pub c0: Option<[f64; 3]>,
-    pub c1: [f64; 3],
-    /// The block's A, B, C words (value, token).
-    pub words: [Option<(f64, usize)>; 3],
-    pub absolute: bool,
-    /// Machine angle = program angle + this (deg), in absolute mode.
-    pub offset: [f64; 3],
-}
-
-/// One written line of a move: which line (None: the original one), the fraction of the move
-/// at its end, and the written axes there.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct EmittedEnd {
-    pub line: Option<usize>,
-    pub s: f64,
-    pub xyz: [f64; 3],
-    pub rot: Option<[f64; 3]>,
-}
-
 fn lerp(a: [f64; 3], b: [f64; 3], s: f64) -> [f64; 3] {
     [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * s)
-}
-
-impl RotaryMove {
-    /// The machine angle written for a wanted machine angle `r` of axis `k` (module docs).
-    fn written(&self, k: usize, r: f64) -> f64 {
-        let base = if self.absolute {
-            self.offset[k]
-        } else {
-            self.r0[k]
-        };
-        match to_decimal(r - base, ROTARY_DECIMALS) {
-            Some(n) => base + decimal_value(n, ROTARY_DECIMALS),
-            None => r,
-        }
-    }
-
-    /// The word value (count of 10⁻⁴) of axis `k` for a piece ending at machine angle `w`, on
-    /// the original line (the first piece): absolute, or incremental from the start.
-    pub fn written_count(&self, k: usize, w: f64) -> i64 {
-        let base = if self.absolute {
-            self.offset[k]
-        } else {
-            self.r0[k]
-        };
-        to_decimal(w - base, ROTARY_DECIMALS).unwrap_or(0)
-    }
-
-    /// The word text of axis `k` for a piece from `prev` to `w` (not the last piece).
-    pub fn word_text(&self, k: usize, w: f64, prev: f64) -> String {
-        let mut text = String::new();
-        let n = self.written_count(k, w);
-        let n = if self.absolute {
-            n
-        } else {
-            n - self.written_count(k, prev)
-        };
-        write_decimal(n, ROTARY_DECIMALS, &mut text);
-        text
-    }
-
-    /// The word text of axis `k` on the last piece, which ends at the programmed angle exactly:
-    /// the original word's text (absolute), or the programmed increment less what the pieces
-    /// before it turned, in exact decimal arithmetic (incremental).
-    pub fn last_word_text(
-        &self,
-        k: usize,
-        tokens: &[Token],
-        body: &[u8],
-        prev: f64,
-    ) -> Option<String> {
-        let (v, tok) = self.words[k]?;
-        let span = tokens[tok].value_span.clone();
-        let text = String::from_utf8_lossy(&body[span]).to_string();
-        if self.absolute {
-            return Some(text);
-        }
-        let digits = text.split_once('.').map_or(0, |(_, f)| {
-            f.chars().take_while(|c| c.is_ascii_digit()).count()
-        });
-        let d = digits.max(ROTARY_DECIMALS);
-        if d > 9 {
-            return None;
-        }
-        let total = to_decimal(v, d)?;
-        let before = self.written_count(k, prev) * 10i64.pow((d - ROTARY_DECIMALS) as u32);
-        let mut out = String::new();
-        write_decimal(total - before, d, &mut out);
-        Some(out)
-    }
 }
 
 impl Rewriter<'_> {
@@ -179,7 +81,8 @@ impl Rewriter<'_> {
                 pieces.clear();
                 let split = self.split_rotary(mv, c0, &mut pieces, col);
                 // the view stands at the move's end angles from here on
-                self.view
+                self.planner
+                    .view
                     .set_rotary(mv.r1)
                     .map_err(|msg| GcodeError::At(self.diag(col, ProblemKind::Correction, msg)))?;
                 split?;
@@ -231,7 +134,7 @@ impl Rewriter<'_> {
 
     /// The nominal tool tip at fraction `s` of the move (workpiece frame, mm).
     fn nominal_tip(&self, mv: &RotaryMove, s: f64) -> [f64; 3] {
-        match self.view.kinematics() {
+        match self.planner.view.kinematics() {
             Some(kin) => kin.tool_point(&Pose::new(lerp(mv.x0, mv.x1, s), lerp(mv.r0, mv.r1, s))),
             None => lerp(mv.x0, mv.x1, s),
         }
@@ -268,10 +171,11 @@ impl Rewriter<'_> {
             }
         });
         let n = self.nominal_tip(mv, s);
-        self.view
+        self.planner
+            .view
             .set_rotary(w)
             .map_err(|msg| GcodeError::At(self.diag(col, ProblemKind::Correction, msg)))?;
-        let t = self.view.machine_point(n);
+        let t = self.planner.view.machine_point(n);
         let c = self.correct(t, col)?;
         Ok(Piece {
             t,
@@ -285,10 +189,10 @@ impl Rewriter<'_> {
     /// (module docs: dense samples plus the rounding of the written X, Y, Z words). NaN when
     /// the model has no value somewhere.
     fn rotary_piece_bound_um(&self, mv: &RotaryMove, a: &Piece, b: &Piece) -> f64 {
-        let Some(kin) = self.view.kinematics() else {
+        let Some(kin) = self.planner.view.kinematics() else {
             return f64::NAN;
         };
-        let model = self.view.model();
+        let model = self.planner.view.model();
         let pa = [0, 1, 2].map(|i| a.t[i] + a.c[i]);
         let pb = [0, 1, 2].map(|i| b.t[i] + b.c[i]);
         let (wa, wb) = (a.rot.unwrap_or(mv.r0), b.rot.unwrap_or(mv.r1));

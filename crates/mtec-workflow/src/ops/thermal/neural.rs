@@ -12,13 +12,14 @@
 
 use super::PredictOptions;
 use crate::{Error, Observer, Result};
-use mtec_io::{InputError, OutputGuard, Table};
+use mtec_io::{CsvWriter, InputError, OutputGuard, Table};
 use mtec_nn::metrics::{channel_metrics, ChannelMetrics};
 use mtec_nn::thermal_log::{self, LoadSpec, NnFitOptions, NnKind};
 use mtec_nn::{
     train_bpnn_baseline_monitored, train_cnn_lstm_monitored, Bpnn, CnnLstm, CnnLstmReport, NnError,
     StopReason, ThermalDataset, TrainReport,
 };
+use mtec_thermal::model_file::SplitBy;
 use serde::Serialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -40,6 +41,35 @@ pub struct FitOptions {
     pub output: PathBuf,
     /// The network and its training.
     pub nn: NnFitOptions,
+}
+
+impl FitOptions {
+    /// The neural fit that `thermal fit` options ask for: the data, target, sensors,
+    /// experiment split and output of `opts`, and the network `nn`. What goes with the
+    /// regression models only is refused (a ridge k, lag features, validation blocks, a split
+    /// by time): the networks are validated on whole experiments.
+    pub fn from_thermal_fit(opts: &super::FitOptions, nn: NnFitOptions) -> Result<FitOptions> {
+        let f = &opts.fit;
+        let (train, test) = match &opts.split {
+            SplitBy::Experiments { train, test }
+                if f.k.is_none() && !f.lag && f.block_min.is_none() =>
+            {
+                (train.clone(), test.clone())
+            }
+            _ => return Err(Error::usage(
+                "--k, --lag, --block-min and --train-until go with the regression models; the neural models split by --train/--test experiments",
+            )),
+        };
+        Ok(FitOptions {
+            data: opts.data.clone(),
+            target: opts.target.clone(),
+            sensors: f.sensors.clone(),
+            train,
+            test,
+            output: opts.output.clone(),
+            nn,
+        })
+    }
 }
 
 /// How the network trained.
@@ -376,35 +406,29 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
     };
     let meas = loaded.has_targets.then(|| loaded.data.rows().1);
     let metrics = meas.as_ref().map(|y| channel_metrics(targets, &pred, y));
-    let mut csv = String::from("experiment,time_min");
-    if let Some(c) = &seq_by {
-        csv.push(',');
-        csv.push_str(c);
-    }
-    for t in targets {
-        csv.push_str(&format!(",pred_{t}"));
-    }
+    let mut header = vec!["experiment".to_string(), "time_min".to_string()];
+    header.extend(seq_by.iter().cloned());
+    header.extend(targets.iter().map(|t| format!("pred_{t}")));
     if meas.is_some() {
-        for t in targets {
-            csv.push_str(&format!(",{t},res_{t}"));
-        }
+        header.extend(
+            targets
+                .iter()
+                .flat_map(|t| [t.to_string(), format!("res_{t}")]),
+        );
     }
-    csv.push('\n');
+    let mut csv = CsvWriter::new(header);
     for (i, l) in loaded.labels.iter().enumerate() {
-        csv.push_str(&format!("{},{}", l.experiment, l.time_min));
-        if let Some(s) = l.sequence {
-            csv.push_str(&format!(",{s}"));
-        }
-        for p in &pred[i] {
-            csv.push_str(&format!(",{p:.4}"));
-        }
+        let mut row = vec![l.experiment.to_string(), l.time_min.to_string()];
+        row.extend(l.sequence.iter().map(|s| s.to_string()));
+        row.extend(pred[i].iter().map(|p| format!("{p:.4}")));
         if let Some(y) = &meas {
             for (p, v) in pred[i].iter().zip(&y[i]) {
-                csv.push_str(&format!(",{v:.4},{:.4}", v - p));
+                row.extend([format!("{v:.4}"), format!("{:.4}", v - p)]);
             }
         }
-        csv.push('\n');
+        csv.row(row);
     }
+    let csv = csv.finish();
     if let Some(d) = &dest {
         d.write(csv.as_bytes())?;
     }

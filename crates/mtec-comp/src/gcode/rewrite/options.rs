@@ -1,0 +1,183 @@
+//! The knobs of a rewrite ([`RewriteOptions`]) and the words they are given in: what to do
+//! with an unsupported construct, the block-delete switch, the program's units, the rounding
+//! of a written position. A leaf: it uses no other module of the rewriter.
+
+use super::super::offsets::Offsets;
+
+/// What to do with a construct that cannot be compensated safely.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum OnUnsupported {
+    /// Stop with an error naming the line and column (the default).
+    #[default]
+    Refuse,
+    /// Copy the line unchanged, record a warning, and stop compensating whatever the construct
+    /// may have changed (positions, modes) until the program sets it again explicitly.
+    PassThroughWithWarning,
+}
+
+/// The operator's block-delete switch (`--block-delete`): what a block starting with `/` does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BlockDelete {
+    /// Not given: a `/` block that moves or changes a mode is unsupported (whether it runs
+    /// depends on the switch).
+    #[default]
+    Unknown,
+    /// Switch on: the controller skips `/` blocks; they are copied and not interpreted.
+    On,
+    /// Switch off: `/` blocks run like any other block.
+    Off,
+}
+
+/// Length units of the program.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Units {
+    Mm,
+    Inch,
+}
+
+impl Units {
+    pub(super) fn mm_per_unit(self) -> f64 {
+        match self {
+            Units::Mm => 1.0,
+            Units::Inch => 25.4,
+        }
+    }
+}
+
+/// The knobs of the rewriter (every one has a CLI flag of the same name).
+#[derive(Debug, Clone)]
+pub struct RewriteOptions {
+    /// Largest change of the correction along one output piece, µm (`--tolerance-um`).
+    pub tolerance_um: f64,
+    /// Longest output piece of a compensated feed move, mm (`--max-segment-mm`).
+    pub max_segment_mm: f64,
+    /// Largest sagitta of a chord when an arc is linearised, µm (`--chord-tolerance-um`).
+    pub chord_tolerance_um: f64,
+    /// Corrections larger than this are refused, µm (`--max-correction-um`).
+    pub max_correction_um: f64,
+    pub on_unsupported: OnUnsupported,
+    /// Digits after the point of rewritten words in mm and in inch programs.
+    pub decimals_mm: usize,
+    pub decimals_inch: usize,
+    /// Units in effect before the program's first G20/G21 (the controller's power-on default).
+    pub default_units: Units,
+    pub offsets: Offsets,
+    /// A single move split into more pieces than this is an error (a runaway model).
+    pub max_pieces_per_move: usize,
+    /// Machine position (mm) at program start, when known (e.g. the home position; on a lathe
+    /// the Y position that programs never state). `None`: unknown until programmed.
+    pub start_position_mm: Option<[f64; 3]>,
+    /// Sample spacing (mm) of the dense path check for models that are not grid maps
+    /// (`--check-step-mm`); grid maps are bounded exactly (see [`super::bound`]).
+    pub check_step_mm: f64,
+    /// Longest line the target controller reads (`--max-line-chars`; LinuxCNC: 251). A
+    /// rewritten or added line longer than this is refused; the header comment is shortened.
+    pub max_line_chars: usize,
+    /// The operator's block-delete switch (`--block-delete on|off`).
+    pub block_delete: BlockDelete,
+    /// Machine angles (deg) of the rotary axes A, B, C at program start, when known
+    /// (`--start-rotary-deg`). `None`: unknown until programmed.
+    pub start_rotary_deg: Option<[f64; 3]>,
+    /// Largest turn (deg) of any rotary axis between two samples of the dense path check of a
+    /// move that turns a rotary axis (`--check-step-deg`).
+    pub check_step_deg: f64,
+}
+
+impl Default for RewriteOptions {
+    fn default() -> Self {
+        RewriteOptions {
+            tolerance_um: 0.5,
+            max_segment_mm: 10.0,
+            chord_tolerance_um: 0.5,
+            max_correction_um: 500.0,
+            on_unsupported: OnUnsupported::Refuse,
+            decimals_mm: 4,
+            decimals_inch: 5,
+            default_units: Units::Mm,
+            offsets: Offsets::default(),
+            max_pieces_per_move: 100_000,
+            start_position_mm: None,
+            check_step_mm: 0.5,
+            max_line_chars: LINUXCNC_MAX_LINE_CHARS,
+            block_delete: BlockDelete::Unknown,
+            start_rotary_deg: None,
+            check_step_deg: 0.5,
+        }
+    }
+}
+
+impl RewriteOptions {
+    /// Checks that the numbers make sense; the message names the option.
+    pub fn validate(&self) -> Result<(), String> {
+        let pos = |v: f64, name: &str| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("{name} must be a positive number, not {v}"))
+            }
+        };
+        pos(self.tolerance_um, "--tolerance-um")?;
+        pos(self.chord_tolerance_um, "--chord-tolerance-um")?;
+        pos(self.max_correction_um, "--max-correction-um")?;
+        if self.max_segment_mm.is_nan() || self.max_segment_mm <= 0.0 {
+            return Err(format!(
+                "--max-segment-mm must be positive, not {}",
+                self.max_segment_mm
+            ));
+        }
+        pos(self.check_step_mm, "--check-step-mm")?;
+        pos(self.check_step_deg, "--check-step-deg")?;
+        if let Some(r) = self.start_rotary_deg {
+            if !r.iter().all(|v| v.is_finite()) {
+                return Err("--start-rotary-deg must be three finite angles".into());
+            }
+        }
+        if self.decimals_mm > 9 || self.decimals_inch > 9 {
+            return Err("--decimals must be at most 9".into());
+        }
+        // rounding a written word moves the command by up to half a unit of its last digit on
+        // each axis; that must leave room for the correction's own path error
+        for (d, units, flag) in [
+            (self.decimals_mm, Units::Mm, "--decimals-mm"),
+            (self.decimals_inch, Units::Inch, "--decimals-inch"),
+        ] {
+            let r = rounding_um(d, units);
+            if r > self.tolerance_um / 2.0 {
+                let need = (0..=9)
+                    .find(|&k| rounding_um(k, units) <= self.tolerance_um / 2.0)
+                    .map(|k| format!("use {flag} {k} or more"))
+                    .unwrap_or_else(|| "raise --tolerance-um".into());
+                return Err(format!(
+                    "{flag} {d} rounds every corrected word by up to {r:.3} um (half a unit of the last digit, on three axes), more than half of --tolerance-um {}: the correction would be lost in rounding; {need}",
+                    self.tolerance_um
+                ));
+            }
+        }
+        if self.max_line_chars < 80 {
+            return Err(format!(
+                "--max-line-chars {} is too short for a rewritten block (at least 80)",
+                self.max_line_chars
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// LinuxCNC's interpreter refuses longer lines ("Command too long"): rs274 of LinuxCNC 2.9
+/// accepts 252 characters and refuses 253, a CR counting as one, so 251 is safe with either
+/// line ending (measured; its LINELEN of 255 includes the terminators).
+pub const LINUXCNC_MAX_LINE_CHARS: usize = 251;
+
+/// Largest distance (µm) a written position moves when its words are rounded to `decimals`
+/// digits: half a unit of the last digit on each of three axes, √3·½·10⁻ᵈ program units.
+pub fn rounding_um(decimals: usize, units: Units) -> f64 {
+    3f64.sqrt() * 0.5 * 10f64.powi(-(decimals as i32)) * units.mm_per_unit() * 1e3
+}
+
+/// [`rounding_um`] of the digits written in `units` (mm unless known to be inch).
+pub(super) fn rounding_in_effect_um(opt: &RewriteOptions, units: Option<Units>) -> f64 {
+    match units {
+        Some(Units::Inch) => rounding_um(opt.decimals_inch, Units::Inch),
+        _ => rounding_um(opt.decimals_mm, Units::Mm),
+    }
+}

@@ -1,0 +1,390 @@
+//! The driver: the [`Rewriter`] reads lines, evaluates parameters and hands each block to the
+//! interpreter (`interp`, the [`State`] it owns), the planning of its move (`plan`,
+//! `rotary_move`, with the [`Planner`] it owns for the numbers) and the emitter (`emit`); those
+//! three are `impl Rewriter` blocks. It holds the per-line buffers they share. The types every part names (options, report, pieces, rotary moves, word text) live in
+//! leaf modules below all of them, so no module of the rewriter uses another in a cycle.
+
+use super::super::block::Block;
+use super::super::code::GCode;
+use super::super::expr::{system_parameters_written_by, LineValues, Params};
+use super::super::format::Edit;
+use super::super::lexer::{lex_line, Token, TokenKind, Value};
+use super::interp::{Interpreted, Motion, State};
+use super::options::{rounding_in_effect_um, BlockDelete, OnUnsupported, RewriteOptions};
+use super::piece::{EmittedEnd, Piece, RotaryMove};
+use super::planner::{At, Planner};
+use super::report::{Diagnostic, GcodeError, ProblemKind, RewriteReport, MAX_WARNINGS_KEPT};
+use crate::ErrorModel;
+use std::io::{BufRead, Write};
+pub(super) struct Rewriter<'a> {
+    pub(super) opt: &'a RewriteOptions,
+    pub(super) st: State,
+    pub(super) report: RewriteReport,
+    pub(super) line_no: usize,
+    pub(super) tokens: Vec<Token>,
+    pub(super) edits: Vec<Edit>,
+    pub(super) extra_lines: Vec<String>,
+    pub(super) out_buf: Vec<u8>,
+    pub(super) tape_started: bool,
+    pub(super) tape_ended: bool,
+    pub(super) seen_content: bool,
+    /// The current line writes its letters in lower case (new words follow it).
+    pub(super) lower: bool,
+    /// The motion of the current block was written (by `emit_pieces` or as an uncorrected rapid).
+    pub(super) emitted: bool,
+    /// The pieces of the current move (reused).
+    pub(super) pieces: Vec<Piece>,
+    /// The current block's words (buffers reused from line to line).
+    pub(super) block: Block,
+    /// Corrections, path-error bounds and splitting (`planner`).
+    pub(super) planner: Planner<'a>,
+    /// The current block moves in machine coordinates (G53).
+    pub(super) g53: bool,
+    /// The current move's original-program offsets less the rewritten program's, mm: a word
+    /// copied unchanged lands this much off in the rewritten program.
+    pub(super) shift: [f64; 3],
+    /// Numbered and named parameters as LinuxCNC sets them (literal values only).
+    pub(super) params: Params,
+    /// The rotary move being written, if the current move turns a rotary axis.
+    pub(super) rot_move: Option<RotaryMove>,
+    /// The output lines of the current move (for its feed words).
+    pub(super) ends: Vec<EmittedEnd>,
+    /// The current line's evaluated words and assignments.
+    pub(super) line_values: LineValues,
+    /// A line's parameters could not be evaluated (pass-through mode): from then on parameter
+    /// values are not known and computed words are unsupported.
+    pub(super) params_lost: bool,
+}
+
+impl<'a> Rewriter<'a> {
+    pub(super) fn new(model: &'a dyn ErrorModel, opt: &'a RewriteOptions) -> Self {
+        Rewriter {
+            opt,
+            st: State::new(opt),
+            report: RewriteReport::default(),
+            line_no: 0,
+            tokens: Vec::new(),
+            edits: Vec::new(),
+            extra_lines: Vec::new(),
+            out_buf: Vec::new(),
+            tape_started: false,
+            tape_ended: false,
+            seen_content: false,
+            lower: false,
+            emitted: false,
+            g53: false,
+            shift: [0.0; 3],
+            params: Params::new(),
+            rot_move: None,
+            ends: Vec::new(),
+            line_values: LineValues::default(),
+            params_lost: false,
+            block: Block::default(),
+            planner: Planner::new(model, opt),
+            pieces: Vec::new(),
+        }
+    }
+
+    pub(super) fn run<R: BufRead, W: Write>(
+        &mut self,
+        mut input: R,
+        mut output: W,
+    ) -> Result<(), GcodeError> {
+        let mut buf = Vec::with_capacity(256);
+        loop {
+            buf.clear();
+            let n = input.read_until(b'\n', &mut buf)?;
+            if n == 0 {
+                break;
+            }
+            self.line_no += 1;
+            self.report.lines_read += 1;
+            let mut body_end = buf.len();
+            if buf[body_end - 1] == b'\n' {
+                body_end -= 1;
+                if body_end > 0 && buf[body_end - 1] == b'\r' {
+                    body_end -= 1;
+                }
+            }
+            let (body, ending) = buf.split_at(body_end);
+            self.line(body, ending, &mut output)?;
+        }
+        output.flush()?;
+        Ok(())
+    }
+
+    pub(super) fn diag(&self, column: usize, kind: ProblemKind, message: String) -> Diagnostic {
+        Diagnostic {
+            line: self.line_no,
+            column,
+            kind,
+            message,
+        }
+    }
+
+    pub(super) fn column_of(&self, token: Option<usize>) -> usize {
+        token
+            .and_then(|t| self.tokens.get(t))
+            .map(|t| t.span.start + 1)
+            .unwrap_or(1)
+    }
+
+    /// Refuses, or records a warning and returns Ok (the caller passes the line through).
+    pub(super) fn unsupported(&mut self, d: Diagnostic) -> Result<(), GcodeError> {
+        match self.opt.on_unsupported {
+            OnUnsupported::Refuse => Err(GcodeError::At(d)),
+            OnUnsupported::PassThroughWithWarning => {
+                self.report.warnings_total += 1;
+                if self.report.warnings.len() < MAX_WARNINGS_KEPT {
+                    self.report.warnings.push(d);
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The planner and where the current block is, for one planning step at column `col`.
+    pub(super) fn at(&mut self, col: usize) -> (&mut Planner<'a>, At<'_>) {
+        let at = At {
+            opt: self.opt,
+            units: self.st.units,
+            line: self.line_no,
+            col,
+            report: &mut self.report,
+        };
+        (&mut self.planner, at)
+    }
+
+    /// The correction at a target (mm), with the error located at the block.
+    pub(super) fn correct(&mut self, target: [f64; 3], col: usize) -> Result<[f64; 3], GcodeError> {
+        let (planner, mut at) = self.at(col);
+        planner.correct(target, &mut at)
+    }
+
+    /// Half a unit of the last written digit on three axes in the units in effect, µm.
+    pub(super) fn rounding_now_um(&self) -> f64 {
+        rounding_in_effect_um(self.opt, self.st.units)
+    }
+
+    pub(super) fn no_model_value(&mut self, col: usize) -> GcodeError {
+        self.at(col).1.no_model_value()
+    }
+
+    pub(super) fn too_many(&mut self, col: usize) -> GcodeError {
+        self.at(col).1.too_many()
+    }
+
+    fn line<W: Write>(
+        &mut self,
+        body: &[u8],
+        ending: &[u8],
+        output: &mut W,
+    ) -> Result<(), GcodeError> {
+        if self.tape_ended {
+            return self.write_verbatim(body, ending, output);
+        }
+        let start = if self.line_no == 1 && body.starts_with(b"\xEF\xBB\xBF") {
+            3
+        } else {
+            0
+        };
+        let mut tokens = std::mem::take(&mut self.tokens);
+        let lexed = lex_line(body, start, &mut tokens);
+        self.tokens = tokens;
+        if let Err(e) = lexed {
+            let d = self.diag(e.column, ProblemKind::Syntax, e.message);
+            self.unsupported(d)?;
+            self.st.poison_all();
+            return self.write_verbatim(body, ending, output);
+        }
+        // a `/` block with the switch on is skipped by the controller: copied, not interpreted
+        if self.opt.block_delete == BlockDelete::On
+            && self
+                .tokens
+                .first()
+                .is_some_and(|t| t.kind == TokenKind::BlockDelete)
+        {
+            return self.write_verbatim(body, ending, output);
+        }
+        // parameters and expressions: every word is read with the values from before the line
+        // (LinuxCNC's rule); a computed word becomes its number, assignments apply after it
+        let computes = self.tokens.iter().any(|t| {
+            matches!(
+                t.kind,
+                TokenKind::Assignment { .. }
+                    | TokenKind::Word {
+                        value: Value::Computed,
+                        ..
+                    }
+            )
+        });
+        let mut evaluated = false;
+        if computes && !self.params_lost {
+            let mut lv = std::mem::take(&mut self.line_values);
+            match self.params.eval_line(body, &self.tokens, &mut lv) {
+                Ok(()) => {
+                    for (i, t) in self.tokens.iter_mut().enumerate() {
+                        if let TokenKind::Word { value, .. } = &mut t.kind {
+                            if *value == Value::Computed {
+                                if let Some(v) = lv.word(i) {
+                                    *value = Value::Number(v);
+                                }
+                            }
+                        }
+                    }
+                    evaluated = true;
+                }
+                Err(e) => {
+                    let d = self.diag(e.column, ProblemKind::Unsupported, e.message);
+                    self.line_values = lv;
+                    self.unsupported(d)?;
+                    // the parameters this line sets are not known from here on
+                    self.params_lost = true;
+                    self.st.poison_all();
+                    return self.write_verbatim(body, ending, output);
+                }
+            }
+            self.line_values = lv;
+        }
+        let mut block = std::mem::take(&mut self.block);
+        block.read_into(&self.tokens, body);
+        let r = self.line_block(&block, body, ending, output);
+        if r.is_ok() && evaluated {
+            let lv = std::mem::take(&mut self.line_values);
+            self.params.commit(&lv);
+            self.line_values = lv;
+        }
+        if r.is_ok() && !self.params_lost {
+            let moved = [b'X', b'Y', b'Z', b'A', b'B', b'C', b'U', b'V', b'W']
+                .iter()
+                .any(|&l| block.word(l).is_some());
+            for range in system_parameters_written_by(&block.g, &block.m, moved) {
+                self.params.forget_numbered(range);
+            }
+        }
+        self.block = block;
+        r
+    }
+
+    fn line_block<W: Write>(
+        &mut self,
+        block: &Block,
+        body: &[u8],
+        ending: &[u8],
+        output: &mut W,
+    ) -> Result<(), GcodeError> {
+        self.lower = self
+            .tokens
+            .iter()
+            .find(|t| matches!(t.kind, TokenKind::Word { .. }))
+            .map(|t| body[t.span.start].is_ascii_lowercase())
+            .unwrap_or(false);
+        if block.percent {
+            if !self.seen_content {
+                self.tape_started = true;
+            } else if self.tape_started {
+                self.tape_ended = true;
+            }
+            self.seen_content = true;
+            return self.write_verbatim(body, ending, output);
+        }
+        if !self.tokens.is_empty() {
+            self.seen_content = true;
+        }
+        self.edits.clear();
+        self.extra_lines.clear();
+        let handled = self.block(block, body)?;
+        if !handled || (self.edits.is_empty() && self.extra_lines.is_empty()) {
+            return self.write_verbatim(body, ending, output);
+        }
+        self.write_edited(body, ending, output)
+    }
+
+    /// Interprets one block and has its move planned and written; fills `edits` /
+    /// `extra_lines`. Returns false when the line is to be passed through unchanged because of
+    /// an unsupported construct (already warned).
+    fn block(&mut self, b: &Block, body: &[u8]) -> Result<bool, GcodeError> {
+        let kinematic = self.planner.view.kinematics().is_some();
+        let Interpreted {
+            mut issues,
+            motion_word,
+            g53,
+            axis_consumer,
+            has_axis,
+            motion,
+            axis_words_followed,
+            offset_change,
+        } = self.st.interpret(b, self.opt.block_delete, kinematic);
+        if let Some(m) = motion.filter(|_| axis_words_followed) {
+            self.check_compensable(b, m, &mut issues);
+        }
+
+        // --- unsupported: refuse, or warn and pass through ----------------------------------
+        if !issues.is_empty() {
+            let first = issues
+                .iter()
+                .min_by_key(|i| self.column_of(i.token))
+                .cloned()
+                .unwrap_or_else(|| issues[0].clone());
+            let d = self.diag(
+                self.column_of(first.token),
+                ProblemKind::Unsupported,
+                first.message.clone(),
+            );
+            self.unsupported(d)?;
+            let mut edited = false;
+            if has_axis
+                && motion_word.is_none()
+                && axis_consumer.is_none()
+                && matches!(
+                    self.st.motion,
+                    Motion::Rapid | Motion::Linear | Motion::Cw | Motion::Ccw
+                )
+                && self.st.out_motion != self.st.motion
+            {
+                // the line is copied, but it must still move in the program's mode
+                let m = self.st.motion;
+                self.restore_motion_word(b, m, true);
+                edited = true;
+            }
+            // a copied line that sets offsets leaves them unknown
+            if issues.iter().any(|i| i.poisons_all) || offset_change.is_some() {
+                self.st.poison_all();
+            } else {
+                self.st
+                    .copied_unfollowed(b, has_axis, motion, motion_word.is_some());
+            }
+            self.st.after_block(b);
+            return Ok(edited);
+        }
+
+        // --- G10 / G92 / G52: new offsets (the line is copied) --------------------------------
+        if let Some(c) = offset_change {
+            self.st.apply_offsets(c);
+            self.st.after_block(b);
+            return Ok(true);
+        }
+
+        // --- G28 / G30: reference-point moves leave the axes at a position we do not know ----
+        if let Some(code) = axis_consumer {
+            debug_assert!(code == GCode::G28 || code == GCode::G30);
+            self.st.reference_move(b, has_axis, motion_word.is_some());
+            self.st.after_block(b);
+            return Ok(true);
+        }
+
+        if let Some(m) = motion {
+            self.emitted = false;
+            let motion_tok = motion_word.map(|(_, t)| t);
+            self.motion_block(b, body, m, motion_tok, g53)?;
+            if !self.emitted {
+                // copied without compensation: it must still move in the program's mode
+                self.restore_motion_word(b, m, motion_tok.is_none());
+            }
+        } else if motion_word.is_some() {
+            self.st.out_motion = self.st.motion;
+        }
+        self.st.after_block(b);
+        Ok(true)
+    }
+}
