@@ -27,7 +27,12 @@ fn p(d: &Path, n: &str) -> String {
 
 /// `identify lines` on the simulated 9-line measurements, writing all three outputs.
 fn identify(d: &Path) {
-    support::write_scenario("vmc-9line", 1, d);
+    identify_scenario("vmc-9line", d)
+}
+
+/// As [`identify`] on the measurements of a named scenario.
+fn identify_scenario(scenario: &str, d: &Path) {
+    support::write_scenario(scenario, 1, d);
     let o = mtec(&[
         "identify",
         "lines",
@@ -95,9 +100,21 @@ fn word(line: &str, letter: char) -> f64 {
 
 #[test]
 fn identified_kinematic_model_compensates_a_program_as_the_volumetric_command_predicts() {
+    compensates_as_predicted("vmc-9line");
+}
+
+/// The same on the realistic machine (issue 19): its machine file gives the screw leads, so the
+/// positioning errors carry pitch terms and are written as tables, which the kinematic model,
+/// `volumetric` and the G-code rewriter all evaluate.
+#[test]
+fn realistic_machine_with_pitch_terms_goes_from_identification_to_compensation() {
+    compensates_as_predicted("vmc-9line-realistic");
+}
+
+fn compensates_as_predicted(scenario: &str) {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    identify(d);
+    identify_scenario(scenario, d);
     let km: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("km.json")).unwrap()).unwrap();
     assert_eq!(km["format"], "mtec.kinematic-model/1");

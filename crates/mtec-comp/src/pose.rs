@@ -302,6 +302,7 @@ mod tests {
                         [-300.0, 300.0]
                     },
                     centre_mm: if rotary { [1.5, -2.0, 40.0] } else { [0.0; 3] },
+                    period_mm: None,
                 },
             );
         }

@@ -52,6 +52,7 @@ fn machine() -> Machine {
     let spec = |lo: f64, hi: f64, centre: [f64; 3]| AxisSpec {
         travel: [lo, hi],
         centre_mm: centre,
+        period_mm: None,
     };
     let axes: BTreeMap<String, AxisSpec> = [
         ("X".to_string(), spec(-300.0, 300.0, [0.0; 3])),

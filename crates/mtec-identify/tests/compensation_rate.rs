@@ -11,14 +11,14 @@ use mtec_comp::kinematic::KinematicModel;
 use mtec_comp::{command_for_target, CorrectionOptions};
 mod support;
 
-use mtec_identify::lines::{identify, DEFAULT_DEGREE};
+use mtec_identify::lines::{identify_with, DEFAULT_DEGREE};
 use mtec_model::{Formalism, Order, VolumetricModel};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
 fn rates(seed: u64) -> ([f64; 3], f64, [f64; 3]) {
     let (machine, data, truth) = support::vmc_9line(seed);
-    let id = identify(&machine, &data, DEFAULT_DEGREE).unwrap();
+    let id = identify_with(&machine, &data, DEFAULT_DEGREE).unwrap();
     let model = KinematicModel::new(&machine, &id.errors, "9-line identification").unwrap();
     let vm = VolumetricModel::new(&machine, &truth);
     let mut rng = StdRng::seed_from_u64(seed ^ 0xc0de);

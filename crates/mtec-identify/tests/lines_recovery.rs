@@ -4,7 +4,9 @@
 mod support;
 
 use mtec_identify::lines::model::Block;
-use mtec_identify::lines::{identify, solve::polynomial_in_q, Layout, LineData, DEFAULT_DEGREE};
+use mtec_identify::lines::{
+    identify, identify_with, solve::polynomial_in_q, Degree, Layout, LineData, DEFAULT_DEGREE,
+};
 use mtec_io::Table;
 use mtec_model::{
     ErrorElement, ErrorFunction, ErrorSet, Formalism, Machine, Order, VolumetricModel,
@@ -127,11 +129,11 @@ fn noise_free_smooth_truth_is_recovered_exactly() {
 #[test]
 fn vmc_9line_predicts_the_volumetric_error() {
     let runs: Vec<_> = (1..=12).map(scenario).collect();
-    for degree in [DEFAULT_DEGREE, 4] {
+    for degree in [DEFAULT_DEGREE, Degree::Fixed(4)] {
         let mut r: Vec<f64> = runs
             .iter()
             .map(|(m, data, truth)| {
-                volumetric_rms(m, truth, &identify(m, data, degree).unwrap().errors)
+                volumetric_rms(m, truth, &identify_with(m, data, degree).unwrap().errors)
             })
             .collect();
         println!("degree {degree}: volumetric RMS per seed {r:.3?} µm");

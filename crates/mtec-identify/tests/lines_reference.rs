@@ -128,11 +128,17 @@ fn least_squares_agrees_with_numpy_lstsq() {
     assert!((fx["rank"].as_u64().unwrap() as usize) == ours.len());
 }
 
-/// Kept design columns (in layout order) and readings of X1, X2, X3 of `vmc-9line` seed 1.
-fn three_x_line_design() -> (nalgebra::DMatrix<f64>, nalgebra::DVector<f64>) {
+/// Lines X1, X2, X3 (run 1) of `vmc-9line` seed 1.
+fn three_x_lines() -> (Machine, LineData) {
     let (m, mut d, _) = support::vmc_9line(1);
     d.channels
         .retain(|c| ["X1", "X2", "X3"].contains(&c.line.as_str()) && c.run == 1);
+    (m, d)
+}
+
+/// Kept design columns (in layout order) and readings of X1, X2, X3 of `vmc-9line` seed 1.
+fn three_x_line_design() -> (nalgebra::DMatrix<f64>, nalgebra::DVector<f64>) {
+    let (m, d) = three_x_lines();
     let layout = mtec_identify::lines::Layout::new(&m, 3, &d).unwrap();
     let (a, y) = mtec_identify::lines::model::design_matrix(&m, &layout, &d);
     let an = mtec_identify::lines::identifiability::analyse(&a, &y, &layout).unwrap();
@@ -168,7 +174,17 @@ fn export_lstsq_fixture_input() {
     let rows: Vec<Vec<f64>> = (0..a.nrows())
         .map(|i| a.row(i).iter().copied().collect())
         .collect();
-    let v = serde_json::json!({ "a": rows, "y": y.iter().copied().collect::<Vec<f64>>() });
+    // kind of each row (0 displacement, 1 straightness): the weighted path's groups
+    let (_, d) = three_x_lines();
+    let kinds: Vec<u8> = d
+        .channels
+        .iter()
+        .flat_map(|c| {
+            let k = (c.kind == mtec_identify::lines::ChannelKind::Straightness) as u8;
+            std::iter::repeat_n(k, c.readings_um.len())
+        })
+        .collect();
+    let v = serde_json::json!({ "a": rows, "y": y.iter().copied().collect::<Vec<f64>>(), "kind": kinds });
     std::fs::write(
         concat!(
             env!("CARGO_MANIFEST_DIR"),
@@ -177,6 +193,36 @@ fn export_lstsq_fixture_input() {
         serde_json::to_string(&v).unwrap(),
     )
     .unwrap();
+}
+
+/// The weighted path of `identify` (issue 19): ordinary least squares, a variance per kind of
+/// optics from its residuals (RSS_k over its share n_k·(m − k)/m of the degrees of freedom), rows
+/// weighted by 1/σ_kind, weighted least squares. NumPy's answer on the same matrix (the fixture,
+/// `fixtures/lines_lstsq.py`) must agree with `identify`'s θ and standard errors.
+#[test]
+fn weighted_least_squares_agrees_with_numpy() {
+    let fx: serde_json::Value =
+        serde_json::from_str(include_str!("fixtures/lines_lstsq_numpy.json")).unwrap();
+    let w = &fx["weighted"];
+    let (m, d) = three_x_lines();
+    let id = identify(&m, &d, 3).unwrap();
+    let theta = w["theta"].as_array().unwrap();
+    let se = w["std_err"].as_array().unwrap();
+    assert_eq!(theta.len(), id.analysis.active.len());
+    for (j, &c) in id.analysis.active.iter().enumerate() {
+        let t = theta[j].as_f64().unwrap();
+        let ours = id.fit.theta[c];
+        assert!(
+            (t - ours).abs() <= 1e-8 * (1.0 + t.abs()),
+            "θ[{j}]: numpy {t}, ours {ours}"
+        );
+        let s = se[j].as_f64().unwrap();
+        let ours_se = id.fit.cov[(j, j)].sqrt();
+        assert!(
+            (s - ours_se).abs() <= 1e-8 * (1.0 + s.abs()),
+            "σ[{j}]: numpy {s}, ours {ours_se}"
+        );
+    }
 }
 
 /// The design uses the Jacobian as an affine function of the pose (exact for X, Y, Z chains):

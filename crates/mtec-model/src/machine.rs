@@ -12,6 +12,9 @@
 //! centre_mm = [0, 0, 0]       # a point of the rotary axis line at the machine's zero
 //! ```
 //!
+//! A linear axis may give `period_mm = 10` (its ball screw's lead): the period of the pitch
+//! error that line identification then models.
+//!
 //! Chain notation (SPEC §2): axis letters from the workpiece `W` to the tool `T` through the
 //! frame `F`. Letters between W and F are workpiece-side axes (the first carries the workpiece);
 //! letters between F and T are tool-side axes (the last carries the tool).
@@ -54,6 +57,8 @@ pub enum MachineError {
     ExtraAxis(String, String),
     #[error("[axes.{0}]: travel must be [min, max] with min < max, finite (got [{1}, {2}])")]
     Travel(String, f64, f64),
+    #[error("[axes.{0}]: period_mm is the lead of a linear axis' ball screw, a positive length in mm (got {1})")]
+    Period(String, f64),
     #[error("{0} must be finite")]
     NotFinite(&'static str),
 }
@@ -128,6 +133,11 @@ pub struct AxisSpec {
     /// in machine coordinates at zero position. Rotary axes: a point of the axis line.
     #[serde(default, alias = "reference_point_mm")]
     pub centre_mm: [f64; 3],
+    /// Linear axes driven by a ball screw: its lead (mm per revolution), the period of the
+    /// screw's pitch error. Optional; line identification then fits a sine/cosine pair of this
+    /// period to the positioning error (`mtec identify lines`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub period_mm: Option<f64>,
 }
 
 /// The TOML form of a machine.
@@ -179,6 +189,11 @@ impl Machine {
             }
             if !s.centre_mm.iter().all(|v| v.is_finite()) {
                 return Err(MachineError::NotFinite("centre_mm"));
+            }
+            if let Some(p) = s.period_mm {
+                if !(p.is_finite() && p > 0.0) || a.is_rotary() {
+                    return Err(MachineError::Period(k.clone(), p));
+                }
             }
             specs.insert(a, s.clone());
         }
@@ -243,6 +258,7 @@ impl Machine {
                 AxisSpec {
                     travel: [0.0, t],
                     centre_mm: [0.0; 3],
+                    period_mm: None,
                 },
             );
         }
@@ -255,5 +271,35 @@ impl Machine {
             error_frame: ErrorFrame::Moving,
         })
         .expect("built-in machine is valid")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn with_period(p: Option<f64>, axis: &str) -> Result<Machine, MachineError> {
+        let mut m = Machine::vmc_xyfz(100.0).to_spec();
+        m.axes.get_mut(axis).expect("axis").period_mm = p;
+        Machine::from_spec(m)
+    }
+
+    #[test]
+    fn a_screw_lead_is_a_positive_length() {
+        assert_eq!(
+            with_period(Some(12.0), "X").unwrap().specs[&Axis::X].period_mm,
+            Some(12.0)
+        );
+        assert!(matches!(
+            with_period(Some(0.0), "Y"),
+            Err(MachineError::Period(..))
+        ));
+        assert!(matches!(
+            with_period(Some(f64::NAN), "Z"),
+            Err(MachineError::Period(..))
+        ));
+        // absent: not written back out (files without it stay byte for byte)
+        let spec = Machine::vmc_xyfz(100.0).to_spec();
+        assert!(spec.axes.values().all(|a| a.period_mm.is_none()));
     }
 }

@@ -23,6 +23,7 @@ fn machine(chain: &str, frame: ErrorFrame, tool: [f64; 3]) -> Machine {
                 } else {
                     [5.0, 7.0, -3.0]
                 },
+                period_mm: None,
             },
         );
     }
@@ -152,6 +153,7 @@ fn hand_worked_yaw_of_the_x_table_with_a_tool_offset() {
             AxisSpec {
                 travel: [0.0, t],
                 centre_mm: [0.0; 3],
+                period_mm: None,
             },
         );
     }

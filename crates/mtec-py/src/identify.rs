@@ -7,7 +7,7 @@ use crate::errors::{internal, Result};
 use crate::model::read_machine;
 use mtec_comp::kinematic::KinematicFile;
 use mtec_identify::ballbar::{identify as identify_dbb, BallbarError, Measurements, Setup};
-use mtec_identify::lines::{self, LineData, LinesError, DEFAULT_DEGREE};
+use mtec_identify::lines::{self, Degree, LineData, LinesError, DEFAULT_DEGREE};
 use mtec_io::InputError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -18,7 +18,8 @@ use std::path::PathBuf;
 ///
 /// `machine` is the machine TOML; `data` the line file (CSV path, or a mapping with the columns
 /// `line,step,x_mm,y_mm,z_mm,ux,uy,uz,reading_um` and optionally `run`, docs/formats.md). Each
-/// error motion is a polynomial of `degree` in its axis position. Returns a dict: `report` (the
+/// error motion is a polynomial of `degree` in its axis position (None: chosen per kind of
+/// element by cross-validation, as the CLI's default `--degree auto`). Returns a dict: `report` (the
 /// document `mtec identify lines --json` prints: rank, condition number, residual RMS, every
 /// element with its uncertainty, what the design cannot identify) and `errors` (the identified
 /// error set, `mtec.errors/1`). `errors_out` and `kinematic_model_out` write the error set and
@@ -33,15 +34,17 @@ use std::path::PathBuf;
 /// >>> sorted(u["element"] for u in r["report"]["unidentifiable"])
 /// ['EAZ', 'EBZ', 'ECY', 'ECZ']
 #[pyfunction]
-#[pyo3(signature = (machine, data, degree = DEFAULT_DEGREE, errors_out = None, kinematic_model_out = None))]
+#[pyo3(signature = (machine, data, degree = None, errors_out = None, kinematic_model_out = None))]
 pub fn identify_lines<'py>(
     py: Python<'py>,
     machine: &Bound<'py, PyAny>,
     data: &Bound<'py, PyAny>,
-    degree: usize,
+    degree: Option<usize>,
     errors_out: Option<PathBuf>,
     kinematic_model_out: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    // None: the CLI's default `--degree auto` (cross-validated)
+    let degree = degree.map_or(DEFAULT_DEGREE, Degree::Fixed);
     Ok(run_lines(
         py,
         machine,
@@ -56,7 +59,7 @@ fn run_lines<'py>(
     py: Python<'py>,
     machine: &Bound<'py, PyAny>,
     data: &Bound<'py, PyAny>,
-    degree: usize,
+    degree: Degree,
     errors_out: Option<PathBuf>,
     kinematic_model_out: Option<PathBuf>,
 ) -> Result<Bound<'py, PyAny>> {
@@ -66,7 +69,7 @@ fn run_lines<'py>(
     let d = LineData::from_table(&table)?;
     let data_path = table.path.clone();
     let id = py
-        .detach(|| lines::identify(&m, &d, degree))
+        .detach(|| lines::identify_with(&m, &d, degree))
         .map_err(|e| match e {
             LinesError::Input(i) => i,
             LinesError::Model(e) => InputError::file(&machine_path, e.to_string()),

@@ -14,6 +14,7 @@ pub mod instruments;
 pub mod iso230_2;
 pub mod output;
 pub mod production_day;
+pub mod realistic_truth;
 pub mod scenario;
 pub mod spindle_sensors;
 pub mod thermal_network;

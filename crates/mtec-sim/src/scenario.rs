@@ -5,6 +5,7 @@ pub use crate::output::{OutputFile, ScenarioOutput, SimError};
 /// The scenarios this build knows, with a one-line description each (shown by `mtec simulate --help`).
 pub const SCENARIOS: &[(&str, &str)] = &[
     ("vmc-9line", "laser-interferometer lines (9-line design) on an XYFZ machining centre, for `mtec identify lines`"),
+    ("vmc-9line-realistic", "as vmc-9line with a realistic truth (long sinusoids, ball-screw pitch errors, local bumps), 0.1 um laser, screw leads in machine.toml"),
     ("volumetric-grid", "laser-tracker volumetric error grid (11x11x11) and body diagonals, for `mtec map fit`"),
     ("iso230-2", "laser-interferometer positioning runs of one axis (ISO 230-2: 11 targets, 5 bidirectional runs)"),
     ("circular-test", "ISO 230-4 ballbar circular test of X and Y with injected faults, and a fault-free run"),
@@ -25,6 +26,7 @@ pub fn run_scenario(name: &str, seed: u64) -> Result<ScenarioOutput, SimError> {
     };
     match name {
         "vmc-9line" => Ok(crate::vmc_9line::run(seed)),
+        "vmc-9line-realistic" => Ok(crate::vmc_9line::run_realistic(seed)),
         "volumetric-grid" => Ok(crate::volumetric_grid::run(seed)),
         "iso230-2" => {
             let (csv, truth) = crate::iso230_2::simulate(&Default::default(), seed);

@@ -103,7 +103,7 @@ pub fn geometric_truth(machine: &Machine, seed: u64) -> ErrorSet {
 /// Straightness is measured from its least-squares reference line (ISO 230-1): the slope of
 /// the least-squares line through (q, f(q)) is removed (here: the ripple's, the smooth bow has
 /// none), the value at the origin kept at zero.
-fn remove_ls_slope(q: &[f64], f: Vec<f64>) -> Vec<f64> {
+pub(crate) fn remove_ls_slope(q: &[f64], f: Vec<f64>) -> Vec<f64> {
     let n = q.len() as f64;
     let (qm, fm) = (q.iter().sum::<f64>() / n, f.iter().sum::<f64>() / n);
     let sqq: f64 = q.iter().map(|v| (v - qm).powi(2)).sum();

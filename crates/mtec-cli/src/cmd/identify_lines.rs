@@ -2,7 +2,7 @@
 
 use crate::error::CliError;
 use crate::help::examples;
-use mtec_identify::lines::DEFAULT_DEGREE;
+use mtec_identify::lines::{Degree, DEFAULT_DEGREE};
 use mtec_workflow::ops::identify_lines::{self as op, Options};
 use std::io::Write;
 use std::path::PathBuf;
@@ -20,9 +20,10 @@ pub struct Args {
     /// A built-in design: the data must contain its lines; without --data, analyse it alone.
     #[arg(long, value_parser = ["nine-line", "fifteen-line"])]
     pub design: Option<String>,
-    /// Polynomial degree of the error functions (2..12).
+    /// Polynomial degree of the error functions: `auto` (per kind of element, by
+    /// cross-validation over the measured points) or 2..12 for every element.
     #[arg(long, default_value_t = DEFAULT_DEGREE)]
-    pub degree: usize,
+    pub degree: Degree,
     /// Print the report as JSON ("format": "mtec.identify-lines/1") instead of text.
     #[arg(long)]
     pub json: bool,

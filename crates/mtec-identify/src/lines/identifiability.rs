@@ -106,7 +106,9 @@ pub fn analyse(
 
 /// As [`analyse`]; with `known`, the elements to drop are taken from a previous analysis of the
 /// same columns (row weights do not change a rank) and no rank search is done: only the kept
-/// design is factorised (its singular values are then left empty).
+/// design is factorised, by Householder QR like every other design here (never through the Gram
+/// matrix AᵀA, whose condition number is the square of the design's); its singular values are
+/// then left empty.
 pub fn analyse_with(
     a: &DMatrix<f64>,
     y: &DVector<f64>,
@@ -157,28 +159,6 @@ pub fn analyse_with(
         c /= scale[cols[j]];
     }
     let k = cols.len();
-    if known.is_some() {
-        // the kept design is known to be full rank and well scaled: R from the Cholesky factor
-        // of the Gram matrix (AᵀA = RᵀR, Qᵀy = R⁻ᵀAᵀy), cheaper than Householder for m ≫ k
-        let gram = scaled.transpose() * &scaled;
-        if let Some(ch) = gram.cholesky() {
-            let r = ch.l().transpose();
-            let aty = scaled.transpose() * y;
-            if let Some(qty) = ch.l().solve_lower_triangular(&aty) {
-                return Ok(Analysis {
-                    scale,
-                    r: r.clone(),
-                    qty,
-                    singular_values: vec![],
-                    rank: k,
-                    active: cols,
-                    dropped,
-                    kept_r: r,
-                    kept_singular_values: vec![],
-                });
-            }
-        }
-    }
     let qr = scaled.qr();
     let mut qty = y.clone();
     qr.q_tr_mul(&mut qty);

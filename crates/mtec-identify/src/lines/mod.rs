@@ -22,11 +22,14 @@
 //! - The element functions are written as polynomials in the axis position q (expanded from the
 //!   normalised basis), zero at the travel's lower end.
 
+pub mod basis;
 pub mod data;
 pub mod identifiability;
 pub mod model;
 pub mod report;
+pub mod select;
 pub mod solve;
+pub mod validity;
 
 pub use data::{Channel, ChannelKind, LineData};
 pub use identifiability::{Analysis, Dropped};
@@ -38,8 +41,47 @@ use mtec_io::InputError;
 use mtec_model::{ErrorFunction, ErrorSet, Machine};
 use nalgebra::{DMatrix, DVector};
 
-/// Default polynomial degree of the error functions.
-pub const DEFAULT_DEGREE: usize = 3;
+/// Default degree of the error functions: chosen by cross-validation ([`select`]).
+pub const DEFAULT_DEGREE: Degree = Degree::Auto;
+
+/// The degree `auto` means for a design analysed without readings.
+pub const AUTO_WITHOUT_READINGS: usize = 3;
+
+/// How the polynomial degree of the error functions is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Degree {
+    /// Per kind of element by cross-validation over the measured points ([`select`]).
+    Auto,
+    /// The same degree (2..=12) for every element.
+    Fixed(usize),
+}
+
+impl std::fmt::Display for Degree {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Degree::Auto => f.write_str("auto"),
+            Degree::Fixed(d) => write!(f, "{d}"),
+        }
+    }
+}
+
+impl std::str::FromStr for Degree {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Degree, String> {
+        let s = s.trim();
+        if s.eq_ignore_ascii_case("auto") {
+            return Ok(Degree::Auto);
+        }
+        match s.parse::<usize>() {
+            Ok(d) if (model::MIN_DEGREE..=model::MAX_DEGREE).contains(&d) => Ok(Degree::Fixed(d)),
+            _ => Err(format!(
+                "`{s}` is not a degree: give `auto` (chosen by cross-validation) or a whole number from {} to {}",
+                model::MIN_DEGREE,
+                model::MAX_DEGREE
+            )),
+        }
+    }
+}
 
 /// Why an identification cannot run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -78,13 +120,57 @@ impl LineIdentification {
     }
 }
 
-/// Identifies the error elements of `machine` from line readings with polynomials of `degree`.
+/// Identifies the error elements of `machine` from line readings with polynomials of `degree`
+/// (every element), with the pitch-error pairs of the axes whose `period_mm` is given.
 pub fn identify(
     machine: &Machine,
     data: &LineData,
     degree: usize,
 ) -> Result<LineIdentification, LinesError> {
-    let layout = Layout::new(machine, degree, data)?;
+    identify_layout(
+        machine,
+        data,
+        Layout::with_degrees(machine, data, &|_| degree, true)?,
+    )
+}
+
+/// Identifies with the degree chosen as `degree` says (the CLI's `--degree auto|N`); the
+/// selection, when made, is in the report.
+pub fn identify_with(
+    machine: &Machine,
+    data: &LineData,
+    degree: Degree,
+) -> Result<LineIdentification, LinesError> {
+    match degree {
+        Degree::Fixed(d) => identify(machine, data, d),
+        // a design without readings (`--design` alone) has nothing to cross-validate
+        Degree::Auto
+            if data
+                .channels
+                .iter()
+                .all(|c| c.readings_um.iter().all(|r| *r == 0.0)) =>
+        {
+            identify(machine, data, AUTO_WITHOUT_READINGS)
+        }
+        Degree::Auto => {
+            model::check_machine(machine)?;
+            let sel = select::select(machine, data, true)?;
+            let d = sel.chosen;
+            let layout = Layout::with_degrees(machine, data, &|e| d.of(e), true)?;
+            let mut id = identify_layout(machine, data, layout)?;
+            id.report.selection = Some(sel);
+            Ok(id)
+        }
+    }
+}
+
+/// Identifies with a given parameter layout.
+pub fn identify_layout(
+    machine: &Machine,
+    data: &LineData,
+    layout: Layout,
+) -> Result<LineIdentification, LinesError> {
+    let degree = layout.blocks.iter().map(|b| b.degree()).max().unwrap_or(0);
     model::check_travels(machine, data).map_err(|(ci, k, e)| match &data.path {
         Some(p) => LinesError::Input(InputError::at(
             p,
@@ -188,10 +274,12 @@ fn error_set(
         if an.dropped.iter().any(|d| d.element == b.element) {
             continue;
         }
+        let theta: Vec<f64> = b.cols().map(|c| fit.theta[c]).collect();
         let f = if b.kind == model::ElementKind::Squareness {
-            ErrorFunction::constant(fit.theta[b.first_col])
+            ErrorFunction::constant(theta[0])
+        } else if let Some(period) = b.period_mm {
+            pitch_table(b, &theta, period)
         } else {
-            let theta: Vec<f64> = b.cols().map(|c| fit.theta[c]).collect();
             let coeffs = b.power_terms(&theta);
             ErrorFunction::polynomial(solve::polynomial_in_q(&coeffs, b.travel))
         };
@@ -199,6 +287,23 @@ fn error_set(
     }
     set.unidentifiable = an.dropped.iter().map(|d| d.element.name()).collect();
     set
+}
+
+/// A function with a pitch-error pair as a table every P/20 (at most 1 mm): every consumer of an
+/// error set (compensation tables, G-code, the real-time library) evaluates tables already, and
+/// linear interpolation of a sinusoid at P/20 is within 1.2 % of its amplitude ((π/20)²/2).
+fn pitch_table(b: &model::Block, theta: &[f64], period: f64) -> ErrorFunction {
+    let [lo, hi] = b.travel;
+    let step = (period / 20.0).min(1.0);
+    let n = ((hi - lo) / step).ceil().max(1.0) as usize;
+    let positions: Vec<f64> = (0..=n)
+        .map(|i| lo + (hi - lo) * i as f64 / n as f64)
+        .collect();
+    let values = positions
+        .iter()
+        .map(|&q| b.basis(q).zip(theta).map(|(v, c)| v * c).sum())
+        .collect();
+    ErrorFunction::table(positions, values)
 }
 
 /// What a design can identify, without readings (rank, singular values, unidentifiable elements).

@@ -3,10 +3,13 @@
 //! built from the first-order kinematics.
 //!
 //! Parameterisation (the conventions of `mtec-sim`'s truth, written down in the crate docs):
-//! with s = (q − q_min)/L the axis position normalised by its travel length L,
-//! - positioning and angular error motions: f(q) = Σ_{p=1..N} c_p s^p (zero at the origin);
-//! - straightness: f(q) = Σ_{p=2..N} c_p φ_p(s), φ_p(s) = s^p − b_p·s with b_p = 6p/((p+1)(p+2))
-//!   the least-squares slope of s^p over [0, 1]: zero at the origin and measured from its
+//! with x = (2q − q_min − q_max)/L the axis position mapped to [−1, 1] over its travel of
+//! length L, and φ_p(x) = P_p(x) − (−1)^p the Legendre polynomial P_p shifted to be zero at the
+//! origin (see [`super::basis`]),
+//! - positioning and angular error motions: f(q) = Σ_{p=1..N} c_p φ_p(x) (zero at the origin);
+//!   a positioning error may add the pitch pair c_s ψ_s + c_c ψ_c of its screw lead;
+//! - straightness: f(q) = Σ_{p=2..N} c_p φ_p(x): zero at the origin and with a zero
+//!   least-squares slope over the travel (P_p ⟂ x for p ≥ 2), i.e. measured from its
 //!   least-squares reference line, as ISO 230-1 defines straightness. The slope of a
 //!   reference line is a squareness (the angle between two reference lines), or for X, which
 //!   defines the frame, nothing.
@@ -27,6 +30,7 @@
 //! with J the first-order Jacobian of [`VolumetricModel::first_order_jacobian`] (µm per µm or
 //! µrad of each element): one row of the design matrix per reading.
 
+use super::basis;
 use super::data::{dot, ChannelKind, LineData};
 use mtec_model::{three_axis_elements, Axis, ErrorElement, Machine, VolumetricModel};
 use nalgebra::{DMatrix, DVector};
@@ -49,73 +53,68 @@ pub struct Block {
     pub pose_index: usize,
     /// Travel [min, max] of the axis.
     pub travel: [f64; 2],
-    /// Powers of s of the columns (0 for a squareness constant).
-    pub powers: Vec<i32>,
-    /// Columns `first_col .. first_col + powers.len()`.
+    /// Legendre orders p of the columns, φ_p of [`basis`] (0 for a squareness constant).
+    pub orders: Vec<i32>,
+    /// Screw lead (mm) of a positioning element with a pitch-error pair (two more columns).
+    pub period_mm: Option<f64>,
+    /// Columns `first_col .. first_col + n_cols()`.
     pub first_col: usize,
     /// True if the element's axis carries the tool (angular errors then act through the tool offset only).
     pub tool_side: bool,
 }
 
 impl Block {
-    /// Normalised position s of an axis value q.
-    pub fn s(&self, q: f64) -> f64 {
-        (q - self.travel[0]) / (self.travel[1] - self.travel[0])
+    /// The axis position mapped to x ∈ [−1, 1] over the travel.
+    pub fn x(&self, q: f64) -> f64 {
+        (2.0 * q - self.travel[0] - self.travel[1]) / (self.travel[1] - self.travel[0])
     }
-    /// Basis values at pose q (µm or µrad of the element per unit coefficient).
+    /// Basis values at axis position q (µm or µrad of the element per unit coefficient):
+    /// φ_p(x) for each order, then the pitch pair.
     pub fn basis(&self, q_axis: f64) -> impl Iterator<Item = f64> + '_ {
-        let s = self.s(q_axis);
-        let straight = self.kind == ElementKind::Straightness;
-        self.powers.iter().map(move |&p| {
-            if straight {
-                straightness_basis(p, s)
-            } else {
-                s.powi(p)
-            }
-        })
+        let x = self.x(q_axis);
+        let n = self.orders.iter().copied().max().unwrap_or(0).max(0) as usize;
+        let p_all = basis::legendre_all(n, x);
+        let pitch = self
+            .period_mm
+            .map(|per| basis::pitch_pair(q_axis - self.travel[0], per));
+        let constant = self.kind == ElementKind::Squareness;
+        self.orders
+            .iter()
+            .map(move |&p| {
+                if constant {
+                    1.0
+                } else {
+                    // φ_p = P_p(x) − (−1)^p
+                    p_all[p as usize] - basis::at_minus_one(p as usize)
+                }
+            })
+            .chain(pitch.into_iter().flatten())
     }
-    /// The element's coefficients `theta[cols]` as (power of s, coefficient) terms.
+    /// The polynomial part of the coefficients `theta[cols]` as (power of s, coefficient)
+    /// terms, s = (q − q_min)/L (the pitch pair, if any, is not included).
     pub fn power_terms(&self, coeffs: &[f64]) -> Vec<(i32, f64)> {
-        if self.kind == ElementKind::Straightness {
-            straightness_power_terms(&self.powers, coeffs)
-        } else {
-            self.powers
-                .iter()
-                .copied()
-                .zip(coeffs.iter().copied())
-                .collect()
+        if self.kind == ElementKind::Squareness {
+            return vec![(0, coeffs[0])];
         }
+        basis::legendre_to_power_terms(&self.orders, &coeffs[..self.orders.len()])
+    }
+    /// Number of columns.
+    pub fn n_cols(&self) -> usize {
+        self.orders.len() + if self.period_mm.is_some() { 2 } else { 0 }
     }
     /// The column range.
     pub fn cols(&self) -> std::ops::Range<usize> {
-        self.first_col..self.first_col + self.powers.len()
+        self.first_col..self.first_col + self.n_cols()
+    }
+    /// The highest Legendre order (the polynomial degree).
+    pub fn degree(&self) -> usize {
+        self.orders.iter().copied().max().unwrap_or(0).max(0) as usize
     }
 }
 
-/// Least-squares slope over s ∈ [0, 1] of s^p: 12·(∫s^{p+1} − ½∫s^p) = 6p / ((p + 1)(p + 2)).
-pub fn ls_slope_of_power(p: i32) -> f64 {
-    let p = p as f64;
-    6.0 * p / ((p + 1.0) * (p + 2.0))
-}
-
-/// Straightness basis φ_p(s) = s^p − b_p·s: zero at the origin and with a zero least-squares
-/// slope over the travel (ISO 230-1: straightness is measured from its least-squares reference
-/// line; the angle between reference lines is the squareness).
-pub fn straightness_basis(p: i32, s: f64) -> f64 {
-    s.powi(p) - ls_slope_of_power(p) * s
-}
-
-/// Σ c_p φ_p(s) as (power of s, coefficient) terms: the c_p s^p and one linear term −Σ c_p b_p.
-pub fn straightness_power_terms(powers: &[i32], coeffs: &[f64]) -> Vec<(i32, f64)> {
-    let linear: f64 = powers
-        .iter()
-        .zip(coeffs)
-        .map(|(&p, c)| -c * ls_slope_of_power(p))
-        .sum();
-    let mut out: Vec<(i32, f64)> = powers.iter().copied().zip(coeffs.iter().copied()).collect();
-    out.push((1, linear));
-    out
-}
+/// Lowest and highest polynomial degree of an error function.
+pub const MIN_DEGREE: usize = 2;
+pub const MAX_DEGREE: usize = 12;
 
 /// Parameter layout: element blocks, then one alignment slope per straightness channel.
 #[derive(Debug, Clone)]
@@ -160,32 +159,50 @@ pub fn element_kind(e: &ErrorElement) -> ElementKind {
 }
 
 impl Layout {
-    /// The layout for a machine, a polynomial degree and the channels of a data set.
+    /// The layout for a machine, one polynomial degree for every element and the channels of
+    /// a data set; no pitch-error pair.
     pub fn new(machine: &Machine, degree: usize, data: &LineData) -> Result<Layout, ModelError> {
+        Layout::with_degrees(machine, data, &|_| degree, false)
+    }
+
+    /// The layout with a degree per element (`degree_of`) and, with `pitch`, a pitch-error pair
+    /// on the positioning element of every axis whose machine file gives `period_mm`.
+    pub fn with_degrees(
+        machine: &Machine,
+        data: &LineData,
+        degree_of: &dyn Fn(&ErrorElement) -> usize,
+        pitch: bool,
+    ) -> Result<Layout, ModelError> {
         check_machine(machine)?;
-        if !(2..=12).contains(&degree) {
-            return Err(ModelError::Degree(degree));
-        }
         let mut blocks = Vec::new();
         let mut col = 0;
         for element in three_axis_elements() {
             let kind = element_kind(&element);
-            let powers: Vec<i32> = match kind {
+            let degree = degree_of(&element);
+            if kind != ElementKind::Squareness && !(MIN_DEGREE..=MAX_DEGREE).contains(&degree) {
+                return Err(ModelError::Degree(degree));
+            }
+            let orders: Vec<i32> = match kind {
                 ElementKind::Squareness => vec![0],
                 ElementKind::Straightness => (2..=degree as i32).collect(),
                 _ => (1..=degree as i32).collect(),
             };
-            let n = powers.len();
-            blocks.push(Block {
+            let period_mm = match kind {
+                ElementKind::Positioning if pitch => machine.specs[&element.axis].period_mm,
+                _ => None,
+            };
+            let block = Block {
                 element,
                 kind,
                 pose_index: machine.axis_index(element.axis).unwrap_or(0),
                 travel: machine.travel(element.axis),
-                powers,
+                orders,
+                period_mm,
                 first_col: col,
                 tool_side: machine.chain.tool_side.contains(&element.axis),
-            });
-            col += n;
+            };
+            col += block.n_cols();
+            blocks.push(block);
         }
         let mut slopes = Vec::new();
         for (i, c) in data.channels.iter().enumerate() {

@@ -4,6 +4,7 @@ use super::data::{ChannelKind, LineData};
 use super::identifiability::{drop_priority, Analysis};
 use super::model::Layout;
 use super::solve::Fit;
+use super::validity;
 use mtec_model::Machine;
 use serde::Serialize;
 use std::fmt::Write;
@@ -51,6 +52,11 @@ pub struct ElementReport {
     pub uncertainty_1sigma: f64,
     /// Unidentifiable elements whose effect this one absorbs at the measured poses.
     pub absorbs: Vec<String>,
+    /// Polynomial degree of its function (0 for a squareness constant).
+    pub degree: usize,
+    /// Period (mm) of its pitch-error pair, when it has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pitch_period_mm: Option<f64>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -87,6 +93,19 @@ pub struct LinesReport {
     pub dof: usize,
     pub channel_residual_rms_um: Vec<(String, f64)>,
     pub validity: String,
+    /// False when a check of [`super::validity`] says the result cannot be trusted.
+    pub valid: bool,
+    /// Why not (one line each).
+    pub warnings: Vec<String>,
+    /// Pure error of the repeat runs, µm (None with one run).
+    pub repeatability_um: Option<f64>,
+    /// σ̂ / repeatability.
+    pub residual_to_repeatability: Option<f64>,
+    /// Largest amplification Λ of a function's fit between the measured positions.
+    pub amplification: f64,
+    /// The cross-validated choice of the degrees (`--degree auto`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub selection: Option<super::select::Selection>,
 }
 
 /// Builds the report.
@@ -172,10 +191,39 @@ pub fn build(
                     .filter(|d| d.confounded_with.contains(&b.element))
                     .map(|d| d.element.name())
                     .collect(),
+                degree: b.degree(),
+                pitch_period_mm: b.period_mm,
             }
         })
         .collect();
     let m = fit.residual_um.len();
+    let condition_number = an.condition_number();
+    let rep = validity::repeatability(data, &fit.residual_um);
+    let ratio = rep.map(|(r, _)| fit.sigma_um / r);
+    let worst = validity::worst_amplification(layout, data);
+    let mut warnings = Vec::new();
+    if condition_number > validity::COND_LIMIT {
+        warnings.push(format!(
+            "the design's condition number {condition_number:.2e} exceeds {:.0e}: the parameters are not determined to the readings' precision",
+            validity::COND_LIMIT
+        ));
+    }
+    if let Some((el, d, l)) = &worst {
+        if *l > validity::LAMBDA_LIMIT {
+            warnings.push(format!(
+                "degree {d} is more than the measured positions support: between them {el} may amplify a reading error {l:.1}x (limit {}); lower the degree or measure more points",
+                validity::LAMBDA_LIMIT
+            ));
+        }
+    }
+    if let (Some(r), Some((rep_um, _))) = (ratio, rep) {
+        if r > validity::RATIO_LIMIT {
+            warnings.push(format!(
+                "the fit's residual ({:.3} um) is {r:.1}x the repeatability of the runs ({rep_um:.3} um): the error functions do not follow the machine's shape; raise the degree or use --degree auto",
+                fit.sigma_um
+            ));
+        }
+    }
     LinesReport {
         format: REPORT_FORMAT.into(),
         data: data.source.clone(),
@@ -188,7 +236,7 @@ pub fn build(
         rank: an.rank,
         rank_deficiency: layout.n_cols - an.rank,
         singular_values: an.singular_values.clone(),
-        condition_number: an.condition_number(),
+        condition_number,
         unidentifiable,
         elements,
         alignment: fit
@@ -208,6 +256,12 @@ pub fn build(
             "predictions are valid for the measured tool offset {:?} mm; unidentifiable elements are absorbed by their partners there",
             machine.tool_offset_mm
         ),
+        valid: warnings.is_empty(),
+        warnings,
+        repeatability_um: rep.map(|r| r.0),
+        residual_to_repeatability: ratio,
+        amplification: worst.map_or(0.0, |w| w.2),
+        selection: None,
     }
 }
 
@@ -285,6 +339,29 @@ impl LinesReport {
             "\nFit: residual RMS {:.3} um, noise estimate {:.3} um ({} degrees of freedom)",
             self.residual_rms_um, self.sigma_um, self.dof
         );
+        if let (Some(r), Some(q)) = (self.repeatability_um, self.residual_to_repeatability) {
+            let _ = writeln!(
+                s,
+                "Repeatability of the runs {r:.3} um: residual/repeatability {q:.2}"
+            );
+        }
+        if let Some(sel) = &self.selection {
+            let d = sel.chosen;
+            let _ = writeln!(
+                s,
+                "Degrees chosen by cross-validation over the points ({} choices scored): positioning {}, straightness {}, angular {}; held-out RMS {:.3} um",
+                sel.trials.len(),
+                d.positioning,
+                d.straightness,
+                d.angular,
+                sel.cv_rms_um
+            );
+        }
+        let _ = writeln!(
+            s,
+            "Largest amplification between measured positions: {:.2}",
+            self.amplification
+        );
         let _ = writeln!(
             s,
             "\n{:<6} {:>12} {:>12}  {:<6} description",
@@ -317,6 +394,12 @@ impl LinesReport {
             }
         }
         let _ = writeln!(s, "\nNote: {}", self.validity);
+        if !self.valid {
+            let _ = writeln!(s, "NOT VALID:");
+            for w in &self.warnings {
+                let _ = writeln!(s, "  warning: {w}");
+            }
+        }
         s
     }
 }

@@ -32,11 +32,14 @@ def iso230_2(data: Columns) -> dict[str, Any]:
 def identify_lines(
     machine: PathLike,
     data: Columns,
-    degree: int = 3,
+    degree: Optional[int] = None,
     errors_out: Optional[PathLike] = None,
     kinematic_model_out: Optional[PathLike] = None,
 ) -> dict[str, Any]:
-    """The error elements of a three-axis machine from laser line measurements (9-line method)."""
+    """The error elements of a three-axis machine from laser line measurements (9-line method).
+
+    degree None: chosen per kind of element by cross-validation (the CLI's --degree auto).
+    """
 
 def identify_ballbar(setup: PathLike, data: Columns) -> dict[str, Any]:
     """The error motions EXC, EYC, EZC, EAC, EBC of a rotary C axis from ballbar readings."""

@@ -5,7 +5,7 @@
 use crate::inputs::read_machine;
 use crate::{Error, Observer, Result};
 use mtec_comp::kinematic::KinematicFile;
-use mtec_identify::lines::{self, LineData, LinesError, LinesReport, DEFAULT_DEGREE};
+use mtec_identify::lines::{self, Degree, LineData, LinesError, LinesReport, DEFAULT_DEGREE};
 use mtec_io::{Destination, InputError, OutputGuard};
 use mtec_model::ErrorSet;
 use mtec_sensitivity::error_model::ErrorStatistics;
@@ -23,8 +23,8 @@ pub struct Options {
     /// A built-in design (`nine-line`, `fifteen-line`): the data must contain its lines;
     /// without data, the design is analysed alone.
     pub design: Option<String>,
-    /// Polynomial degree of the error functions (2..12).
-    pub degree: usize,
+    /// Degree of the error functions: `auto` (cross-validated) or 2..12.
+    pub degree: Degree,
     /// Where to write the identified error set (`mtec.errors/1`; `-` is stdout).
     pub output: Option<PathBuf>,
     /// Where to write the kinematic model (`mtec.kinematic-model/1`).
@@ -172,7 +172,7 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
                 "give the measurements with --data LINES.csv, or a design to analyse with --design",
             )),
         };
-    let id = lines::identify(&machine, &data, opts.degree).map_err(|e| match e {
+    let id = lines::identify_with(&machine, &data, opts.degree).map_err(|e| match e {
         LinesError::Input(i) => Error::Input(i),
         LinesError::Model(m) => Error::Input(InputError::file(&opts.machine, m.to_string())),
         other => Error::Input(InputError::file(

@@ -307,7 +307,7 @@ pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> crate::Result<
     let mut opts = ops::identify_lines::Options::new(machine, &data);
     opts.output = Some(errors.clone());
     if let Some(d) = l.degree {
-        opts.degree = d;
+        opts.degree = mtec_identify::lines::Degree::Fixed(d);
     }
     let mut obs = Collect::default();
     let done = ops::identify_lines::run(&opts, &mut obs)?;

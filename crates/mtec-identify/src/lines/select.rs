@@ -1,0 +1,190 @@
+//! The degree of the error functions chosen by cross-validation over the measured points.
+//!
+//! Leave-points-out: fold f holds out the points with step index ≡ f (mod 3) of every channel
+//! and every run (the reference point stays in), fits the rest (alignment slopes included) and
+//! predicts the held-out readings. The score of a choice is the RMS of those prediction errors
+//! over the folds (µm). It tests the functions *between* measured positions, where the
+//! volumetric prediction at any other point needs them: a degree too low misses the machine's
+//! shape, a degree too high oscillates between the points it fits.
+//!
+//! Why not leave-one-run-out: repeat runs measure the same positions, so holding out a run only
+//! tests the noise. On `vmc-9line-realistic` it chose degree 9 for every kind on 5 of 5 seeds
+//! (it predicts the held-out run best), and the volumetric prediction was then up to 1.75 µm RMS
+//! on an axis; leave-points-out chose 4–7 and ≤ 0.75 µm (docs/methods.md §3).
+//!
+//! Search: one polynomial degree per *kind* of element (positioning, straightness, angular),
+//! by coordinate descent from the best common degree of [`CANDIDATES`]: each kind in turn
+//! takes the candidate degree that scores best with the other two fixed, until no kind changes
+//! (at most [`SWEEPS`] passes). A higher degree must lower the score by 1 % to be taken.
+
+use super::data::LineData;
+use super::identifiability;
+use super::model::{design_matrix, ElementKind, Layout, ModelError};
+use super::solve;
+use mtec_model::{ErrorElement, Machine};
+use serde::Serialize;
+
+/// Degrees tried (2 stays available as an explicit `--degree 2`).
+pub const CANDIDATES: std::ops::RangeInclusive<usize> = 3..=9;
+/// Passes of the coordinate descent.
+const SWEEPS: usize = 2;
+/// A choice must lower the score by this fraction to replace a lower degree (parsimony: a
+/// tie goes to the simpler model).
+const MIN_GAIN: f64 = 0.01;
+
+/// Degrees per kind of element: positioning, straightness, angular.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct KindDegrees {
+    pub positioning: usize,
+    pub straightness: usize,
+    pub angular: usize,
+}
+
+impl KindDegrees {
+    pub fn all(d: usize) -> KindDegrees {
+        KindDegrees {
+            positioning: d,
+            straightness: d,
+            angular: d,
+        }
+    }
+    /// The degree of an element.
+    pub fn of(&self, e: &ErrorElement) -> usize {
+        match super::model::element_kind(e) {
+            ElementKind::Positioning => self.positioning,
+            ElementKind::Straightness => self.straightness,
+            ElementKind::Angular => self.angular,
+            ElementKind::Squareness => 0,
+        }
+    }
+    fn get(&self, k: usize) -> usize {
+        [self.positioning, self.straightness, self.angular][k]
+    }
+    fn with(mut self, k: usize, d: usize) -> KindDegrees {
+        match k {
+            0 => self.positioning = d,
+            1 => self.straightness = d,
+            _ => self.angular = d,
+        }
+        self
+    }
+}
+
+/// One scored choice.
+#[derive(Debug, Clone, Serialize)]
+pub struct Trial {
+    pub degrees: KindDegrees,
+    /// Cross-validated RMS prediction error of the held-out readings, µm.
+    pub cv_rms_um: f64,
+}
+
+/// The outcome of the selection.
+#[derive(Debug, Clone, Serialize)]
+pub struct Selection {
+    pub chosen: KindDegrees,
+    pub cv_rms_um: f64,
+    /// Every choice scored, in the order tried.
+    pub trials: Vec<Trial>,
+}
+
+/// Leave-points-out score (µm): fold f holds out the points with step index ≡ f (mod
+/// [`POINT_FOLDS`]) of every channel (the reference point stays), fits the rest (alignment slopes
+/// included) and predicts them: it tests the functions *between* the measured positions, which
+/// repeat runs at the same positions cannot.
+pub fn point_cv_score(
+    machine: &Machine,
+    data: &LineData,
+    degrees: KindDegrees,
+    pitch: bool,
+) -> Result<Option<f64>, ModelError> {
+    let deg = |e: &ErrorElement| degrees.of(e);
+    let layout = Layout::with_degrees(machine, data, &deg, pitch)?;
+    let (a, y) = design_matrix(machine, &layout, data);
+    let mut fold_of = Vec::with_capacity(y.len());
+    for c in &data.channels {
+        for k in 0..c.readings_um.len() {
+            fold_of.push(if k == 0 { usize::MAX } else { k % POINT_FOLDS });
+        }
+    }
+    // what the whole design cannot identify, once: a fold keeps the same positions, so the
+    // same elements are dropped and each fold needs only its QR
+    let Ok(full) = identifiability::analyse(&a, &y, &layout) else {
+        return Ok(None);
+    };
+    let (mut ss, mut n) = (0.0, 0usize);
+    for f in 0..POINT_FOLDS {
+        let train: Vec<usize> = (0..y.len()).filter(|&i| fold_of[i] != f).collect();
+        let test: Vec<usize> = (0..y.len()).filter(|&i| fold_of[i] == f).collect();
+        let at = a.select_rows(train.iter());
+        let yt = y.select_rows(train.iter());
+        let Ok(an) = identifiability::analyse_with(&at, &yt, &layout, Some(&full.dropped)) else {
+            return Ok(None);
+        };
+        let fit = solve::solve(&at, &yt, &an);
+        for &i in &test {
+            let e = y[i] - (a.row(i) * &fit.theta)[0];
+            ss += e * e;
+            n += 1;
+        }
+    }
+    Ok(Some((ss / n.max(1) as f64).sqrt()))
+}
+
+/// Folds of [`point_cv_score`].
+pub const POINT_FOLDS: usize = 3;
+
+/// Chooses the degrees by cross-validation over the measured points.
+pub fn select(machine: &Machine, data: &LineData, pitch: bool) -> Result<Selection, ModelError> {
+    let mut trials: Vec<Trial> = Vec::new();
+    let score = |d: KindDegrees, trials: &mut Vec<Trial>| -> Result<f64, ModelError> {
+        if let Some(t) = trials.iter().find(|t| t.degrees == d) {
+            return Ok(t.cv_rms_um);
+        }
+        let s = point_cv_score(machine, data, d, pitch)?.unwrap_or(f64::INFINITY);
+        trials.push(Trial {
+            degrees: d,
+            cv_rms_um: s,
+        });
+        Ok(s)
+    };
+    // best common degree (ascending: a higher degree must gain MIN_GAIN)
+    let mut best = KindDegrees::all(*CANDIDATES.start());
+    let mut best_s = score(best, &mut trials)?;
+    for d in CANDIDATES.skip(1) {
+        let s = score(KindDegrees::all(d), &mut trials)?;
+        if s < best_s * (1.0 - MIN_GAIN) {
+            best = KindDegrees::all(d);
+            best_s = s;
+        }
+    }
+    for _ in 0..SWEEPS {
+        let mut changed = false;
+        for k in 0..3 {
+            let mut kind_best = (best.get(k), best_s);
+            for d in CANDIDATES {
+                if d == best.get(k) {
+                    continue;
+                }
+                let s = score(best.with(k, d), &mut trials)?;
+                // lower degrees win ties; a higher one must gain MIN_GAIN
+                let gain = if d > kind_best.0 { 1.0 - MIN_GAIN } else { 1.0 };
+                if s < kind_best.1 * gain {
+                    kind_best = (d, s);
+                }
+            }
+            if kind_best.0 != best.get(k) {
+                best = best.with(k, kind_best.0);
+                best_s = kind_best.1;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    Ok(Selection {
+        chosen: best,
+        cv_rms_um: best_s,
+        trials,
+    })
+}
