@@ -110,7 +110,11 @@ fn air_and_material_corrections_match_the_library_equations() {
     let dir = tempfile::tempdir().unwrap();
     let run = simulated_run(dir.path());
     let plain = iso_json(&run, &[]);
-    for (formula, name) in [(AirFormula::Ciddor, "ciddor"), (AirFormula::Edlen, "edlen")] {
+    for (formula, name) in [
+        (AirFormula::Ciddor, "ciddor"),
+        (AirFormula::Edlen, "edlen"),
+        (AirFormula::BonschPotulski, "bonsch-potulski"),
+    ] {
         let corrected = iso_json(
             &run,
             &[

@@ -1,6 +1,6 @@
 //! Environmental compensation of laser interferometer readings: the refractive index of air
-//! (Ciddor 1996; the updated Edlén equation of Birch & Downs 1993/1994) and the ISO 1
-//! normalisation of a length to 20 °C.
+//! (Ciddor 1996; the updated Edlén equations of Birch & Downs 1993/1994 and of Bönsch &
+//! Potulski 1998) and the ISO 1 normalisation of a length to 20 °C.
 //!
 //! Both index equations are written as the NIST Engineering Metrology Toolbox states them
 //! (J. A. Stone and J. H. Zimmerman, "Index of Refraction of Air", Appendix A,
@@ -12,6 +12,9 @@
 //! - Edlén: K. P. Birch and M. J. Downs, Metrologia 30, 155–162 (1993) and 31, 315–316 (1994),
 //!   with the NIST water-vapour factor 292.75/T (A-IV), which equals Birch & Downs at 19.6 °C
 //!   and departs from it by less than 1e-9 between 15 °C and 25 °C at 50 % RH.
+//!
+//! - Bönsch & Potulski: G. Bönsch and E. Potulski, Metrologia 35, 133–139 (1998), eqs. 6, 7, 8
+//!   and 9a, as they give them (the water term without a temperature factor).
 //!
 //! A laser interferometer counts wavelengths in air: the length it reports is
 //! `counts · λ_vac / n_laser`, where `n_laser` is the index its compensation assumed. With the
@@ -26,7 +29,8 @@ pub struct Air {
     pub pressure_pa: f64,
     /// Relative humidity (%, 0..100).
     pub humidity_pct: f64,
-    /// CO2 mole fraction x_c (µmol/mol); used by Ciddor only (Edlén assumes 450).
+    /// CO2 mole fraction x_c (µmol/mol); used by Ciddor and Bönsch & Potulski (Birch & Downs'
+    /// Edlén assumes 450).
     pub co2_ppm: f64,
 }
 
@@ -49,6 +53,8 @@ pub enum AirFormula {
     Ciddor,
     /// Birch & Downs (1993/1994) updated Edlén: 350–650 nm, near-standard shop-floor air.
     Edlen,
+    /// Bönsch & Potulski (1998) updated Edlén: 350–650 nm, with the air's CO2 content.
+    BonschPotulski,
 }
 
 impl AirFormula {
@@ -57,6 +63,7 @@ impl AirFormula {
         match self {
             AirFormula::Ciddor => "ciddor",
             AirFormula::Edlen => "edlen",
+            AirFormula::BonschPotulski => "bonsch-potulski",
         }
     }
 
@@ -64,7 +71,7 @@ impl AirFormula {
     pub fn wavelength_range_nm(self) -> (f64, f64) {
         match self {
             AirFormula::Ciddor => (230.0, 1690.0),
-            AirFormula::Edlen => (350.0, 650.0),
+            AirFormula::Edlen | AirFormula::BonschPotulski => (350.0, 650.0),
         }
     }
 }
@@ -157,6 +164,7 @@ pub fn refractive_index(formula: AirFormula, air: &Air, wavelength_nm: f64) -> f
     match formula {
         AirFormula::Ciddor => ciddor(air, wavelength_nm),
         AirFormula::Edlen => edlen(air, wavelength_nm),
+        AirFormula::BonschPotulski => bonsch_potulski(air, wavelength_nm),
     }
 }
 
@@ -223,6 +231,24 @@ pub fn edlen(air: &Air, wavelength_nm: f64) -> f64 {
     // Birch & Downs (1993) eq. 4 with NIST's 292.75/T: n_tpf − n_tp = −(292.75/T) f (3.7345 − 0.0401 σ²)·10⁻¹⁰
     let pv = air.humidity_pct / 100.0 * saturation_vapour_pressure_pa(t);
     1.0 + r_tp - 292.75 / (t + 273.15) * pv * (3.7345 - 0.0401 * s) * 1e-10
+}
+
+/// Updated Edlén equation of Bönsch & Potulski (1998), with the air's CO2 content.
+pub fn bonsch_potulski(air: &Air, wavelength_nm: f64) -> f64 {
+    let t = air.temperature_c;
+    let p = air.pressure_pa;
+    let x = air.co2_ppm * 1e-6;
+    let s = (1000.0 / wavelength_nm).powi(2); // σ² in µm⁻²
+    // B&P eq. 6: (n − 1)_N·10⁸ = 8091.37 + 2333983/(130 − σ²) + 15518/(38.9 − σ²)
+    let r_n = 1e-8 * (8091.37 + 2_333_983.0 / (130.0 - s) + 15_518.0 / (38.9 - s));
+    // B&P eq. 7: (n − 1)_x = (n − 1)_N [1 + 0.5327 (x − 0.0004)]
+    let r_x = r_n * (1.0 + 0.5327 * (x - 0.0004));
+    // B&P eq. 8: (n − 1)_tp = p (n − 1)_x [1 + 10⁻⁸(0.5953 − 0.009876 t) p] / (93214.60 (1 + 0.0036610 t))
+    let r_tp = p * r_x * (1.0 + 1e-8 * (0.5953 - 0.009_876 * t) * p)
+        / (93_214.60 * (1.0 + 0.003_661_0 * t));
+    // B&P eq. 9a: n_tpf − n_tp = −f (3.8020 − 0.0384 σ²)·10⁻¹⁰
+    let f = air.humidity_pct / 100.0 * saturation_vapour_pressure_pa(t);
+    1.0 + r_tp - f * (3.8020 - 0.0384 * s) * 1e-10
 }
 
 /// Factor that turns a length read by a laser that assumed index `n_laser` into the true length
@@ -306,6 +332,54 @@ mod tests {
         }
     }
 
+    // An independent implementation: the `AstroAtmosphere` package 1.6 (PyPI),
+    // `refractivityModels.BonschPotulski(l=0.633, T, p=101325, RH, CO2)`, which writes B&P eqs.
+    // 6–9a from the paper with the CIPM (Davis 1992) saturation vapour pressure; run for these
+    // values. (t °C, RH %, CO2 ppm, n)
+    #[allow(clippy::excessive_precision)] // the digits as printed
+    const ASTRO_ATMOSPHERE_BP: [(f64, f64, f64, f64); 4] = [
+        (20.0, 20.0, 450.0, 1.000_271_617_016_67),
+        (20.0, 80.0, 450.0, 1.000_271_096_857_165_8),
+        (15.0, 0.0, 400.0, 1.000_276_513_004_164_4),
+        (25.0, 50.0, 450.0, 1.000_266_631_699_270_5),
+    ];
+
+    #[test]
+    fn bonsch_potulski_matches_an_independent_implementation_within_1e_8() {
+        for (t, rh, co2, n_ref) in ASTRO_ATMOSPHERE_BP {
+            let a = Air {
+                co2_ppm: co2,
+                ..air(t, 101_325.0, rh)
+            };
+            let n = bonsch_potulski(&a, 633.0);
+            assert!((n - n_ref).abs() < 1e-8, "t {t} RH {rh}: {n} vs {n_ref}");
+        }
+        // and CO2 moves it as B&P eq. 7 says: +0.5327·(n − 1) per unit mole fraction
+        let lo = bonsch_potulski(&air(20.0, 101_325.0, 0.0), 633.0);
+        let hi = bonsch_potulski(
+            &Air {
+                co2_ppm: 550.0,
+                ..air(20.0, 101_325.0, 0.0)
+            },
+            633.0,
+        );
+        let expected = (lo - 1.0) * 0.5327 * 100e-6 / (1.0 + 0.5327 * (450e-6 - 0.0004));
+        assert!(((hi - lo) - expected).abs() < 1e-15);
+    }
+
+    #[test]
+    fn the_three_equations_agree_near_standard_air() {
+        // B&P and Birch & Downs are fits to the same measurements: within 3e-8 of Ciddor at
+        // shop-floor conditions (Bönsch & Potulski 1998, §5)
+        for (t, rh) in [(18.0, 30.0), (20.0, 50.0), (23.0, 60.0)] {
+            let a = air(t, 100_000.0, rh);
+            let c = ciddor(&a, 633.0);
+            for n in [edlen(&a, 633.0), bonsch_potulski(&a, 633.0)] {
+                assert!((n - c).abs() < 3e-8, "t {t} RH {rh}: {n} vs Ciddor {c}");
+            }
+        }
+    }
+
     #[test]
     fn ciddor_standard_dry_air_is_the_dispersion_formula() {
         // Ciddor eq. 1 defines standard air (15 °C, 101 325 Pa, dry, 450 ppm): at these
@@ -319,7 +393,11 @@ mod tests {
 
     #[test]
     fn humidity_lowers_the_index_and_temperature_lowers_it_by_about_1_ppm_per_kelvin() {
-        for f in [AirFormula::Ciddor, AirFormula::Edlen] {
+        for f in [
+            AirFormula::Ciddor,
+            AirFormula::Edlen,
+            AirFormula::BonschPotulski,
+        ] {
             let n20 = refractive_index(f, &STANDARD_AIR, HENE_WAVELENGTH_NM);
             let n21 = refractive_index(f, &air(21.0, 101_325.0, 50.0), HENE_WAVELENGTH_NM);
             let dn_ppm = (n20 - n21) * 1e6;

@@ -83,7 +83,11 @@ impl Choice for Outside {
 }
 
 impl Choice for AirFormula {
-    const ALL: &'static [Self] = &[AirFormula::Ciddor, AirFormula::Edlen];
+    const ALL: &'static [Self] = &[
+        AirFormula::Ciddor,
+        AirFormula::Edlen,
+        AirFormula::BonschPotulski,
+    ];
 
     fn name(self) -> &'static str {
         AirFormula::name(self)
@@ -93,6 +97,7 @@ impl Choice for AirFormula {
         match self {
             AirFormula::Ciddor => "Ciddor (1996)",
             AirFormula::Edlen => "updated Edlén (Birch & Downs 1993/1994)",
+            AirFormula::BonschPotulski => "updated Edlén with CO2 (Bönsch & Potulski 1998)",
         }
     }
 }

@@ -48,7 +48,7 @@ pub struct Args {
         long,
         value_parser = choice::<AirFormula>(),
         default_value = "ciddor",
-        value_name = "ciddor|edlen"
+        value_name = "ciddor|edlen|bonsch-potulski"
     )]
     pub air_formula: AirFormula,
     /// Index the laser used for its readings (default: the formula at 20 °C, 101325 Pa, 50 % RH).
