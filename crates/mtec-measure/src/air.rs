@@ -238,7 +238,8 @@ pub fn bonsch_potulski(air: &Air, wavelength_nm: f64) -> f64 {
     let t = air.temperature_c;
     let p = air.pressure_pa;
     let x = air.co2_ppm * 1e-6;
-    let s = (1000.0 / wavelength_nm).powi(2); // σ² in µm⁻²
+    // σ² in µm⁻²
+    let s = (1000.0 / wavelength_nm).powi(2);
     // B&P eq. 6: (n − 1)_N·10⁸ = 8091.37 + 2333983/(130 − σ²) + 15518/(38.9 − σ²)
     let r_n = 1e-8 * (8091.37 + 2_333_983.0 / (130.0 - s) + 15_518.0 / (38.9 - s));
     // B&P eq. 7: (n − 1)_x = (n − 1)_N [1 + 0.5327 (x − 0.0004)]
