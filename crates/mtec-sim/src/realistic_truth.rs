@@ -13,8 +13,8 @@
 //! zero; the waviness also faded in over the first 20 mm as in [`crate::truth`]),
 //! straightness measured from its least-squares reference line. Stored as 0.5 mm tables.
 
-use crate::truth::{remove_ls_slope, RIPPLE};
-use mtec_model::{location_elements, motion_elements, ErrorFunction, ErrorSet, Machine};
+use crate::truth::{location_constants, peak_and_sign, remove_ls_slope, RIPPLE};
+use mtec_model::{motion_elements, ErrorFunction, ErrorSet, Machine};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use std::f64::consts::TAU;
@@ -60,16 +60,7 @@ pub fn realistic_truth_with(machine: &Machine, seed: u64, mix: Mix) -> ErrorSet 
             let d = el.direction;
             let positioning = d == axis;
             let straightness = !d.is_rotary() && d != axis;
-            let peak = if positioning {
-                rng.random_range(10.0..20.0)
-            } else if straightness {
-                rng.random_range(2.0..8.0)
-            } else if d.index() == axis.index() {
-                rng.random_range(5.0..15.0)
-            } else {
-                rng.random_range(5.0..30.0)
-            };
-            let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+            let (peak, sign) = peak_and_sign(&mut rng, axis, d);
             let (a1, a2, a3) = if positioning {
                 (
                     rng.random_range(0.6..1.0),
@@ -135,10 +126,7 @@ pub fn realistic_truth_with(machine: &Machine, seed: u64, mix: Mix) -> ErrorSet 
             };
             set.insert(el, ErrorFunction::table(positions, values));
         }
-        for el in location_elements(axis) {
-            let v = rng.random_range(10.0..50.0) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
-            set.insert(el, ErrorFunction::constant(v));
-        }
+        location_constants(&mut set, axis, &mut rng);
     }
     set
 }

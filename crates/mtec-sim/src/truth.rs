@@ -11,7 +11,8 @@
 //! 1 mm piecewise-linear table.
 
 use mtec_model::{
-    location_elements, motion_elements, ErrorElement, ErrorFunction, ErrorSet, Machine, ThermalTerm,
+    location_elements, motion_elements, Axis, ErrorElement, ErrorFunction, ErrorSet, Machine,
+    ThermalTerm,
 };
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -30,17 +31,7 @@ pub fn geometric_truth(machine: &Machine, seed: u64) -> ErrorSet {
             let d = el.direction;
             let positioning = d == axis;
             let straightness = !d.is_rotary() && d != axis;
-            // peak magnitude over the travel
-            let peak = if positioning {
-                rng.random_range(10.0..20.0)
-            } else if straightness {
-                rng.random_range(2.0..8.0)
-            } else if d.index() == axis.index() {
-                rng.random_range(5.0..15.0) // roll
-            } else {
-                rng.random_range(5.0..30.0)
-            };
-            let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+            let (peak, sign) = peak_and_sign(&mut rng, axis, d);
             // shape in s = (q − lo)/len ∈ [0, 1]
             let (a1, a2, a3) = if positioning {
                 (
@@ -92,12 +83,35 @@ pub fn geometric_truth(machine: &Machine, seed: u64) -> ErrorSet {
             };
             set.insert(el, ErrorFunction::table(positions, values));
         }
-        for el in location_elements(axis) {
-            let v = rng.random_range(10.0..50.0) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
-            set.insert(el, ErrorFunction::constant(v));
-        }
+        location_constants(&mut set, axis, &mut rng);
     }
     set
+}
+
+/// The peak magnitude over the travel of a motion element of `axis` in direction `d`
+/// (positioning 10–20 µm, straightness 2–8 µm, roll 5–15 µrad, pitch and yaw 5–30 µrad), and
+/// its sign: the first two draws of every element in both truths.
+pub(crate) fn peak_and_sign(rng: &mut StdRng, axis: Axis, d: Axis) -> (f64, f64) {
+    let peak = if d == axis {
+        rng.random_range(10.0..20.0)
+    } else if !d.is_rotary() {
+        rng.random_range(2.0..8.0)
+    } else if d.index() == axis.index() {
+        rng.random_range(5.0..15.0) // roll
+    } else {
+        rng.random_range(5.0..30.0)
+    };
+    let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+    (peak, sign)
+}
+
+/// The location errors of `axis` (squareness and zero offsets): constants of 10–50 µrad or
+/// µm with a random sign.
+pub(crate) fn location_constants(set: &mut ErrorSet, axis: Axis, rng: &mut StdRng) {
+    for el in location_elements(axis) {
+        let v = rng.random_range(10.0..50.0) * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+        set.insert(el, ErrorFunction::constant(v));
+    }
 }
 
 /// Straightness is measured from its least-squares reference line (ISO 230-1): the slope of
