@@ -238,6 +238,25 @@ fn the_demo_report_reads_and_prints_as_a_customer_would_see_it() {
     ] {
         assert!(html.contains(q), "summary lacks {q}");
     }
+    // every analysis section names its method and source in a footnote
+    for title in [
+        "Positioning (ISO 230-2)",
+        "Identified geometric errors",
+        "Global sensitivity",
+        "Circular test (ISO 230-4)",
+        "Rotary axis",
+        "Thermal model",
+        "Volumetric error map",
+        "Compensation outputs",
+        "Compensation rate",
+    ] {
+        let at = html.find(&format!("<h2>{title}")).expect(title);
+        let end = at + html[at..].find("</section>").unwrap();
+        assert!(
+            html[at..end].contains("<p class=\"source\">Method and source: "),
+            "{title} has no method footnote"
+        );
+    }
     let mut columns = Vec::new();
     data_columns(&folder.join("data"), &mut columns);
     tables_read_as_text(&html, &columns);

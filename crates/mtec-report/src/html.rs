@@ -76,6 +76,8 @@ pub struct KeyFigure {
 pub struct Section {
     pub title: String,
     blocks: Vec<Block>,
+    /// The method and its source, printed as the section's footnote.
+    source: Option<String>,
 }
 
 impl Section {
@@ -83,7 +85,13 @@ impl Section {
         Section {
             title: title.into(),
             blocks: vec![],
+            source: None,
         }
+    }
+    /// The method and its source (standard, paper, mtec's docs), the section's footnote.
+    pub fn source(&mut self, t: impl Into<String>) -> &mut Self {
+        self.source = Some(t.into());
+        self
     }
     /// A paragraph of plain text.
     pub fn text(&mut self, t: impl Into<String>) -> &mut Self {
@@ -158,6 +166,7 @@ td.hash{font-family:monospace;font-size:.85em;word-break:break-all;text-align:le
 table.key td{text-align:left}table.key td:nth-child(3){text-align:right}table.key td:nth-child(4){text-align:right;white-space:nowrap}\
 table.wide{font-size:.8em}table.wide td,table.wide th{padding:.2em .35em}\
 table.facts td{text-align:left}\
+.source{color:#555;font-size:.85em;border-top:1px solid #ddd;padding-top:.4em;margin-top:1.5em}\
 .print{float:right;font-size:.9em;padding:.3em .8em;cursor:pointer}\
 @page{size:A4;margin:14mm}\
 @media print{body{max-width:none;margin:0;padding:0;font-size:10.5pt}nav,.print{display:none}section{break-before:page}\
@@ -271,6 +280,13 @@ impl Report {
                         );
                     }
                 }
+            }
+            if let Some(src) = &s.source {
+                let _ = write!(
+                    h,
+                    "<p class=\"source\">Method and source: {}</p>",
+                    escape(src)
+                );
             }
             h.push_str("</section>");
         }

@@ -182,6 +182,10 @@ fn compensation_rate_section(p: &mut Pipeline, data: &Path, seed: u64) -> Result
     );
     let arrows = error_arrows(&vm, model.as_ref(), &tr, &opts)?;
     let sec = p.report.section("Compensation rate on the virtual machine");
+    sec.source(
+        "the simulator's exact kinematics (mtec docs/methods.md §11) commanded to the corrected \
+         points; compensation rate = 1 − RMS after / RMS before",
+    );
     sec.text(format!("The machine commanded to 1000 random points with and without the map's correction; errors measured against the simulation's truth ({}). Rate = 1 − RMS after / RMS before.", model.describe()));
     sec.table(&["axis", "RMS before (µm)", "RMS after (µm)", "rate"], rows);
     let ([before, after], scale, reference) = arrows;

@@ -185,6 +185,10 @@ pub fn iso230_2(p: &mut Pipeline, data: &Path) -> crate::Result<()> {
     let sec = p
         .report
         .section(format!("Positioning (ISO 230-2): {}", stem(&f)));
+    sec.source(
+        "ISO 230-2:2014 (A, E, R, B, M as it defines them); VDI/DGQ 3441 (P, Ps, Pa, \
+         U); mtec docs/methods.md §2",
+    );
     warnings(sec, &obs, &mut *p.obs);
     sec.text("Bidirectional positioning accuracy A, repeatability R, reversal B, systematic deviation E and mean reversal per ISO 230-2:2014, from the laser runs.");
     // mean unidirectional deviations with their ±2s bands, from the statistics themselves
@@ -339,6 +343,10 @@ pub fn lines(p: &mut Pipeline, machine: &Path, l: &LinesStage) -> crate::Result<
     let sec = p
         .report
         .section("Identified geometric errors (line measurements)");
+    sec.source(
+        "ISO 230-1 error elements; the 9-line method (least squares on Legendre error \
+         functions, degree by cross-validation); mtec docs/methods.md §3",
+    );
     warnings(sec, &obs, &mut *p.obs);
     sec.text("Error elements identified by least squares from the laser-interferometer lines; the identifiability report names what the design cannot determine.");
     let mach = crate::inputs::read_machine(machine)?;
@@ -473,6 +481,10 @@ pub fn sensitivity(
     let sec = p
         .report
         .section("Global sensitivity of the volumetric error");
+    sec.source(
+        "EFAST (Saltelli, Tarantola & Chan 1999), Sobol indices (Saltelli et al. 2010), \
+         Morris elementary effects (Campolongo et al. 2007); mtec docs/methods.md §6",
+    );
     warnings(sec, &obs, &mut *p.obs);
     sec.text("First-order index S1 (key errors) and total index ST (ST − S1: coupling) of each error element for the volumetric error, inputs drawn from the statistics of the error functions.");
     // one chart per output (Ex, Ey, Ez, |E|) with S1 and ST per input; Morris gives μ*, σ
@@ -635,6 +647,10 @@ pub fn circular(p: &mut Pipeline, data: &Path) -> crate::Result<()> {
     let sec = p
         .report
         .section(format!("Circular test (ISO 230-4): {}", stem(&f)));
+    sec.source(
+        "ISO 230-4:2005 (circular deviation G, hysteresis H); ballbar diagnostics by \
+         least squares on the faults' signatures; mtec docs/methods.md §5",
+    );
     warnings(sec, &obs, &mut *p.obs);
     sec.text(format!(
         "Circular deviation G and circular hysteresis H per ISO 230-4 ({:?} plane, R = {} mm, \
@@ -764,6 +780,10 @@ pub fn ballbar(p: &mut Pipeline, b: &BallbarStage) -> crate::Result<()> {
     let sec = p
         .report
         .section("Rotary axis: ballbar identification (5 installation modes)");
+    sec.source(
+        "the five-mode ballbar identification of a rotary axis' error motions (ISO \
+         230-7 names); mtec docs/methods.md §4",
+    );
     warnings(sec, &obs, &mut *p.obs);
     sec.text("Error motions EXC, EYC, EZC (µm), EAC, EBC (µrad) identified per angle and time from five installation modes, after removal of each mode's mean and first harmonic (set-up errors). ECC is not observable by a ballbar.");
     // the polar and time plots `identify ballbar --out` drew, in name order
@@ -892,6 +912,10 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> crate::Result<PathBuf> {
     let sec = p
         .report
         .section(format!("Thermal model: {} from {}", t.target, stem(&data)));
+    sec.source(
+        "the model kind's method in mtec docs/methods.md §7 (ridge trace: Hoerl & \
+         Kennard 1970; forward validation: rolling origin, Tashman 2000)",
+    );
     warnings(sec, &obs, &mut *p.obs);
     let ridge_trace = super::thermal_section::section(
         sec,
@@ -1132,6 +1156,10 @@ pub fn map(p: &mut Pipeline, m: &MapStage) -> crate::Result<PathBuf> {
         }
     }
     let sec = p.report.section("Volumetric error map");
+    sec.source(
+        "a regular grid of measured volumetric errors, trilinear interpolation; mtec \
+         docs/methods.md §8",
+    );
     warnings(sec, &obs, &mut *p.obs);
     sec.text("A regular grid of measured volumetric errors, interpolated trilinearly (the controller-style compensation baseline).");
     for (svg, cap) in figures {
@@ -1228,6 +1256,10 @@ pub fn compensation(
         ),
     );
     let sec = p.report.section("Compensation outputs");
+    sec.source(
+        "the correction solve and the G-code rewriter, mtec docs/methods.md §8–9; table \
+         formats from the controllers' manuals (docs/formats.md)",
+    );
     warnings(sec, &obs, &mut *p.obs);
     sec.text(format!("Model used: {}. NC programs are rewritten so that every commanded point is corrected (long moves split where the correction changes); controller tables carry the negative of the predicted error.", model.display()));
     if !rows.is_empty() {
