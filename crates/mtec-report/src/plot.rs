@@ -102,17 +102,6 @@ fn xy_frame<'a, 'b>(
     Some(chart)
 }
 
-/// A chart's root split into (plot area `plot_width` px wide, legend strip right of it).
-fn split_root<'a>(
-    root: &DrawingArea<SVGBackend<'a>, Shift>,
-    plot_width: u32,
-) -> (
-    DrawingArea<SVGBackend<'a>, Shift>,
-    DrawingArea<SVGBackend<'a>, Shift>,
-) {
-    root.split_horizontally(plot_width)
-}
-
 /// A line chart of several series with optional bands. Returns SVG text.
 pub fn line_chart(
     title: &str,
@@ -146,7 +135,7 @@ pub fn line_chart(
     {
         let root = SVGBackend::with_string(&mut svg, (CHART.0 + lw, CHART.1)).into_drawing_area();
         let _ = root.fill(&WHITE);
-        let (plot, strip) = split_root(&root, CHART.0);
+        let (plot, strip) = root.split_horizontally(CHART.0);
         let xs = series
             .iter()
             .flat_map(|s| s.points.iter().map(|p| p.0))
@@ -195,7 +184,7 @@ pub fn scatter_chart(title: &str, x_label: &str, y_label: &str, series: &[Series
     {
         let root = SVGBackend::with_string(&mut svg, (CHART.0 + lw, CHART.1)).into_drawing_area();
         let _ = root.fill(&WHITE);
-        let (plot, strip) = split_root(&root, CHART.0);
+        let (plot, strip) = root.split_horizontally(CHART.0);
         let (x0, x1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
         let (y0, y1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
         let Some(mut chart) = xy_frame(&plot, title, x_label, y_label, (x0, x1), (y0, y1)) else {
@@ -242,7 +231,7 @@ pub fn bar_chart_with_errors(
             (120 + 40 * categories.len().max(1) * series.len().max(1)).clamp(480, 1100) as u32;
         let root = SVGBackend::with_string(&mut svg, (width + lw, CHART.1)).into_drawing_area();
         let _ = root.fill(&WHITE);
-        let (plot, strip) = split_root(&root, width);
+        let (plot, strip) = root.split_horizontally(width);
         let whisker = |j: usize, i: usize| {
             errors
                 .get(j)
@@ -360,7 +349,7 @@ pub fn quiver_chart(
     {
         let root = SVGBackend::with_string(&mut svg, (CHART.0 + lw, CHART.1)).into_drawing_area();
         let _ = root.fill(&WHITE);
-        let (plot, strip) = split_root(&root, CHART.0);
+        let (plot, strip) = root.split_horizontally(CHART.0);
         // one grid step of margin round the positions: room for the arrows
         let (x0, x1) = range(arrows.iter().flat_map(|a| [a.x - sx, a.x + sx]));
         let (y0, y1) = range(arrows.iter().flat_map(|a| [a.y - sy, a.y + sy]));
