@@ -123,7 +123,7 @@ pub fn network() -> ThermalNetwork {
 }
 
 /// Sensor k (T1..T9) as a weighted mix of body temperatures and the ambient air (last weight).
-const SENSORS: [[f64; 6]; 9] = [
+pub(crate) const SENSORS: [[f64; 6]; 9] = [
     [1.0, 0.0, 0.0, 0.0, 0.0, 0.0], // T1 motor winding
     [0.6, 0.0, 0.4, 0.0, 0.0, 0.0], // T2 motor flange
     [0.0, 1.0, 0.0, 0.0, 0.0, 0.0], // T3 axis bearing
@@ -253,19 +253,117 @@ fn exact_reading_um(
     ((ball - cup).norm() - (pw - pt).norm()) * 1e3
 }
 
-/// Runs the scenario.
+/// Runs the scenario (named `dbb-rotary`, its historical name).
 pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
+    run_named("dbb-rotary", seed)
+}
+
+/// Runs the constant-speed campaign under the name the truth records (`dbb-rotary` or its
+/// explicit name `dbb-rotary-constant`: same files).
+pub fn run_named(scenario: &str, seed: u64) -> Result<ScenarioOutput, SimError> {
+    let net = network();
+    let names: Vec<String> = net.bodies.iter().map(|b| b.name.clone()).collect();
+    let sensors: Vec<Vec<f64>> = SENSORS.iter().map(|w| w.to_vec()).collect();
+    let campaign = Campaign {
+        scenario,
+        body_names: &names,
+        sensors: &sensors,
+        n_experiments: SPEEDS_RPM.len(),
+        extra: serde_json::Map::new(),
+    };
+    simulate_campaign(&campaign, seed, |ei, rng| {
+        let speed = SPEEDS_RPM[ei];
+        let ambient = AmbientProfile {
+            mean_c: AMBIENT_C + rng.random_range(-0.3..0.3),
+            drift_c_per_h: rng.random_range(-0.03..0.03),
+            daily_amplitude_c: 0.0,
+            phase_h: 0.0,
+        };
+        let start = vec![ambient.at(0.0); net.bodies.len()];
+        let duty = DutyCycle::new(vec![(240.0, speed)]);
+        let hist = net.simulate(&start, &duty, &ambient, 240.0, 20.0, 30.0);
+        let drivers = hist
+            .temps_c
+            .iter()
+            .map(|tb| Drivers {
+                bearing: tb[1] - start[1],
+                table: tb[3] - start[3],
+                motor: tb[0] - start[0],
+                head: tb[4] - start[4],
+            })
+            .collect();
+        let mut meta = serde_json::Map::new();
+        meta.insert("speed_rpm".into(), serde_json::json!(speed));
+        meta.insert("duration_min".into(), serde_json::json!(240.0));
+        ExperimentThermal {
+            times_min: TIMES_MIN.to_vec(),
+            bodies_c: hist.temps_c,
+            ambient_c: hist.ambient_c,
+            drivers,
+            meta,
+        }
+    })
+}
+
+/// The temperature changes that drive the error motions at one measurement (°C): the axis
+/// bearing (harmonics and scale), the table (uniform growth), the motor (tilt) and the bed
+/// under the spindle head (the tool cup's drift), each against the state the static error
+/// motions belong to.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Drivers {
+    pub bearing: f64,
+    pub table: f64,
+    pub motor: f64,
+    pub head: f64,
+}
+
+/// The thermal side of one experiment at its measurement times: body temperatures, ambient air,
+/// the drivers of the error motions, and what the truth records about the experiment.
+pub(crate) struct ExperimentThermal {
+    pub times_min: Vec<f64>,
+    /// `bodies_c[k][i]`: body i at `times_min[k]`.
+    pub bodies_c: Vec<Vec<f64>>,
+    pub ambient_c: Vec<f64>,
+    pub drivers: Vec<Drivers>,
+    /// Entries of the truth's `experiments[i]` after `experiment` (before `bodies`).
+    pub meta: serde_json::Map<String, serde_json::Value>,
+}
+
+/// A ballbar campaign on the C axis: the bodies, the sensors (weights over the bodies and,
+/// last, the ambient air) and how many experiments.
+pub(crate) struct Campaign<'a> {
+    pub scenario: &'a str,
+    pub body_names: &'a [String],
+    pub sensors: &'a [Vec<f64>],
+    pub n_experiments: usize,
+    /// Entries added at the top level of the truth.
+    pub extra: serde_json::Map<String, serde_json::Value>,
+}
+
+/// Simulates a campaign: the axis truth (first draw of the seed's stream), then per experiment
+/// its thermal side (`thermal(index, rng)`), the sensors with noise and, at every measurement
+/// time, the five installations read over one revolution from the exact bar lengths.
+pub(crate) fn simulate_campaign(
+    campaign: &Campaign,
+    seed: u64,
+    mut thermal: impl FnMut(usize, &mut StdRng) -> ExperimentThermal,
+) -> Result<ScenarioOutput, SimError> {
     let mut rng = StdRng::seed_from_u64(seed);
     let truth_axis = AxisTruth::random(&mut rng);
-    let net = network();
     let modes = modes();
     let noise = Normal::new(0.0, BALLBAR_NOISE_UM).map_err(|e| SimError::Invalid(e.to_string()))?;
     let tnoise = Normal::new(0.0, SENSOR_NOISE_C).map_err(|e| SimError::Invalid(e.to_string()))?;
     let n_angles = (360.0 / ANGLE_STEP_DEG).round() as usize;
     let angles: Vec<f64> = (0..n_angles).map(|i| i as f64 * ANGLE_STEP_DEG).collect();
+    let nb = campaign.body_names.len();
+    if campaign.sensors.iter().any(|w| w.len() != nb + 1) {
+        return Err(SimError::Invalid(
+            "a sensor needs one weight per body and one for the ambient air".into(),
+        ));
+    }
 
     let mut dbb = CsvWriter::new(DBB_HEADER);
-    let sensor_columns = (1..=9).map(|k| format!("T{k}_c"));
+    let sensor_columns = (1..=campaign.sensors.len()).map(|k| format!("T{k}_c"));
     let mut temps = CsvWriter::new(
         ["experiment", "time_min"]
             .map(String::from)
@@ -279,34 +377,32 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
     let (mut t_exp, mut t_time, mut t_angle) = (Vec::new(), Vec::new(), Vec::new());
     let mut installs = Vec::new();
     let mut experiments = Vec::new();
-    for (ei, &speed) in SPEEDS_RPM.iter().enumerate() {
+    for ei in 0..campaign.n_experiments {
         let exp = ei as i64 + 1;
-        let ambient = AmbientProfile {
-            mean_c: AMBIENT_C + rng.random_range(-0.3..0.3),
-            drift_c_per_h: rng.random_range(-0.03..0.03),
-            daily_amplitude_c: 0.0,
-            phase_h: 0.0,
-        };
-        let start = vec![ambient.at(0.0); net.bodies.len()];
-        let duty = DutyCycle::new(vec![(240.0, speed)]);
-        let hist = net.simulate(&start, &duty, &ambient, 240.0, 20.0, 30.0);
+        let th = thermal(ei, &mut rng);
         let mut body_rows = Vec::new();
-        for (ti, &time) in TIMES_MIN.iter().enumerate() {
-            let tb = &hist.temps_c[ti];
-            let amb = hist.ambient_c[ti];
-            body_rows.push(serde_json::json!({"time_min": time, "motor_c": tb[0], "bearing_c": tb[1], "axis_housing_c": tb[2], "table_c": tb[3], "bed_c": tb[4], "ambient_c": amb}));
+        for (ti, &time) in th.times_min.iter().enumerate() {
+            let tb = &th.bodies_c[ti];
+            let amb = th.ambient_c[ti];
+            let mut body = serde_json::Map::new();
+            body.insert("time_min".into(), serde_json::json!(time));
+            for (name, t) in campaign.body_names.iter().zip(tb) {
+                body.insert(format!("{name}_c"), serde_json::json!(t));
+            }
+            body.insert("ambient_c".into(), serde_json::json!(amb));
+            body_rows.push(serde_json::Value::Object(body));
             let mut row = vec![exp.to_string(), time.to_string()];
-            for w in SENSORS {
-                let v: f64 = (0..5).map(|i| w[i] * tb[i]).sum::<f64>() + w[5] * amb;
+            for w in campaign.sensors {
+                let v: f64 = (0..nb).map(|i| w[i] * tb[i]).sum::<f64>() + w[nb] * amb;
                 row.push(format!("{:.3}", v + tnoise.sample(&mut rng)));
             }
             temps.row(row);
-            let (db, dt, dm) = (tb[1] - start[1], tb[3] - start[3], tb[0] - start[0]);
+            let d = th.drivers[ti];
             // The spindle head holding the tool cup drifts with the bed/column (µm/°C).
-            let head_drift_mm = Vector3::new(0.3, -0.2, -1.2) * (tb[4] - start[4]) * 1e-3;
+            let head_drift_mm = Vector3::new(0.3, -0.2, -1.2) * d.head * 1e-3;
             let motions: Vec<[f64; 6]> = angles
                 .iter()
-                .map(|&c| truth_axis.motions(c, db, dt, dm))
+                .map(|&c| truth_axis.motions(c, d.bearing, d.table, d.motor))
                 .collect();
             for (ai, &c) in angles.iter().enumerate() {
                 t_exp.push(exp);
@@ -341,15 +437,20 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
                 }
             }
         }
-        experiments.push(serde_json::json!({"experiment": exp, "speed_rpm": speed, "duration_min": 240.0, "bodies": body_rows}));
+        let mut e = serde_json::Map::new();
+        e.insert("experiment".into(), serde_json::json!(exp));
+        e.extend(th.meta);
+        e.insert("bodies".into(), serde_json::json!(body_rows));
+        experiments.push(serde_json::Value::Object(e));
     }
 
     let (h, a, b, phis) = PRESET;
-    let mut setup = String::from(
-        "# mtec ballbar setup written by `mtec simulate dbb-rotary` (docs/formats.md, Ballbar).\n\
+    let mut setup = format!(
+        "# mtec ballbar setup written by `mtec simulate {}` (docs/formats.md, Ballbar).\n\
          # Source layout: modes 1-2 centre ball on the axis at h, tool cup at radius b;\n\
          # modes 3-5 second mount at radius a (table angles 0, 120, 240 deg), tool cup on the\n\
          # axis k = sqrt(b^2 - a^2) above the ball plane.\n",
+        campaign.scenario
     );
     writeln!(
         setup,
@@ -371,9 +472,9 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
     for (k, n) in names.iter().enumerate() {
         motions.insert((*n).into(), serde_json::json!(cols[k]));
     }
-    let truth = serde_json::json!({
+    let mut truth = serde_json::json!({
         "format": "mtec.truth/1",
-        "scenario": "dbb-rotary",
+        "scenario": campaign.scenario,
         "seed": seed,
         "convention": "table pose E(C)·Rz(C), E = Trans(EXC,EYC,EZC)·Rz(ECC)·Ry(EBC)·Rx(EAC), error motions in the machine frame, angular motions about the origin (axis line, Z = 0)",
         "preset": {"h_mm": h, "a_mm": a, "b_mm": b, "mount2_angles_deg": phis},
@@ -383,6 +484,9 @@ pub fn run(seed: u64) -> Result<ScenarioOutput, SimError> {
         "motions": motions,
         "installations": installs,
     });
+    if let Some(t) = truth.as_object_mut() {
+        t.extend(campaign.extra.clone());
+    }
     Ok(ScenarioOutput {
         files: vec![
             OutputFile {

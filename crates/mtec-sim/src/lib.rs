@@ -9,6 +9,7 @@
 
 pub mod circular_test;
 pub mod dbb_rotary;
+pub mod dbb_rotary_realistic;
 pub mod feed_axis_ambient;
 pub mod instruments;
 pub mod iso230_2;

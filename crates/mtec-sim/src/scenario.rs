@@ -13,7 +13,9 @@ pub const SCENARIOS: &[(&str, &str)] = &[
     ("spindle-sensors", "8 collinear spindle temperature sensors and the radial drift (ridge-trace sensor selection)"),
     ("feed-axis-ambient", "Z-axis thermal error along the axis at ambient 15/20/25/30 C (exp-ambient model)"),
     ("production-day", "a VMC through 4 production days and an unseen day (spindle steps, idle, cooling, day/night air), its project.toml fits, builds and compensates: `mtec run`"),
-    ("dbb-rotary", "ballbar on a C axis: 5 installation modes, 4 speeds x 4 h, every 20 min, temperatures T1-T9, for `mtec identify ballbar`"),
+    ("dbb-rotary", "ballbar on a C axis: 5 installation modes, 4 speeds x 4 h, every 20 min, temperatures T1-T9, for `mtec identify ballbar` (same as dbb-rotary-constant)"),
+    ("dbb-rotary-constant", "dbb-rotary under its explicit name: each experiment one constant speed from cold, sensors on the heated bodies"),
+    ("dbb-rotary-realistic", "ballbar on a C axis heated like a real one: unsensed rotor and bearing rings, surface sensors, 4 x 6 h of speed steps, dwells and cooling, drifting air; 5 modes every 20 min"),
 ];
 
 /// Runs the named scenario with a seed.
@@ -51,7 +53,8 @@ pub fn run_scenario(name: &str, seed: u64) -> Result<ScenarioOutput, SimError> {
         }
         "spindle-sensors" => crate::spindle_sensors::run(seed),
         "feed-axis-ambient" => crate::feed_axis_ambient::run(seed),
-        "dbb-rotary" => crate::dbb_rotary::run(seed),
+        "dbb-rotary" | "dbb-rotary-constant" => crate::dbb_rotary::run_named(name, seed),
+        "dbb-rotary-realistic" => crate::dbb_rotary_realistic::run(seed),
         "production-day" => crate::production_day::run(seed),
         _ => Err(SimError::UnknownScenario(
             name.to_string(),
