@@ -416,6 +416,7 @@ pub struct ReadingComparison {
     /// Readings compared (modes × angles × times).
     pub n: usize,
     pub rmse_um: f64,
+    pub mae_um: f64,
     /// max |predicted − measured| over modes, angles and times.
     pub max_abs_residual_um: f64,
     /// max |measured| (cleaned readings).
@@ -424,23 +425,40 @@ pub struct ReadingComparison {
     pub residual_ratio: f64,
     /// The same for the thermal change alone (readings minus those at the first time).
     pub change_rmse_um: f64,
+    pub change_mae_um: f64,
     pub change_max_abs_residual_um: f64,
     pub change_max_abs_measured_um: f64,
     pub change_residual_ratio: f64,
 }
 
-/// Maps predicted motions of one experiment to predicted readings of every mode and compares
-/// them with the measured readings (both cleaned of mean and first harmonic). `predicted` must
-/// hold every angle of every measurement of `experiment` in `measured`.
-pub fn compare_readings(
+/// One cleaned ballbar reading (µm), predicted and measured, and its bar-length change since
+/// the experiment's first measurement (same mode and angle).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ReadingRow {
+    pub experiment: u32,
+    pub time_min: f64,
+    /// Mode id of the setup.
+    pub mode: i64,
+    pub angle_deg: f64,
+    pub predicted_um: f64,
+    pub measured_um: f64,
+    pub predicted_change_um: f64,
+    pub measured_change_um: f64,
+}
+
+/// Maps predicted motions of one experiment to predicted readings of every mode, beside the
+/// measured readings (both cleaned of mean and first harmonic) and both changes since the
+/// first measurement; ordered by time, mode, angle. `predicted` must hold every angle of every
+/// measurement of `experiment` in `measured`.
+pub fn reading_rows(
     setup: &Setup,
     measured: &Measurements,
     experiment: u32,
     predicted: &[MotionRow],
-) -> Result<ReadingComparison> {
+) -> Result<Vec<ReadingRow>> {
     let pred = by_measurement(predicted);
-    // (time key) → [mode][angle] of predicted and measured cleaned readings
-    let mut pairs: Vec<ReadingPair> = Vec::new();
+    let mut out = Vec::new();
+    let mut first: Option<ReadingPair> = None;
     for m in measured
         .items
         .iter()
@@ -469,48 +487,79 @@ pub fn compare_readings(
             .iter()
             .map(|s| remove_mean_and_first_harmonic(&m.angles_deg, s).map_err(ballbar))
             .collect::<Result<Vec<_>>>()?;
-        pairs.push((p, y));
+        let (p0, y0) = first.get_or_insert_with(|| (p.clone(), y.clone())).clone();
+        for (mi, mode) in setup.modes.iter().enumerate() {
+            for (j, c) in m.angles_deg.iter().enumerate() {
+                out.push(ReadingRow {
+                    experiment,
+                    time_min: m.time_min,
+                    mode: mode.id,
+                    angle_deg: *c,
+                    predicted_um: p[mi][j],
+                    measured_um: y[mi][j],
+                    predicted_change_um: p[mi][j] - p0[mi][j],
+                    measured_change_um: y[mi][j] - y0[mi][j],
+                });
+            }
+        }
     }
-    if pairs.is_empty() {
+    if out.is_empty() {
         return Err(NnError::Data(format!(
             "the measurements hold no experiment {experiment}"
         )));
     }
-    let stats = |diff: &dyn Fn(usize, usize, usize) -> (f64, f64)| {
-        let (mut sq, mut n, mut max_r, mut max_y) = (0.0, 0usize, 0.0f64, 0.0f64);
-        for (k, pair) in pairs.iter().enumerate() {
-            for (m, row) in pair.1.iter().enumerate() {
-                for j in 0..row.len() {
-                    let (p, y) = diff(k, m, j);
-                    sq += (p - y) * (p - y);
-                    n += 1;
-                    max_r = max_r.max((p - y).abs());
-                    max_y = max_y.max(y.abs());
-                }
-            }
+    Ok(out)
+}
+
+/// The source's metrics of reading rows of one experiment (module docs).
+pub fn reading_metrics(experiment: u32, rows: &[ReadingRow]) -> ReadingComparison {
+    // RMSE, MAE, max |residual|, max |measured| of (predicted, measured) pairs
+    let stats = |pairs: &mut dyn Iterator<Item = (f64, f64)>| {
+        let (mut sq, mut ab, mut n, mut max_r, mut max_y) = (0.0, 0.0, 0usize, 0.0f64, 0.0f64);
+        for (p, y) in pairs {
+            sq += (p - y) * (p - y);
+            ab += (p - y).abs();
+            n += 1;
+            max_r = max_r.max((p - y).abs());
+            max_y = max_y.max(y.abs());
         }
-        ((sq / n.max(1) as f64).sqrt(), max_r, max_y, n)
+        let d = n.max(1) as f64;
+        ((sq / d).sqrt(), ab / d, max_r, max_y, n)
     };
-    let (rmse, max_r, max_y, n) = stats(&|k, m, j| (pairs[k].0[m][j], pairs[k].1[m][j]));
-    let (c_rmse, c_max_r, c_max_y, _) = stats(&|k, m, j| {
-        (
-            pairs[k].0[m][j] - pairs[0].0[m][j],
-            pairs[k].1[m][j] - pairs[0].1[m][j],
-        )
-    });
+    let (rmse, mae, max_r, max_y, n) =
+        stats(&mut rows.iter().map(|r| (r.predicted_um, r.measured_um)));
+    let (c_rmse, c_mae, c_max_r, c_max_y, _) = stats(
+        &mut rows
+            .iter()
+            .map(|r| (r.predicted_change_um, r.measured_change_um)),
+    );
     let ratio = |r: f64, y: f64| if y > 0.0 { r / y } else { f64::INFINITY };
-    Ok(ReadingComparison {
+    ReadingComparison {
         experiment,
         n,
         rmse_um: rmse,
+        mae_um: mae,
         max_abs_residual_um: max_r,
         max_abs_measured_um: max_y,
         residual_ratio: ratio(max_r, max_y),
         change_rmse_um: c_rmse,
+        change_mae_um: c_mae,
         change_max_abs_residual_um: c_max_r,
         change_max_abs_measured_um: c_max_y,
         change_residual_ratio: ratio(c_max_r, c_max_y),
-    })
+    }
+}
+
+/// Maps predicted motions of one experiment to predicted readings of every mode and compares
+/// them with the measured readings ([`reading_rows`], [`reading_metrics`]).
+pub fn compare_readings(
+    setup: &Setup,
+    measured: &Measurements,
+    experiment: u32,
+    predicted: &[MotionRow],
+) -> Result<ReadingComparison> {
+    let rows = reading_rows(setup, measured, experiment, predicted)?;
+    Ok(reading_metrics(experiment, &rows))
 }
 
 #[cfg(test)]
@@ -630,6 +679,17 @@ mod tests {
         assert!((stale.max_abs_residual_um - want).abs() < 1e-9);
         assert!((stale.change_max_abs_measured_um - want).abs() < 1e-9);
         assert!((stale.change_residual_ratio - 1.0).abs() < 1e-9);
+        // MAE by hand: zero at t = 0, |change| at t = 20, over 2 × 5 × N readings
+        let rows20 = reading_rows(&s, &measured, 3, &rows(&|_, c| at(0.0, c))).unwrap();
+        assert_eq!(rows20.len(), 2 * 5 * N);
+        assert_eq!(rows20[N].mode, 2);
+        let mae: f64 = rows20
+            .iter()
+            .map(|r| r.measured_change_um.abs())
+            .sum::<f64>()
+            / (2 * 5 * N) as f64;
+        assert!((stale.mae_um - mae).abs() < 1e-9 && stale.mae_um > 0.05);
+        assert!(exact.mae_um < 1e-9);
         // an experiment without measurements is refused
         assert!(compare_readings(&s, &measured, 4, &rows(&at)).is_err());
     }
