@@ -355,3 +355,160 @@ fn bad_neural_fits_exit_2_with_the_reason() {
         text(&o)
     );
 }
+
+/// `thermal predict --setup --dbb --readings` on the realistic campaign (issue #21): a small
+/// BPNN's error motions become predicted readings of every mode, scored like the source (RMSE,
+/// MAE, max |residual| against max |measured|); the CSV agrees with the printed metrics; bad
+/// input exits 2 naming the file (and line and column where there is one).
+#[test]
+fn rotary_model_predicts_ballbar_readings() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n).to_string_lossy().into_owned();
+    write_scenario("dbb-rotary-realistic", 1, dir.path());
+    let o = identify_ballbar(dir.path());
+    assert!(o.status.success(), "{}", text(&o));
+    let d = p("id/motions.csv");
+    let model = p("bpnn.json");
+    let o = mtec(&[
+        "thermal",
+        "fit",
+        "--model",
+        "bpnn",
+        "--data",
+        &d,
+        "--target",
+        TARGETS,
+        "--sequence-by",
+        "angle_deg",
+        "--features",
+        "angle_deg",
+        "--angle-harmonics",
+        "3",
+        "--hidden",
+        "4",
+        "--epochs",
+        "4",
+        "--train",
+        "1,2,4",
+        "--test",
+        "3",
+        "--quiet",
+        "-o",
+        &model,
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let (setup, dbb, readings) = (p("setup.toml"), p("dbb.csv"), p("readings.csv"));
+    let predict = |model: &str, dbb: &str, extra: &[&str]| {
+        let mut a = vec![
+            "thermal", "predict", "--model", model, "--data", &d, "--setup", &setup, "--dbb", dbb,
+        ];
+        a.extend_from_slice(extra);
+        mtec(&a)
+    };
+    let o = predict(
+        &model,
+        &dbb,
+        &["--readings", &readings, "--json", "-o", &p("pred.csv")],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let m = j["readings"]["metrics"].as_array().unwrap();
+    assert_eq!(m.len(), 4);
+    let csv = std::fs::read_to_string(&readings).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "experiment,time_min,mode,angle_deg,predicted_um,measured_um,residual_um,\
+         predicted_change_um,measured_change_um,change_residual_um"
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 4 * 19 * 5 * 72);
+    // experiment 3 (held out): the metrics recomputed from the CSV (4 decimals)
+    let e3: Vec<&Vec<f64>> = rows.iter().filter(|r| r[0] == 3.0).collect();
+    let n = e3.len() as f64;
+    let rmse = (e3.iter().map(|r| r[9] * r[9]).sum::<f64>() / n).sqrt();
+    let mae = e3.iter().map(|r| r[9].abs()).sum::<f64>() / n;
+    let max_r = e3.iter().map(|r| r[9].abs()).fold(0.0, f64::max);
+    let max_y = e3.iter().map(|r| r[8].abs()).fold(0.0, f64::max);
+    let m3 = &m[2];
+    assert_eq!(m3["experiment"], 3);
+    for (k, v) in [
+        ("change_rmse_um", rmse),
+        ("change_mae_um", mae),
+        ("change_max_abs_residual_um", max_r),
+        ("change_max_abs_measured_um", max_y),
+    ] {
+        assert!(
+            (m3[k].as_f64().unwrap() - v).abs() < 2e-4,
+            "{k}: {} vs {v}",
+            m3[k]
+        );
+    }
+    // the campaign changes the cleaned readings by a few µm (docs/methods.md §10.2)
+    assert!(max_y > 2.0, "{max_y}");
+    // the table beside the CSV
+    let o = predict(&model, &dbb, &["-o", &p("pred.csv")]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("ballbar readings") && text(&o).contains("3 change"),
+        "{}",
+        text(&o)
+    );
+
+    // the project report's section: metrics table, one figure per experiment, method and source
+    std::fs::write(
+        p("project.toml"),
+        "name = \"rotary\"\n[ballbar]\nsetup = \"setup.toml\"\ndata = \"dbb.csv\"\n\
+         temps = \"temps.csv\"\nmodel = \"bpnn.json\"\n",
+    )
+    .unwrap();
+    let o = mtec(&["run", &p("project.toml"), "--out", &p("res"), "--quiet"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let html = std::fs::read_to_string(p("res/report.html")).unwrap();
+    let sec = &html[html.find("predicted ballbar readings").expect("section")..];
+    assert!(sec.contains("Experiment 3: the bar-length change") && sec.contains("<svg"));
+    assert!(sec.contains("7.4 µm against 19.3 µm") && sec.contains("max |residual|"));
+    assert_eq!(
+        std::fs::read_to_string(p("res/ballbar/readings.csv")).unwrap(),
+        csv,
+        "the project writes what thermal predict --readings does"
+    );
+
+    // bad input: a damaged reading (file, line, column), a model without angle sequences,
+    // --setup without --dbb, the readings onto an input
+    let bad = p("bad.csv");
+    let mut t: Vec<String> = std::fs::read_to_string(&dbb)
+        .unwrap()
+        .lines()
+        .map(String::from)
+        .collect();
+    t[5] = t[5]
+        .rsplit_once(',')
+        .map(|(a, _)| format!("{a},1.2.3"))
+        .unwrap();
+    std::fs::write(&bad, t.join("\n")).unwrap();
+    let o = predict(&model, &bad, &[]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("bad.csv:6:5"), "{}", text(&o));
+    let mut j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    j["provenance"]["sequence_by"] = serde_json::Value::Null;
+    let flat = p("flat.json");
+    std::fs::write(&flat, j.to_string()).unwrap();
+    let o = predict(&flat, &dbb, &[]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("flat.json") && text(&o).contains("--sequence-by angle_deg"),
+        "{}",
+        text(&o)
+    );
+    let o = mtec(&[
+        "thermal", "predict", "--model", &model, "--data", &d, "--setup", &setup,
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let o = predict(&model, &dbb, &["--readings", &dbb]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(std::fs::read_to_string(&dbb).unwrap().len() > 1000);
+}

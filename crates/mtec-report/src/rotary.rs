@@ -193,6 +193,87 @@ pub fn rotary_figures(samples: &[MotionSample], names: &[&str]) -> Vec<Figure> {
     figures
 }
 
+/// One ballbar reading's bar-length change since its experiment's first measurement (same mode
+/// and angle, µm, mean and first harmonic removed): measured, and predicted from a thermal
+/// model's error motions.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReadingSample {
+    pub experiment: i64,
+    pub time_min: f64,
+    pub mode: i64,
+    pub angle_deg: f64,
+    pub predicted_change_um: f64,
+    pub measured_change_um: f64,
+}
+
+/// The source's figure of predicted against measured ballbar readings, per experiment against
+/// time: the bar-length change of the reading that changed most (its mode and angle named),
+/// measured and predicted, and the largest |predicted − measured| over every mode and angle at
+/// that time (what a compensation from the model would leave at worst).
+pub fn readings_figure(samples: &[ReadingSample]) -> Figure {
+    let mut experiments: Vec<i64> = samples.iter().map(|s| s.experiment).collect();
+    experiments.sort_unstable();
+    experiments.dedup();
+    let mut series = Vec::new();
+    for &e in &experiments {
+        let of_e: Vec<&ReadingSample> = samples.iter().filter(|s| s.experiment == e).collect();
+        let Some(peak) = of_e.iter().max_by(|a, b| {
+            a.measured_change_um
+                .abs()
+                .total_cmp(&b.measured_change_um.abs())
+        }) else {
+            continue;
+        };
+        let mut at_peak: Vec<(f64, f64, f64)> = of_e
+            .iter()
+            .filter(|s| s.mode == peak.mode && s.angle_deg == peak.angle_deg)
+            .map(|s| (s.time_min, s.measured_change_um, s.predicted_change_um))
+            .collect();
+        at_peak.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut times: Vec<f64> = of_e.iter().map(|s| s.time_min).collect();
+        times.sort_by(f64::total_cmp);
+        times.dedup();
+        let worst: Vec<(f64, f64)> = times
+            .iter()
+            .map(|&t| {
+                let r = of_e
+                    .iter()
+                    .filter(|s| s.time_min == t)
+                    .map(|s| (s.predicted_change_um - s.measured_change_um).abs())
+                    .fold(0.0, f64::max);
+                (t, r)
+            })
+            .collect();
+        let at = format!("mode {}, C = {}°", peak.mode, peak.angle_deg);
+        series.push(Series::new(
+            format!("exp {e} measured ({at})"),
+            at_peak.iter().map(|p| (p.0, p.1)).collect(),
+        ));
+        series.push(Series::new(
+            format!("exp {e} predicted ({at})"),
+            at_peak.iter().map(|p| (p.0, p.2)).collect(),
+        ));
+        series.push(Series::new(
+            format!("exp {e} max |residual|, all readings"),
+            worst,
+        ));
+    }
+    Figure {
+        name: "readings_predicted_vs_measured.svg".into(),
+        svg: line_chart(
+            "Ballbar readings: predicted against measured change",
+            "time (min)",
+            "bar-length change (µm)",
+            &series,
+            &[],
+        ),
+        caption: "Bar-length change since the first measurement of the reading that changed \
+                  most, measured and predicted, and the largest |residual| over all modes and \
+                  angles, against time"
+            .into(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -225,5 +306,40 @@ mod tests {
         );
         assert!(f[1].svg.contains("experiment 1") && f[1].svg.contains("polyline"));
         assert!(f[3].svg.contains("EAC peak-to-valley (urad)"));
+    }
+
+    /// The reading that changed most is followed; the residual line is the worst over all
+    /// readings at each time.
+    #[test]
+    fn readings_figure_follows_the_largest_change() {
+        let mut samples = Vec::new();
+        for (k, t) in [0.0, 20.0, 40.0].into_iter().enumerate() {
+            for (mode, angle, gain) in [(1, 0.0, 1.0), (3, 90.0, 4.0)] {
+                let m = gain * k as f64;
+                // mode 3 at 40 min is predicted 2 µm short
+                let p = if mode == 3 && k == 2 {
+                    m - 2.0
+                } else {
+                    m + 0.5 * (k == 1) as i64 as f64
+                };
+                samples.push(ReadingSample {
+                    experiment: 3,
+                    time_min: t,
+                    mode,
+                    angle_deg: angle,
+                    predicted_change_um: p,
+                    measured_change_um: m,
+                });
+            }
+        }
+        let f = readings_figure(&samples);
+        assert_eq!(f.name, "readings_predicted_vs_measured.svg");
+        assert!(
+            f.svg.contains("exp 3 measured (mode 3, C = 90°)"),
+            "{}",
+            f.svg
+        );
+        assert!(f.svg.contains("max |residual|") && f.svg.contains("polyline"));
+        assert!(readings_figure(&[]).svg.contains("svg"));
     }
 }

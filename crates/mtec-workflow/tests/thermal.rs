@@ -101,6 +101,7 @@ fn fit_and_predict_agree_with_the_model_evaluated_by_hand() {
             data: data.clone(),
             history: None,
             output: Some(out.clone()),
+            readings: None,
         },
         &mut Collect::default(),
     )

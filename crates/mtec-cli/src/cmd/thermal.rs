@@ -156,6 +156,15 @@ struct PredictArgs {
     /// Write `experiment,time_min,predicted_um[,measured_um,residual_um]` here (default stdout).
     #[arg(short = 'o', long = "output")]
     output: Option<PathBuf>,
+    /// Rotary model: the ballbar setup; with --dbb, predicts and scores every mode's readings.
+    #[arg(long, requires = "dbb")]
+    setup: Option<PathBuf>,
+    /// The measured ballbar readings (`experiment,time_min,mode,angle_deg,dl_um`).
+    #[arg(long, requires = "setup")]
+    dbb: Option<PathBuf>,
+    /// Write the predicted and measured readings and their changes here (CSV).
+    #[arg(long, requires = "dbb")]
+    readings: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -296,6 +305,7 @@ fn predict(a: PredictArgs) -> Result<(), CliError> {
         data: a.data,
         history: a.history,
         output: a.output,
+        readings: op::ReadingsOptions::given(a.setup, a.dbb, a.readings),
     };
     let mut obs = mtec_workflow::Collect::default();
     let outcome = op::predict(&opts, &mut obs)?;
@@ -303,27 +313,20 @@ fn predict(a: PredictArgs) -> Result<(), CliError> {
     for n in outcome.notes() {
         eprintln!("note: {n}");
     }
-    // with `-o -` the CSV has stdout and the JSON summary and metrics go to stderr
+    // the JSON or the metrics table: beside a CSV on stdout (`-o -`, no -o) the table is on stderr
     let mut say: Box<dyn Write> = match &opts.output {
         Some(p) => say_for(p),
-        None => Box::new(std::io::stdout()),
+        None if a.json => Box::new(std::io::stdout()),
+        None => Box::new(std::io::stderr()),
     };
-    if a.json {
-        let _ = writeln!(
-            say,
-            "{}",
+    let text = match a.json {
+        true => format!(
+            "{}\n",
             serde_json::to_string(&serde_json::to_value(&outcome)?)?
-        );
-    } else {
-        // the metrics table (neural models); beside a CSV on stdout it goes to stderr
-        let report = outcome.to_string();
-        match &opts.output {
-            Some(_) => {
-                let _ = write!(say, "{report}");
-            }
-            None => eprint!("{report}"),
-        }
-    }
+        ),
+        false => outcome.to_string(),
+    };
+    let _ = write!(say, "{text}");
     if opts.output.is_none() && !a.json {
         print!("{}", outcome.csv());
     }

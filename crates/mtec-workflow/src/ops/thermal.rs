@@ -539,6 +539,35 @@ pub struct PredictOptions {
     /// Where the predictions go (CSV; `-`: stdout). `None`: the CSV is only in the outcome
     /// ([`PredictOutcome::csv`]).
     pub output: Option<PathBuf>,
+    /// A rotary model's predicted ballbar readings (neural models of the five error motions).
+    pub readings: Option<ReadingsOptions>,
+}
+
+/// Where the ballbar readings of a rotary model's predictions come from and go
+/// (`thermal predict --setup --dbb [--readings]`).
+#[derive(Debug, Clone)]
+pub struct ReadingsOptions {
+    /// The ballbar setup (TOML, the modes).
+    pub setup: PathBuf,
+    /// The ballbar readings (`experiment,time_min,mode,angle_deg,dl_um`).
+    pub dbb: PathBuf,
+    /// Where the predicted and measured readings go (CSV); `None`: only in the outcome.
+    pub out: Option<PathBuf>,
+}
+
+impl ReadingsOptions {
+    /// The readings asked for when both the setup and the DBB file are given.
+    pub fn given(
+        setup: Option<PathBuf>,
+        dbb: Option<PathBuf>,
+        out: Option<PathBuf>,
+    ) -> Option<ReadingsOptions> {
+        Some(ReadingsOptions {
+            setup: setup?,
+            dbb: dbb?,
+            out,
+        })
+    }
 }
 
 /// The predictions of a regression model file.
@@ -673,6 +702,12 @@ pub fn predict(opts: &PredictOptions, obs: &mut dyn Observer) -> Result<PredictO
 }
 
 fn predict_regression(opts: &PredictOptions, obs: &mut dyn Observer) -> Result<Prediction> {
+    if opts.readings.is_some() {
+        return Err(Error::usage(
+            "--setup/--dbb (predicted ballbar readings) go with a rotary model of the five error \
+             motions (cnn-lstm or bpnn, fitted on `identify ballbar --temps` motions)",
+        ));
+    }
     // where the predictions go is settled before any work (an input, a directory: exit 2)
     let dest = match &opts.output {
         Some(p) => {

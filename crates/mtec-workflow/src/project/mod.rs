@@ -23,6 +23,7 @@
 //! setup = "setup.toml"
 //! data = "dbb.csv"
 //! temps = "temps.csv"
+//! model = "rotary.json"      # optional: its predicted readings (neural build)
 //! [[thermal]]
 //! data = "thermal.csv"
 //! target = "drift_um"
@@ -44,6 +45,8 @@ pub mod demo;
 mod labels;
 mod machine_stage;
 mod pipeline;
+#[cfg(feature = "neural")]
+mod readings_section;
 mod spec;
 mod stages;
 mod summary;
@@ -233,6 +236,16 @@ fn run_project_with(
         inputs.push(check(&b.data, "ballbar data")?);
         if let Some(t) = &b.temps {
             inputs.push(check(t, "ballbar temps")?);
+        }
+        if let Some(m) = &b.model {
+            inputs.push(check(m, "ballbar model")?);
+            if b.temps.is_none() {
+                return Err(InputError::file(
+                    project_path,
+                    "[ballbar] model needs `temps`: the model predicts from the temperatures",
+                )
+                .into());
+            }
         }
     }
     for t in &project.thermal {

@@ -138,6 +138,9 @@ pub struct BallbarStage {
     pub setup: PathBuf,
     pub data: PathBuf,
     pub temps: Option<PathBuf>,
+    /// A rotary thermal model (`thermal fit --model cnn-lstm|bpnn` on the identified motions,
+    /// `--sequence-by angle_deg`): the report adds its predicted ballbar readings.
+    pub model: Option<PathBuf>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -826,6 +826,47 @@ pub fn ballbar(p: &mut Pipeline, b: &BallbarStage) -> crate::Result<()> {
     );
     sec.text("revolution");
     json_tables(sec, &serde_json::to_value(&c.revolution)?, 1);
+    match &b.model {
+        Some(m) => predicted_readings(p, b, &p.path_of(m), &dir),
+        None => Ok(()),
+    }
+}
+
+/// The predicted ballbar readings of the `[ballbar] model` on the identified motions
+/// (`thermal predict --setup --dbb --readings`), and their report section.
+fn predicted_readings(
+    p: &mut Pipeline,
+    b: &BallbarStage,
+    model: &Path,
+    dir: &Path,
+) -> crate::Result<()> {
+    let out = dir.join("readings.csv");
+    let opts = ops::thermal::PredictOptions {
+        model: model.to_path_buf(),
+        data: dir.join("motions.csv"),
+        history: None,
+        output: None,
+        readings: Some(ops::thermal::ReadingsOptions {
+            setup: p.path_of(&b.setup),
+            dbb: p.path_of(&b.data),
+            out: Some(out.clone()),
+        }),
+    };
+    let mut obs = Collect::default();
+    let done = ops::thermal::predict(&opts, &mut obs)?;
+    p.outputs.push(s(&out));
+    let sec = p
+        .report
+        .section("Rotary axis: predicted ballbar readings (thermal model)");
+    warnings(sec, &obs, &mut *p.obs);
+    #[cfg(feature = "neural")]
+    if let ops::thermal::PredictOutcome::Neural(n) = &done {
+        if let Some(r) = &n.readings {
+            super::readings_section::section(sec, &stem(model), r);
+        }
+    }
+    #[cfg(not(feature = "neural"))]
+    let _ = done;
     Ok(())
 }
 
@@ -891,6 +932,7 @@ pub fn thermal(p: &mut Pipeline, t: &ThermalStage) -> crate::Result<PathBuf> {
         data: data.clone(),
         history: None,
         output: None,
+        readings: None,
     };
     let done = ops::thermal::predict(&predict, &mut obs)?;
     p.json_result(

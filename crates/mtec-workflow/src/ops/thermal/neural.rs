@@ -12,8 +12,12 @@
 
 use super::PredictOptions;
 use crate::{Error, Observer, Result};
+use mtec_identify::ballbar::{Measurements, Setup};
 use mtec_io::{CsvWriter, InputError, OutputGuard, Table};
 use mtec_nn::metrics::{channel_metrics, ChannelMetrics};
+use mtec_nn::rotary::{
+    reading_metrics, reading_rows, MotionRow, ReadingComparison, ReadingRow, TARGET_NAMES,
+};
 use mtec_nn::thermal_log::{self, LoadSpec, NnFitOptions, NnKind};
 use mtec_nn::{
     train_bpnn_baseline_monitored, train_cnn_lstm_monitored, Bpnn, CnnLstm, CnnLstmReport, NnError,
@@ -334,15 +338,169 @@ pub struct Prediction {
     /// `experiment,time_min[,<sequence_by>],pred_<t>...[,<t>,res_<t>...]`
     #[serde(skip)]
     pub csv: String,
+    /// The predicted ballbar readings of a rotary model (`--setup`, `--dbb`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub readings: Option<RotaryReadings>,
 }
 
-/// The metrics table, when the data hold the targets.
+/// A rotary model's predicted ballbar readings against the measured ones: the source's metrics
+/// per experiment and every reading (`mtec_nn::rotary::reading_rows`).
+#[derive(Debug, Clone, Serialize)]
+pub struct RotaryReadings {
+    pub metrics: Vec<ReadingComparison>,
+    #[serde(skip)]
+    pub rows: Vec<ReadingRow>,
+    /// `experiment,time_min,mode,angle_deg,predicted_um,measured_um,residual_um,
+    /// predicted_change_um,measured_change_um,change_residual_um`
+    #[serde(skip)]
+    pub csv: String,
+}
+
+/// The readings table: per experiment the readings (after mean and first harmonic) and their
+/// change since the first measurement, RMSE, MAE, max |residual| against max |measured|.
+impl fmt::Display for RotaryReadings {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "ballbar readings (µm; change = since the experiment's first measurement)\n  {:<10} {:>6} {:>8} {:>8} {:>9} {:>9} {:>7}",
+            "experiment", "n", "RMSE", "MAE", "max|res|", "max|meas|", "ratio"
+        )?;
+        for m in &self.metrics {
+            for (what, r) in [
+                (
+                    "",
+                    [
+                        m.rmse_um,
+                        m.mae_um,
+                        m.max_abs_residual_um,
+                        m.max_abs_measured_um,
+                        m.residual_ratio,
+                    ],
+                ),
+                (
+                    " change",
+                    [
+                        m.change_rmse_um,
+                        m.change_mae_um,
+                        m.change_max_abs_residual_um,
+                        m.change_max_abs_measured_um,
+                        m.change_residual_ratio,
+                    ],
+                ),
+            ] {
+                writeln!(
+                    f,
+                    "  {:<10} {:>6} {:>8.3} {:>8.3} {:>9.3} {:>9.3} {:>6.1}%",
+                    format!("{}{what}", m.experiment),
+                    m.n,
+                    r[0],
+                    r[1],
+                    r[2],
+                    r[3],
+                    100.0 * r[4]
+                )?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The ballbar readings of a rotary model's predictions (`pred` per row of `labels`, the five
+/// motions in `TARGET_NAMES` order, one sequence per angle): every experiment of the
+/// predictions that the DBB file holds.
+fn rotary_readings(
+    r: &super::ReadingsOptions,
+    model: &Path,
+    targets: &[String],
+    seq_by: Option<&str>,
+    labels: &[thermal_log::RowLabel],
+    pred: &[Vec<f64>],
+) -> Result<RotaryReadings> {
+    if targets.iter().map(String::as_str).ne(TARGET_NAMES) || seq_by != Some("angle_deg") {
+        return Err(Error::Input(InputError::file(
+            model,
+            format!(
+                "predicted ballbar readings need a rotary model of the five error motions {} \
+                 fitted with --sequence-by angle_deg (this one predicts {} with sequences by {})",
+                TARGET_NAMES.join(","),
+                targets.join(","),
+                seq_by.unwrap_or("experiment")
+            ),
+        )));
+    }
+    let setup = Setup::read(&r.setup)?;
+    let measured = Measurements::from_table(&Table::read(&r.dbb)?, &setup)?;
+    let rows: Vec<MotionRow> = labels
+        .iter()
+        .zip(pred)
+        .map(|(l, p)| MotionRow {
+            experiment: l.experiment,
+            time_min: l.time_min,
+            angle_deg: l.sequence.unwrap_or(f64::NAN),
+            motions: [p[0], p[1], p[2], p[3], p[4]],
+        })
+        .collect();
+    let mut experiments: Vec<u32> = rows.iter().map(|r| r.experiment).collect();
+    experiments.sort_unstable();
+    experiments.dedup();
+    let in_dbb = |e: u32| measured.items.iter().any(|m| m.experiment == i64::from(e));
+    let mut metrics = Vec::new();
+    let mut all = Vec::new();
+    for e in experiments.into_iter().filter(|&e| in_dbb(e)) {
+        let of_e: Vec<MotionRow> = rows.iter().filter(|r| r.experiment == e).copied().collect();
+        let rr = reading_rows(&setup, &measured, e, &of_e).map_err(|x| nn_error(&r.dbb, x))?;
+        metrics.push(reading_metrics(e, &rr));
+        all.extend(rr);
+    }
+    if metrics.is_empty() {
+        return Err(Error::Input(InputError::file(
+            &r.dbb,
+            "holds none of the experiments of the predictions",
+        )));
+    }
+    let mut csv = CsvWriter::new([
+        "experiment",
+        "time_min",
+        "mode",
+        "angle_deg",
+        "predicted_um",
+        "measured_um",
+        "residual_um",
+        "predicted_change_um",
+        "measured_change_um",
+        "change_residual_um",
+    ]);
+    for x in &all {
+        csv.row([
+            x.experiment.to_string(),
+            x.time_min.to_string(),
+            x.mode.to_string(),
+            x.angle_deg.to_string(),
+            format!("{:.4}", x.predicted_um),
+            format!("{:.4}", x.measured_um),
+            format!("{:.4}", x.measured_um - x.predicted_um),
+            format!("{:.4}", x.predicted_change_um),
+            format!("{:.4}", x.measured_change_um),
+            format!("{:.4}", x.measured_change_um - x.predicted_change_um),
+        ]);
+    }
+    Ok(RotaryReadings {
+        metrics,
+        rows: all,
+        csv: csv.finish(),
+    })
+}
+
+/// The metrics table, when the data hold the targets, and the ballbar readings' table.
 impl fmt::Display for Prediction {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match &self.metrics {
-            Some(m) => write!(f, "{}", metrics_table("metrics", m)),
-            None => Ok(()),
+        if let Some(m) = &self.metrics {
+            write!(f, "{}", metrics_table("metrics", m))?;
         }
+        if let Some(r) = &self.readings {
+            write!(f, "{r}")?;
+        }
+        Ok(())
     }
 }
 
@@ -350,8 +508,22 @@ impl fmt::Display for Prediction {
 /// the targets, the CSV (written to `output` when given).
 pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Prediction> {
     // where the predictions go is settled before any work (an input, a directory: exit 2)
+    let mut inputs = vec![opts.data.as_path(), opts.model.as_path()];
+    if let Some(r) = &opts.readings {
+        inputs.extend([r.setup.as_path(), r.dbb.as_path()]);
+    }
     let dest = match &opts.output {
-        Some(p) => Some(OutputGuard::new(&[&opts.data, &opts.model]).check(p)?),
+        Some(p) => Some(OutputGuard::new(&inputs).check(p)?),
+        None => None,
+    };
+    let readings_dest = match opts.readings.as_ref().and_then(|r| r.out.as_ref()) {
+        Some(p) => {
+            let mut g = OutputGuard::new(&inputs);
+            if let Some(o) = &opts.output {
+                g.add_input(o);
+            }
+            Some(g.check(p)?)
+        }
         None => None,
     };
     let model = read_model(&opts.model)?.ok_or_else(|| {
@@ -429,8 +601,22 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
         csv.row(row);
     }
     let csv = csv.finish();
+    let readings = match &opts.readings {
+        Some(r) => Some(rotary_readings(
+            r,
+            &opts.model,
+            targets,
+            seq_by.as_deref(),
+            &loaded.labels,
+            &pred,
+        )?),
+        None => None,
+    };
     if let Some(d) = &dest {
         d.write(csv.as_bytes())?;
+    }
+    if let (Some(d), Some(r)) = (&readings_dest, &readings) {
+        d.write(r.csv.as_bytes())?;
     }
     Ok(Prediction {
         format: "mtec.thermal-prediction/1".into(),
@@ -439,6 +625,7 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
         predictions: pred,
         metrics,
         csv,
+        readings,
     })
 }
 
