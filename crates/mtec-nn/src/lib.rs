@@ -35,6 +35,7 @@ pub mod cnn_lstm;
 pub mod dataset;
 pub mod error;
 pub mod grid_fit;
+pub mod lagged_linear;
 pub mod lm;
 pub mod metrics;
 pub mod progress;

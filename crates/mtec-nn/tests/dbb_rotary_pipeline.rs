@@ -25,7 +25,12 @@ struct Scenario {
 }
 
 fn scenario(seed: u64) -> Scenario {
-    let out = mtec_sim::run_scenario("dbb-rotary", seed).unwrap();
+    scenario_of("dbb-rotary", seed, 3)
+}
+
+/// A campaign of `name`, the angle as its first `harmonics` harmonics.
+fn scenario_of(name: &str, seed: u64, harmonics: u8) -> Scenario {
+    let out = mtec_sim::run_scenario(name, seed).unwrap();
     let file = |n: &str| &out.files.iter().find(|f| f.name == n).unwrap().contents;
     let setup = Setup::parse(Path::new("setup.toml"), file("setup.toml")).unwrap();
     let dbb = Table::parse(Path::new("dbb.csv"), file("dbb.csv")).unwrap();
@@ -35,7 +40,7 @@ fn scenario(seed: u64) -> Scenario {
         &Table::parse(Path::new("temps.csv"), file("temps.csv")).unwrap(),
     )
     .unwrap();
-    let data = RotaryDataset::build(&temps, &id.rows, AngleEncoding::Harmonics(3)).unwrap();
+    let data = RotaryDataset::build(&temps, &id.rows, AngleEncoding::Harmonics(harmonics)).unwrap();
     Scenario {
         setup,
         measurements,
@@ -295,4 +300,55 @@ fn acceptance_cnn_lstm_beats_bpnn_on_dbb_rotary() {
         "CNN-LSTM readings residual ratio {}",
         o.cnn_readings.residual_ratio
     );
+}
+
+/// Issue #21's criterion on the realistic campaign (`dbb-rotary-realistic`, seed 1, trained on
+/// experiments 1, 2, 4, tested on 3) for the lagged linear model (sensors now, 20 and 40 min
+/// earlier, times the angle's harmonics 1-6; `mtec_nn::lagged_linear`): the max residual of the
+/// predicted bar-length change stays below 40 % of the max measured change, and the same model
+/// without the lagged rows (the current sensors only) leaves more, because the sensors on the
+/// surfaces do not fix the bearing rings' temperature. The networks' five-seed, four-fold
+/// comparison is the example `rotary_campaign_compare` (docs/methods.md §10.4).
+#[test]
+fn realistic_campaign_lagged_linear_meets_the_readings_criterion() {
+    use mtec_nn::lagged_linear::LaggedLinear;
+    let s = scenario_of("dbb-rotary-realistic", 1, 6);
+    let (train, test) = s.data.data.split(&[1, 2, 4], &[3]).unwrap();
+    let ratio = |lags: usize| {
+        let m = LaggedLinear::fit(&train, 9, lags).unwrap();
+        let rows = s.data.label(&test, &m.predict(&test)).unwrap();
+        compare_readings(&s.setup, &s.measurements, 3, &rows).unwrap()
+    };
+    let (lagged, now) = (ratio(2), ratio(0));
+    eprintln!(
+        "lagged: {:.2} of {:.2} um ({:.1} %); current sensors only: {:.1} %",
+        lagged.change_max_abs_residual_um,
+        lagged.change_max_abs_measured_um,
+        100.0 * lagged.change_residual_ratio,
+        100.0 * now.change_residual_ratio
+    );
+    assert!(lagged.change_max_abs_measured_um > 2.0);
+    assert!(lagged.change_residual_ratio < 0.40, "{lagged:?}");
+    assert!(
+        now.change_residual_ratio > lagged.change_residual_ratio + 0.05,
+        "{now:?}"
+    );
+    // and against the truth: the predictions of the change are as close to the true motions
+    // (as the ballbar method sees them) as to the identified ones
+    let m = LaggedLinear::fit(&train, 9, 2).unwrap();
+    let pred = s.data.label(&test, &m.predict(&test)).unwrap();
+    let truth = observable_truth(&s, 3);
+    let key = |r: &MotionRow| (r.time_min.to_bits(), r.angle_deg.to_bits());
+    let t: std::collections::HashMap<_, _> = truth.iter().map(|r| (key(r), r.motions)).collect();
+    let (_, y) = test.rows();
+    let (mut to_truth, mut to_id) = (0.0, 0.0);
+    for (p, y) in pred.iter().zip(&y) {
+        let tr = t[&key(p)];
+        for k in 0..5 {
+            to_truth += (p.motions[k] - tr[k]).powi(2);
+            to_id += (p.motions[k] - y[k]).powi(2);
+        }
+    }
+    eprintln!("sum of squares to the truth {to_truth:.1}, to the identified motions {to_id:.1}");
+    assert!(to_truth < to_id, "{to_truth} vs {to_id}");
 }
