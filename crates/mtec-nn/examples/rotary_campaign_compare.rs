@@ -9,7 +9,7 @@
 //!
 //!     cargo run --release -p mtec-nn --example rotary_campaign_compare [-- --seeds 1,2,3,4,5
 //!         --models linear,bpnn,cnn-lstm --epochs N --lags L
-//!         --linear-harmonics H]
+//!         --linear-harmonics H --window W --conv C --lstm H --rises]
 
 mod support;
 
@@ -97,8 +97,24 @@ fn main() {
                         if let Some(n) = args.value("--epochs") {
                             cfg.max_epochs = n.parse().expect("--epochs");
                         }
-                        let (net, _) = train_cnn_lstm(&train, &cfg).expect("cnn-lstm");
-                        net.predict(&test).expect("cnn-lstm")
+                        if let Some(n) = args.value("--window") {
+                            cfg.architecture.window = n.parse().expect("--window");
+                        }
+                        if let Some(n) = args.value("--conv") {
+                            cfg.architecture.conv_channels = n.parse().expect("--conv");
+                        }
+                        if let Some(n) = args.value("--lstm") {
+                            cfg.architecture.lstm_hidden = n.parse().expect("--lstm");
+                        }
+                        if args.flag("--rises") {
+                            // the sensors as rises over each sequence's first row
+                            let (tr, te) = (train.rises(n_sensors), test.rises(n_sensors));
+                            let (net, _) = train_cnn_lstm(&tr, &cfg).expect("cnn-lstm");
+                            net.predict(&te).expect("cnn-lstm")
+                        } else {
+                            let (net, _) = train_cnn_lstm(&train, &cfg).expect("cnn-lstm");
+                            net.predict(&test).expect("cnn-lstm")
+                        }
                     }
                     other => panic!("unknown model {other}"),
                 };
