@@ -16,6 +16,7 @@
 //! splits by harmonic) and costs a 57 × 28 solve per harmonic instead of one 4104 × 196:
 //! 1. per experiment and time, the targets over the angles → their coefficients on ψ;
 //! 2. per coefficient, its course over the times → β on φ.
+//!
 //! Every sequence of an experiment is one angle over the same times (the rotary dataset).
 
 use crate::dataset::ThermalDataset;
