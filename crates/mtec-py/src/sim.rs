@@ -10,7 +10,8 @@ use std::path::PathBuf;
 /// `mtec simulate SCENARIO --out OUT --seed SEED` does (the same seed gives the same bytes).
 ///
 /// Scenarios: `vmc-9line`, `volumetric-grid`, `iso230-2`, `circular-test`, `circular-test-arc`,
-/// `spindle-sensors`, `feed-axis-ambient`, `production-day`, `dbb-rotary` (docs/formats.md, "Simulation outputs").
+/// `spindle-sensors`, `feed-axis-ambient`, `production-day`, `dbb-rotary` (also named
+/// `dbb-rotary-constant`), `dbb-rotary-realistic` (docs/formats.md, "Simulation outputs").
 /// Returns a dict of file name to path (`str`).
 ///
 /// >>> import mtec, tempfile
