@@ -12,7 +12,11 @@
 //! N > 4M² is needed). Each curve gets independent random phase shifts φ_j ∈ [0, 2π) (the
 //! paper's resampling scheme); repeating the curves `resamples` times with new phases and
 //! averaging the indices reduces the estimator's variance, and the spread over repetitions gives
-//! a confidence interval.
+//! a confidence interval: the R replicate estimates are independent and identically distributed,
+//! so the Student-t interval mean ± t_{R−1,(1+c)/2}·sd/√R holds at level c (see `interval`).
+//! Cost model: N·D·R model evaluations and D·R FFTs of length N; with R = 10 (the default) the
+//! interval costs 10× the evaluations of the single design (the model is usually the cost; the
+//! FFTs of the analysis are measured in docs/methods.md).
 //!
 //! Analysis of one curve (eqs. 21–24): Λ_p = |F_p/N|² for p = 1..⌈N/2⌉−1 (F = DFT of the
 //! output), V = 2 Σ_p Λ_p, V_i = 2 Σ_{q=1..M} Λ_{qω_i}, S1_i = V_i / V; the complementary set's
@@ -26,7 +30,8 @@
 //! per cent of each input's variance lies above the M-th harmonic: S1 is biased low and an
 //! input with no effect shows ST ≈ 0.01–0.02. A larger M (6–8, with N > 4M²) reduces this.
 
-use crate::problem::{check_outputs, Indices, Problem, SampleMatrix};
+use crate::interval::{replicate_half_widths, replicate_mean};
+use crate::problem::{check_outputs, Indices, Problem, Replicates, SampleMatrix};
 use crate::SensitivityError;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
@@ -39,8 +44,11 @@ pub struct EfastSettings {
     pub n: usize,
     /// Interference factor M: harmonics of ω_i counted in S1 (default 4).
     pub m: usize,
-    /// Independent repetitions of every curve with new random phases (default 1, SALib's design).
+    /// R, independent repetitions of every curve with new random phases (default 10; 1 is
+    /// SALib's design, without intervals).
     pub resamples: usize,
+    /// Confidence level of the intervals from the R repetitions (default 0.95).
+    pub confidence: f64,
 }
 
 impl Default for EfastSettings {
@@ -48,7 +56,8 @@ impl Default for EfastSettings {
         EfastSettings {
             n: 1000,
             m: 4,
-            resamples: 1,
+            resamples: 10,
+            confidence: 0.95,
         }
     }
 }
@@ -185,14 +194,16 @@ pub fn curve_indices(y: &[f64], m: usize, omega_max: usize) -> (f64, f64, f64) {
 }
 
 /// EFAST indices from the outputs `y` of a design drawn by [`sample`] (or by SALib's
-/// `fast_sampler` when `resamples` is 1): S1 and ST per input, averaged over repetitions; with
-/// two or more repetitions the 95 % confidence half widths 1.96·sd/√R are reported.
+/// `fast_sampler` when `resamples` is 1): S1 and ST per input, averaged over the R repetitions;
+/// with R ≥ 2 the half widths t_{R−1,(1+c)/2}·sd/√R of the intervals at confidence level c.
 pub fn analyze(
     names: &[String],
     y: &[f64],
     m: usize,
     resamples: usize,
+    confidence: f64,
 ) -> Result<Indices, SensitivityError> {
+    crate::interval::check_confidence(confidence)?;
     let d = names.len();
     if d == 0 || resamples == 0 {
         return Err(SensitivityError::Settings(
@@ -207,7 +218,12 @@ pub fn analyze(
         )));
     }
     let n = y.len() / (d * resamples);
-    let settings = EfastSettings { n, m, resamples };
+    let settings = EfastSettings {
+        n,
+        m,
+        resamples,
+        confidence,
+    };
     settings.check()?;
     check_outputs(y, settings.evaluations(d))?;
     let (omega_max, _) = frequencies(n, m, d);
@@ -221,38 +237,34 @@ pub fn analyze(
             names[c % d]
         )));
     }
-    let r = resamples as f64;
-    let mut s1 = vec![0.0; d];
-    let mut st = vec![0.0; d];
-    let mut variance = 0.0;
-    for (c, &(a, b, v)) in per_curve.iter().enumerate() {
-        s1[c % d] += a / r;
-        st[c % d] += b / r;
-        variance += v / (r * d as f64);
-    }
+    // Replicate k's indices of input i come from curve k·D + i.
+    let reps = Replicates {
+        s1: per_curve
+            .chunks_exact(d)
+            .map(|c| c.iter().map(|t| t.0).collect())
+            .collect(),
+        st: per_curve
+            .chunks_exact(d)
+            .map(|c| c.iter().map(|t| t.1).collect())
+            .collect(),
+    };
+    let variance = per_curve.iter().map(|t| t.2).sum::<f64>() / per_curve.len() as f64;
     let (s1_conf, st_conf) = if resamples >= 2 {
-        let half_width = |k: usize, mean: &[f64], pick: fn(&(f64, f64, f64)) -> f64| {
-            let ss: f64 = per_curve
-                .iter()
-                .enumerate()
-                .filter(|(c, _)| c % d == k)
-                .map(|(_, t)| (pick(t) - mean[k]).powi(2))
-                .sum();
-            1.96 * (ss / (r - 1.0)).sqrt() / r.sqrt()
-        };
+        // t_{R−1}·sd/√R over the independent random-phase replicates (`interval` module)
         (
-            Some((0..d).map(|k| half_width(k, &s1, |t| t.0)).collect()),
-            Some((0..d).map(|k| half_width(k, &st, |t| t.1)).collect()),
+            Some(replicate_half_widths(&reps.s1, confidence)),
+            Some(replicate_half_widths(&reps.st, confidence)),
         )
     } else {
         (None, None)
     };
     Ok(Indices {
         inputs: names.to_vec(),
-        s1,
-        st,
+        s1: replicate_mean(&reps.s1),
+        st: replicate_mean(&reps.st),
         s1_conf,
         st_conf,
+        replicates: (resamples >= 2).then_some(reps),
         variance,
     })
 }

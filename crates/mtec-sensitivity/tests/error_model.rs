@@ -58,6 +58,7 @@ fn efast_and_sobol_match_the_exact_indices_of_ex_ey_ez() {
             n: 2000,
             m: 4,
             resamples: 1,
+            confidence: 0.95,
         }),
         3,
         25.0,
@@ -124,6 +125,7 @@ fn positioning_and_straightness_dominate_angular_errors_need_long_offsets() {
         n: 1200,
         m: 4,
         resamples: 1,
+        confidence: 0.95,
     });
     let short_m = Machine::vmc_xyfz(0.0);
     let stats = sim_stats(&short_m);
@@ -166,6 +168,7 @@ fn aggregation_over_identical_points_equals_one_point() {
         n: 500,
         m: 4,
         resamples: 1,
+        confidence: 0.95,
     });
     let one = analyze(
         &ErrorModelProblem::new(&m, &stats, std::slice::from_ref(&q)).unwrap(),
@@ -208,6 +211,7 @@ fn tolerance_allocation_follows_the_equal_effects_rule_by_hand() {
             s1_conf: None,
             st_conf: None,
             mu_star: None,
+            mu_star_conf: None,
             sigma: None,
             variance_um2: cols
                 .iter()

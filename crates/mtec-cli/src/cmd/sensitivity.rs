@@ -34,15 +34,18 @@ pub struct Args {
     /// EFAST interference factor M.
     #[arg(long, default_value_t = 4)]
     pub interference: usize,
-    /// EFAST repetitions of the search curves with new random phases.
-    #[arg(long, default_value_t = 1)]
+    /// EFAST repetitions R with new random phases (intervals from their spread if R ≥ 2).
+    #[arg(long, default_value_t = 10)]
     pub resamples: usize,
     /// Morris grid levels (even).
     #[arg(long, default_value_t = 4)]
     pub levels: usize,
-    /// Sobol bootstrap replicates.
-    #[arg(long, default_value_t = 100)]
-    pub bootstrap: usize,
+    /// Bootstrap replicates of the Sobol and Morris intervals (0: none).
+    #[arg(long, alias = "bootstrap", default_value_t = 100)]
+    pub num_resamples: usize,
+    /// Confidence level of the intervals (*_conf).
+    #[arg(long, default_value_t = 0.95)]
+    pub conf_level: f64,
     /// Random seed of the design.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -78,7 +81,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
         interference: args.interference,
         resamples: args.resamples,
         levels: args.levels,
-        bootstrap: args.bootstrap,
+        num_resamples: args.num_resamples,
+        conf_level: args.conf_level,
         seed: args.seed,
         at: args.at,
         points: args.points,
