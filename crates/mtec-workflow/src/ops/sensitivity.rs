@@ -384,9 +384,14 @@ impl fmt::Display for MachineOutcome {
                 let max = c.iter().cloned().fold(0.0, f64::max);
                 writeln!(
                     s,
-                    "{:.0} % confidence half widths up to {max:.4} for {} (all in --json: *_conf)",
+                    "{:.0} % confidence half widths up to {max:.4} for {}{} (all in --json: *_conf)",
                     100.0 * self.conf_level,
-                    o.output
+                    o.output,
+                    if r.method == "efast" {
+                        ", random-phase spread only"
+                    } else {
+                        ""
+                    }
                 )?;
             }
         }
@@ -499,8 +504,13 @@ impl fmt::Display for FunctionOutcome {
         if ca.is_some() {
             writeln!(
                 s,
-                "±: {:.0} % confidence half widths",
-                100.0 * self.conf_level
+                "±: {:.0} % confidence half widths{}",
+                100.0 * self.conf_level,
+                if ix.method == "efast" {
+                    " of the random-phase repetitions (EFAST's interference bias is not in them)"
+                } else {
+                    ""
+                }
             )?;
         }
         Ok(())
