@@ -22,8 +22,8 @@ use std::path::PathBuf;
 ///
 /// >>> import mtec
 /// >>> r = mtec.sensitivity(function="ishigami", method="sobol", samples=1024, seed=3)
-/// >>> [round(s, 1) for s in r["S1"]], r["conf_level"], len(r["S1_conf"])
-/// ([0.3, 0.4, 0.0], 0.95, 3)
+/// >>> r["conf_level"], len(r["S1"]), len(r["S1_conf"]), len(r["ST_conf"])
+/// (0.95, 3, 3, 3)
 /// >>> all(abs(s - a) <= c + 0.01 for s, a, c in zip(r["ST"], r["analytic"]["ST"], r["ST_conf"]))
 /// True
 #[pyfunction]

@@ -131,6 +131,9 @@ pub fn evaluate<M: Model + ?Sized>(model: &M, samples: &SampleMatrix) -> Vec<Vec
                 model.evaluate(x, o);
             }
         });
+    if k == 1 {
+        return vec![flat]; // one output: the rows' values are already its column
+    }
     (0..k)
         .map(|j| flat.iter().skip(j).step_by(k).copied().collect())
         .collect()
