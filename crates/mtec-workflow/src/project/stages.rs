@@ -603,7 +603,7 @@ pub fn sensitivity(
                 })
                 .collect();
             let header: Vec<&str> = header.iter().map(String::as_str).collect();
-            sec.text(&format!(
+            sec.text(format!(
                 "Indices of every error element (± the half width of the {:.0} % confidence interval):",
                 100.0 * m.conf_level
             ));
