@@ -24,6 +24,7 @@ pub mod distribution;
 pub mod efast;
 mod error;
 pub mod error_model;
+pub mod lhs;
 pub mod morris;
 pub mod problem;
 pub mod sobol;

@@ -85,3 +85,45 @@ fn a_list_naming_an_element_the_model_lacks_is_refused_naming_it() {
     assert!(e.to_string().contains("no element `EYY`"), "{e}");
     assert!(!d.join("o.ngc").exists());
 }
+
+/// `sensitivity --sampling lhs:N`: N poses, each axis with exactly one pose in each of N equal
+/// slices of its travel (the Latin hypercube property), indices aggregated over them; with
+/// `--at` as well it is a usage error.
+#[test]
+fn lhs_poses_stratify_every_travel_and_feed_the_analysis() {
+    use mtec_workflow::ops::sensitivity::{self, lhs_poses, Options, Outcome};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let machine = Machine::vmc_xyfz(100.0); // the travels of m.toml below
+    let n = 10;
+    let poses = lhs_poses(&machine, n, 3);
+    for (i, a) in machine.axes.iter().enumerate() {
+        let [lo, hi] = machine.travel(*a);
+        let mut slices: Vec<usize> = poses
+            .iter()
+            .map(|p| ((p[i] - lo) / (hi - lo) * n as f64).floor() as usize)
+            .collect();
+        slices.sort_unstable();
+        assert_eq!(slices, (0..n).collect::<Vec<_>>(), "axis {a:?}");
+    }
+    std::fs::write(
+        d.join("m.toml"),
+        "chain = \"WXYFZT\"\ntool_offset_mm = [0, 0, 100]\n[axes.X]\ntravel = [0, 600]\n\
+         [axes.Y]\ntravel = [0, 800]\n[axes.Z]\ntravel = [0, 300]\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("s.csv"),
+        "element,mean,std,unit\nEXX,1,2,um\nEYY,0,3,um\nECX,0,5,urad\n",
+    )
+    .unwrap();
+    let mut opts = Options::machine(d.join("m.toml"), d.join("s.csv"));
+    opts.lhs_poses = Some(n);
+    let Outcome::Machine(o) = sensitivity::run(&opts, &mut Silent).unwrap() else {
+        panic!("a machine's outcome")
+    };
+    assert_eq!(o.report.points, n);
+    opts.at = Some(vec![1.0, 2.0, 3.0]);
+    let e = sensitivity::run(&opts, &mut Silent).unwrap_err();
+    assert!(e.to_string().contains("without --at"), "{e}");
+}

@@ -1,8 +1,7 @@
 //! `mtec compensate gcode`: rewrites an NC program so the machine reaches the programmed points.
 
-use crate::choice::choice;
-use crate::error::CliError;
 use crate::help::{examples, text};
+use crate::{choice::choice, error::CliError};
 use mtec_comp::gcode::tooltable::MachineUnits;
 use mtec_comp::gcode::{OnUnsupported, RewriteOptions, Units};
 use mtec_workflow::ops::compensate_gcode::{self, Options};
