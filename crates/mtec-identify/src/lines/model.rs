@@ -130,12 +130,21 @@ impl Block {
 }
 
 /// The basis of an error function: Legendre polynomials of a degree, or cubic B-splines with
-/// a number of interior knots placed at the quantiles of the measured positions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
+/// a number of interior knots placed at the quantiles of the measured positions. Written as
+/// the degree (a number, as before splines existed) or as `"spline:K"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Basis {
     Legendre(usize),
     Spline(usize),
+}
+
+impl serde::Serialize for Basis {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match *self {
+            Basis::Legendre(d) => s.serialize_u64(d as u64),
+            Basis::Spline(k) => s.serialize_str(&format!("spline:{k}")),
+        }
+    }
 }
 
 impl Basis {
@@ -151,8 +160,8 @@ impl Basis {
 impl std::fmt::Display for Basis {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Basis::Legendre(d) => write!(f, "degree {d}"),
-            Basis::Spline(k) => write!(f, "spline, {k} knots"),
+            Basis::Legendre(d) => write!(f, "{d}"),
+            Basis::Spline(k) => write!(f, "cubic spline with {k} interior knots"),
         }
     }
 }
