@@ -240,7 +240,7 @@ impl Layout {
         pitch: bool,
     ) -> Result<Layout, ModelError> {
         check_machine(machine)?;
-        let positions = super::validity::measured_positions(data);
+        let positions = super::data::measured_positions(data);
         let mut blocks = Vec::new();
         let mut col = 0;
         for element in three_axis_elements() {

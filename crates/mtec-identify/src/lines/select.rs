@@ -35,10 +35,9 @@ pub const KNOT_CANDIDATES: std::ops::RangeInclusive<usize> = 1..=6;
 /// Every basis a kind may take, in the order tried (splines only when asked: see
 /// docs/methods.md §3 for why the default does not try them).
 fn candidates(splines: bool) -> Vec<Basis> {
-    let knots = if splines { KNOT_CANDIDATES } else { 1..=0 };
     CANDIDATES
         .map(Basis::Legendre)
-        .chain(knots.map(Basis::Spline))
+        .chain(KNOT_CANDIDATES.filter(|_| splines).map(Basis::Spline))
         .collect()
 }
 

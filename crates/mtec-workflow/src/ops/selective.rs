@@ -38,6 +38,9 @@ pub const KEY_SHARE: f64 = 0.99;
 /// Grid points per axis of the key ranking and of the rates.
 const GRID: usize = 4;
 
+/// (element, S1 of |E|), largest first.
+pub type Ranking = Vec<(String, f64)>;
+
 /// Which elements to compensate (`--elements`).
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub enum Elements {
@@ -72,7 +75,7 @@ pub struct Selective {
     pub left_out: Vec<String>,
     /// Key only: (element, S1 of |E|) of every element, largest first.
     #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub ranking: Vec<(String, f64)>,
+    pub ranking: Ranking,
     /// Compensation rate per axis (X, Y, Z), %, with all elements and with the selected ones.
     pub rate_all_pct: [f64; 3],
     pub rate_selected_pct: [f64; 3],
@@ -211,7 +214,7 @@ fn grid(machine: &Machine) -> Vec<Vec<f64>> {
 pub fn key_elements(
     machine: &Machine,
     set: &ErrorSet,
-) -> std::result::Result<(Vec<ErrorElement>, Vec<(String, f64)>), String> {
+) -> std::result::Result<(Vec<ErrorElement>, Ranking), String> {
     // inputs of mean 0 and the RMS over the travel as spread: S1 is then each element's share
     // of the mean square of E that the compensation rate measures, not only of its variance
     let mut stats = ErrorStatistics::of_identified(set, machine);
@@ -245,7 +248,7 @@ pub fn key_elements(
             }
         }
     }
-    let ranking: Vec<(String, f64)> = report
+    let ranking: Ranking = report
         .key_errors
         .iter()
         .map(|r| (r.element.clone(), r.value))
