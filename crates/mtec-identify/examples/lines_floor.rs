@@ -4,7 +4,8 @@
 //! axis at 1000 random points (the definition of `tests/lines_realistic.rs`).
 //!
 //! Run: `cargo run -p mtec-identify --example lines_floor [NOISE_UM]`; `ALL_ONLY=1` only the
-//! whole truth, `SPLINES=1` with cubic splines among the cross-validated candidates.
+//! whole truth, `SPLINES=1` with cubic splines among the cross-validated candidates, `STEPS=N`
+//! N intervals per line instead of the scenario's 20.
 
 use mtec_comp::kinematic::KinematicModel;
 use mtec_comp::{command_for_target, CorrectionOptions};
@@ -46,7 +47,9 @@ fn evaluate(machine: &Machine, truth: &ErrorSet, ident: &ErrorSet, seed: u64) ->
 
 fn main() {
     let machine = machine_with_leads();
-    let lines = line_preset("nine-line", &machine, 20, 10.0).unwrap();
+    // intervals per line (the scenario's 20 unless STEPS says)
+    let steps = std::env::var("STEPS").map_or(20, |s| s.parse().unwrap());
+    let lines = line_preset("nine-line", &machine, steps, 10.0).unwrap();
     let one = |b: f64, r: f64| Mix {
         bump: b,
         ripple: r,
