@@ -156,7 +156,9 @@ pub fn load(path: &Path, elements: &Elements) -> Result<(Box<dyn ErrorModel>, Op
                                 .join(", ")
                         ))
                     })?;
-                chosen.push(e);
+                if !chosen.contains(&e) {
+                    chosen.push(e);
+                }
             }
             ("list", chosen, Vec::new())
         }
