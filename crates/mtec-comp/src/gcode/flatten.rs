@@ -503,8 +503,9 @@ impl Flattener {
         }
         let held = self.next_held(c)?;
         let out = self.target(c, [v[0], v[1], v[2]])?;
-        for a in 0..3 {
-            self.live[a] |= self.held.is_some() && !held[a];
+        let probed = self.held.is_some();
+        for (live, held) in self.live.iter_mut().zip(&held[..3]) {
+            *live |= probed && !held;
         }
         let mut s = String::from(if rapid { "G0" } else { "G1" });
         self.axis_words(&out, &mut s);

@@ -188,13 +188,15 @@ pub fn held_axes(run: &str, probe: &str) -> Result<Vec<[bool; 6]>, FlattenError>
                     "this call is missing when the program starts elsewhere: its course {DEPENDS}"
                 )))
             }
-            (None, Some(_)) => return Err(FlattenError {
-                line: last_a_line,
-                call: String::new(),
-                message: format!(
+            (None, Some(_)) => {
+                return Err(FlattenError {
+                    line: last_a_line,
+                    call: String::new(),
+                    message: format!(
                     "the program goes on further when it starts elsewhere: its course {DEPENDS}"
                 ),
-            }),
+                })
+            }
         };
         last_a_line = ca.line;
         if ca.name != cb.name {
