@@ -25,6 +25,7 @@ pub mod efast;
 mod error;
 pub mod error_model;
 pub mod interval;
+pub mod lhs;
 pub mod morris;
 pub mod problem;
 pub mod sobol;

@@ -1,9 +1,8 @@
 //! `mtec sensitivity`: global sensitivity of the volumetric error to the error elements
 //! (EFAST, Sobol or Morris), or of a standard test function.
 
-use crate::choice::choice;
-use crate::error::CliError;
 use crate::help::{examples, text};
+use crate::{choice::choice, error::CliError};
 use mtec_workflow::ops::sensitivity::{self as op, MethodKind, Options};
 use std::path::PathBuf;
 
@@ -60,6 +59,9 @@ pub struct Args {
     /// Several poses (CSV with x_mm, y_mm, z_mm, ... columns); indices are aggregated.
     #[arg(long)]
     pub points: Option<PathBuf>,
+    /// lhs or lhs:N: N poses (64) by Latin hypercube over the travels instead of --at/--points.
+    #[arg(long, value_parser = op::parse_sampling)]
+    pub sampling: Option<usize>,
     /// Target accuracy of Ex, Ey, Ez for the tolerance allocation, µm.
     #[arg(long, default_value_t = 25.0)]
     pub target_um: f64,
@@ -86,6 +88,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         seed: args.seed,
         at: args.at,
         points: args.points,
+        lhs_poses: args.sampling,
         target_um: args.target_um,
         coverage: args.coverage,
     };

@@ -87,6 +87,9 @@ pub struct Options {
     pub at: Option<Vec<f64>>,
     /// Several poses (CSV with `x_mm`, `y_mm`, `z_mm`, ... columns); indices are aggregated.
     pub points: Option<PathBuf>,
+    /// Instead of `at`/`points`: this many poses drawn by Latin hypercube sampling over the
+    /// travels (`--sampling lhs[:N]`, [`parse_sampling`]; seed `seed`); indices are aggregated.
+    pub lhs_poses: Option<usize>,
     /// Target accuracy of Ex, Ey, Ez for the tolerance allocation (µm).
     pub target_um: f64,
     /// Coverage factor k: the target bounds k·σ of each axis.
@@ -110,6 +113,7 @@ impl Options {
             seed: 1,
             at: None,
             points: None,
+            lhs_poses: None,
             target_um: 25.0,
             coverage: 2.0,
         }
@@ -242,6 +246,14 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
     let machine = read_machine(machine_path)?;
     let stats = ErrorStatistics::read(stats_path)?;
     let poses = match (&opts.at, &opts.points) {
+        _ if opts.lhs_poses.is_some() && (opts.at.is_some() || opts.points.is_some()) => {
+            return Err(Error::usage(
+                "--sampling lhs draws the poses: give it without --at and --points",
+            ))
+        }
+        (None, None) if opts.lhs_poses.is_some() => {
+            lhs_poses(&machine, opts.lhs_poses.unwrap_or(LHS_POSES), opts.seed)
+        }
         (Some(at), None) => {
             if at.len() != machine.axes.len() {
                 return Err(Error::usage(format!(
@@ -269,7 +281,7 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
         (None, Some(p)) => read_poses(p, &machine)?,
         _ => {
             return Err(Error::usage(
-                "give the pose with --at x,y,z or several with --points P.csv",
+                "give the pose with --at x,y,z, several with --points P.csv, or draw them with --sampling lhs",
             ))
         }
     };
@@ -299,6 +311,39 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
                 .collect()
         }),
     }))
+}
+
+/// Poses `--sampling lhs` draws when it gives no count.
+pub const LHS_POSES: usize = 64;
+
+/// The number of poses of `--sampling lhs[:N]` (`lhs` alone: [`LHS_POSES`]).
+pub fn parse_sampling(s: &str) -> Result<usize> {
+    let bad = || {
+        Error::usage(format!(
+            "--sampling: `{s}` is not lhs or lhs:N (N poses, at least 2)"
+        ))
+    };
+    match s.split_once(':') {
+        None if s == "lhs" => Ok(LHS_POSES),
+        Some(("lhs", n)) => n.parse().ok().filter(|n| *n >= 2).ok_or_else(bad),
+        _ => Err(bad()),
+    }
+}
+
+/// n poses by Latin hypercube sampling over the travels of the machine's axes
+/// ([`mtec_sensitivity::lhs`]): each axis has exactly one pose in each of n equal slices of
+/// its travel.
+pub fn lhs_poses(machine: &mtec_model::Machine, n: usize, seed: u64) -> Vec<Vec<f64>> {
+    let travels: Vec<[f64; 2]> = machine.axes.iter().map(|a| machine.travel(*a)).collect();
+    mtec_sensitivity::lhs::unit(n, travels.len(), seed)
+        .into_iter()
+        .map(|u| {
+            u.iter()
+                .zip(&travels)
+                .map(|(u, [lo, hi])| lo + u * (hi - lo))
+                .collect()
+        })
+        .collect()
 }
 
 fn function(opts: &Options, name: &str) -> Result<FunctionOutcome> {
