@@ -225,10 +225,11 @@ pub fn key_elements(
         e.mean = 0.0;
     }
     let emp = ErrorModelProblem::new(machine, &stats, &grid(machine)).map_err(|e| e.to_string())?;
+    // one design: the ranking needs the estimates, not their intervals
     let method = Method::Efast(EfastSettings {
         n: 1200,
-        m: 4,
         resamples: 1,
+        ..EfastSettings::default()
     });
     let report = error_model::analyze(&emp, &method, 1, 25.0, 2.0).map_err(|e| e.to_string())?;
     let names = &emp.problem.names;
