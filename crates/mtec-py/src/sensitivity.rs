@@ -13,7 +13,8 @@ use std::path::PathBuf;
 /// JSON").
 ///
 /// Give `function` (`"ishigami"`, `"sobol-g"`, `"linear"`) or `machine` and `stats` (TOML and
-/// error-statistics CSV paths) with one pose `at` (axis positions) or a `points` CSV path.
+/// error-statistics CSV paths) with one pose `at` (axis positions), a `points` CSV path, or
+/// `lhs_poses` poses by Latin hypercube over the travels (`--sampling lhs:N`).
 /// `method` is `"efast"` (default; `samples` points per curve, default 1200, `resamples`
 /// random-phase repetitions, default 10), `"sobol"` (`samples` base points, default 1024) or
 /// `"morris"` (`samples` trajectories, default 100). Every index has the half width of its
@@ -29,7 +30,8 @@ use std::path::PathBuf;
 #[pyfunction]
 #[pyo3(signature = (*, function = None, machine = None, stats = None, method = "efast",
     samples = None, at = None, points = None, interference = 4, resamples = 10, levels = 4,
-    num_resamples = 100, conf_level = 0.95, seed = 1, target_um = 25.0, coverage = 2.0))]
+    num_resamples = 100, conf_level = 0.95, seed = 1, target_um = 25.0, coverage = 2.0,
+    lhs_poses = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn sensitivity<'py>(
     py: Python<'py>,
@@ -48,6 +50,7 @@ pub fn sensitivity<'py>(
     seed: u64,
     target_um: f64,
     coverage: f64,
+    lhs_poses: Option<usize>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let method = MethodKind::from_name(method).ok_or_else(|| {
         usage(format!(
@@ -70,6 +73,7 @@ pub fn sensitivity<'py>(
         points,
         target_um,
         coverage,
+        lhs_poses,
     };
     Ok(run(py, &opts)?)
 }

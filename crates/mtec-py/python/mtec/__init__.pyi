@@ -130,6 +130,7 @@ def sensitivity(
     seed: int = 1,
     target_um: float = 25.0,
     coverage: float = 2.0,
+    lhs_poses: Optional[int] = None,
 ) -> dict[str, Any]:
     """Sensitivity indices with their confidence intervals (`mtec sensitivity --json`)."""
 
