@@ -544,8 +544,12 @@ def arc_from_canon(frame, start_machine, v):
     r_end = sub(end_m, centre_m)
     r_end_plane = sub(r_end, scale(normal, dot(r_end, normal)))
     r1 = norm(r_end_plane)
+    if r0 <= ZERO_LENGTH_MM and r1 <= ZERO_LENGTH_MM:
+        # start, centre and end on one axial line (a subroutine run with zero arguments):
+        # LinuxCNC moves along the axis only, a straight line
+        return Line(start_machine, end_m)
     if r0 <= ZERO_LENGTH_MM or r1 <= ZERO_LENGTH_MM:
-        raise CheckFailure("arc with zero radius")
+        raise CheckFailure("arc with zero radius at one end only")
     u = scale(r_start_plane, 1.0 / r0)
     vv = cross(normal, u)
     ang = math.atan2(dot(r_end_plane, vv), dot(r_end_plane, u)) % (2 * math.pi)
@@ -663,6 +667,7 @@ class Walker:
         self.max_bound_um = 0.0
         self.samples = 0
         self.end_only = 0  # moves from the initial position: checked at their end point only
+        self.at_start = set()  # zero-length rapids at the initial position (a bare `G0` block)
         self.violations = []
 
     def violation(self, comp, msg):
@@ -680,7 +685,7 @@ class Walker:
 
     def at_end(self, i, point):
         """Nominal move i is finished: its end reached by `point` (a displaced end point)."""
-        if i < 0:
+        if i < 0 or i in self.at_start:
             return True  # the initial position: not commanded by either program
         n = self.nom.moves[i]
         bound = self.limits.point_bound_um(n, n)
@@ -730,6 +735,13 @@ class Walker:
             return
         j = same[0]
         n = self.nom.moves[j]
+        if (self.i < 0 and j == 0 and n.length <= ZERO_LENGTH_MM and c.length <= ZERO_LENGTH_MM
+                and norm(sub(c.end, n.end)) <= ZERO_LENGTH_MM):
+            # a block such as a bare `G0` before any move: LinuxCNC issues a traverse of zero
+            # length where the machine stands, which neither program commands
+            self.at_start.add(j)
+            self.i, self.progress = j, n.length
+            return
         dev = norm(sub(end, n.end)) * 1e3
         bound = self.limits.point_bound_um(n, c)
         self.note(dev, bound, c)
@@ -992,11 +1004,6 @@ def check(original, compensated, model_path, offsets=None, tool_table=None, limi
     if flattened:
         actions_only(nominal)
         actions_only(comp)
-        # a program that ends at its closing % gets an M2 when flattened (rs274 prints no
-        # PROGRAM_END for the %): the end of the program either way
-        if (comp.events and comp.events[-1][0] == "PROGRAM_END"
-                and not any(e[0] == "PROGRAM_END" for e in nominal.events)):
-            comp.events.pop()
     if c_err != n_err:
         return Result(nominal, comp, None, violations)
     walker = Walker(nominal, comp, model, limits)

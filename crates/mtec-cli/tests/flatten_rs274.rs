@@ -220,6 +220,25 @@ fn same_motion(original: &str, flattened: &str, what: &str) -> usize {
     a.len()
 }
 
+/// A copy of `program` (in `dir`) that first moves the machine to another position
+/// (`G53 G0`, after a leading `%`): how it runs when the machine does not start at zero.
+fn started_elsewhere(program: &Path, dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(program).unwrap();
+    let start = "G53 G0 X31.7 Y-12.9 Z8.3\n";
+    let body = match text.trim_start().strip_prefix('%') {
+        Some(rest) => format!(
+            "%{}{start}{}",
+            &rest[..rest.find('\n').map_or(0, |i| i + 1)],
+            &rest[rest.find('\n').map_or(rest.len(), |i| i + 1)..]
+        ),
+        None => format!("{start}{text}"),
+    };
+    let name = program.file_name().unwrap().to_string_lossy();
+    let p = dir.join(format!("elsewhere-{name}"));
+    std::fs::write(&p, body).unwrap();
+    p
+}
+
 const ZERO_MODEL: &str = r#"{"format": "mtec.zero-model/1"}"#;
 
 enum Expect {
@@ -266,9 +285,11 @@ fn check(
                 flat.lines().all(|l| l.len() <= 255),
                 "{name}: a line over 255 characters"
             );
+            // the header first, after the leading % of a program that ends at its %
+            let header = flat.lines().find(|l| *l != "%").unwrap();
             assert!(
-                flat.starts_with("(mtec: ")
-                    && flat.lines().next().unwrap().contains("flattened by rs274")
+                header.starts_with("(mtec: ") && header.contains("flattened by rs274"),
+                "{name}: {header}"
             );
             let original = run_rs274(bin, program, table, var)
                 .unwrap_or_else(|e| panic!("{name}: rs274 on the original: {e}"));
@@ -276,7 +297,14 @@ fn check(
             let again = run_rs274(bin, &out, None, var)
                 .unwrap_or_else(|e| panic!("{name}: rs274 on the flattened program: {e}"));
             let n = same_motion(&original, &again, &name);
-            format!("{name}: flattened, {n} motion calls identical")
+            // and the same from another start position: an axis the original has not
+            // commanded yet stays where the machine stood in both
+            let original = run_rs274(bin, &started_elsewhere(program, dir.path()), table, var)
+                .unwrap_or_else(|e| panic!("{name}: rs274 on the original from elsewhere: {e}"));
+            let again = run_rs274(bin, &started_elsewhere(&out, dir.path()), None, var)
+                .unwrap_or_else(|e| panic!("{name}: rs274 on the flattened from elsewhere: {e}"));
+            same_motion(&original, &again, &format!("{name} started elsewhere"));
+            format!("{name}: flattened, {n} motion calls identical, also from another start")
         }
         Expect::Refused(words) => {
             assert_eq!(o.status.code(), Some(2), "{name}: {}", text(&o));
@@ -427,6 +455,92 @@ fn constructs_without_a_plain_equivalent_are_refused_naming_the_canonical_line()
             assert!(msg.contains("canonical line"), "{msg}");
         }
     }
+}
+
+#[test]
+fn what_the_machine_decides_at_run_time_is_kept_or_refused() {
+    // found on LinuxCNC's own example programs (/usr/share/linuxcnc/ncfiles and the sample
+    // configurations of linuxcnc-uspace), run through tests/rs274/run_all.py
+    let Some(bin) = rs274() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, body: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, body).unwrap();
+        p
+    };
+    // cds.ngc: the first move lifts Z only; X and Y stay where the machine stands (not X0 Y0),
+    // and an M9 with nothing on still reaches the machine
+    let p = write(
+        "lift.ngc",
+        "G21 G90 M9\nG0 Z5\nG0 X10 Y10\nG1 Z-1 F100\nG2 X20 I5\nM2\n",
+    );
+    check(&bin, &p, None, None, &[], &Expect::Same);
+    let flat = flatten_text(&bin, &p);
+    let first_move = flat.lines().find(|l| l.starts_with("G0 ")).unwrap();
+    assert_eq!(first_move, "G0 Z5.0", "{flat}");
+    assert!(flat.lines().any(|l| l == "M9"), "{flat}");
+    // db_demo/base.ngc and on_abort.ngc: a program that ends at its % ends at a % again (M2
+    // would also stop the spindle and reset the modes)
+    let p = write("percent.ngc", "%\nG21 G90\nM3 S1000\nG0 X1 Y2 Z3\n%\n");
+    check(&bin, &p, None, None, &[], &Expect::Same);
+    let flat = flatten_text(&bin, &p);
+    assert_eq!(flat.lines().next(), Some("%"), "{flat}");
+    assert_eq!(flat.lines().last(), Some("%"), "{flat}");
+    assert!(!flat.contains("M2"), "{flat}");
+    // an incremental first move goes somewhere that depends on the start: refused
+    let p = write("incremental.ngc", "G21 G91\nG0 X10\nG90 G0 Y5\nM2\n");
+    check(
+        &bin,
+        &p,
+        None,
+        None,
+        &[],
+        &Expect::Refused("axis X depends on where the machine stands"),
+    );
+    // the current position read before an axis is set: refused the same way
+    let p = write("position.ngc", "G21 G90\nG0 Z[#5422 + 5]\nM2\n");
+    check(
+        &bin,
+        &p,
+        None,
+        None,
+        &[],
+        &Expect::Refused("depends on where the machine stands"),
+    );
+    // db_demo/base.ngc: #<_task> is 0 in stand-alone rs274 and 1 on the machine, so the loop
+    // runs zero times in rs274 and five on the machine: refused at its line and column
+    let p = write(
+        "task.ngc",
+        "G21 G90\n#<ct> = 0\no100 while [[#<ct> lt 5] and [#<_task> ne 0]]\n#<ct> = [#<ct> + 1]\nG0 X#<ct>\no100 endwhile\nM2\n",
+    );
+    check(
+        &bin,
+        &p,
+        None,
+        None,
+        &[],
+        &Expect::Refused("task.ngc:3:31: #<_task> reads the machine's state"),
+    );
+}
+
+/// The flattened text of `program` (zero model).
+fn flatten_text(bin: &Path, program: &Path) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("zero.json");
+    std::fs::write(&model, ZERO_MODEL).unwrap();
+    let out = dir.path().join("flat.ngc");
+    let o = mtec()
+        .args(["compensate", "gcode", "--model"])
+        .arg(&model)
+        .args(["--flatten-with", "rs274", "--rs274"])
+        .arg(bin)
+        .arg(program)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    std::fs::read_to_string(&out).unwrap()
 }
 
 #[test]

@@ -142,6 +142,32 @@ fn compensates_as_predicted(scenario: &str) {
     ]);
     assert!(o.status.success(), "{}", text(&o));
     let out = std::fs::read_to_string(d.join("part-km.ngc")).unwrap();
+    // `--elements all` is the model as it is, byte for byte; a list naming an element the
+    // model lacks is refused (exit 2) naming it (issue 19, item 4)
+    let km = p(d, "km.json");
+    let part = p(d, "part.ngc");
+    let with = |e: &str, out: &str| {
+        mtec(&[
+            "compensate",
+            "gcode",
+            "--model",
+            &km,
+            &part,
+            "-o",
+            out,
+            "--elements",
+            e,
+        ])
+    };
+    let o = with("all", &p(d, "part-all.ngc"));
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(
+        std::fs::read(d.join("part-all.ngc")).unwrap(),
+        out.as_bytes()
+    );
+    let o = with("EXX,EQQ", &p(d, "part-list.ngc"));
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(stderr(&o).contains("no element `EQQ`"), "{}", stderr(&o));
     let rapids: Vec<&str> = out.lines().filter(|l| l.starts_with("G0 ")).collect();
     assert_eq!(rapids.len(), TARGETS.len(), "{out}");
     let e = predicted_um(d, &TARGETS);

@@ -147,3 +147,30 @@ fn unsupported_or_too_simple_models_are_flagged() {
     );
     assert!(auto.valid, "{:?}", auto.warnings);
 }
+
+/// Cubic splines with knots from the data (docs/methods.md §3): 4 interior knots for every
+/// element predict the realistic machine within 1.0 µm RMS per axis (as the polynomials do)
+/// and report their knots; a knot count the 21 positions of a line cannot carry is refused.
+#[test]
+fn splines_with_knots_from_the_data_predict_the_machine_and_too_many_are_refused() {
+    use mtec_identify::lines::model::{Basis, ModelError};
+    let (m, data, truth) = support::line_scenario("vmc-9line-realistic", 3);
+    let layout = Layout::with_bases(&m, &data, &|_| Basis::Spline(4), true).unwrap();
+    let id = identify_layout(&m, &data, layout).unwrap();
+    let (p, r) = evaluate(&m, &truth, &id.errors, 3);
+    println!("spline 4: prediction {p:.3?} um, rate {r:.3?}");
+    assert!(p.iter().all(|v| *v <= 1.0), "{p:?}");
+    let exx = id
+        .report
+        .elements
+        .iter()
+        .find(|e| e.element == "EXX")
+        .unwrap();
+    // X measured at 10, 39, ..., 590: the quintiles of the 21 positions
+    assert_eq!(
+        exx.spline_knots_mm.as_deref(),
+        Some(&[126.0, 242.0, 358.0, 474.0][..])
+    );
+    let e = Layout::with_bases(&m, &data, &|_| Basis::Spline(19), true).unwrap_err();
+    assert!(matches!(e, ModelError::Knots(19, _)), "{e:?}");
+}

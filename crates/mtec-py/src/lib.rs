@@ -22,6 +22,7 @@ mod errors;
 mod identify;
 mod measure;
 mod model;
+mod sensitivity;
 mod sim;
 mod thermal;
 // the place of the project pipeline's binding (`mtec.run_project`), see its docs
@@ -43,6 +44,7 @@ fn _mtec(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(comp::map_fit, m)?)?;
     m.add_function(wrap_pyfunction!(comp::map_eval, m)?)?;
     m.add_function(wrap_pyfunction!(comp::compensate_gcode, m)?)?;
+    m.add_function(wrap_pyfunction!(sensitivity::sensitivity, m)?)?;
     m.add_function(wrap_pyfunction!(sim::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(workflow::run_project, m)?)?;
     Ok(())

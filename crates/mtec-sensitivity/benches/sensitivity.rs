@@ -18,6 +18,7 @@ fn ishigami_efast(c: &mut Criterion) {
         n: 10_000,
         m: 4,
         resamples: 1,
+        confidence: 0.95,
     };
     c.bench_function(
         "efast ishigami N=10000 M=4 (sample+evaluate+analyze)",
@@ -25,7 +26,7 @@ fn ishigami_efast(c: &mut Criterion) {
             b.iter(|| {
                 let x = efast::sample(&problem, &s, 1).unwrap();
                 let y = evaluate(&f, &x).remove(0);
-                black_box(efast::analyze(&problem.names, &y, 4, 1).unwrap())
+                black_box(efast::analyze(&problem.names, &y, 4, 1, 0.95).unwrap())
             })
         },
     );
@@ -40,6 +41,7 @@ fn error_model_efast(c: &mut Criterion) {
         n: 1200,
         m: 4,
         resamples: 1,
+        confidence: 0.95,
     });
     c.bench_function("efast error model 18 elements N=1200, 4 outputs", |b| {
         b.iter(|| black_box(analyze(&emp, &method, 1, 25.0, 2.0).unwrap()))

@@ -12,7 +12,11 @@
 //! N > 4M² is needed). Each curve gets independent random phase shifts φ_j ∈ [0, 2π) (the
 //! paper's resampling scheme); repeating the curves `resamples` times with new phases and
 //! averaging the indices reduces the estimator's variance, and the spread over repetitions gives
-//! a confidence interval.
+//! a confidence interval: the R replicate estimates are independent and identically distributed,
+//! so the Student-t interval mean ± t_{R−1,(1+c)/2}·sd/√R holds at level c (see `interval`).
+//! Cost model: N·D·R model evaluations and D·R FFTs of length N; with R = 10 (the default) the
+//! interval costs 10× the evaluations of the single design (the model is usually the cost; the
+//! FFTs of the analysis are measured in docs/methods.md).
 //!
 //! Analysis of one curve (eqs. 21–24): Λ_p = |F_p/N|² for p = 1..⌈N/2⌉−1 (F = DFT of the
 //! output), V = 2 Σ_p Λ_p, V_i = 2 Σ_{q=1..M} Λ_{qω_i}, S1_i = V_i / V; the complementary set's
@@ -26,11 +30,12 @@
 //! per cent of each input's variance lies above the M-th harmonic: S1 is biased low and an
 //! input with no effect shows ST ≈ 0.01–0.02. A larger M (6–8, with N > 4M²) reduces this.
 
-use crate::problem::{check_outputs, Indices, Problem, SampleMatrix};
+use crate::interval::{replicate_half_widths, replicate_mean};
+use crate::problem::{check_outputs, Indices, Problem, Replicates, SampleMatrix};
 use crate::SensitivityError;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
-use rustfft::{num_complex::Complex, FftPlanner};
+use rustfft::{num_complex::Complex, Fft, FftPlanner};
 
 /// Design settings of an EFAST analysis.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -39,8 +44,11 @@ pub struct EfastSettings {
     pub n: usize,
     /// Interference factor M: harmonics of ω_i counted in S1 (default 4).
     pub m: usize,
-    /// Independent repetitions of every curve with new random phases (default 1, SALib's design).
+    /// R, independent repetitions of every curve with new random phases (default 10; 1 is
+    /// SALib's design, without intervals).
     pub resamples: usize,
+    /// Confidence level of the intervals from the R repetitions (default 0.95).
+    pub confidence: f64,
 }
 
 impl Default for EfastSettings {
@@ -48,7 +56,8 @@ impl Default for EfastSettings {
         EfastSettings {
             n: 1000,
             m: 4,
-            resamples: 1,
+            resamples: 10,
+            confidence: 0.95,
         }
     }
 }
@@ -148,12 +157,23 @@ pub fn sample(
                     *rest.next().unwrap_or(&1)
                 };
             }
-            let phi = &phases[c];
-            for (k, row) in curve.chunks_exact_mut(d).enumerate() {
-                let s = std::f64::consts::TAU * k as f64 / n as f64;
+            // Search curve, Saltelli et al. 1999 eq. 19, at θ = ω_j·2πk/N + φ_j in the form
+            // |2·frac((θ − π/2)/2π) − 1| (see `search_curve`), with the whole turns ω_j·k/N taken
+            // in integers: (ω_j·k mod N)/N + (φ_j − π/2)/2π. No sine, arcsine or fmod per point.
+            let offset: Vec<f64> = phases[c]
+                .iter()
+                .map(|p| (p - std::f64::consts::FRAC_PI_2) / std::f64::consts::TAU)
+                .collect();
+            let mut turns = vec![0usize; d]; // ω_j·k mod N, advanced by ω_j < N per point
+            let inv_n = 1.0 / n as f64;
+            for row in curve.chunks_exact_mut(d) {
                 for j in 0..d {
-                    // Search curve, Saltelli et al. 1999 eq. 19.
-                    row[j] = search_curve(omega[j] as f64 * s + phi[j]);
+                    let t = turns[j] as f64 * inv_n + offset[j];
+                    row[j] = (2.0 * (t - t.floor()) - 1.0).abs();
+                    turns[j] += omega[j];
+                    if turns[j] >= n {
+                        turns[j] -= n;
+                    }
                 }
                 problem.scale_row(row);
             }
@@ -170,11 +190,38 @@ pub fn search_curve(theta: f64) -> f64 {
 }
 
 /// S1 and ST of the input of interest from the outputs along one curve (eqs. 21–24; SALib's
-/// `compute_orders`).
+/// `compute_orders`), and the curve's variance V.
 pub fn curve_indices(y: &[f64], m: usize, omega_max: usize) -> (f64, f64, f64) {
+    let plan = fft_plan(y.len());
+    let mut buf = Vec::new();
+    curve_indices_with(&*plan, &mut buf, y, m, omega_max)
+}
+
+/// The forward FFT plan of length `n` from one process-wide planner, which keeps the plans it
+/// made: planning a length of 10 000 takes about as long as one transform (130 µs), and an
+/// analysis over many outputs or poses needs the same length every time.
+fn fft_plan(n: usize) -> std::sync::Arc<dyn Fft<f64>> {
+    static PLANNER: std::sync::OnceLock<std::sync::Mutex<FftPlanner<f64>>> =
+        std::sync::OnceLock::new();
+    let planner = PLANNER.get_or_init(|| std::sync::Mutex::new(FftPlanner::new()));
+    // a poisoned lock only means another thread panicked while planning: the cache is intact
+    let mut p = planner.lock().unwrap_or_else(|e| e.into_inner());
+    p.plan_fft_forward(n)
+}
+
+/// [`curve_indices`] with a prepared FFT plan of length `y.len()` and a reusable buffer (the
+/// analysis plans once for all D·R curves).
+fn curve_indices_with(
+    plan: &dyn Fft<f64>,
+    buf: &mut Vec<Complex<f64>>,
+    y: &[f64],
+    m: usize,
+    omega_max: usize,
+) -> (f64, f64, f64) {
     let n = y.len();
-    let mut buf: Vec<Complex<f64>> = y.iter().map(|&v| Complex::new(v, 0.0)).collect();
-    FftPlanner::new().plan_fft_forward(n).process(&mut buf);
+    buf.clear();
+    buf.extend(y.iter().map(|&v| Complex::new(v, 0.0)));
+    plan.process(buf);
     // Λ_p = |F_p / N|², p = 1 .. ceil(N/2) − 1
     let spectrum = |p: usize| (buf[p] / n as f64).norm_sqr();
     let top = n.div_ceil(2);
@@ -185,14 +232,16 @@ pub fn curve_indices(y: &[f64], m: usize, omega_max: usize) -> (f64, f64, f64) {
 }
 
 /// EFAST indices from the outputs `y` of a design drawn by [`sample`] (or by SALib's
-/// `fast_sampler` when `resamples` is 1): S1 and ST per input, averaged over repetitions; with
-/// two or more repetitions the 95 % confidence half widths 1.96·sd/√R are reported.
+/// `fast_sampler` when `resamples` is 1): S1 and ST per input, averaged over the R repetitions;
+/// with R ≥ 2 the half widths t_{R−1,(1+c)/2}·sd/√R of the intervals at confidence level c.
 pub fn analyze(
     names: &[String],
     y: &[f64],
     m: usize,
     resamples: usize,
+    confidence: f64,
 ) -> Result<Indices, SensitivityError> {
+    crate::interval::check_confidence(confidence)?;
     let d = names.len();
     if d == 0 || resamples == 0 {
         return Err(SensitivityError::Settings(
@@ -207,13 +256,21 @@ pub fn analyze(
         )));
     }
     let n = y.len() / (d * resamples);
-    let settings = EfastSettings { n, m, resamples };
+    let settings = EfastSettings {
+        n,
+        m,
+        resamples,
+        confidence,
+    };
     settings.check()?;
     check_outputs(y, settings.evaluations(d))?;
     let (omega_max, _) = frequencies(n, m, d);
+    let plan = fft_plan(n);
     let per_curve: Vec<(f64, f64, f64)> = y
         .par_chunks_exact(n)
-        .map(|c| curve_indices(c, m, omega_max))
+        .map_init(Vec::new, |buf, c| {
+            curve_indices_with(&*plan, buf, c, m, omega_max)
+        })
         .collect();
     if let Some(c) = per_curve.iter().position(|r| r.2.is_nan() || r.2 <= 0.0) {
         return Err(SensitivityError::Outputs(format!(
@@ -221,44 +278,84 @@ pub fn analyze(
             names[c % d]
         )));
     }
-    let r = resamples as f64;
-    let mut s1 = vec![0.0; d];
-    let mut st = vec![0.0; d];
-    let mut variance = 0.0;
-    for (c, &(a, b, v)) in per_curve.iter().enumerate() {
-        s1[c % d] += a / r;
-        st[c % d] += b / r;
-        variance += v / (r * d as f64);
-    }
+    // Replicate k's indices of input i come from curve k·D + i.
+    let reps = Replicates {
+        s1: per_curve
+            .chunks_exact(d)
+            .map(|c| c.iter().map(|t| t.0).collect())
+            .collect(),
+        st: per_curve
+            .chunks_exact(d)
+            .map(|c| c.iter().map(|t| t.1).collect())
+            .collect(),
+    };
+    let variance = per_curve.iter().map(|t| t.2).sum::<f64>() / per_curve.len() as f64;
     let (s1_conf, st_conf) = if resamples >= 2 {
-        let half_width = |k: usize, mean: &[f64], pick: fn(&(f64, f64, f64)) -> f64| {
-            let ss: f64 = per_curve
-                .iter()
-                .enumerate()
-                .filter(|(c, _)| c % d == k)
-                .map(|(_, t)| (pick(t) - mean[k]).powi(2))
-                .sum();
-            1.96 * (ss / (r - 1.0)).sqrt() / r.sqrt()
-        };
+        // t_{R−1}·sd/√R over the independent random-phase replicates (`interval` module)
         (
-            Some((0..d).map(|k| half_width(k, &s1, |t| t.0)).collect()),
-            Some((0..d).map(|k| half_width(k, &st, |t| t.1)).collect()),
+            Some(replicate_half_widths(&reps.s1, confidence)),
+            Some(replicate_half_widths(&reps.st, confidence)),
         )
     } else {
         (None, None)
     };
     Ok(Indices {
         inputs: names.to_vec(),
-        s1,
-        st,
+        s1: replicate_mean(&reps.s1),
+        st: replicate_mean(&reps.st),
         s1_conf,
         st_conf,
+        replicates: (resamples >= 2).then_some(reps),
         variance,
     })
 }
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_sampler_draws_the_search_curve() {
+        // every design value equals search_curve(ω_j·2πk/N + φ_j) with SALib's frequencies
+        use crate::{Distribution, Problem};
+        let d = 4;
+        let p = Problem::new(
+            (1..=d).map(|i| format!("x{i}")).collect(),
+            vec![
+                Distribution::Uniform {
+                    low: 0.0,
+                    high: 1.0
+                };
+                d
+            ],
+        )
+        .unwrap();
+        let s = super::EfastSettings {
+            n: 257,
+            m: 4,
+            resamples: 2,
+            confidence: 0.95,
+        };
+        let x = super::sample(&p, &s, 7).unwrap();
+        let (w_max, others) = super::frequencies(s.n, s.m, d);
+        // the phases as the sampler draws them
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        for c in 0..s.resamples * d {
+            let phi: Vec<f64> = (0..d)
+                .map(|_| rng.random::<f64>() * std::f64::consts::TAU)
+                .collect();
+            let mut omega = others.clone();
+            omega.insert(c % d, w_max);
+            for k in 0..s.n {
+                let sk = std::f64::consts::TAU * k as f64 / s.n as f64;
+                for j in 0..d {
+                    let want = super::search_curve(omega[j] as f64 * sk + phi[j]);
+                    let got = x.row(c * s.n + k)[j];
+                    assert!((got - want).abs() < 1e-12, "curve {c} k {k} input {j}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn search_curve_is_the_arcsine_of_the_sine() {
         for k in -2000..2000 {

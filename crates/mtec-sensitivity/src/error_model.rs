@@ -29,6 +29,7 @@
 //!   to compensation and are not part of the budget.
 
 use crate::efast::{self, EfastSettings};
+use crate::interval::{bootstrap_half_widths, replicate_half_widths};
 use crate::morris::{self, MorrisSettings};
 use crate::problem::{evaluate, Model, Problem};
 use crate::sobol::{self, Bootstrap};
@@ -364,6 +365,9 @@ pub struct ChannelIndices {
     pub st_conf: Option<Vec<f64>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mu_star: Option<Vec<f64>>,
+    /// Bootstrap half width of μ* (Morris).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mu_star_conf: Option<Vec<f64>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sigma: Option<Vec<f64>>,
     /// Mean over the poses of the output's variance, µm².
@@ -451,6 +455,7 @@ pub fn analyze(
             (cols, rows, Some(design))
         }
     };
+    let is_morris = matches!(method, Method::Morris(_));
     let mut outputs = Vec::new();
     for (k, out_name) in OUTPUTS.iter().enumerate() {
         let mut acc = Aggregate::new(d);
@@ -459,50 +464,49 @@ pub fn analyze(
             let mean = y.iter().sum::<f64>() / y.len() as f64;
             let var = y.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / y.len() as f64;
             if var.is_nan() || var <= 1e-20 * (1.0 + mean * mean) {
-                acc.add_constant();
-                continue;
+                continue; // weight 0: the output does not vary at this pose
             }
             match method {
                 Method::Efast(s) => {
-                    let ix = efast::analyze(names, y, s.m, s.resamples)?;
+                    let ix = efast::analyze(names, y, s.m, s.resamples, s.confidence)?;
+                    let reps = ix.replicates.as_ref();
                     acc.add(
                         var,
-                        &ix.s1,
-                        &ix.st,
-                        ix.s1_conf.as_deref(),
-                        ix.st_conf.as_deref(),
+                        (&ix.s1, reps.map(|r| &r.s1[..])),
+                        (&ix.st, reps.map(|r| &r.st[..])),
                     );
                 }
                 Method::Sobol { bootstrap, .. } => {
-                    // Bootstrap intervals at a single pose only (over many poses they would
-                    // cost resamples × outputs analyses and the aggregate has no simple interval).
-                    let b = if n_points == 1 {
-                        *bootstrap
-                    } else {
-                        Bootstrap {
-                            resamples: 0,
-                            ..*bootstrap
-                        }
-                    };
-                    let r = sobol::analyze(names, y, &b)?;
-                    let ix = r.indices;
+                    // every pose resamples the same base points (`Bootstrap::rows`), so the
+                    // replicates aggregate like the estimates
+                    let ix = sobol::analyze(names, y, bootstrap)?.indices;
+                    let reps = ix.replicates.as_ref();
                     acc.add(
                         var,
-                        &ix.s1,
-                        &ix.st,
-                        ix.s1_conf.as_deref(),
-                        ix.st_conf.as_deref(),
+                        (&ix.s1, reps.map(|r| &r.s1[..])),
+                        (&ix.st, reps.map(|r| &r.st[..])),
                     );
                 }
-                Method::Morris(_) => {
+                Method::Morris(s) => {
                     let design = morris_design.as_ref().expect("morris design drawn above");
-                    let r = morris::analyze(names, design, y)?;
-                    acc.add(var, &r.mu_star, &r.sigma, None, None);
+                    let r = morris::analyze(names, design, y, &s.bootstrap)?;
+                    acc.add(
+                        var,
+                        (&r.mu_star, r.mu_star_replicates.as_deref()),
+                        (&r.sigma, None),
+                    );
                 }
             }
         }
-        let is_morris = matches!(method, Method::Morris(_));
-        let (a, b, ca, cb, v) = acc.finish(n_points, is_morris);
+        let (a, b, ca, cb, v) = match method {
+            Method::Efast(s) => acc.finish(n_points, s.confidence, replicate_half_widths),
+            Method::Sobol { bootstrap, .. } => {
+                acc.finish(n_points, bootstrap.confidence, bootstrap_half_widths)
+            }
+            Method::Morris(s) => {
+                acc.finish(n_points, s.bootstrap.confidence, bootstrap_half_widths)
+            }
+        };
         outputs.push(if is_morris {
             ChannelIndices {
                 output: out_name.to_string(),
@@ -511,6 +515,7 @@ pub fn analyze(
                 s1_conf: None,
                 st_conf: None,
                 mu_star: Some(a),
+                mu_star_conf: ca,
                 sigma: Some(b),
                 variance_um2: v,
             }
@@ -522,6 +527,7 @@ pub fn analyze(
                 s1_conf: ca,
                 st_conf: cb,
                 mu_star: None,
+                mu_star_conf: None,
                 sigma: None,
                 variance_um2: v,
             }
@@ -561,15 +567,27 @@ pub fn analyze(
     })
 }
 
-/// Variance-weighted aggregation of per-pose indices (Gamboa et al. 2014).
+/// Variance-weighted aggregation of per-pose indices (Gamboa et al. 2014) and of their
+/// replicate estimates, which give the aggregate's interval (`interval` module docs).
 struct Aggregate {
     a: Vec<f64>,
     b: Vec<f64>,
-    ca: Option<Vec<f64>>,
-    cb: Option<Vec<f64>>,
+    reps_a: Option<Vec<Vec<f64>>>,
+    reps_b: Option<Vec<Vec<f64>>>,
     weight: f64,
-    sum_var: f64,
-    single: bool,
+}
+
+/// An index vector with its replicate estimates `[k][i]`, if any.
+type WithReplicates<'a> = (&'a [f64], Option<&'a [Vec<f64>]>);
+
+fn add_weighted(acc: &mut Option<Vec<Vec<f64>>>, w: f64, reps: Option<&[Vec<f64>]>) {
+    let Some(reps) = reps else { return };
+    let sums = acc.get_or_insert_with(|| vec![vec![0.0; reps[0].len()]; reps.len()]);
+    for (s, r) in sums.iter_mut().zip(reps) {
+        for (si, ri) in s.iter_mut().zip(r) {
+            *si += w * ri;
+        }
+    }
 }
 
 impl Aggregate {
@@ -577,46 +595,41 @@ impl Aggregate {
         Aggregate {
             a: vec![0.0; d],
             b: vec![0.0; d],
-            ca: None,
-            cb: None,
+            reps_a: None,
+            reps_b: None,
             weight: 0.0,
-            sum_var: 0.0,
-            single: true,
         }
     }
-    fn add_constant(&mut self) {
-        self.single = false;
-    }
-    fn add(&mut self, var: f64, a: &[f64], b: &[f64], ca: Option<&[f64]>, cb: Option<&[f64]>) {
-        if self.weight > 0.0 {
-            self.single = false;
+    fn add(&mut self, var: f64, a: WithReplicates, b: WithReplicates) {
+        for i in 0..a.0.len() {
+            self.a[i] += var * a.0[i];
+            self.b[i] += var * b.0[i];
         }
-        for i in 0..a.len() {
-            self.a[i] += var * a[i];
-            self.b[i] += var * b[i];
-        }
-        self.ca = ca.map(|c| c.to_vec());
-        self.cb = cb.map(|c| c.to_vec());
+        add_weighted(&mut self.reps_a, var, a.1);
+        add_weighted(&mut self.reps_b, var, b.1);
         self.weight += var;
-        self.sum_var += var;
     }
-    /// Variance-weighted indices (or Morris measures), the single-pose intervals, and the mean
-    /// variance over the poses.
+    /// Variance-weighted indices (or Morris measures), the half widths of their intervals from
+    /// the aggregated replicates (`half_width(replicates, confidence)`), and the mean variance
+    /// over the poses.
     #[allow(clippy::type_complexity)]
     fn finish(
         self,
         n_points: usize,
-        _morris: bool,
+        confidence: f64,
+        half_width: fn(&[Vec<f64>], f64) -> Vec<f64>,
     ) -> (Vec<f64>, Vec<f64>, Option<Vec<f64>>, Option<Vec<f64>>, f64) {
         let w = if self.weight > 0.0 { self.weight } else { 1.0 };
         let a = self.a.iter().map(|v| v / w).collect();
         let b = self.b.iter().map(|v| v / w).collect();
-        let (ca, cb) = if self.single && n_points == 1 {
-            (self.ca, self.cb)
-        } else {
-            (None, None)
+        let conf = |reps: Option<Vec<Vec<f64>>>| {
+            reps.map(|mut r| {
+                r.iter_mut().flatten().for_each(|v| *v /= w);
+                half_width(&r, confidence)
+            })
         };
-        (a, b, ca, cb, self.sum_var / n_points as f64)
+        let (ca, cb) = (conf(self.reps_a), conf(self.reps_b));
+        (a, b, ca, cb, self.weight / n_points as f64)
     }
 }
 

@@ -24,6 +24,8 @@ pub mod distribution;
 pub mod efast;
 mod error;
 pub mod error_model;
+pub mod interval;
+pub mod lhs;
 pub mod morris;
 pub mod problem;
 pub mod sobol;
@@ -31,4 +33,5 @@ pub mod testfns;
 
 pub use distribution::Distribution;
 pub use error::SensitivityError;
-pub use problem::{evaluate, FnModel, Indices, Model, Problem, SampleMatrix};
+pub use interval::Bootstrap;
+pub use problem::{evaluate, FnModel, Indices, Model, Problem, Replicates, SampleMatrix};

@@ -12,7 +12,12 @@
 //! Analysis: the elementary effect of input i on a trajectory is
 //! EE_i = (f(x + Δe_i) − f(x)) / Δ  (Morris 1991 eq. 1; Δ in unit-hypercube scale, as SALib),
 //! μ = mean EE_i, μ* = mean |EE_i|, σ = standard deviation of EE_i (ddof 1).
+//! The confidence interval of μ* is SALib's bootstrap (`_compute_mu_star_confidence`): B
+//! replicates each redraw the r trajectories with replacement, μ*_conf = z_{(1+c)/2}·sd of the
+//! replicate μ* (see `interval`). One resampling of the trajectories serves every input and
+//! every output, so that μ* aggregated over poses has an interval too.
 
+use crate::interval::{bootstrap_half_widths, Bootstrap};
 use crate::problem::{check_outputs, Problem, SampleMatrix};
 use crate::SensitivityError;
 use rand::seq::SliceRandom;
@@ -25,6 +30,8 @@ pub struct MorrisSettings {
     pub trajectories: usize,
     /// Number of grid levels p (even, ≥ 2; default 4).
     pub levels: usize,
+    /// Bootstrap of μ*'s interval (SALib's defaults: 100 resamples at 0.95).
+    pub bootstrap: Bootstrap,
 }
 
 impl Default for MorrisSettings {
@@ -32,6 +39,7 @@ impl Default for MorrisSettings {
         MorrisSettings {
             trajectories: 100,
             levels: 4,
+            bootstrap: Bootstrap::default(),
         }
     }
 }
@@ -124,14 +132,20 @@ pub struct MorrisIndices {
     pub mu: Vec<f64>,
     pub mu_star: Vec<f64>,
     pub sigma: Vec<f64>,
+    /// Bootstrap half width of μ* at the bootstrap's confidence level (none with B < 2).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mu_star_conf: Option<Vec<f64>>,
+    /// The bootstrap replicates of μ* (`[k][i]`), for aggregation over poses; not in the JSON.
+    #[serde(skip)]
+    pub mu_star_replicates: Option<Vec<Vec<f64>>>,
 }
 
-/// μ, μ* and σ from the outputs `y` of a design drawn by [`sample`].
-pub fn analyze(
+/// The elementary effects of every input, `effects[i][t]` on trajectory t (Morris 1991 eq. 1).
+pub fn elementary_effects(
     names: &[String],
     design: &MorrisDesign,
     y: &[f64],
-) -> Result<MorrisIndices, SensitivityError> {
+) -> Result<Vec<Vec<f64>>, SensitivityError> {
     let d = names.len();
     if d == 0 || design.samples.n_cols != d || design.steps.len() % d != 0 {
         return Err(SensitivityError::Settings(
@@ -150,6 +164,26 @@ pub fn analyze(
             effects[i].push((after - before) / step);
         }
     }
+    Ok(effects)
+}
+
+/// μ* of one input's elementary effects on resampled trajectories: replicate k is the mean
+/// |EE| over the trajectories `rows[k]` (SALib's `resample_index[k]`).
+pub fn mu_star_replicates_on(effects: &[f64], rows: &[Vec<usize>]) -> Vec<f64> {
+    rows.iter()
+        .map(|r| r.iter().map(|&t| effects[t].abs()).sum::<f64>() / r.len() as f64)
+        .collect()
+}
+
+/// μ, μ* and σ from the outputs `y` of a design drawn by [`sample`], and μ*'s bootstrap
+/// interval.
+pub fn analyze(
+    names: &[String],
+    design: &MorrisDesign,
+    y: &[f64],
+    bootstrap: &Bootstrap,
+) -> Result<MorrisIndices, SensitivityError> {
+    let effects = elementary_effects(names, design, y)?;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     let mu: Vec<f64> = effects.iter().map(|e| mean(e)).collect();
     let mu_star = effects
@@ -163,10 +197,32 @@ pub fn analyze(
             (e.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (e.len() - 1) as f64).sqrt()
         })
         .collect();
+    let (mu_star_conf, mu_star_replicates) = if bootstrap.active()? {
+        let r = effects[0].len();
+        let rows: Vec<Vec<usize>> = (0..bootstrap.resamples)
+            .map(|k| bootstrap.rows(k, r))
+            .collect();
+        let per_input: Vec<Vec<f64>> = effects
+            .iter()
+            .map(|e| mu_star_replicates_on(e, &rows))
+            .collect();
+        // transpose to [replicate][input]
+        let reps: Vec<Vec<f64>> = (0..rows.len())
+            .map(|k| per_input.iter().map(|v| v[k]).collect())
+            .collect();
+        (
+            Some(bootstrap_half_widths(&reps, bootstrap.confidence)),
+            Some(reps),
+        )
+    } else {
+        (None, None)
+    };
     Ok(MorrisIndices {
         inputs: names.to_vec(),
         mu,
         mu_star,
         sigma,
+        mu_star_conf,
+        mu_star_replicates,
     })
 }

@@ -131,6 +131,9 @@ pub fn evaluate<M: Model + ?Sized>(model: &M, samples: &SampleMatrix) -> Vec<Vec
                 model.evaluate(x, o);
             }
         });
+    if k == 1 {
+        return vec![flat]; // one output: the rows' values are already its column
+    }
     (0..k)
         .map(|j| flat.iter().skip(j).step_by(k).copied().collect())
         .collect()
@@ -166,6 +169,18 @@ pub struct Indices {
     pub s1_conf: Option<Vec<f64>>,
     #[serde(rename = "ST_conf", skip_serializing_if = "Option::is_none")]
     pub st_conf: Option<Vec<f64>>,
+    /// The replicate estimates the intervals come from (bootstrap replicates for Sobol,
+    /// independent designs for EFAST), kept so that indices aggregated over poses get intervals
+    /// too (`interval` module docs); not part of the JSON.
+    #[serde(skip)]
+    pub replicates: Option<Replicates>,
     /// Variance of the output over the design.
     pub variance: f64,
+}
+
+/// Replicate estimates of S1 and ST: `s1[k][i]` is replicate k's S1 of input i.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Replicates {
+    pub s1: Vec<Vec<f64>>,
+    pub st: Vec<Vec<f64>>,
 }

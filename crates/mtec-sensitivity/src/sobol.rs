@@ -16,7 +16,8 @@
 //! over base points: each replicate redraws N base points with replacement; the reported half
 //! width is z·sd of the replicates (SALib's convention), and the percentile interval is also kept.
 
-use crate::problem::{check_outputs, Indices, Problem, SampleMatrix};
+use crate::interval::bootstrap_half_widths;
+use crate::problem::{check_outputs, Indices, Problem, Replicates, SampleMatrix};
 use crate::SensitivityError;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
@@ -68,29 +69,7 @@ pub fn sample(problem: &Problem, n: usize, seed: u64) -> Result<SampleMatrix, Se
     SampleMatrix::from_rows(d, data)
 }
 
-/// Settings of the bootstrap of [`analyze`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Bootstrap {
-    /// Number of bootstrap replicates (0: no intervals).
-    pub resamples: usize,
-    /// Confidence level of the intervals, e.g. 0.95.
-    pub confidence: f64,
-    /// Seed of the replicate draws.
-    pub seed: u64,
-}
-
-impl Default for Bootstrap {
-    fn default() -> Self {
-        Bootstrap {
-            resamples: 100,
-            confidence: 0.95,
-            seed: 1,
-        }
-    }
-}
-
-/// One bootstrap replicate: (S1, ST) per input.
-type Replicate = (Vec<f64>, Vec<f64>);
+pub use crate::interval::Bootstrap;
 
 /// Sobol indices with bootstrap intervals.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -175,53 +154,52 @@ pub fn analyze(
             st,
             s1_conf: None,
             st_conf: None,
+            replicates: None,
             variance,
         },
         s1_interval: Vec::new(),
         st_interval: Vec::new(),
     };
-    if bootstrap.resamples >= 2 {
-        if !(0.0..1.0).contains(&bootstrap.confidence) || bootstrap.confidence == 0.0 {
-            return Err(SensitivityError::Settings(format!(
-                "confidence level {} is not in (0, 1)",
-                bootstrap.confidence
-            )));
-        }
-        let replicates: Vec<(Vec<f64>, Vec<f64>)> = (0..bootstrap.resamples)
-            .into_par_iter()
-            .map(|r| {
-                let mut rng = rand::rngs::StdRng::seed_from_u64(
-                    bootstrap.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ r as u64,
-                );
-                let rows: Vec<usize> = (0..n).map(|_| rng.random_range(0..n)).collect();
-                let (a, b, _) = estimate(y, d, &rows);
-                (a, b)
-            })
+    if bootstrap.active()? {
+        let rows: Vec<Vec<usize>> = (0..bootstrap.resamples)
+            .map(|k| bootstrap.rows(k, n))
             .collect();
-        let z = crate::distribution::standard_normal_quantile(0.5 + bootstrap.confidence / 2.0);
+        let reps = replicates_on(y, d, &rows);
         let alpha = (1.0 - bootstrap.confidence) / 2.0;
-        let summarize = |pick: &dyn Fn(&Replicate) -> &Vec<f64>| {
-            let mut conf = vec![0.0; d];
-            let mut interval = vec![[0.0; 2]; d];
-            for i in 0..d {
-                let mut v: Vec<f64> = replicates.iter().map(|rep| pick(rep)[i]).collect();
-                let mean = v.iter().sum::<f64>() / v.len() as f64;
-                let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (v.len() - 1) as f64)
-                    .sqrt();
-                conf[i] = z * sd;
-                v.sort_by(f64::total_cmp);
-                interval[i] = [percentile(&v, alpha), percentile(&v, 1.0 - alpha)];
-            }
-            (conf, interval)
+        let percentiles = |r: &[Vec<f64>]| -> Vec<[f64; 2]> {
+            (0..d)
+                .map(|i| {
+                    let mut v: Vec<f64> = r.iter().map(|x| x[i]).collect();
+                    v.sort_by(f64::total_cmp);
+                    [percentile(&v, alpha), percentile(&v, 1.0 - alpha)]
+                })
+                .collect()
         };
-        let (c1, i1) = summarize(&|r| &r.0);
-        let (ct, it) = summarize(&|r| &r.1);
-        out.indices.s1_conf = Some(c1);
-        out.indices.st_conf = Some(ct);
-        out.s1_interval = i1;
-        out.st_interval = it;
+        out.s1_interval = percentiles(&reps.s1);
+        out.st_interval = percentiles(&reps.st);
+        out.indices.s1_conf = Some(bootstrap_half_widths(&reps.s1, bootstrap.confidence));
+        out.indices.st_conf = Some(bootstrap_half_widths(&reps.st, bootstrap.confidence));
+        out.indices.replicates = Some(reps);
     }
     Ok(out)
+}
+
+/// The bootstrap replicates of S1 and ST on given resamplings of the base points: replicate k
+/// estimates from the base points `rows[k]` (SALib's `r[:, k]`). Exposed so that a test can feed
+/// SALib's own resampling and compare the intervals exactly. `y` is centred on its mean first,
+/// as in [`analyze`] (SALib standardises it).
+pub fn replicates_on(y: &[f64], d: usize, rows: &[Vec<usize>]) -> Replicates {
+    let mean = y.iter().sum::<f64>() / y.len() as f64;
+    let centred: Vec<f64> = y.iter().map(|v| v - mean).collect();
+    let y = &centred[..];
+    let (s1, st) = rows
+        .par_iter()
+        .map(|r| {
+            let (a, b, _) = estimate(y, d, r);
+            (a, b)
+        })
+        .unzip();
+    Replicates { s1, st }
 }
 
 /// Linear-interpolation percentile of sorted values (numpy's default method).

@@ -221,6 +221,9 @@ pub struct FunctionIndices {
     pub mu: Option<Vec<f64>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mu_star: Option<Vec<f64>>,
+    /// Bootstrap half width of μ* (Morris).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mu_star_conf: Option<Vec<f64>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sigma: Option<Vec<f64>>,
 }
@@ -242,13 +245,14 @@ pub fn analyze(
         st_conf: None,
         mu: None,
         mu_star: None,
+        mu_star_conf: None,
         sigma: None,
     };
     let (s1, st, conf) = match method {
         Method::Efast(s) => {
             let x = efast::sample(&problem, s, seed)?;
             let y = evaluate(f, &x).remove(0);
-            let ix = efast::analyze(&problem.names, &y, s.m, s.resamples)?;
+            let ix = efast::analyze(&problem.names, &y, s.m, s.resamples, s.confidence)?;
             r.evaluations = x.n_rows;
             (ix.s1, ix.st, ix.s1_conf.zip(ix.st_conf))
         }
@@ -262,10 +266,11 @@ pub fn analyze(
         Method::Morris(s) => {
             let d = morris::sample(&problem, s, seed)?;
             let y = evaluate(f, &d.samples).remove(0);
-            let ix = morris::analyze(&problem.names, &d, &y)?;
+            let ix = morris::analyze(&problem.names, &d, &y, &s.bootstrap)?;
             r.evaluations = d.samples.n_rows;
             r.mu = Some(ix.mu);
             r.mu_star = Some(ix.mu_star);
+            r.mu_star_conf = ix.mu_star_conf;
             r.sigma = Some(ix.sigma);
             return Ok(r);
         }

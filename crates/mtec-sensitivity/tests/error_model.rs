@@ -58,6 +58,7 @@ fn efast_and_sobol_match_the_exact_indices_of_ex_ey_ez() {
             n: 2000,
             m: 4,
             resamples: 1,
+            confidence: 0.95,
         }),
         3,
         25.0,
@@ -124,6 +125,7 @@ fn positioning_and_straightness_dominate_angular_errors_need_long_offsets() {
         n: 1200,
         m: 4,
         resamples: 1,
+        confidence: 0.95,
     });
     let short_m = Machine::vmc_xyfz(0.0);
     let stats = sim_stats(&short_m);
@@ -157,37 +159,75 @@ fn positioning_and_straightness_dominate_angular_errors_need_long_offsets() {
     );
 }
 
+/// Indices and their intervals aggregated over three identical points equal those of one point
+/// (the replicates aggregate with the same weights as the estimates), for every method; and
+/// over distinct points every index still has its interval.
 #[test]
 fn aggregation_over_identical_points_equals_one_point() {
     let m = Machine::vmc_xyfz(100.0);
     let stats = sim_stats(&m);
     let q = vec![200.0, 300.0, 100.0];
-    let method = Method::Efast(EfastSettings {
+    let efast = Method::Efast(EfastSettings {
         n: 500,
         m: 4,
-        resamples: 1,
+        resamples: 4,
+        confidence: 0.9,
     });
-    let one = analyze(
-        &ErrorModelProblem::new(&m, &stats, std::slice::from_ref(&q)).unwrap(),
-        &method,
-        9,
-        25.0,
-        2.0,
-    )
-    .unwrap();
-    let three = analyze(
-        &ErrorModelProblem::new(&m, &stats, &[q.clone(), q.clone(), q]).unwrap(),
-        &method,
-        9,
-        25.0,
-        2.0,
-    )
-    .unwrap();
-    for (a, b) in one.outputs.iter().zip(&three.outputs) {
-        for (x, y) in a.s1.as_ref().unwrap().iter().zip(b.s1.as_ref().unwrap()) {
-            assert!((x - y).abs() < 1e-12);
+    let sobol = Method::Sobol {
+        n: 256,
+        bootstrap: Bootstrap {
+            resamples: 20,
+            confidence: 0.9,
+            seed: 2,
+        },
+    };
+    let morris = Method::Morris(mtec_sensitivity::morris::MorrisSettings {
+        trajectories: 20,
+        levels: 4,
+        bootstrap: Bootstrap {
+            resamples: 20,
+            confidence: 0.9,
+            seed: 2,
+        },
+    });
+    let close = |what: &str, a: &Option<Vec<f64>>, b: &Option<Vec<f64>>| {
+        let (a, b) = (a.as_ref().unwrap(), b.as_ref().unwrap());
+        for (x, y) in a.iter().zip(b) {
+            assert!(
+                (x - y).abs() < 1e-9 * (1.0 + x.abs()),
+                "{what}: {a:?} {b:?}"
+            );
         }
-        assert!((a.variance_um2 - b.variance_um2).abs() < 1e-9 * a.variance_um2);
+    };
+    for method in [efast, sobol, morris] {
+        let run = |poses: &[Vec<f64>]| {
+            analyze(
+                &ErrorModelProblem::new(&m, &stats, poses).unwrap(),
+                &method,
+                9,
+                25.0,
+                2.0,
+            )
+            .unwrap()
+        };
+        let one = run(std::slice::from_ref(&q));
+        let three = run(&[q.clone(), q.clone(), q.clone()]);
+        for (a, b) in one.outputs.iter().zip(&three.outputs) {
+            if a.s1.is_some() {
+                close("S1", &a.s1, &b.s1);
+                close("S1_conf", &a.s1_conf, &b.s1_conf);
+                close("ST_conf", &a.st_conf, &b.st_conf);
+            } else {
+                close("mu*", &a.mu_star, &b.mu_star);
+                close("mu*_conf", &a.mu_star_conf, &b.mu_star_conf);
+            }
+            assert!((a.variance_um2 - b.variance_um2).abs() < 1e-9 * a.variance_um2);
+        }
+        let spread = run(&[q.clone(), vec![0.0, 0.0, 0.0], vec![600.0, 800.0, 300.0]]);
+        for o in &spread.outputs {
+            let c = o.s1_conf.as_ref().or(o.mu_star_conf.as_ref()).unwrap();
+            assert!(c.iter().all(|v| v.is_finite() && *v >= 0.0) && c.iter().any(|v| *v > 0.0));
+        }
     }
 }
 
@@ -208,6 +248,7 @@ fn tolerance_allocation_follows_the_equal_effects_rule_by_hand() {
             s1_conf: None,
             st_conf: None,
             mu_star: None,
+            mu_star_conf: None,
             sigma: None,
             variance_um2: cols
                 .iter()

@@ -13,10 +13,15 @@ fn efast_run(
     seed: u64,
 ) -> (Vec<f64>, Vec<f64>) {
     let problem = f.problem();
-    let settings = efast::EfastSettings { n, m, resamples };
+    let settings = efast::EfastSettings {
+        n,
+        m,
+        resamples,
+        confidence: 0.95,
+    };
     let x = efast::sample(&problem, &settings, seed).unwrap();
     let y = evaluate(f, &x).remove(0);
-    let ix = efast::analyze(&problem.names, &y, m, resamples).unwrap();
+    let ix = efast::analyze(&problem.names, &y, m, resamples, 0.95).unwrap();
     (ix.s1, ix.st)
 }
 
@@ -201,12 +206,13 @@ fn morris_ranks_and_linear_effects() {
         &morris::MorrisSettings {
             trajectories: 20,
             levels: 4,
+            bootstrap: Default::default(),
         },
         1,
     )
     .unwrap();
     let y = evaluate(&l, &design.samples).remove(0);
-    let r = morris::analyze(&problem.names, &design, &y).unwrap();
+    let r = morris::analyze(&problem.names, &design, &y, &Default::default()).unwrap();
     assert_close("mu*", &r.mu_star, &[2.0, 3.0, 0.5], 1e-12);
     assert_close("mu", &r.mu, &[2.0, -3.0, 0.5], 1e-12);
     assert_close("sigma", &r.sigma, &[0.0, 0.0, 0.0], 1e-12);
@@ -219,12 +225,13 @@ fn morris_ranks_and_linear_effects() {
         &morris::MorrisSettings {
             trajectories: 200,
             levels: 4,
+            bootstrap: Default::default(),
         },
         2,
     )
     .unwrap();
     let y = evaluate(&f, &design.samples).remove(0);
-    let r = morris::analyze(&problem.names, &design, &y).unwrap();
+    let r = morris::analyze(&problem.names, &design, &y, &Default::default()).unwrap();
     eprintln!("morris ishigami {r:?}");
     assert!(r.sigma[2] > 3.0 * r.mu[2].abs(), "x3 is pure interaction");
     assert!(r.mu_star[0] > r.mu_star[2] * 0.5);

@@ -1,6 +1,7 @@
 //! Timing of the ridge trace (100 values of k) and of the VIF table on a thermal log, for
 //! `bench/thermal.sh` (which times scikit-learn and statsmodels on the same file and prints the
-//! ratio). Prints `ridge_trace_s=<seconds>` and `vif_s=<seconds>` (best of repeated runs).
+//! ratio). Prints `ridge_trace_s=<seconds>` and `vif_s=<seconds>` (best of repeated runs), then
+//! `outputs=<JSON>`: the k grid, the standardised trace coefficients and the VIFs.
 //!
 //! Run: cargo run --release -p mtec-thermal --example bench_thermal -- FILE.csv TARGET
 
@@ -43,4 +44,12 @@ fn main() {
     println!("rows={} sensors={}", d.len(), d.sensor_names.len());
     println!("ridge_trace_s={trace_s:.6e}");
     println!("vif_s={vif_s:.6e}");
+    // the outputs, for the bench script's agreement check with its Python peers
+    let p = RidgeProblem::new(&d.temps_c, &y, &d.sensor_names).unwrap();
+    let trace = RidgeTrace::compute(&p, &d.sensor_names, &ks);
+    let v = vif(&d.temps_c, &d.sensor_names).unwrap();
+    println!(
+        "outputs={}",
+        serde_json::json!({"k": ks, "trace": trace.coefficients, "vif": v})
+    );
 }

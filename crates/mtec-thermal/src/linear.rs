@@ -151,11 +151,18 @@ impl RidgeProblem {
         if !(y_std > 0.0) {
             return Err(ThermalError::ConstantColumn("target".into()));
         }
-        let yc = DVector::from_iterator(n, y.iter().map(|v| (v - y_mean) / (y_std * nf.sqrt())));
-        let svd = z.svd(true, true);
+        let mut yc =
+            DVector::from_iterator(n, y.iter().map(|v| (v - y_mean) / (y_std * nf.sqrt())));
+        // SVD of the tall Z through its QR (Golub & Van Loan 2013, §8.6.3, "R-SVD"): Z = QR,
+        // R = U_r Σ Vᵀ, so Z = (Q U_r) Σ Vᵀ and Uᵀy* = U_rᵀ (Qᵀy*)[..p]. The n × p U is never
+        // formed: one Householder QR of Z and an SVD of the p × p R (issue 22: the trace was
+        // dominated by the SVD of the 7709 × 16 design accumulating U).
+        let qr = z.qr();
+        qr.q_tr_mul(&mut yc);
+        let svd = qr.r().svd(true, true);
         let u = svd.u.expect("u requested");
         let v = svd.v_t.expect("v requested").transpose();
-        let uty = u.transpose() * yc;
+        let uty = u.transpose() * yc.rows(0, n.min(p));
         Ok(RidgeProblem {
             std: Standardisation {
                 x_mean,
@@ -323,4 +330,44 @@ pub fn cancellation_warning(names: &[String], beta_std: &[f64]) -> Option<String
             list.join(", ")
         )
     })
+}
+
+#[cfg(test)]
+mod r_svd_tests {
+    use super::*;
+
+    /// The trace through QR + SVD of R equals the ridge normal equations (R + kI)β* = r solved
+    /// directly (Hoerl & Kennard 1970, eq. 2.2), for a tall design and for a wide one (n < p,
+    /// where R is n × p).
+    #[test]
+    fn r_svd_ridge_equals_the_direct_solution() {
+        for (n, p) in [(40, 5), (4, 6)] {
+            let x = DMatrix::from_fn(n, p, |i, j| {
+                ((i * 7 + j * 13) % 11) as f64 + (i * j) as f64 * 0.1
+            });
+            let y: Vec<f64> = (0..n)
+                .map(|i| (i as f64 * 0.7).sin() + i as f64 * 0.05)
+                .collect();
+            let names: Vec<String> = (0..p).map(|j| format!("s{j}")).collect();
+            let prob = RidgeProblem::new(&x, &y, &names).unwrap();
+            // Z, y* as the problem standardises them
+            let s = &prob.std;
+            let nf = n as f64;
+            let z = DMatrix::from_fn(n, p, |i, j| {
+                (x[(i, j)] - s.x_mean[j]) / (s.x_std[j] * nf.sqrt())
+            });
+            let ys = DVector::from_fn(n, |i, _| (y[i] - s.y_mean) / (s.y_std * nf.sqrt()));
+            for k in [1e-3, 0.1, 1.0] {
+                let a = z.transpose() * &z + DMatrix::identity(p, p) * k;
+                let want = a.lu().solve(&(z.transpose() * &ys)).unwrap();
+                let got = prob.standardised(k).unwrap();
+                for (g, w) in got.iter().zip(want.iter()) {
+                    assert!(
+                        (g - w).abs() < 1e-9 * (1.0 + w.abs()),
+                        "n={n} p={p} k={k}: {got:?} vs {want}"
+                    );
+                }
+            }
+        }
+    }
 }

@@ -11,6 +11,8 @@ use mtec_comp::gcode::flatten::{
     axes_named, flatten, rotary_axes_named, work_offsets_from_probe, FlattenOptions, FlattenReport,
     WORK_OFFSET_PROBE,
 };
+use mtec_comp::gcode::runtime_params::machine_state_parameter;
+use mtec_comp::gcode::start_probe::{held_axes, probe_program};
 use mtec_comp::gcode::tooltable::MachineUnits;
 use mtec_io::InputError;
 use std::io::Read;
@@ -257,6 +259,17 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     };
     let program =
         std::fs::read(input).map_err(|e| InputError::file(input, format!("cannot read: {e}")))?;
+    // a parameter that reads the machine's state takes another value in stand-alone rs274: the
+    // flattened path would be one the machine never runs
+    if let Some((line, column, name)) = machine_state_parameter(&program) {
+        return Err(InputError::at(
+            input,
+            line,
+            column,
+            format!("{name} reads the machine's state, which stand-alone rs274 does not have (it gives its own value, e.g. #<_task> = 0): the flattened path could differ from what the machine runs. Replace it with the value the machine will have, or compensate without flattening"),
+        )
+        .into());
+    }
     let abs_input = std::path::absolute(input)?;
     let tmp = TempDir::new()?;
     // stand-alone rs274 reads tool tables and parameter files as inches: a metric machine's
@@ -325,6 +338,35 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         }
         .into());
     }
+    // 3. the same program started elsewhere: which axes each move leaves where the machine
+    // stood, and whether anything else depends on it (mtec_comp::gcode::start_probe)
+    let probe_file = tmp.0.join("start-probe.ngc");
+    std::fs::write(&probe_file, probe_program(&program))?;
+    // fresh copies: rs274 wrote the parameter file back when the first run ended
+    let mut probe_flags = Vec::new();
+    if let Some(t) = &args.tool_table {
+        probe_flags.push("-t".to_string());
+        probe_flags.push(copy(t, "start-probe.tbl")?.display().to_string());
+    }
+    if let Some(v) = &args.rs274.var_file {
+        probe_flags.push("-v".to_string());
+        probe_flags.push(copy(v, "start-probe.var")?.display().to_string());
+    }
+    if args.block_delete == Some(true) {
+        probe_flags.push("-b".to_string());
+    }
+    let probe_run = run_rs274(&bin, &tmp.0, &probe_flags, &probe_file, timeout)?;
+    if probe_run.status != Some(0) {
+        return Err(InputError::file(
+            input,
+            format!(
+                "cannot flatten: rs274 stopped when the program was started at another position ({}), so whether its path depends on the start position cannot be checked",
+                rs274_message(&probe_run.stderr)
+            ),
+        )
+        .into());
+    }
+    let held = held_axes(&run.stdout, &probe_run.stdout);
     let name = input
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -347,9 +389,21 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         header: Some(format!(
             "(mtec: {name} flattened by rs274 -g: LinuxCNC-only plain program; cutter comp, tool lengths and G92 baked in for the tool table given)"
         )),
+        held: None,
     };
-    let (text, report) = flatten(&run.stdout, &options)
-        .map_err(|e| InputError::file(input, format!("cannot flatten: {e}")))?;
+    let cannot = |e| InputError::file(input, format!("cannot flatten: {e}"));
+    let (text, report) = match held {
+        Ok(h) => flatten(
+            &run.stdout,
+            &FlattenOptions {
+                held: Some(h),
+                ..options
+            },
+        )
+        .map_err(cannot)?,
+        // a call flattening refuses anyway is the plainer reason (a probe, a rigid tap)
+        Err(e) => return Err(cannot(flatten(&run.stdout, &options).err().unwrap_or(e)).into()),
+    };
     Ok(Flattened {
         text: text.into_bytes(),
         report,

@@ -36,7 +36,8 @@ fn indices_at_one_pose_are_the_squared_coefficient_shares_of_the_exact_model() {
     };
     assert_eq!(o.report.inputs, ["EXX", "EYY", "EZZ", "ECX", "EAY"]);
     assert_eq!(o.report.fixed, ["EBX"]);
-    assert_eq!(o.report.evaluations, 5 * 1200);
+    // N = 1200 points per curve, 5 inputs, R = 10 random-phase replicates
+    assert_eq!(o.report.evaluations, 5 * 1200 * 10);
 
     // J of each input from the exact HTM error of a machine with that element alone, 1 unit
     let machine = read_machine(&m).unwrap();
@@ -69,7 +70,7 @@ fn indices_at_one_pose_are_the_squared_coefficient_shares_of_the_exact_model() {
     let mut sobol = opts.clone();
     sobol.method = MethodKind::Sobol;
     sobol.samples = Some(8192);
-    sobol.bootstrap = 0;
+    sobol.num_resamples = 0;
     let Outcome::Machine(so) = sensitivity::run(&sobol, &mut Silent).unwrap() else {
         panic!("a machine's outcome")
     };
@@ -117,7 +118,7 @@ fn indices_at_one_pose_are_the_squared_coefficient_shares_of_the_exact_model() {
     );
     assert!(v["tolerance"]["rows"].is_array());
     let text = Outcome::Machine(o).to_string();
-    assert!(text.starts_with("EFAST sensitivity of the first-order volumetric error: 5 inputs, 1 point(s), 6000 model evaluations\nfixed at their mean (std 0): EBX\n"), "{text}");
+    assert!(text.starts_with("EFAST sensitivity of the first-order volumetric error: 5 inputs, 1 point(s), 60000 model evaluations\nfixed at their mean (std 0): EBX\n"), "{text}");
 }
 
 #[test]
@@ -135,7 +136,17 @@ fn the_ishigami_function_against_its_published_indices() {
         assert!((f.analytic.st[i] - st[i]).abs() < 5e-5);
     }
     assert_eq!(f.indices.method, "efast");
-    assert_eq!(f.indices.evaluations, 3 * 2000);
+    assert_eq!(f.indices.evaluations, 3 * 2000 * 10);
+    // every index has its interval by default: EFAST's from the 10 replicates
+    assert_eq!(f.conf_level, 0.95);
+    assert!(f
+        .indices
+        .s1_conf
+        .as_ref()
+        .unwrap()
+        .iter()
+        .all(|c| c.is_finite() && *c >= 0.0));
+    assert!(f.indices.st_conf.is_some());
     let (es1, est) = (
         f.indices.s1.as_ref().unwrap(),
         f.indices.st.as_ref().unwrap(),
@@ -170,10 +181,15 @@ fn the_ishigami_function_against_its_published_indices() {
     assert!(m.indices.s1.is_none() && m.indices.mu_star.is_some());
     let v = serde_json::to_value(&o).unwrap();
     assert!(v.get("S1").is_none() && v["mu_star"].is_array() && v["analytic"]["ST"].is_array());
-    assert!(o.to_string().starts_with(
-        "MORRIS of the ishigami function (400 model evaluations)\n\
-         input     mu_star      sigma   S1 exact   ST exact\n"
-    ));
+    assert!(v["mu_star_conf"].as_array().unwrap().len() == 3 && v["conf_level"] == 0.95);
+    let text = o.to_string();
+    assert!(
+        text.starts_with(
+            "MORRIS of the ishigami function (400 model evaluations)\n\
+             input             mu_star      sigma   S1 exact   ST exact\n"
+        ) && text.ends_with("±: 95 % confidence half widths\n"),
+        "{text}"
+    );
 }
 
 #[test]

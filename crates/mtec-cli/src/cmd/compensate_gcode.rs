@@ -1,11 +1,11 @@
 //! `mtec compensate gcode`: rewrites an NC program so the machine reaches the programmed points.
 
-use crate::choice::choice;
-use crate::error::CliError;
 use crate::help::{examples, text};
+use crate::{choice::choice, error::CliError};
 use mtec_comp::gcode::tooltable::MachineUnits;
 use mtec_comp::gcode::{OnUnsupported, RewriteOptions, Units};
 use mtec_workflow::ops::compensate_gcode::{self, Options};
+use mtec_workflow::ops::selective::Elements;
 use mtec_workflow::rs274::Rs274;
 use std::path::PathBuf;
 
@@ -78,6 +78,9 @@ pub struct Args {
     /// rewritten lines are refused.
     #[arg(long, default_value_t = 251)]
     pub max_line_chars: usize,
+    /// Elements of a kinematic model to compensate: all, key (ranked by EFAST) or a list (EXX,EYY).
+    #[arg(long, default_value = "all")]
+    pub elements: Elements,
     #[command(flatten)]
     pub flatten: FlattenArgs,
 }
@@ -170,6 +173,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         input: args.input,
         output: args.output,
         rewrite,
+        elements: args.elements,
         offsets: args.offsets,
         tool_table: f.tool_table,
         machine_units: f.machine_units,

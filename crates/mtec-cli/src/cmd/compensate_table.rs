@@ -1,8 +1,6 @@
 //! `mtec compensate table`: controller compensation tables from an error model.
 
-use crate::choice::choice;
-use crate::error::CliError;
-use crate::help::examples;
+use crate::{choice::choice, error::CliError, help::examples};
 use mtec_comp::table;
 use mtec_workflow::ops::compensate_table::{self as op, parse_at, parse_axis, Options, Range};
 use std::path::PathBuf;

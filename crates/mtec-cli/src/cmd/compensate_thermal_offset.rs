@@ -3,9 +3,7 @@
 //! `mtec_workflow::ops::compensate_thermal_offset` (the method `mtec_comp::thermal_offset`);
 //! this parses and prints.
 
-use crate::choice::choice;
-use crate::error::CliError;
-use crate::help::examples;
+use crate::{choice::choice, error::CliError, help::examples};
 use mtec_comp::table::DEFAULT_MAX_CORRECTION_UM;
 use mtec_comp::thermal_offset::OutsidePolicy;
 use mtec_workflow::ops::compensate_table::parse_axis;

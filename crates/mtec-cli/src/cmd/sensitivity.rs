@@ -1,9 +1,8 @@
 //! `mtec sensitivity`: global sensitivity of the volumetric error to the error elements
 //! (EFAST, Sobol or Morris), or of a standard test function.
 
-use crate::choice::choice;
-use crate::error::CliError;
 use crate::help::{examples, text};
+use crate::{choice::choice, error::CliError};
 use mtec_workflow::ops::sensitivity::{self as op, MethodKind, Options};
 use std::path::PathBuf;
 
@@ -34,15 +33,18 @@ pub struct Args {
     /// EFAST interference factor M.
     #[arg(long, default_value_t = 4)]
     pub interference: usize,
-    /// EFAST repetitions of the search curves with new random phases.
-    #[arg(long, default_value_t = 1)]
+    /// EFAST repetitions R with new random phases (intervals from their spread if R ≥ 2).
+    #[arg(long, default_value_t = 10)]
     pub resamples: usize,
     /// Morris grid levels (even).
     #[arg(long, default_value_t = 4)]
     pub levels: usize,
-    /// Sobol bootstrap replicates.
-    #[arg(long, default_value_t = 100)]
-    pub bootstrap: usize,
+    /// Bootstrap replicates of the Sobol and Morris intervals (0: none).
+    #[arg(long, alias = "bootstrap", default_value_t = 100)]
+    pub num_resamples: usize,
+    /// Confidence level of the intervals (*_conf).
+    #[arg(long, default_value_t = 0.95)]
+    pub conf_level: f64,
     /// Random seed of the design.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -57,6 +59,9 @@ pub struct Args {
     /// Several poses (CSV with x_mm, y_mm, z_mm, ... columns); indices are aggregated.
     #[arg(long)]
     pub points: Option<PathBuf>,
+    /// lhs or lhs:N: N poses (64) by Latin hypercube over the travels instead of --at/--points.
+    #[arg(long, value_parser = op::parse_sampling)]
+    pub sampling: Option<usize>,
     /// Target accuracy of Ex, Ey, Ez for the tolerance allocation, µm.
     #[arg(long, default_value_t = 25.0)]
     pub target_um: f64,
@@ -78,10 +83,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
         interference: args.interference,
         resamples: args.resamples,
         levels: args.levels,
-        bootstrap: args.bootstrap,
+        num_resamples: args.num_resamples,
+        conf_level: args.conf_level,
         seed: args.seed,
         at: args.at,
         points: args.points,
+        lhs_poses: args.sampling,
         target_um: args.target_um,
         coverage: args.coverage,
     };

@@ -95,9 +95,8 @@ struct Common {
     /// the duty-cycle steps that cut the validation blocks (used when the file has it).
     #[arg(long, default_value = "spindle_rpm")]
     input: String,
-    /// exp-ambient: ΔT_up from several sensors — the first principal component of their
-    /// (standardised) rises, as a weighted mean in °C. Goes with --nut-sensors, instead of
-    /// --sensors.
+    /// exp-ambient: ΔT_up from several sensors (first principal component of their standardised
+    /// rises, a weighted mean in °C). Goes with --nut-sensors, instead of --sensors.
     #[arg(
         long,
         value_delimiter = ',',
@@ -175,15 +174,13 @@ struct CvArgs {
     /// Print the per-block metrics as JSON.
     #[arg(long)]
     json: bool,
-    /// Leave-one-block-out instead of forward folds (optimistic: trains on the future of the
-    /// block it scores).
+    /// Leave-one-block-out instead of forward folds (optimistic: trains on the block's future).
     #[arg(long)]
     loo: bool,
 }
 
 /// candle sizes its thread pool once, from the environment: one thread is ~8x faster for these
-/// nets (`mtec_nn::threads`). The command sets it before its first candle op, while it has no
-/// other thread.
+/// nets (`mtec_nn::threads`); set before the first candle op, while there is no other thread.
 #[cfg(feature = "neural")]
 pub(crate) fn single_candle_thread() {
     if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {

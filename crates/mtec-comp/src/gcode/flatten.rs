@@ -54,6 +54,8 @@
 //!   constant surface speed with an X origin that flattening moved, and any call it does not
 //!   know. rs274's own errors are the CLI's to pass on (rs274 stops and prints them).
 
+pub use super::canon::FlattenError;
+use super::canon::{parse_line, Call};
 use super::format::format_number;
 use super::offsets::WORK_SYSTEMS;
 
@@ -73,6 +75,10 @@ pub struct FlattenOptions {
     pub rotary_named: [bool; 3],
     /// First line of the output (a comment), without newline, cut to 254 characters.
     pub header: Option<String>,
+    /// For every motion call of the canonical text, which of X Y Z A B C the program has not
+    /// commanded yet ([`super::start_probe::held_axes`]): those are not written, as in the
+    /// original. `None`: the rules of `axes_named` and `rotary_named` alone.
+    pub held: Option<Vec<[bool; 6]>>,
 }
 
 impl Default for FlattenOptions {
@@ -82,6 +88,7 @@ impl Default for FlattenOptions {
             axes_named: [true; 3],
             rotary_named: [true; 3],
             header: None,
+            held: None,
         }
     }
 }
@@ -97,28 +104,6 @@ pub struct FlattenReport {
     /// coordinates of some move.
     pub offsets_folded: bool,
 }
-
-/// A canonical line that cannot be written as a plain program.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FlattenError {
-    /// The line's sequence number as rs274 printed it (the 1-based line of its output).
-    pub line: usize,
-    /// The call, shortened.
-    pub call: String,
-    pub message: String,
-}
-
-impl std::fmt::Display for FlattenError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "rs274 canonical line {} `{}`: {}",
-            self.line, self.call, self.message
-        )
-    }
-}
-
-impl std::error::Error for FlattenError {}
 
 /// The program the CLI runs through rs274 (with the same parameter file) to learn the
 /// work-offset table: it selects every system in mm, so rs274 prints each entry.
@@ -214,125 +199,6 @@ fn letters_named(program: &[u8], letters: [u8; 3]) -> [bool; 3] {
     named
 }
 
-/// One parsed canonical line.
-struct Call<'a> {
-    line: usize,
-    raw: &'a str,
-    name: &'a str,
-    /// The text between the outer parentheses.
-    inner: &'a str,
-    /// `inner` split at commas and blanks.
-    args: Vec<&'a str>,
-}
-
-impl Call<'_> {
-    fn err(&self, message: impl Into<String>) -> FlattenError {
-        FlattenError {
-            line: self.line,
-            call: shorten(self.raw.trim()),
-            message: message.into(),
-        }
-    }
-
-    /// The first `n` arguments as finite numbers (more may follow).
-    fn numbers(&self, n: usize) -> Result<Vec<f64>, FlattenError> {
-        if self.args.len() < n {
-            return Err(self.err(format!(
-                "{} needs {n} arguments, rs274 printed {}",
-                self.name,
-                self.args.len()
-            )));
-        }
-        self.args[..n]
-            .iter()
-            .map(|a| match a.parse::<f64>() {
-                Ok(v) if v.is_finite() => Ok(v),
-                _ => Err(self.err(format!("'{a}' is not a finite number"))),
-            })
-            .collect()
-    }
-
-    /// A 1-based index argument (work system, spindle) turned into 0-based, below `n`.
-    fn index(&self, v: f64, n: usize) -> Result<usize, FlattenError> {
-        if v.fract() == 0.0 && v >= 1.0 && v <= n as f64 {
-            Ok(v as usize - 1)
-        } else {
-            Err(self.err(format!("index {v} is not between 1 and {n}")))
-        }
-    }
-
-    /// The quoted text argument of COMMENT/MESSAGE.
-    fn text(&self) -> &str {
-        let t = self.inner.trim();
-        let t = t.strip_prefix('"').unwrap_or(t);
-        t.strip_suffix('"').unwrap_or(t)
-    }
-}
-
-fn shorten(s: &str) -> String {
-    if s.chars().count() <= 100 {
-        s.to_string()
-    } else {
-        let mut t: String = s.chars().take(97).collect();
-        t.push_str("...");
-        t
-    }
-}
-
-/// Splits `   17 N..... NAME(args)` into its call; `None` for a blank line.
-fn parse_line(raw: &str, text_line: usize) -> Result<Option<Call<'_>>, FlattenError> {
-    let t = raw.trim();
-    if t.is_empty() {
-        return Ok(None);
-    }
-    let bad = |m: &str| FlattenError {
-        line: text_line,
-        call: shorten(t),
-        message: m.to_string(),
-    };
-    let digits = t.len() - t.trim_start_matches(|c: char| c.is_ascii_digit()).len();
-    let (line, rest) = if digits > 0 {
-        let n = t[..digits].parse::<usize>().unwrap_or(text_line);
-        (n, t[digits..].trim_start())
-    } else {
-        (text_line, t)
-    };
-    // the block's line number field: `N.....` or `N0080`
-    let rest = match rest.strip_prefix('N') {
-        Some(r) if !r.starts_with(|c: char| c.is_ascii_uppercase() || c == '_') => {
-            let end = r.find(char::is_whitespace).unwrap_or(r.len());
-            r[end..].trim_start()
-        }
-        _ => rest,
-    };
-    let Some(open) = rest.find('(') else {
-        return Err(bad("not a canonical call (no '(')"));
-    };
-    let name = rest[..open].trim();
-    if name.is_empty()
-        || !name
-            .bytes()
-            .all(|b| b.is_ascii_uppercase() || b.is_ascii_digit() || b == b'_')
-    {
-        return Err(bad("not a canonical call (no call name)"));
-    }
-    let Some(close) = rest.rfind(')').filter(|&c| c > open) else {
-        return Err(bad("not a canonical call (no closing ')')"));
-    };
-    let inner = &rest[open + 1..close];
-    let args = inner
-        .split(|c: char| c == ',' || c.is_whitespace())
-        .filter(|s| !s.is_empty())
-        .collect();
-    Ok(Some(Call {
-        line,
-        raw: t,
-        name,
-        inner,
-        args,
-    }))
-}
-
 #[derive(Clone, Copy, PartialEq, Debug)]
 enum PathMode {
     ExactStop,
@@ -381,8 +247,14 @@ struct Flattener {
     out_feed_per_rev: Option<bool>,
     out_path: Option<PathMode>,
     out_css: Option<Option<f64>>,
-    out_mist: bool,
-    out_flood: bool,
+    /// Held axes of every motion call (see [`FlattenOptions::held`]) and the next one's index.
+    held: Option<Vec<[bool; 6]>>,
+    motion: usize,
+    /// A lone MIST_OFF (true) or FLOOD_OFF (false): the first half of an M9, or part of the
+    /// reset of the program end that follows.
+    pending_off: Option<(bool, FlattenError)>,
+    /// The output ends at a closing `%` (rs274 printed FINISH without PROGRAM_END).
+    percent: bool,
 }
 
 fn num(v: f64, out: &mut String) {
@@ -413,7 +285,11 @@ impl Flattener {
             pallet: false,
             ended: false,
             machine_mm: [0.0; 3],
-            live: opt.axes_named,
+            live: if opt.held.is_some() {
+                [false; 3]
+            } else {
+                opt.axes_named
+            },
             rotary_deg: [0.0; 3],
             rotary_live: [false; 3],
             rotary_turned: [false; 3],
@@ -424,9 +300,23 @@ impl Flattener {
             out_feed_per_rev: None,
             out_path: None,
             out_css: Some(None),
-            out_mist: false,
-            out_flood: false,
+            held: opt.held.clone(),
+            motion: 0,
+            pending_off: None,
+            percent: false,
         }
+    }
+
+    /// The held axes of the next motion call (none held without a start probe).
+    fn next_held(&mut self, c: &Call) -> Result<[bool; 6], FlattenError> {
+        let Some(h) = &self.held else {
+            return Ok([false; 6]);
+        };
+        let m = h.get(self.motion).copied().ok_or_else(|| {
+            c.err("more moves than the start-position check saw (the two rs274 runs differ)")
+        })?;
+        self.motion += 1;
+        Ok(m)
     }
 
     fn scale(&self) -> f64 {
@@ -443,7 +333,7 @@ impl Flattener {
         self.report.lines_written += 1;
     }
 
-    /// Writes pending modal changes (units, work system, plane, path mode, coolant) before a
+    /// Writes pending modal changes (units, work system, plane, path mode) before a
     /// line that depends on them.
     fn sync_modes(&mut self, motion: bool) {
         if self.out_inch != Some(self.inch) {
@@ -474,23 +364,6 @@ impl Flattener {
             }
             self.line(&s);
             self.out_path = self.path;
-        }
-        self.sync_coolant();
-    }
-
-    fn sync_coolant(&mut self) {
-        if (self.out_mist && !self.mist) || (self.out_flood && !self.flood) {
-            self.line("M9");
-            self.out_mist = false;
-            self.out_flood = false;
-        }
-        if self.mist && !self.out_mist {
-            self.line("M7");
-            self.out_mist = true;
-        }
-        if self.flood && !self.out_flood {
-            self.line("M8");
-            self.out_flood = true;
         }
     }
 
@@ -628,12 +501,22 @@ impl Flattener {
         if !rapid {
             self.sync_feed_mode();
         }
+        let held = self.next_held(c)?;
         let out = self.target(c, [v[0], v[1], v[2]])?;
+        let probed = self.held.is_some();
+        for (live, held) in self.live.iter_mut().zip(&held[..3]) {
+            *live |= probed && !held;
+        }
         let mut s = String::from(if rapid { "G0" } else { "G1" });
         self.axis_words(&out, &mut s);
         self.rotary_deg = [v[3], v[4], v[5]];
         for (k, l) in ["A", "B", "C"].iter().enumerate() {
-            self.rotary_live[k] |= self.rotary_turned[k] && self.rotary_deg[k] != 0.0;
+            self.rotary_live[k] |= self.rotary_turned[k]
+                && if self.held.is_some() {
+                    !held[3 + k]
+                } else {
+                    self.rotary_deg[k] != 0.0
+                };
             if self.rotary_live[k] {
                 s.push(' ');
                 s.push_str(l);
@@ -690,8 +573,10 @@ impl Flattener {
         centre[f] = v[2] + fold[f];
         centre[se] = v[3] + fold[se];
         // the plane's axes take part in the arc: they are written from here on
+        let held = self.next_held(c)?;
         self.live[f] = true;
         self.live[se] = true;
+        self.live[n] |= self.held.is_some() && !held[n];
         let out = self.target(c, end)?;
         let mut line = String::from(if rot < 0.0 { "G2" } else { "G3" });
         self.axis_words(&out, &mut line);
@@ -713,6 +598,30 @@ impl Flattener {
     }
 
     fn call(&mut self, c: &Call) -> Result<(), FlattenError> {
+        if let Some((mist, e)) = self.pending_off.take() {
+            match (mist, c.name) {
+                // M9
+                (true, "FLOOD_OFF") => {
+                    self.mist = false;
+                    self.flood = false;
+                    self.line("M9");
+                    return Ok(());
+                }
+                // the program end's own reset switches off what is on: M2/M30 does it again
+                (_, "PROGRAM_END") | (false, "MIST_OFF") => {
+                    if mist {
+                        self.mist = false;
+                    } else {
+                        self.flood = false;
+                    }
+                    if c.name == "MIST_OFF" {
+                        self.pending_off = Some((true, c.err("a single coolant switched off: LinuxCNC has no code for that (M9 switches both off)")));
+                        return Ok(());
+                    }
+                }
+                _ => return Err(e),
+            }
+        }
         if self.ended {
             return match c.name {
                 "ON_RESET" => Ok(()),
@@ -838,10 +747,24 @@ impl Flattener {
                     _ => "M5",
                 });
             }
-            "MIST_ON" => self.mist = true,
-            "MIST_OFF" => self.mist = false,
-            "FLOOD_ON" => self.flood = true,
-            "FLOOD_OFF" => self.flood = false,
+            // coolant is written as rs274 prints it: M7, M8, and M9 (MIST_OFF then FLOOD_OFF,
+            // whatever was on), so that a program starting with M9 still turns it off
+            "MIST_ON" | "FLOOD_ON" => {
+                let mist = c.name == "MIST_ON";
+                if mist {
+                    self.mist = true;
+                } else {
+                    self.flood = true;
+                }
+                self.sync_modes(false);
+                self.line(if mist { "M7" } else { "M8" });
+            }
+            "MIST_OFF" | "FLOOD_OFF" => {
+                self.pending_off = Some((
+                    c.name == "MIST_OFF",
+                    c.err("a single coolant switched off: LinuxCNC has no code for that (M9 switches both off)"),
+                ));
+            }
             "DWELL" => {
                 let t = c.numbers(1)?[0];
                 self.sync_modes(false);
@@ -897,8 +820,11 @@ impl Flattener {
             }
             "PROGRAM_END" | "FINISH" => {
                 self.sync_css(false);
-                self.sync_coolant();
-                self.line(if self.pallet { "M30" } else { "M2" });
+                if self.percent {
+                    self.line("%");
+                } else {
+                    self.line(if self.pallet { "M30" } else { "M2" });
+                }
                 self.pallet = false;
                 self.ended = true;
             }
@@ -972,6 +898,13 @@ pub fn flatten(canon: &str, opt: &FlattenOptions) -> Result<(String, FlattenRepo
     let turned = rotary_axes_turned(canon);
     f.rotary_live = std::array::from_fn(|k| turned[k] && opt.rotary_named[k]);
     f.rotary_turned = turned;
+    // a program that ends at its closing % (rs274 prints FINISH and no PROGRAM_END): the same
+    // end, without the reset that M2 would add (spindle stop, coolant off, modes); LinuxCNC
+    // wants the opening % on the first line
+    f.percent = canon.contains("FINISH(") && !canon.contains("PROGRAM_END(");
+    if f.percent {
+        f.line("%");
+    }
     if let Some(h) = &opt.header {
         let h: String = h.replace(['\n', '\r'], " ").chars().take(254).collect();
         f.line(&h);
@@ -986,6 +919,22 @@ pub fn flatten(canon: &str, opt: &FlattenOptions) -> Result<(String, FlattenRepo
         };
         f.call(&c)?;
     }
+    if let Some((_, e)) = f.pending_off.take() {
+        return Err(e);
+    }
+    if let Some(h) = &f.held {
+        if f.motion != h.len() {
+            return Err(FlattenError {
+                line: f.report.canonical_lines,
+                call: String::new(),
+                message: format!(
+                    "{} moves, but the start-position check saw {} (the two rs274 runs differ)",
+                    f.motion,
+                    h.len()
+                ),
+            });
+        }
+    }
     if f.pallet {
         return Err(FlattenError {
             line: f.report.canonical_lines,
@@ -995,8 +944,7 @@ pub fn flatten(canon: &str, opt: &FlattenOptions) -> Result<(String, FlattenRepo
     }
     if !f.ended {
         f.sync_css(false);
-        f.sync_coolant();
-        f.line("M2");
+        f.line(if f.percent { "%" } else { "M2" });
     }
     Ok((f.out, f.report))
 }
@@ -1236,6 +1184,84 @@ mod tests {
     }
 
     #[test]
+    fn coolant_is_written_as_printed_and_the_end_as_the_original_ends() {
+        // an M9 with nothing on still turns coolant off (the machine may have it on)
+        let t = flat(&canon(&["MIST_OFF()", "FLOOD_OFF()", "PROGRAM_END()"])).unwrap();
+        assert_eq!(t.lines().skip(1).collect::<Vec<_>>(), ["M9", "M2"], "{t}");
+        // M2's own reset switches off the flood that is on: M2 does it again, nothing written
+        let t = flat(&canon(&[
+            "FLOOD_ON()",
+            "STOP_SPINDLE_TURNING(0)",
+            "SET_SPINDLE_MODE(0 0.0000)",
+            "FLOOD_OFF()",
+            "PROGRAM_END()",
+        ]))
+        .unwrap();
+        assert_eq!(
+            t.lines().skip(1).collect::<Vec<_>>(),
+            ["G21", "G54", "G17", "M8", "M5", "M2"],
+            "{t}"
+        );
+        // a single coolant off anywhere else has no code
+        let e = flat(&canon(&["FLOOD_ON()", "MIST_OFF()", "DWELL(1.0000)"])).unwrap_err();
+        assert!(e.message.contains("single coolant"), "{e}");
+        assert!(e.call.contains("MIST_OFF"), "{e}");
+        // a program that ends at its % (FINISH, no PROGRAM_END) ends at a % again, without
+        // the reset an M2 would add
+        let t = flat(&canon(&[
+            "STRAIGHT_TRAVERSE(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+            "FINISH()",
+            "ON_RESET()",
+        ]))
+        .unwrap();
+        let lines: Vec<&str> = t.lines().collect();
+        assert_eq!(lines.first(), Some(&"%"), "{t}");
+        assert_eq!(lines.last(), Some(&"%"), "{t}");
+        assert!(!t.contains("M2"), "{t}");
+    }
+
+    #[test]
+    fn held_axes_are_not_written() {
+        // G0 Z5 first (X, Y held), then G1 X1 Y2
+        let opt = FlattenOptions {
+            held: Some(vec![
+                [true, true, false, true, true, true],
+                [false, false, false, true, true, true],
+            ]),
+            ..zero_table()
+        };
+        let (t, _) = flatten(
+            &canon(&[
+                "STRAIGHT_TRAVERSE(0.0000, 0.0000, 5.0000, 0.0000, 0.0000, 0.0000)",
+                "SET_FEED_RATE(100.0000)",
+                "STRAIGHT_FEED(1.0000, 2.0000, 5.0000, 0.0000, 0.0000, 0.0000)",
+                "PROGRAM_END()",
+            ]),
+            &opt,
+        )
+        .unwrap();
+        let moves: Vec<&str> = t
+            .lines()
+            .filter(|l| l.starts_with('G') && l.contains(['X', 'Z']))
+            .collect();
+        assert_eq!(moves, ["G0 Z5.0", "G1 X1.0 Y2.0 Z5.0 F100.0"], "{t}");
+        // a different number of moves than the check saw is refused
+        let opt = FlattenOptions {
+            held: Some(vec![[false; 6]]),
+            ..zero_table()
+        };
+        let e = flatten(
+            &canon(&[
+                "STRAIGHT_TRAVERSE(0.0000, 0.0000, 5.0000, 0.0000, 0.0000, 0.0000)",
+                "STRAIGHT_TRAVERSE(0.0000, 0.0000, 6.0000, 0.0000, 0.0000, 0.0000)",
+            ]),
+            &opt,
+        )
+        .unwrap_err();
+        assert!(e.message.contains("start-position check"), "{e}");
+    }
+
+    #[test]
     fn non_motion_calls_become_their_codes() {
         let t = flat(&canon(&[
             "SET_SPINDLE_SPEED(0, 1000.0000)",
@@ -1250,6 +1276,7 @@ mod tests {
             "SET_FEED_RATE(120.0000)",
             "STRAIGHT_FEED(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
             "MIST_OFF()",
+            "FLOOD_OFF()",
             "DWELL(1.5000)",
             "SELECT_TOOL(2)",
             "START_CHANGE()",
@@ -1272,14 +1299,13 @@ mod tests {
                 "G17",
                 "S1000.0",
                 "M3",
+                "M8",
+                "M7",
                 "(keep [me])",
                 "(MSG, hi)",
                 "G64 P0.01 Q0.02",
-                "M7",
-                "M8",
                 "G1 X1.0 Y0.0 Z0.0 F120.0",
                 "M9",
-                "M8",
                 "G4 P1.5",
                 "T2",
                 "M6",
@@ -1354,6 +1380,7 @@ mod tests {
             axes_named: named,
             rotary_named: [false; 3],
             header: Some("(flattened)".into()),
+            held: None,
         };
         let (t, _) = flatten(
             &canon(&[

@@ -70,6 +70,7 @@
 pub mod arc;
 pub mod block;
 pub mod bound;
+pub mod canon;
 pub mod code;
 pub mod expr;
 pub mod flatten;
@@ -79,7 +80,9 @@ pub mod modal;
 pub mod offsets;
 pub mod rewrite;
 pub mod rotary;
+pub mod runtime_params;
 pub mod solve;
+pub mod start_probe;
 pub mod tooltable;
 
 pub use code::GCode;

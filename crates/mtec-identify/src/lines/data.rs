@@ -423,3 +423,18 @@ fn normalise(a: [f64; 3]) -> [f64; 3] {
     let n = norm(a);
     a.map(|v| v / n)
 }
+
+/// Distinct measured positions of each axis (mm, rounded to 1 µm), X, Y, Z.
+pub fn measured_positions(data: &LineData) -> [Vec<f64>; 3] {
+    [0, 1, 2].map(|a| {
+        let mut v: Vec<i64> = data
+            .channels
+            .iter()
+            .filter(|c| c.direction[a].abs() > 1e-9)
+            .flat_map(|c| c.points_mm.iter().map(move |p| (p[a] * 1e3).round() as i64))
+            .collect();
+        v.sort_unstable();
+        v.dedup();
+        v.into_iter().map(|p| p as f64 * 1e-3).collect()
+    })
+}

@@ -29,6 +29,7 @@ pub mod model;
 pub mod report;
 pub mod select;
 pub mod solve;
+pub mod spline;
 pub mod validity;
 
 pub use data::{Channel, ChannelKind, LineData};
@@ -152,16 +153,25 @@ pub fn identify_with(
         {
             identify(machine, data, AUTO_WITHOUT_READINGS)
         }
-        Degree::Auto => {
-            model::check_machine(machine)?;
-            let sel = select::select(machine, data, true)?;
-            let d = sel.chosen;
-            let layout = Layout::with_degrees(machine, data, &|e| d.of(e), true)?;
-            let mut id = identify_layout(machine, data, layout)?;
-            id.report.selection = Some(sel);
-            Ok(id)
-        }
+        Degree::Auto => identify_auto(machine, data, false),
     }
+}
+
+/// Identifies with the bases chosen by cross-validation ([`select`]): Legendre degrees, and
+/// with `splines` cubic splines with knots from the data as candidates too. The selection is in
+/// the report.
+pub fn identify_auto(
+    machine: &Machine,
+    data: &LineData,
+    splines: bool,
+) -> Result<LineIdentification, LinesError> {
+    model::check_machine(machine)?;
+    let sel = select::select_among(machine, data, true, splines)?;
+    let d = sel.chosen;
+    let layout = Layout::with_bases(machine, data, &|e| d.of(e), true)?;
+    let mut id = identify_layout(machine, data, layout)?;
+    id.report.selection = Some(sel);
+    Ok(id)
 }
 
 /// Identifies with a given parameter layout.
@@ -277,8 +287,8 @@ fn error_set(
         let theta: Vec<f64> = b.cols().map(|c| fit.theta[c]).collect();
         let f = if b.kind == model::ElementKind::Squareness {
             ErrorFunction::constant(theta[0])
-        } else if let Some(period) = b.period_mm {
-            pitch_table(b, &theta, period)
+        } else if b.period_mm.is_some() || b.spline.is_some() {
+            sampled_table(b, &theta)
         } else {
             let coeffs = b.power_terms(&theta);
             ErrorFunction::polynomial(solve::polynomial_in_q(&coeffs, b.travel))
@@ -289,12 +299,13 @@ fn error_set(
     set
 }
 
-/// A function with a pitch-error pair as a table every P/20 (at most 1 mm): every consumer of an
-/// error set (compensation tables, G-code, the real-time library) evaluates tables already, and
-/// linear interpolation of a sinusoid at P/20 is within 1.2 % of its amplitude ((π/20)²/2).
-fn pitch_table(b: &model::Block, theta: &[f64], period: f64) -> ErrorFunction {
+/// A function with a pitch-error pair or a spline as a table every P/20 (at most 1 mm): every
+/// consumer of an error set (compensation tables, G-code, the real-time library) evaluates
+/// tables already; linear interpolation of a sinusoid at P/20 is within 1.2 % of its amplitude
+/// ((π/20)²/2), and of a cubic spline whose knots are ≥ 10 mm apart at 1 mm within h²/8·|f''|.
+fn sampled_table(b: &model::Block, theta: &[f64]) -> ErrorFunction {
     let [lo, hi] = b.travel;
-    let step = (period / 20.0).min(1.0);
+    let step = b.period_mm.map_or(1.0, |p| p / 20.0).min(1.0);
     let n = ((hi - lo) / step).ceil().max(1.0) as usize;
     let positions: Vec<f64> = (0..=n)
         .map(|i| lo + (hi - lo) * i as f64 / n as f64)

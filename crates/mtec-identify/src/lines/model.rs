@@ -32,6 +32,7 @@
 
 use super::basis;
 use super::data::{dot, ChannelKind, LineData};
+use super::spline::Spline;
 use mtec_model::{three_axis_elements, Axis, ErrorElement, Machine, VolumetricModel};
 use nalgebra::{DMatrix, DVector};
 
@@ -55,6 +56,9 @@ pub struct Block {
     pub travel: [f64; 2],
     /// Legendre orders p of the columns, φ_p of [`basis`] (0 for a squareness constant).
     pub orders: Vec<i32>,
+    /// Cubic B-spline columns with knots from the data, instead of Legendre orders (`orders`
+    /// is then empty), see [`super::spline`].
+    pub spline: Option<Spline>,
     /// Screw lead (mm) of a positioning element with a pitch-error pair (two more columns).
     pub period_mm: Option<f64>,
     /// Columns `first_col .. first_col + n_cols()`.
@@ -88,6 +92,7 @@ impl Block {
                     p_all[p as usize] - basis::at_minus_one(p as usize)
                 }
             })
+            .chain(self.spline.iter().flat_map(move |s| s.columns(q_axis)))
             .chain(pitch.into_iter().flatten())
     }
     /// The polynomial part of the coefficients `theta[cols]` as (power of s, coefficient)
@@ -100,15 +105,64 @@ impl Block {
     }
     /// Number of columns.
     pub fn n_cols(&self) -> usize {
-        self.orders.len() + if self.period_mm.is_some() { 2 } else { 0 }
+        self.orders.len()
+            + self.spline.as_ref().map_or(0, Spline::n_cols)
+            + if self.period_mm.is_some() { 2 } else { 0 }
     }
     /// The column range.
     pub fn cols(&self) -> std::ops::Range<usize> {
         self.first_col..self.first_col + self.n_cols()
     }
-    /// The highest Legendre order (the polynomial degree).
+    /// The function's basis.
+    pub fn basis_choice(&self) -> Basis {
+        match &self.spline {
+            Some(s) => Basis::Spline(s.interior.len()),
+            None => Basis::Legendre(self.degree()),
+        }
+    }
+    /// The highest Legendre order (the polynomial degree; 3 for a spline, 0 for a constant).
     pub fn degree(&self) -> usize {
+        if self.spline.is_some() {
+            return 3;
+        }
         self.orders.iter().copied().max().unwrap_or(0).max(0) as usize
+    }
+}
+
+/// The basis of an error function: Legendre polynomials of a degree, or cubic B-splines with
+/// a number of interior knots placed at the quantiles of the measured positions. Written as
+/// the degree (a number, as before splines existed) or as `"spline:K"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Basis {
+    Legendre(usize),
+    Spline(usize),
+}
+
+impl serde::Serialize for Basis {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match *self {
+            Basis::Legendre(d) => s.serialize_u64(d as u64),
+            Basis::Spline(k) => s.serialize_str(&format!("spline:{k}")),
+        }
+    }
+}
+
+impl Basis {
+    /// Number of coefficients (of a positioning or angular function): the model's size.
+    pub fn size(&self) -> usize {
+        match *self {
+            Basis::Legendre(d) => d,
+            Basis::Spline(k) => k + 3,
+        }
+    }
+}
+
+impl std::fmt::Display for Basis {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Basis::Legendre(d) => write!(f, "{d}"),
+            Basis::Spline(k) => write!(f, "cubic spline with {k} interior knots"),
+        }
     }
 }
 
@@ -132,6 +186,8 @@ pub enum ModelError {
     NotThreeAxis(String),
     #[error("polynomial degree must be between 2 and 12 (got {0})")]
     Degree(usize),
+    #[error("a cubic spline with {0} interior knots has a function with no measured position of {1}'s axis in its support")]
+    Knots(usize, String),
     #[error("line `{line}` point {point} ({x}, {y}, {z}) is outside the travel of axis {axis} [{lo}, {hi}]")]
     OutsideTravel {
         line: String,
@@ -173,16 +229,44 @@ impl Layout {
         degree_of: &dyn Fn(&ErrorElement) -> usize,
         pitch: bool,
     ) -> Result<Layout, ModelError> {
+        Layout::with_bases(machine, data, &|e| Basis::Legendre(degree_of(e)), pitch)
+    }
+
+    /// The layout with a basis per element (`basis_of`), pitch pairs as [`Layout::with_degrees`].
+    pub fn with_bases(
+        machine: &Machine,
+        data: &LineData,
+        basis_of: &dyn Fn(&ErrorElement) -> Basis,
+        pitch: bool,
+    ) -> Result<Layout, ModelError> {
         check_machine(machine)?;
+        let positions = super::data::measured_positions(data);
         let mut blocks = Vec::new();
         let mut col = 0;
         for element in three_axis_elements() {
             let kind = element_kind(&element);
-            let degree = degree_of(&element);
-            if kind != ElementKind::Squareness && !(MIN_DEGREE..=MAX_DEGREE).contains(&degree) {
+            let (degree, spline) = match (kind, basis_of(&element)) {
+                (ElementKind::Squareness, _) => (0, None),
+                (_, Basis::Legendre(d)) => (d, None),
+                (_, Basis::Spline(k)) => {
+                    let s = Spline::new(
+                        &positions[element.axis.index()],
+                        machine.travel(element.axis),
+                        k,
+                        kind == ElementKind::Straightness,
+                    )
+                    .ok_or(ModelError::Knots(k, element.name()))?;
+                    (0, Some(s))
+                }
+            };
+            if kind != ElementKind::Squareness
+                && spline.is_none()
+                && !(MIN_DEGREE..=MAX_DEGREE).contains(&degree)
+            {
                 return Err(ModelError::Degree(degree));
             }
             let orders: Vec<i32> = match kind {
+                _ if spline.is_some() => Vec::new(),
                 ElementKind::Squareness => vec![0],
                 ElementKind::Straightness => (2..=degree as i32).collect(),
                 _ => (1..=degree as i32).collect(),
@@ -197,6 +281,7 @@ impl Layout {
                 pose_index: machine.axis_index(element.axis).unwrap_or(0),
                 travel: machine.travel(element.axis),
                 orders,
+                spline,
                 period_mm,
                 first_col: col,
                 tool_side: machine.chain.tool_side.contains(&element.axis),

@@ -57,6 +57,9 @@ pub struct ElementReport {
     /// Period (mm) of its pitch-error pair, when it has one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pitch_period_mm: Option<f64>,
+    /// Interior knots (mm) of a cubic-spline function (`degree` is then 3).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spline_knots_mm: Option<Vec<f64>>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -193,6 +196,7 @@ pub fn build(
                     .collect(),
                 degree: b.degree(),
                 pitch_period_mm: b.period_mm,
+                spline_knots_mm: b.spline.as_ref().map(|s| s.interior.clone()),
             }
         })
         .collect();

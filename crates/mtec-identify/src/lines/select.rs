@@ -12,55 +12,73 @@
 //! (it predicts the held-out run best), and the volumetric prediction was then up to 1.75 µm RMS
 //! on an axis; leave-points-out chose 4–7 and ≤ 0.75 µm (docs/methods.md §3).
 //!
-//! Search: one polynomial degree per *kind* of element (positioning, straightness, angular),
-//! by coordinate descent from the best common degree of [`CANDIDATES`]: each kind in turn
-//! takes the candidate degree that scores best with the other two fixed, until no kind changes
-//! (at most [`SWEEPS`] passes). A higher degree must lower the score by 1 % to be taken.
+//! Search: one basis per *kind* of element (positioning, straightness, angular): a Legendre
+//! degree of [`CANDIDATES`] or a cubic spline with [`KNOT_CANDIDATES`] interior knots at the
+//! quantiles of the measured positions ([`super::spline`]), by coordinate descent from the best
+//! common Legendre degree: each kind in turn takes the candidate that scores best with the
+//! other two fixed, until no kind changes (at most [`SWEEPS`] passes). A larger model (more
+//! coefficients; a spline after a polynomial of the same size) must lower the score by 1 % to
+//! be taken.
 
 use super::data::LineData;
 use super::identifiability;
-use super::model::{design_matrix, ElementKind, Layout, ModelError};
+use super::model::{design_matrix, Basis, ElementKind, Layout, ModelError};
 use super::solve;
 use mtec_model::{ErrorElement, Machine};
 use serde::Serialize;
 
 /// Degrees tried (2 stays available as an explicit `--degree 2`).
 pub const CANDIDATES: std::ops::RangeInclusive<usize> = 3..=9;
+/// Interior knot counts of the splines tried (4..9 coefficients, the sizes of degrees 4..9).
+pub const KNOT_CANDIDATES: std::ops::RangeInclusive<usize> = 1..=6;
+
+/// Every basis a kind may take, in the order tried (splines only when asked: see
+/// docs/methods.md §3 for why the default does not try them).
+fn candidates(splines: bool) -> Vec<Basis> {
+    CANDIDATES
+        .map(Basis::Legendre)
+        .chain(KNOT_CANDIDATES.filter(|_| splines).map(Basis::Spline))
+        .collect()
+}
+
+/// The order of parsimony: size, then a polynomial before a spline.
+fn larger(a: Basis, b: Basis) -> bool {
+    (a.size(), matches!(a, Basis::Spline(_))) > (b.size(), matches!(b, Basis::Spline(_)))
+}
 /// Passes of the coordinate descent.
 const SWEEPS: usize = 2;
 /// A choice must lower the score by this fraction to replace a lower degree (parsimony: a
 /// tie goes to the simpler model).
 const MIN_GAIN: f64 = 0.01;
 
-/// Degrees per kind of element: positioning, straightness, angular.
+/// The basis per kind of element: positioning, straightness, angular.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct KindDegrees {
-    pub positioning: usize,
-    pub straightness: usize,
-    pub angular: usize,
+    pub positioning: Basis,
+    pub straightness: Basis,
+    pub angular: Basis,
 }
 
 impl KindDegrees {
-    pub fn all(d: usize) -> KindDegrees {
+    pub fn all(d: Basis) -> KindDegrees {
         KindDegrees {
             positioning: d,
             straightness: d,
             angular: d,
         }
     }
-    /// The degree of an element.
-    pub fn of(&self, e: &ErrorElement) -> usize {
+    /// The basis of an element (a squareness is a constant whatever it says).
+    pub fn of(&self, e: &ErrorElement) -> Basis {
         match super::model::element_kind(e) {
             ElementKind::Positioning => self.positioning,
             ElementKind::Straightness => self.straightness,
-            ElementKind::Angular => self.angular,
-            ElementKind::Squareness => 0,
+            ElementKind::Angular | ElementKind::Squareness => self.angular,
         }
     }
-    fn get(&self, k: usize) -> usize {
+    fn get(&self, k: usize) -> Basis {
         [self.positioning, self.straightness, self.angular][k]
     }
-    fn with(mut self, k: usize, d: usize) -> KindDegrees {
+    fn with(mut self, k: usize, d: Basis) -> KindDegrees {
         match k {
             0 => self.positioning = d,
             1 => self.straightness = d,
@@ -98,7 +116,11 @@ pub fn point_cv_score(
     pitch: bool,
 ) -> Result<Option<f64>, ModelError> {
     let deg = |e: &ErrorElement| degrees.of(e);
-    let layout = Layout::with_degrees(machine, data, &deg, pitch)?;
+    let layout = match Layout::with_bases(machine, data, &deg, pitch) {
+        // a knot count the measured positions cannot support is no candidate
+        Err(ModelError::Knots(..)) => return Ok(None),
+        l => l?,
+    };
     let (a, y) = design_matrix(machine, &layout, data);
     let mut fold_of = Vec::with_capacity(y.len());
     for c in &data.channels {
@@ -133,8 +155,19 @@ pub fn point_cv_score(
 /// Folds of [`point_cv_score`].
 pub const POINT_FOLDS: usize = 3;
 
-/// Chooses the degrees by cross-validation over the measured points.
+/// Chooses the degrees by cross-validation over the measured points (Legendre bases).
 pub fn select(machine: &Machine, data: &LineData, pitch: bool) -> Result<Selection, ModelError> {
+    select_among(machine, data, pitch, false)
+}
+
+/// Chooses the bases by cross-validation over the measured points, splines included with
+/// `splines`.
+pub fn select_among(
+    machine: &Machine,
+    data: &LineData,
+    pitch: bool,
+    splines: bool,
+) -> Result<Selection, ModelError> {
     let mut trials: Vec<Trial> = Vec::new();
     let score = |d: KindDegrees, trials: &mut Vec<Trial>| -> Result<f64, ModelError> {
         if let Some(t) = trials.iter().find(|t| t.degrees == d) {
@@ -148,12 +181,12 @@ pub fn select(machine: &Machine, data: &LineData, pitch: bool) -> Result<Selecti
         Ok(s)
     };
     // best common degree (ascending: a higher degree must gain MIN_GAIN)
-    let mut best = KindDegrees::all(*CANDIDATES.start());
+    let mut best = KindDegrees::all(Basis::Legendre(*CANDIDATES.start()));
     let mut best_s = score(best, &mut trials)?;
     for d in CANDIDATES.skip(1) {
-        let s = score(KindDegrees::all(d), &mut trials)?;
+        let s = score(KindDegrees::all(Basis::Legendre(d)), &mut trials)?;
         if s < best_s * (1.0 - MIN_GAIN) {
-            best = KindDegrees::all(d);
+            best = KindDegrees::all(Basis::Legendre(d));
             best_s = s;
         }
     }
@@ -161,13 +194,17 @@ pub fn select(machine: &Machine, data: &LineData, pitch: bool) -> Result<Selecti
         let mut changed = false;
         for k in 0..3 {
             let mut kind_best = (best.get(k), best_s);
-            for d in CANDIDATES {
+            for d in candidates(splines) {
                 if d == best.get(k) {
                     continue;
                 }
                 let s = score(best.with(k, d), &mut trials)?;
-                // lower degrees win ties; a higher one must gain MIN_GAIN
-                let gain = if d > kind_best.0 { 1.0 - MIN_GAIN } else { 1.0 };
+                // smaller models win ties; a larger one must gain MIN_GAIN
+                let gain = if larger(d, kind_best.0) {
+                    1.0 - MIN_GAIN
+                } else {
+                    1.0
+                };
                 if s < kind_best.1 * gain {
                     kind_best = (d, s);
                 }

@@ -14,7 +14,7 @@
 //!    functions do not follow the machine's shape. Needs ≥ 2 runs.
 
 use super::basis;
-use super::data::LineData;
+use super::data::{measured_positions, LineData};
 use super::model::Layout;
 use nalgebra::DMatrix;
 use std::collections::BTreeMap;
@@ -52,21 +52,6 @@ pub fn amplification(q: &[f64], travel: [f64; 2], degree: usize) -> f64 {
             l.iter().map(|c| c.abs()).sum::<f64>()
         })
         .fold(0.0, f64::max)
-}
-
-/// Distinct measured positions of each axis (mm, rounded to 1 µm), X, Y, Z.
-pub fn measured_positions(data: &LineData) -> [Vec<f64>; 3] {
-    [0, 1, 2].map(|a| {
-        let mut v: Vec<i64> = data
-            .channels
-            .iter()
-            .filter(|c| c.direction[a].abs() > 1e-9)
-            .flat_map(|c| c.points_mm.iter().map(move |p| (p[a] * 1e3).round() as i64))
-            .collect();
-        v.sort_unstable();
-        v.dedup();
-        v.into_iter().map(|p| p as f64 * 1e-3).collect()
-    })
 }
 
 /// σ_rep (µm) and its degrees of freedom from the residuals of a fit; None with one run only.

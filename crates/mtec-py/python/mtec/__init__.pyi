@@ -113,6 +113,27 @@ def compensate_gcode(
 ) -> Tuple[str, dict[str, Any]]:
     """An NC program rewritten so the machine with the model's errors cuts the programmed path."""
 
+def sensitivity(
+    *,
+    function: Optional[Literal["ishigami", "sobol-g", "linear"]] = None,
+    machine: Optional[PathLike] = None,
+    stats: Optional[PathLike] = None,
+    method: Literal["efast", "sobol", "morris"] = "efast",
+    samples: Optional[int] = None,
+    at: Optional[Sequence[float]] = None,
+    points: Optional[PathLike] = None,
+    interference: int = 4,
+    resamples: int = 10,
+    levels: int = 4,
+    num_resamples: int = 100,
+    conf_level: float = 0.95,
+    seed: int = 1,
+    target_um: float = 25.0,
+    coverage: float = 2.0,
+    lhs_poses: Optional[int] = None,
+) -> dict[str, Any]:
+    """Sensitivity indices with their confidence intervals (`mtec sensitivity --json`)."""
+
 def simulate(scenario: str, out: PathLike, seed: int = 1) -> dict[str, str]:
     """Writes a scenario's simulated measurement files and truth.json into `out`."""
 

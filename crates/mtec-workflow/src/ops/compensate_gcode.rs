@@ -1,5 +1,6 @@
 //! `compensate gcode`: rewrites an NC program so that the machine reaches the programmed points.
 
+use super::selective::{Elements, Selective};
 use crate::rs274::{flatten_input, FlattenInputs, Flattened, Rs274};
 use crate::{Error, Observer, Result};
 use mtec_comp::gcode::flatten::FlattenReport;
@@ -39,6 +40,8 @@ pub struct Options {
     pub block_delete: Option<bool>,
     /// Run the program through LinuxCNC's interpreter first.
     pub flatten: Option<Rs274>,
+    /// The elements of a kinematic model to compensate ([`super::selective`]).
+    pub elements: Elements,
 }
 
 impl Options {
@@ -59,6 +62,7 @@ impl Options {
             machine_units: MachineUnits::Mm,
             block_delete: None,
             flatten: None,
+            elements: Elements::All,
         }
     }
 }
@@ -76,6 +80,9 @@ pub struct Outcome {
     pub warnings: Vec<String>,
     /// Notes on how the program was read (e.g. no work offsets given).
     pub notes: Vec<String>,
+    /// What a selective compensation (`--elements key|LIST`) compensates and costs.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub selective: Option<Selective>,
 }
 
 impl fmt::Display for Outcome {
@@ -100,6 +107,9 @@ impl fmt::Display for Outcome {
                 r.rapids_not_compensated, r.moves_end_point_only
             )?;
         }
+        if let Some(s) = &self.selective {
+            write!(f, "{s}")?;
+        }
         Ok(())
     }
 }
@@ -112,12 +122,8 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
         obs.warning(&w);
         warnings.push(w);
     };
-    let model = crate::state::model_in_state(
-        mtec_comp::load_error_model(&opts.model)?,
-        &opts.model,
-        opts.state.as_deref(),
-        obs,
-    )?;
+    let (model, selective) = super::selective::load(&opts.model, &opts.elements)?;
+    let model = crate::state::model_in_state(model, &opts.model, opts.state.as_deref(), obs)?;
     let mut options = opts.rewrite.clone();
     if let Some(p) = &opts.offsets {
         let file: OffsetsFile = mtec_io::read_toml(p)?;
@@ -273,6 +279,7 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
         report,
         warnings,
         notes,
+        selective,
     })
 }
 

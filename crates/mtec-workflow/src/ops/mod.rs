@@ -9,6 +9,7 @@ pub mod identify_lines;
 pub mod iso230_2;
 pub mod machine;
 pub mod map;
+pub mod selective;
 pub mod sensitivity;
 pub mod simulate;
 pub mod thermal;

@@ -71,18 +71,25 @@ pub struct Options {
     pub samples: Option<usize>,
     /// EFAST interference factor M.
     pub interference: usize,
-    /// EFAST repetitions of the search curves with new random phases.
+    /// EFAST repetitions R of the search curves with new random phases (intervals from their
+    /// spread when R ≥ 2; default 10).
     pub resamples: usize,
     /// Morris grid levels (even).
     pub levels: usize,
-    /// Sobol bootstrap replicates.
-    pub bootstrap: usize,
+    /// Bootstrap replicates of the Sobol and Morris intervals (SALib's `num_resamples`, 100;
+    /// 0: no intervals).
+    pub num_resamples: usize,
+    /// Confidence level of every interval (SALib's `conf_level`, 0.95).
+    pub conf_level: f64,
     /// Random seed of the design.
     pub seed: u64,
     /// One pose in the machine's axis order (mm, deg).
     pub at: Option<Vec<f64>>,
     /// Several poses (CSV with `x_mm`, `y_mm`, `z_mm`, ... columns); indices are aggregated.
     pub points: Option<PathBuf>,
+    /// Instead of `at`/`points`: this many poses drawn by Latin hypercube sampling over the
+    /// travels (`--sampling lhs[:N]`, [`parse_sampling`]; seed `seed`); indices are aggregated.
+    pub lhs_poses: Option<usize>,
     /// Target accuracy of Ex, Ey, Ez for the tolerance allocation (µm).
     pub target_um: f64,
     /// Coverage factor k: the target bounds k·σ of each axis.
@@ -99,12 +106,14 @@ impl Options {
             method: MethodKind::Efast,
             samples: None,
             interference: 4,
-            resamples: 1,
+            resamples: 10,
             levels: 4,
-            bootstrap: 100,
+            num_resamples: 100,
+            conf_level: 0.95,
             seed: 1,
             at: None,
             points: None,
+            lhs_poses: None,
             target_um: 25.0,
             coverage: 2.0,
         }
@@ -129,23 +138,26 @@ impl Options {
 
     /// The method with its design settings.
     pub fn method(&self) -> Method {
+        let bootstrap = Bootstrap {
+            resamples: self.num_resamples,
+            confidence: self.conf_level,
+            seed: self.seed,
+        };
         match self.method {
             MethodKind::Efast => Method::Efast(EfastSettings {
                 n: self.samples.unwrap_or(1200),
                 m: self.interference,
                 resamples: self.resamples,
+                confidence: self.conf_level,
             }),
             MethodKind::Sobol => Method::Sobol {
                 n: self.samples.unwrap_or(1024),
-                bootstrap: Bootstrap {
-                    resamples: self.bootstrap,
-                    confidence: 0.95,
-                    seed: self.seed,
-                },
+                bootstrap,
             },
             MethodKind::Morris => Method::Morris(MorrisSettings {
                 trajectories: self.samples.unwrap_or(100),
                 levels: self.levels,
+                bootstrap,
             }),
         }
     }
@@ -164,6 +176,9 @@ pub struct MachineOutcome {
     pub format: String,
     /// The machine's name.
     pub machine: String,
+    /// Confidence level of the `*_conf` half widths (EFAST: R ≥ 2 replicates; Sobol, Morris:
+    /// bootstrap).
+    pub conf_level: f64,
     /// Indices, key and coupled errors, tolerance allocation.
     #[serde(flatten)]
     pub report: ErrorModelReport,
@@ -192,6 +207,8 @@ pub struct FunctionOutcome {
     pub format: String,
     /// The function's name as given.
     pub function: String,
+    /// Confidence level of the `*_conf` half widths.
+    pub conf_level: f64,
     /// Its inputs.
     pub inputs: Vec<String>,
     /// The estimates.
@@ -229,6 +246,14 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
     let machine = read_machine(machine_path)?;
     let stats = ErrorStatistics::read(stats_path)?;
     let poses = match (&opts.at, &opts.points) {
+        _ if opts.lhs_poses.is_some() && (opts.at.is_some() || opts.points.is_some()) => {
+            return Err(Error::usage(
+                "--sampling lhs draws the poses: give it without --at and --points",
+            ))
+        }
+        (None, None) if opts.lhs_poses.is_some() => {
+            lhs_poses(&machine, opts.lhs_poses.unwrap_or(LHS_POSES), opts.seed)
+        }
         (Some(at), None) => {
             if at.len() != machine.axes.len() {
                 return Err(Error::usage(format!(
@@ -256,7 +281,7 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
         (None, Some(p)) => read_poses(p, &machine)?,
         _ => {
             return Err(Error::usage(
-                "give the pose with --at x,y,z or several with --points P.csv",
+                "give the pose with --at x,y,z, several with --points P.csv, or draw them with --sampling lhs",
             ))
         }
     };
@@ -274,6 +299,7 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
     Ok(Outcome::Machine(MachineOutcome {
         format: FORMAT.into(),
         machine: machine.name.clone(),
+        conf_level: opts.conf_level,
         report,
         at: one.then(|| poses[0].clone()),
         coefficients_um_per_unit: one.then(|| {
@@ -285,6 +311,39 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
                 .collect()
         }),
     }))
+}
+
+/// Poses `--sampling lhs` draws when it gives no count.
+pub const LHS_POSES: usize = 64;
+
+/// The number of poses of `--sampling lhs[:N]` (`lhs` alone: [`LHS_POSES`]).
+pub fn parse_sampling(s: &str) -> Result<usize> {
+    let bad = || {
+        Error::usage(format!(
+            "--sampling: `{s}` is not lhs or lhs:N (N poses, at least 2)"
+        ))
+    };
+    match s.split_once(':') {
+        None if s == "lhs" => Ok(LHS_POSES),
+        Some(("lhs", n)) => n.parse().ok().filter(|n| *n >= 2).ok_or_else(bad),
+        _ => Err(bad()),
+    }
+}
+
+/// n poses by Latin hypercube sampling over the travels of the machine's axes
+/// ([`mtec_sensitivity::lhs`]): each axis has exactly one pose in each of n equal slices of
+/// its travel.
+pub fn lhs_poses(machine: &mtec_model::Machine, n: usize, seed: u64) -> Vec<Vec<f64>> {
+    let travels: Vec<[f64; 2]> = machine.axes.iter().map(|a| machine.travel(*a)).collect();
+    mtec_sensitivity::lhs::unit(n, travels.len(), seed)
+        .into_iter()
+        .map(|u| {
+            u.iter()
+                .zip(&travels)
+                .map(|(u, [lo, hi])| lo + u * (hi - lo))
+                .collect()
+        })
+        .collect()
 }
 
 fn function(opts: &Options, name: &str) -> Result<FunctionOutcome> {
@@ -299,6 +358,7 @@ fn function(opts: &Options, name: &str) -> Result<FunctionOutcome> {
     Ok(FunctionOutcome {
         format: FORMAT.into(),
         function: name.into(),
+        conf_level: opts.conf_level,
         inputs: f.problem().names,
         indices,
         analytic: Analytic {
@@ -362,6 +422,23 @@ impl fmt::Display for MachineOutcome {
                 }
             }
             writeln!(s)?;
+        }
+        if let Some(o) = r.outputs.last() {
+            let c = o.s1_conf.as_ref().or(o.mu_star_conf.as_ref());
+            if let Some(c) = c {
+                let max = c.iter().cloned().fold(0.0, f64::max);
+                writeln!(
+                    s,
+                    "{:.0} % confidence half widths up to {max:.4} for {}{} (all in --json: *_conf)",
+                    100.0 * self.conf_level,
+                    o.output,
+                    if r.method == "efast" {
+                        ", random-phase spread only"
+                    } else {
+                        ""
+                    }
+                )?;
+            }
         }
         let what = if morris { "mu* of |E|" } else { "S1 of |E|" };
         writeln!(s, "\nkey errors ({what}):")?;
@@ -427,26 +504,58 @@ impl fmt::Display for FunctionOutcome {
             ix.evaluations
         )?;
         let none = Vec::new();
-        let (names, a, b) = if ix.s1.is_some() {
-            (["S1", "ST"], &ix.s1, &ix.st)
+        let (names, a, b, ca, cb) = if ix.s1.is_some() {
+            (["S1", "ST"], &ix.s1, &ix.st, &ix.s1_conf, &ix.st_conf)
         } else {
-            (["mu_star", "sigma"], &ix.mu_star, &ix.sigma)
+            (
+                ["mu_star", "sigma"],
+                &ix.mu_star,
+                &ix.sigma,
+                &ix.mu_star_conf,
+                &None,
+            )
         };
         let (a, b) = (a.as_ref().unwrap_or(&none), b.as_ref().unwrap_or(&none));
         let value = |v: &Vec<f64>, i: usize| v.get(i).copied().unwrap_or(f64::NAN);
+        // "± half width" after an estimate that has an interval
+        let pm = |c: &Option<Vec<f64>>, i: usize| {
+            c.as_ref()
+                .map_or(String::new(), |c| format!(" ±{:.4}", value(c, i)))
+        };
+        let w = |c: &Option<Vec<f64>>| if c.is_some() { 18 } else { 10 };
         writeln!(
             s,
-            "{:<6} {:>10} {:>10} {:>10} {:>10}",
-            "input", names[0], names[1], "S1 exact", "ST exact"
+            "{:<6} {:>wa$} {:>wb$} {:>10} {:>10}",
+            "input",
+            names[0],
+            names[1],
+            "S1 exact",
+            "ST exact",
+            wa = w(ca),
+            wb = w(cb)
         )?;
         for (i, n) in self.inputs.iter().enumerate() {
             writeln!(
                 s,
-                "{n:<6} {:>10.4} {:>10.4} {:>10.4} {:>10.4}",
-                value(a, i),
-                value(b, i),
+                "{n:<6} {:>wa$} {:>wb$} {:>10.4} {:>10.4}",
+                format!("{:.4}{}", value(a, i), pm(ca, i)),
+                format!("{:.4}{}", value(b, i), pm(cb, i)),
                 value(&self.analytic.s1, i),
-                value(&self.analytic.st, i)
+                value(&self.analytic.st, i),
+                wa = w(ca),
+                wb = w(cb)
+            )?;
+        }
+        if ca.is_some() {
+            writeln!(
+                s,
+                "±: {:.0} % confidence half widths{}",
+                100.0 * self.conf_level,
+                if ix.method == "efast" {
+                    " of the random-phase repetitions (EFAST's interference bias is not in them)"
+                } else {
+                    ""
+                }
             )?;
         }
         Ok(())

@@ -522,6 +522,17 @@ pub fn sensitivity(
                 coupled.clone()
             },
         );
+        // what the whiskers are: EFAST's come from its random-phase repetitions and do not
+        // hold its interference bias (docs/methods.md §6, "Confidence intervals")
+        let whisker_note = format!(
+            "; whiskers: the {:.0} % confidence interval of each index ({})",
+            100.0 * m.conf_level,
+            if r.method == "efast" {
+                "spread of the random-phase repetitions; EFAST's own bias of a few hundredths is not in it"
+            } else {
+                "bootstrap over the base samples"
+            }
+        );
         for idx in &r.outputs {
             if let (Some(s1), Some(st)) = (&idx.s1, &idx.st) {
                 let mark = |n: &String| {
@@ -550,7 +561,7 @@ pub fn sensitivity(
                          with other elements{}. * key: {}. † coupled: {}.",
                         idx.output,
                         if whiskers.iter().any(Option::is_some) {
-                            "; whiskers: the confidence interval of each index"
+                            whisker_note.as_str()
                         } else {
                             ""
                         },
@@ -579,15 +590,23 @@ pub fn sensitivity(
                 .map(|(i, n)| {
                     let mut row = vec![n.clone()];
                     for o in &with {
-                        for v in [&o.s1, &o.st].into_iter().flatten() {
-                            row.push(format!("{:.3}", v[i]));
+                        for (v, c) in [(&o.s1, &o.s1_conf), (&o.st, &o.st_conf)] {
+                            let Some(v) = v else { continue };
+                            // the estimate ± its half width, at the resolution of the interval
+                            row.push(match c {
+                                Some(c) => format!("{:.3} ± {:.3}", v[i], c[i]),
+                                None => format!("{:.3}", v[i]),
+                            });
                         }
                     }
                     row
                 })
                 .collect();
             let header: Vec<&str> = header.iter().map(String::as_str).collect();
-            sec.text("Indices of every error element:");
+            sec.text(format!(
+                "Indices of every error element (± the half width of the {:.0} % confidence interval):",
+                100.0 * m.conf_level
+            ));
             sec.table(&header, rows);
         }
         if let Some(o) = rest.as_object_mut() {

@@ -1,0 +1,145 @@
+//! LinuxCNC's canonical machining calls as `rs274 -g` prints them, one call a line
+//! (`   17 N..... STRAIGHT_FEED(1.0000, 2.0000, 3.0000, 0.0000, 0.0000, 0.0000)`): the parsed
+//! call and the error that names its line. Read by [`super::flatten`] and
+//! [`super::start_probe`].
+
+/// A canonical line that cannot be written as a plain program.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FlattenError {
+    /// The line's sequence number as rs274 printed it (the 1-based line of its output).
+    pub line: usize,
+    /// The call, shortened.
+    pub call: String,
+    pub message: String,
+}
+
+impl std::fmt::Display for FlattenError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "rs274 canonical line {} `{}`: {}",
+            self.line, self.call, self.message
+        )
+    }
+}
+
+impl std::error::Error for FlattenError {}
+
+/// One parsed canonical line.
+pub struct Call<'a> {
+    pub line: usize,
+    pub raw: &'a str,
+    pub name: &'a str,
+    /// The text between the outer parentheses.
+    pub inner: &'a str,
+    /// `inner` split at commas and blanks.
+    pub args: Vec<&'a str>,
+}
+
+impl Call<'_> {
+    pub fn err(&self, message: impl Into<String>) -> FlattenError {
+        FlattenError {
+            line: self.line,
+            call: shorten(self.raw.trim()),
+            message: message.into(),
+        }
+    }
+
+    /// The first `n` arguments as finite numbers (more may follow).
+    pub fn numbers(&self, n: usize) -> Result<Vec<f64>, FlattenError> {
+        if self.args.len() < n {
+            return Err(self.err(format!(
+                "{} needs {n} arguments, rs274 printed {}",
+                self.name,
+                self.args.len()
+            )));
+        }
+        self.args[..n]
+            .iter()
+            .map(|a| match a.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                _ => Err(self.err(format!("'{a}' is not a finite number"))),
+            })
+            .collect()
+    }
+
+    /// A 1-based index argument (work system, spindle) turned into 0-based, below `n`.
+    pub fn index(&self, v: f64, n: usize) -> Result<usize, FlattenError> {
+        if v.fract() == 0.0 && v >= 1.0 && v <= n as f64 {
+            Ok(v as usize - 1)
+        } else {
+            Err(self.err(format!("index {v} is not between 1 and {n}")))
+        }
+    }
+
+    /// The quoted text argument of COMMENT/MESSAGE.
+    pub fn text(&self) -> &str {
+        let t = self.inner.trim();
+        let t = t.strip_prefix('"').unwrap_or(t);
+        t.strip_suffix('"').unwrap_or(t)
+    }
+}
+
+fn shorten(s: &str) -> String {
+    if s.chars().count() <= 100 {
+        s.to_string()
+    } else {
+        let mut t: String = s.chars().take(97).collect();
+        t.push_str("...");
+        t
+    }
+}
+
+/// Splits `   17 N..... NAME(args)` into its call; `None` for a blank line.
+pub fn parse_line(raw: &str, text_line: usize) -> Result<Option<Call<'_>>, FlattenError> {
+    let t = raw.trim();
+    if t.is_empty() {
+        return Ok(None);
+    }
+    let bad = |m: &str| FlattenError {
+        line: text_line,
+        call: shorten(t),
+        message: m.to_string(),
+    };
+    let digits = t.len() - t.trim_start_matches(|c: char| c.is_ascii_digit()).len();
+    let (line, rest) = if digits > 0 {
+        let n = t[..digits].parse::<usize>().unwrap_or(text_line);
+        (n, t[digits..].trim_start())
+    } else {
+        (text_line, t)
+    };
+    // the block's line number field: `N.....` or `N0080`
+    let rest = match rest.strip_prefix('N') {
+        Some(r) if !r.starts_with(|c: char| c.is_ascii_uppercase() || c == '_') => {
+            let end = r.find(char::is_whitespace).unwrap_or(r.len());
+            r[end..].trim_start()
+        }
+        _ => rest,
+    };
+    let Some(open) = rest.find('(') else {
+        return Err(bad("not a canonical call (no '(')"));
+    };
+    let name = rest[..open].trim();
+    if name.is_empty()
+        || !name
+            .bytes()
+            .all(|b| b.is_ascii_uppercase() || b.is_ascii_digit() || b == b'_')
+    {
+        return Err(bad("not a canonical call (no call name)"));
+    }
+    let Some(close) = rest.rfind(')').filter(|&c| c > open) else {
+        return Err(bad("not a canonical call (no closing ')')"));
+    };
+    let inner = &rest[open + 1..close];
+    let args = inner
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|s| !s.is_empty())
+        .collect();
+    Ok(Some(Call {
+        line,
+        raw: t,
+        name,
+        inner,
+        args,
+    }))
+}

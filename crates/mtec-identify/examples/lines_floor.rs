@@ -1,0 +1,94 @@
+//! Study (issue 19): what limits the compensation rate after 9-line identification on the
+//! realistic truth. For 5 seeds it measures the scenario's design on the truth with one part
+//! removed at a time (bump, waviness) and prints the prediction RMS and compensation rate per
+//! axis at 1000 random points (the definition of `tests/lines_realistic.rs`).
+//!
+//! Run: `cargo run -p mtec-identify --example lines_floor [NOISE_UM]`; `ALL_ONLY=1` only the
+//! whole truth, `SPLINES=1` with cubic splines among the cross-validated candidates, `STEPS=N`
+//! N intervals per line instead of the scenario's 20.
+
+use mtec_comp::kinematic::KinematicModel;
+use mtec_comp::{command_for_target, CorrectionOptions};
+use mtec_identify::lines::{identify_auto, LineData};
+use mtec_io::Table;
+use mtec_model::{line_preset, ErrorSet, Formalism, Machine, Order, VolumetricModel};
+use mtec_sim::instruments::LaserInterferometer;
+use mtec_sim::realistic_truth::{realistic_truth_with, Mix};
+use mtec_sim::vmc_9line::{machine_with_leads, measure_runs, RUNS};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use std::path::Path;
+
+fn evaluate(machine: &Machine, truth: &ErrorSet, ident: &ErrorSet, seed: u64) -> [[f64; 3]; 3] {
+    let vt = VolumetricModel::new(machine, truth);
+    let vi = VolumetricModel::new(machine, ident);
+    let model = KinematicModel::new(machine, ident, "identified").unwrap();
+    let mut rng = StdRng::seed_from_u64(seed ^ 0xc0de);
+    let (mut pred, mut before, mut after) = ([0.0; 3], [0.0; 3], [0.0; 3]);
+    let n = 1000;
+    for _ in 0..n {
+        let t: [f64; 3] = [0, 1, 2].map(|i| {
+            let [lo, hi] = machine.travel(machine.axes[i]);
+            rng.random_range(lo + 5.0..hi - 5.0)
+        });
+        let et = vt.error(&t, Formalism::Htm, Order::Exact).position_um;
+        let ei = vi.error(&t, Formalism::Htm, Order::Exact).position_um;
+        let p = command_for_target(&model, t, &CorrectionOptions::default()).unwrap();
+        let e1 = vt.error(&p, Formalism::Htm, Order::Exact).position_um;
+        for i in 0..3 {
+            pred[i] += (et[i] - ei[i]).powi(2);
+            before[i] += et[i].powi(2);
+            after[i] += ((p[i] - t[i]) * 1e3 + e1[i]).powi(2);
+        }
+    }
+    let rms = |v: f64| (v / n as f64).sqrt();
+    [pred.map(rms), before.map(rms), after.map(rms)]
+}
+
+fn main() {
+    let machine = machine_with_leads();
+    // intervals per line (the scenario's 20 unless STEPS says)
+    let steps = std::env::var("STEPS").map_or(20, |s| s.parse().unwrap());
+    let lines = line_preset("nine-line", &machine, steps, 10.0).unwrap();
+    let one = |b: f64, r: f64| Mix {
+        bump: b,
+        ripple: r,
+        ..Mix::default()
+    };
+    let noise = std::env::args()
+        .nth(1)
+        .map(|s| s.parse::<f64>().unwrap())
+        .unwrap_or(0.1);
+    let laser = LaserInterferometer {
+        noise_um: noise,
+        straightness_noise_um: noise,
+        alignment_urad: 20.0,
+    };
+    let splines = std::env::var_os("SPLINES").is_some();
+    for seed in 1..=5u64 {
+        let mixes = [
+            ("all", Mix::default()),
+            ("no bump", one(0.0, 1.0)),
+            ("no ripple", one(1.0, 0.0)),
+            ("neither", one(0.0, 0.0)),
+        ];
+        let parts = if std::env::var_os("ALL_ONLY").is_some() {
+            1
+        } else {
+            4
+        };
+        for (name, mix) in mixes.into_iter().take(parts) {
+            let truth = realistic_truth_with(&machine, seed, mix);
+            let (csv, _) = measure_runs(&machine, &truth, &lines, &laser, seed, RUNS);
+            let data =
+                LineData::from_table(&Table::parse(Path::new("lines.csv"), &csv).unwrap()).unwrap();
+            let id = identify_auto(&machine, &data, splines).unwrap();
+            let [p, b, a] = evaluate(&machine, &truth, &id.errors, seed);
+            let c = id.report.selection.as_ref().map(|s| s.chosen);
+            println!(
+                "seed {seed} {name:>9}: pred {p:.3?} before {b:.2?} after {a:.3?} rate {:.1?} {c:?}",
+                [0, 1, 2].map(|i| 100.0 * (1.0 - a[i] / b[i]))
+            );
+        }
+    }
+}
