@@ -83,12 +83,10 @@ struct Common {
     /// training rows (blocks as --input/--block-min; not by the training fit).
     #[arg(long)]
     lag: bool,
-    /// Validation block length in minutes (default: experiments, or the steps of the --input
-    /// column, or eight equal blocks).
+    /// Validation block length, min (default: experiments, --input steps, or eight blocks).
     #[arg(long)]
     block_min: Option<f64>,
-    /// auto and lag-select: largest number of temperature sensors (default: auto 6,
-    /// lag-select 3); the --input column does not count.
+    /// auto and lag-select: most temperature sensors (auto 6, lag-select 3; --input not counted).
     #[arg(long)]
     max_sensors: Option<usize>,
     /// The heat-source column (spindle speed, rpm): heat-input and auto's heat features, and
