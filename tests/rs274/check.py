@@ -438,8 +438,21 @@ class Arc:
         best = min(v for v, _ in cands)
         phis = [p for v, p in cands if math.sqrt(v) <= math.sqrt(best) + 1e-3]
         along = [self.length_of_phi(p) for p in phis]
-        pick = along[0] if hint is None else min(along, key=lambda s: abs(s - hint))
-        return math.sqrt(best), pick
+        if hint is None:
+            return math.sqrt(best), along[0]
+        if self.sweep > 2 * math.pi:
+            # the turns of a spiral or helix lie one turn's spacing apart: a point within the
+            # path bound of one turn may lie nearer the next when the spacing is small (an inch
+            # arc whose printed end radius differs from its start radius by 3 um; found by
+            # tests/rs274/generate.py). The path goes on continuously, so the nearest point
+            # within half a turn of `hint` is the one followed, with its own distance.
+            turn = self.length * 2 * math.pi / self.sweep
+            window = [(v, self.length_of_phi(p)) for v, p in cands]
+            window = [(v, s) for v, s in window if abs(s - hint) <= turn / 2]
+            if window:
+                v, s = min(window)
+                return math.sqrt(v), s
+        return math.sqrt(best), min(along, key=lambda s: abs(s - hint))
 
     def minima_circle(self, ql):
         # planar circle: the nearest point is at the angle of q (every turn) when that lies in
