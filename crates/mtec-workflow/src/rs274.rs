@@ -312,19 +312,24 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     let table = work_offsets_from_probe(&run.stdout)
         .map_err(|e| CliError::usage(format!("rs274 work-offset probe: {e}")))?;
 
-    // 2. the program itself
-    let mut flags = Vec::new();
-    if let Some(t) = &args.tool_table {
-        flags.push("-t".to_string());
-        flags.push(copy(t, "tool.tbl")?.display().to_string());
-    }
-    if let Some(v) = &args.rs274.var_file {
-        flags.push("-v".to_string());
-        flags.push(copy(v, "program.var")?.display().to_string());
-    }
-    if args.block_delete == Some(true) {
-        flags.push("-b".to_string());
-    }
+    // 2. the program itself; each run gets fresh copies of the tool table and parameter file
+    // (rs274 writes the parameter file back when it ends)
+    let program_flags = |name: &str| -> Result<Vec<String>, CliError> {
+        let mut flags = Vec::new();
+        if let Some(t) = &args.tool_table {
+            flags.push("-t".to_string());
+            flags.push(copy(t, &format!("{name}.tbl"))?.display().to_string());
+        }
+        if let Some(v) = &args.rs274.var_file {
+            flags.push("-v".to_string());
+            flags.push(copy(v, &format!("{name}.var"))?.display().to_string());
+        }
+        if args.block_delete == Some(true) {
+            flags.push("-b".to_string());
+        }
+        Ok(flags)
+    };
+    let flags = program_flags("program")?;
     let run = run_rs274(&bin, &tmp.0, &flags, &abs_input, timeout)?;
     if run.status != Some(0) {
         let message = format!(
@@ -342,19 +347,7 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     // stood, and whether anything else depends on it (mtec_comp::gcode::start_probe)
     let probe_file = tmp.0.join("start-probe.ngc");
     std::fs::write(&probe_file, probe_program(&program))?;
-    // fresh copies: rs274 wrote the parameter file back when the first run ended
-    let mut probe_flags = Vec::new();
-    if let Some(t) = &args.tool_table {
-        probe_flags.push("-t".to_string());
-        probe_flags.push(copy(t, "start-probe.tbl")?.display().to_string());
-    }
-    if let Some(v) = &args.rs274.var_file {
-        probe_flags.push("-v".to_string());
-        probe_flags.push(copy(v, "start-probe.var")?.display().to_string());
-    }
-    if args.block_delete == Some(true) {
-        probe_flags.push("-b".to_string());
-    }
+    let probe_flags = program_flags("start-probe")?;
     let probe_run = run_rs274(&bin, &tmp.0, &probe_flags, &probe_file, timeout)?;
     if probe_run.status != Some(0) {
         return Err(InputError::file(
