@@ -507,6 +507,20 @@ fn what_the_machine_decides_at_run_time_is_kept_or_refused() {
         &[],
         &Expect::Refused("depends on where the machine stands"),
     );
+    // `G0 A0` turns a table that stood elsewhere back to 0: the word is kept, so a
+    // three-axis model refuses it as it refuses it without flattening (it was dropped)
+    let p = write(
+        "a-zero.ngc",
+        "G21 G90\no1 if [1]\nG0 X1 Y1 Z1 A0\no1 endif\nG1 X5 F100\nM2\n",
+    );
+    check(
+        &bin,
+        &p,
+        None,
+        None,
+        &[],
+        &Expect::Refused("axis A moves but the error model has no rotary axes"),
+    );
     // db_demo/base.ngc: #<_task> is 0 in stand-alone rs274 and 1 on the machine, so the loop
     // runs zero times in rs274 and five on the machine: refused at its line and column
     let p = write(

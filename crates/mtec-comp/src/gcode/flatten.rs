@@ -239,6 +239,8 @@ struct Flattener {
     rotary_live: [bool; 3],
     /// Rotary axes the program turns somewhere.
     rotary_turned: [bool; 3],
+    /// Rotary axes the original program names (FlattenOptions::rotary_named).
+    rotary_named: [bool; 3],
     // --- what the output has set ---
     out_inch: Option<bool>,
     out_work: Option<usize>,
@@ -293,6 +295,7 @@ impl Flattener {
             rotary_deg: [0.0; 3],
             rotary_live: [false; 3],
             rotary_turned: [false; 3],
+            rotary_named: opt.rotary_named,
             out_inch: None,
             out_work: None,
             out_plane: None,
@@ -511,12 +514,15 @@ impl Flattener {
         self.axis_words(&out, &mut s);
         self.rotary_deg = [v[3], v[4], v[5]];
         for (k, l) in ["A", "B", "C"].iter().enumerate() {
-            self.rotary_live[k] |= self.rotary_turned[k]
-                && if self.held.is_some() {
-                    !held[3 + k]
-                } else {
-                    self.rotary_deg[k] != 0.0
-                };
+            // with the start check: from the first move that commands an axis the program
+            // names, also at 0 (`G0 A0` turns a table that stood elsewhere back to 0; leaving
+            // the word out would leave it turned; a G28 of a program that never names A stays
+            // three-axis); without it: once the program turns it
+            self.rotary_live[k] |= if self.held.is_some() {
+                self.rotary_named[k] && !held[3 + k]
+            } else {
+                self.rotary_turned[k] && self.rotary_deg[k] != 0.0
+            };
             if self.rotary_live[k] {
                 s.push(' ');
                 s.push_str(l);
@@ -1245,6 +1251,21 @@ mod tests {
             .filter(|l| l.starts_with('G') && l.contains(['X', 'Z']))
             .collect();
         assert_eq!(moves, ["G0 Z5.0", "G1 X1.0 Y2.0 Z5.0 F100.0"], "{t}");
+        // an A the program commands is written also at 0 (a table standing elsewhere turns
+        // back), one it never commands is not
+        let opt = FlattenOptions {
+            held: Some(vec![[false, false, false, false, true, true]]),
+            ..zero_table()
+        };
+        let (t, _) = flatten(
+            &canon(&[
+                "STRAIGHT_TRAVERSE(1.0000, 2.0000, 5.0000, 0.0000, 0.0000, 0.0000)",
+                "PROGRAM_END()",
+            ]),
+            &opt,
+        )
+        .unwrap();
+        assert!(t.lines().any(|l| l == "G0 X1.0 Y2.0 Z5.0 A0.0"), "{t}");
         // a different number of moves than the check saw is refused
         let opt = FlattenOptions {
             held: Some(vec![[false; 6]]),
