@@ -535,8 +535,14 @@ PLANE_AXES = {  # ARC_FEED(first_end, second_end, first_centre, second_centre, r
 UNIT = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
-def arc_from_canon(frame, start_machine, v):
-    """ARC_FEED in canonical units -> Arc in machine mm (start = previous position)."""
+def arc_from_canon(frame, start_machine, v, start_mm_per_unit=None):
+    """ARC_FEED in canonical units -> Arc in machine mm (start = previous position).
+
+    `start_mm_per_unit`: the units the start was printed in. After a G20/G21 switch the start
+    (printed in the old units) and the end (in the new) carry different roundings, so a full
+    circle (G91 with no axis words, end = start inside LinuxCNC) can print with its end a
+    micrometre from its start: start and end within both printouts' rounding are one point
+    then (found by tests/rs274/generate.py)."""
     i1, i2, i3 = PLANE_AXES[frame.plane]
     start_c = frame.to_canon(start_machine)
     end_c = [0.0, 0.0, 0.0]
@@ -566,7 +572,10 @@ def arc_from_canon(frame, start_machine, v):
     u = scale(r_start_plane, 1.0 / r0)
     vv = cross(normal, u)
     ang = math.atan2(dot(r_end_plane, vv), dot(r_end_plane, u)) % (2 * math.pi)
-    if ang < 1e-12 or norm(sub(r_end_plane, scale(u, r1))) < FULL_CIRCLE_MM:
+    same = FULL_CIRCLE_MM
+    if start_mm_per_unit is not None and start_mm_per_unit != frame.mm_per_unit:
+        same = SQRT3 * HALF_PRINT_UNIT * (start_mm_per_unit + frame.mm_per_unit)
+    if ang < 1e-12 or norm(sub(r_end_plane, scale(u, r1))) < same:
         ang = 2 * math.pi  # start == end: a full circle
     sweep = ang + 2 * math.pi * (abs(turns) - 1)
     centre_start = add(centre_m, scale(normal, dot(r_start, normal)))
@@ -617,7 +626,7 @@ def interpret(path, calls, error):
         if c.name in MOTION_CALLS:
             v = numbers(c.args)
             if c.name == "ARC_FEED":
-                geom = arc_from_canon(frame, pos, v)
+                geom = arc_from_canon(frame, pos, v, pos_units)
                 abc = tuple(v[6:9])
                 kind = "feed"
             else:
