@@ -487,54 +487,37 @@ fn what_the_machine_decides_at_run_time_is_kept_or_refused() {
     assert_eq!(flat.lines().next(), Some("%"), "{flat}");
     assert_eq!(flat.lines().last(), Some("%"), "{flat}");
     assert!(!flat.contains("M2"), "{flat}");
-    // an incremental first move goes somewhere that depends on the start: refused
-    let p = write("incremental.ngc", "G21 G91\nG0 X10\nG90 G0 Y5\nM2\n");
-    check(
-        &bin,
-        &p,
-        None,
-        None,
-        &[],
-        &Expect::Refused("axis X depends on where the machine stands"),
-    );
-    // the current position read before an axis is set: refused the same way
-    let p = write("position.ngc", "G21 G90\nG0 Z[#5422 + 5]\nM2\n");
-    check(
-        &bin,
-        &p,
-        None,
-        None,
-        &[],
-        &Expect::Refused("depends on where the machine stands"),
-    );
-    // `G0 A0` turns a table that stood elsewhere back to 0: the word is kept, so a
-    // three-axis model refuses it as it refuses it without flattening (it was dropped)
-    let p = write(
-        "a-zero.ngc",
-        "G21 G90\no1 if [1]\nG0 X1 Y1 Z1 A0\no1 endif\nG1 X5 F100\nM2\n",
-    );
-    check(
-        &bin,
-        &p,
-        None,
-        None,
-        &[],
-        &Expect::Refused("axis A moves but the error model has no rotary axes"),
-    );
-    // db_demo/base.ngc: #<_task> is 0 in stand-alone rs274 and 1 on the machine, so the loop
-    // runs zero times in rs274 and five on the machine: refused at its line and column
-    let p = write(
-        "task.ngc",
-        "G21 G90\n#<ct> = 0\no100 while [[#<ct> lt 5] and [#<_task> ne 0]]\n#<ct> = [#<ct> + 1]\nG0 X#<ct>\no100 endwhile\nM2\n",
-    );
-    check(
-        &bin,
-        &p,
-        None,
-        None,
-        &[],
-        &Expect::Refused("task.ngc:3:31: #<_task> reads the machine's state"),
-    );
+    for (name, body, words) in [
+        // an incremental first move goes somewhere that depends on the start
+        (
+            "incremental.ngc",
+            "G21 G91\nG0 X10\nG90 G0 Y5\nM2\n",
+            "axis X depends on where the machine stands",
+        ),
+        // the current position read before an axis is set
+        (
+            "position.ngc",
+            "G21 G90\nG0 Z[#5422 + 5]\nM2\n",
+            "depends on where the machine stands",
+        ),
+        // `G0 A0` turns a table that stood elsewhere back to 0: the word is kept, so a
+        // three-axis model refuses it as it refuses it without flattening (it was dropped)
+        (
+            "a-zero.ngc",
+            "G21 G90\no1 if [1]\nG0 X1 Y1 Z1 A0\no1 endif\nG1 X5 F100\nM2\n",
+            "axis A moves but the error model has no rotary axes",
+        ),
+        // db_demo/base.ngc: #<_task> is 0 in stand-alone rs274 and 1 on the machine, so the
+        // loop runs zero times in rs274 and five on the machine: refused at line and column
+        (
+            "task.ngc",
+            "G21 G90\n#<ct> = 0\no100 while [[#<ct> lt 5] and [#<_task> ne 0]]\n#<ct> = [#<ct> + 1]\nG0 X#<ct>\no100 endwhile\nM2\n",
+            "task.ngc:3:31: #<_task> reads the machine's state",
+        ),
+    ] {
+        let p = write(name, body);
+        check(&bin, &p, None, None, &[], &Expect::Refused(words));
+    }
 }
 
 /// The flattened text of `program` (zero model).
