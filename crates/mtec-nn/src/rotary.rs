@@ -431,6 +431,35 @@ pub struct ReadingComparison {
     pub change_residual_ratio: f64,
 }
 
+impl ReadingComparison {
+    /// The two rows of a table, readings and their change: RMSE, MAE, max |residual|,
+    /// max |measured| (µm) and their ratio.
+    pub fn rows(&self) -> [(&'static str, [f64; 5]); 2] {
+        [
+            (
+                "reading",
+                [
+                    self.rmse_um,
+                    self.mae_um,
+                    self.max_abs_residual_um,
+                    self.max_abs_measured_um,
+                    self.residual_ratio,
+                ],
+            ),
+            (
+                "change",
+                [
+                    self.change_rmse_um,
+                    self.change_mae_um,
+                    self.change_max_abs_residual_um,
+                    self.change_max_abs_measured_um,
+                    self.change_residual_ratio,
+                ],
+            ),
+        ]
+    }
+}
+
 /// One cleaned ballbar reading (µm), predicted and measured, and its bar-length change since
 /// the experiment's first measurement (same mode and angle).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

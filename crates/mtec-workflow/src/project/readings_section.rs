@@ -24,28 +24,7 @@ pub fn section(sec: &mut Section, model: &str, r: &RotaryReadings) {
     ));
     let mut rows = Vec::new();
     for m in &r.metrics {
-        for (what, v) in [
-            (
-                "reading",
-                [
-                    m.rmse_um,
-                    m.mae_um,
-                    m.max_abs_residual_um,
-                    m.max_abs_measured_um,
-                    m.residual_ratio,
-                ],
-            ),
-            (
-                "change",
-                [
-                    m.change_rmse_um,
-                    m.change_mae_um,
-                    m.change_max_abs_residual_um,
-                    m.change_max_abs_measured_um,
-                    m.change_residual_ratio,
-                ],
-            ),
-        ] {
+        for (what, v) in m.rows() {
             rows.push(vec![
                 m.experiment.to_string(),
                 what.to_string(),

@@ -366,28 +366,8 @@ impl fmt::Display for RotaryReadings {
             "experiment", "n", "RMSE", "MAE", "max|res|", "max|meas|", "ratio"
         )?;
         for m in &self.metrics {
-            for (what, r) in [
-                (
-                    "",
-                    [
-                        m.rmse_um,
-                        m.mae_um,
-                        m.max_abs_residual_um,
-                        m.max_abs_measured_um,
-                        m.residual_ratio,
-                    ],
-                ),
-                (
-                    " change",
-                    [
-                        m.change_rmse_um,
-                        m.change_mae_um,
-                        m.change_max_abs_residual_um,
-                        m.change_max_abs_measured_um,
-                        m.change_residual_ratio,
-                    ],
-                ),
-            ] {
+            for (what, r) in m.rows() {
+                let what = if what == "change" { " change" } else { "" };
                 writeln!(
                     f,
                     "  {:<10} {:>6} {:>8.3} {:>8.3} {:>9.3} {:>9.3} {:>6.1}%",
