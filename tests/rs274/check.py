@@ -214,6 +214,35 @@ def write_var_file(path, active, work):
         f.write("\n".join(lines) + "\n")
 
 
+# G28 and G30 reference points for the second rs274 run (machine mm; parameters 5161-5163 and
+# 5181-5183): moves whose end changes with them go to or from a position that only the
+# controller's parameters define
+REFERENCE_PROBE_MM = {5161: -101.1, 5162: -102.2, 5163: -103.3,
+                      5181: -201.1, 5182: -202.2, 5183: -203.3}
+REFERENCE_RE = re.compile(r"[gG]\s*0*\s*(2\s*8|3\s*0)(?![\d.])")
+
+
+def write_reference_var_file(path, var_file):
+    """A var file with the parameters of `var_file` (or none) and moved reference points."""
+    lines = []
+    if var_file:
+        with open(var_file, encoding="ascii") as f:
+            lines = [ln.rstrip("\n") for ln in f if ln.split()[:1] and
+                     int(float(ln.split()[0])) not in REFERENCE_PROBE_MM]
+    lines += [f"{k}\t{v / MM_PER_INCH:.12f}" for k, v in sorted(REFERENCE_PROBE_MM.items())]
+    with open(path, "w", encoding="ascii") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def mark_reference(prog, moved):
+    """Marks the moves of `prog` whose end differs in `moved` (the same program run with other
+    reference points). Nothing is marked when the runs differ in their number of moves."""
+    if len(prog.moves) != len(moved.moves):
+        return
+    for m, r in zip(prog.moves, moved.moves):
+        m.reference = norm(sub(m.end, r.end)) > 1e-9
+
+
 def write_tool_table(path, tools):
     with open(path, "w", encoding="ascii") as f:
         for t, length in sorted(tools.items()):
@@ -595,6 +624,7 @@ class Move:
         self.mm_per_unit = max(mm_per_unit, start_mm_per_unit or mm_per_unit)
         self.abc = abc
         self.start, self.end, self.length = geom.start, geom.end, geom.length
+        self.reference = False  # its end depends on the G28/G30 reference points (mark_reference)
 
     def rounding_um(self):
         # printed to 4 decimals: each coordinate off by half a unit; an arc's printed centre
@@ -690,6 +720,7 @@ class Walker:
         self.samples = 0
         self.end_only = 0  # moves from the initial position: checked at their end point only
         self.at_start = set()  # zero-length rapids at the initial position (a bare `G0` block)
+        self.reference_moves = 0  # rapids whose end is a G28/G30 reference point (not checked)
         self.violations = []
 
     def violation(self, comp, msg):
@@ -709,6 +740,8 @@ class Walker:
         """Nominal move i is finished: its end reached by `point` (a displaced end point)."""
         if i < 0 or i in self.at_start:
             return True  # the initial position: not commanded by either program
+        if self.nom.moves[i].reference:
+            return True  # a G28/G30 reference point: the controller's, in both programs
         n = self.nom.moves[i]
         bound = self.limits.point_bound_um(n, n)
         if n.kind == "feed" and (n.length - self.progress) * 1e3 > bound + self.limits.tolerance_um:
@@ -757,11 +790,13 @@ class Walker:
             return
         j = same[0]
         n = self.nom.moves[j]
-        if (self.i < 0 and j == 0 and n.length <= ZERO_LENGTH_MM and c.length <= ZERO_LENGTH_MM
-                and norm(sub(c.end, n.end)) <= ZERO_LENGTH_MM):
-            # a block such as a bare `G0` before any move: LinuxCNC issues a traverse of zero
-            # length where the machine stands, which neither program commands
-            self.at_start.add(j)
+        if self.stands_at_start(c, j):
+            return
+        if n.reference and c.reference:
+            # a move to (or on from) a G28/G30 reference point: where it ends is the
+            # controller's parameter, the same in both programs; not a compensated position
+            self.reference_moves += 1
+            self.check_abc(c, n)
             self.i, self.progress = j, n.length
             return
         dev = norm(sub(end, n.end)) * 1e3
@@ -774,8 +809,24 @@ class Walker:
         self.check_abc(c, n)
         self.i, self.progress = j, n.length
 
+    def stands_at_start(self, c, j):
+        """A block such as a bare `G0` or `G1 F100` before any move: LinuxCNC issues a move of
+        zero length where the machine stands, which neither program commands. Matched without a
+        check when nominal move j is such a move, every move before it was one too, and the
+        compensated move c is one as well."""
+        n = self.nom.moves[j]
+        if (j == self.i + 1 and (self.i < 0 or self.i in self.at_start)
+                and n.kind == c.kind and n.length <= ZERO_LENGTH_MM and c.length <= ZERO_LENGTH_MM
+                and norm(sub(c.end, n.end)) <= ZERO_LENGTH_MM):
+            self.at_start.add(j)
+            self.i, self.progress = j, n.length
+            return True
+        return False
+
     def feed(self, c, start):
         """A compensated feed continues nominal move i, or starts the next one once i is done."""
+        if self.i + 1 < len(self.nom.moves) and self.stands_at_start(c, self.i + 1):
+            return
         i = self.i
         stay = [i] if i >= 0 and self.nom.moves[i].kind == "feed" else []
         advance = self.next_indices(start)
@@ -947,17 +998,27 @@ class Result:
         self.bound_um = walker.max_bound_um if walker else None
         self.samples = walker.samples if walker else 0
         self.end_only = walker.end_only if walker else 0
+        self.reference_moves = walker.reference_moves if walker else 0
         self.stopped = nominal.error
         self.violations = violations
 
     def summary(self, path):
         stop = f"; both stop at: {self.stopped}" if self.stopped else ""
         first = f"; {self.end_only} first moves checked at the end point only" if self.end_only else ""
+        if self.reference_moves:
+            first += f"; {self.reference_moves} moves to or from a G28/G30 reference point not checked"
         dev = "-" if self.max_dev_um is None else f"{self.max_dev_um:.3f}"
         bound = "-" if self.bound_um is None else f"{self.bound_um:.3f}"
         return (f"{path}: {self.nominal_moves} nominal moves, {self.comp_moves} compensated, "
                 f"{self.samples} samples; max deviation {dev} um ({self.max_dev_at or '-'}), "
                 f"largest bound {bound} um{first}{stop}")
+
+
+def strip_comments(path):
+    """The program's text without (comments) and ; comments."""
+    with open(path, encoding="utf-8", errors="replace") as f:
+        text = f.read()
+    return re.sub(r"\([^)\n]*\)|;[^\n]*", "", text)
 
 
 def prepare_rs274_inputs(workdir, offsets=None, tool_table=None):
@@ -1021,8 +1082,16 @@ def check(original, compensated, model_path, offsets=None, tool_table=None, limi
             if long_lines(compensated, RS274_LINE_LIMIT):
                 # go on without the over-long comments to report the path as well
                 c_calls, c_err = run_rs274(without_long_comments(compensated, work), work, var_file, tbl)
+        refs = None
+        if c_err == n_err and any(REFERENCE_RE.search(strip_comments(p)) for p in (original, compensated)):
+            ref_var = os.path.join(work, "reference.var")
+            write_reference_var_file(ref_var, var_file)
+            refs = [interpret(p, *run_rs274(p, work, ref_var, tbl)) for p in (original, compensated)]
     nominal = interpret(original, n_calls, n_err)
     comp = interpret(compensated, c_calls, c_err)
+    if refs:
+        mark_reference(nominal, refs[0])
+        mark_reference(comp, refs[1])
     if flattened:
         actions_only(nominal)
         actions_only(comp)

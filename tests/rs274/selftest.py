@@ -6,7 +6,8 @@
      (centres I/J/K are relative, R is unchanged): those hand-made programs must pass, in every
      plane, for helices, full circles and inch programs;
   3. the same programs moved by -e + 3 um, or with one word moved by 10 um, must fail;
-  4. the G18 reading of ARC_FEED: G2 X50 Z0 I20 K0 from X10 Z0 passes through Z = -20.
+  4. G28/G30 moves are matched without an end-point check, the moves after them are checked;
+  5. the G18 reading of ARC_FEED: G2 X50 Z0 I20 K0 from X10 Z0 passes through Z = -20.
 
     python3 tests/rs274/selftest.py     # prints "selftest: N passed" or the failures, exit 1
 """
@@ -101,6 +102,21 @@ def main():
             v = outcome(prog, off, constant, work, stem + ".off.ngc")
             (failures.append(f"{stem} off by 3 um per axis was accepted") if not v else None)
             passed += bool(v)
+        # G28/G30 moves end at the controller's reference points, not compensated; a move
+        # after them that names every axis absolutely is checked like any other
+        prog = os.path.join(CASES, "g28-reference-park.ngc")
+        text = open(prog, encoding="utf-8").read()
+        keep_ref = lambda t, sh: "\n".join(  # noqa: E731
+            ln if re.search(r"G28|G30", ln.split("(")[0]) else translated(ln, sh).rstrip("\n")
+            for ln in t.splitlines()) + "\n"
+        v = outcome(prog, keep_ref(text, tuple(-e for e in E_UM)), constant, work, "g28.right.ngc")
+        (failures.append(f"g28-reference-park compensated exactly: {v[0]}") if v else None)
+        passed += not v
+        wrong = keep_ref(text, tuple(-e for e in E_UM)).replace("G0 X29.98", "G0 X30.0")
+        v = outcome(prog, wrong, constant, work, "g28.wrong.ngc")
+        (failures.append("g28-reference-park: a move after G28 left uncompensated was accepted")
+         if not v else None)
+        passed += bool(v)
         ok, mid = g18_direction(work)
         (failures.append(f"G18 G2 midpoint {mid}, expected (30, 0, -20)") if not ok else None)
         passed += ok

@@ -322,3 +322,25 @@ fn byte_order_mark_stays_first_when_the_first_line_changes() {
     assert_eq!(out.lines().nth(1), Some("G21 G90 G0 X-0.001 Y0 Z0"));
     assert_eq!(out.matches('\u{feff}').count(), 1);
 }
+
+#[test]
+fn g80_in_a_block_with_another_motion_code_is_ignored_as_linuxcnc_does() {
+    // rs274 (linuxcnc-uspace 2.9): `G0 G80` and `G1 G80` keep G0 / G1 in either order, so the
+    // axis words of the next block move; only a G80 alone cancels the motion mode
+    let model = ConstModel([10.0, -20.0, 5.0]);
+    let opts = RewriteOptions {
+        max_segment_mm: 1e6,
+        ..RewriteOptions::default()
+    };
+    let input = "G0 G90 G21 G17 G80\nX-75 Y-75 Z5\nG1 G80 Z-2 F100\nG80 G1 X-40\n";
+    let (out, _) = run(input, &model, &opts);
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines[0], "G0 G90 G21 G17 G80", "{out}");
+    assert!(lines[1].starts_with("(mtec compensate gcode"), "{out}");
+    assert_eq!(lines[2], "X-75.01 Y-74.98 Z4.995", "{out}");
+    assert_eq!(lines[3], "G1 G80 Z-2.005 F100", "{out}");
+    assert_eq!(lines[4], "G80 G1 X-40.01", "{out}");
+    // a G80 alone still leaves no motion mode: axis words after it are refused at the word
+    let d = refuse("G0 X0 Y0 Z5\nG80\nX2\n", &model, &opts);
+    assert_eq!((d.line, d.column), (3, 1), "{d:?}");
+}

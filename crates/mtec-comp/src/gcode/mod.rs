@@ -48,7 +48,9 @@
 //!   docs/formats.md, "Offsets the program sets").
 //! - **Positions not yet known** (the first moves of a program, after G28/G30): rapids are
 //!   copied uncorrected; feed moves to a known end point from an unknown start are corrected at
-//!   their end point only; arcs from an unknown start are unsupported.
+//!   their end point only; arcs from an unknown start are unsupported. The move to a G28/G30
+//!   reference point (a controller parameter) is copied with a warning; an intermediate point
+//!   that moves is unsupported. A G80 beside G0–G3 in one block is ignored, as LinuxCNC does.
 //! - Lines after a closing `%` tape mark are copied untouched (the controller never reads them).
 //! - **Units and start**: before the first G20/G21 the units are `default_units` (mm unless
 //!   told); the machine position at program start is unknown unless `start_position_mm` is

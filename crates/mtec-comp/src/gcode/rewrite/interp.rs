@@ -241,7 +241,11 @@ impl State {
                 G1 => motion_word = Some((Motion::Linear, tok)),
                 G2 => motion_word = Some((Motion::Cw, tok)),
                 G3 => motion_word = Some((Motion::Ccw, tok)),
-                G80 => motion_word = Some((Motion::Cancelled, tok)),
+                // LinuxCNC ignores a G80 in a block with another motion code (`G0 G80 X1`
+                // moves; modal.rs lets the pair through), whichever comes first
+                G80 => {
+                    motion_word.get_or_insert((Motion::Cancelled, tok));
+                }
                 G4 | G17 | G18 | G19 | G20 | G21 | G40 | G43 | G49 | G54 | G55 | G56 | G57
                 | G58 | G59 | G59_1 | G59_2 | G59_3 | G61 | G61_1 | G64 | G8 | G90 | G91
                 | G90_1 | G91_1 | G94 | G95 | G96 | G97 | G98 | G99 | G28_1 | G30_1 => {}
@@ -384,6 +388,25 @@ impl State {
         if g92_reset {
             for f in st.frames.iter_mut() {
                 f.g92 = [Some(0.0); 3];
+            }
+        }
+
+        // --- G28 / G30: an intermediate point that moves is a rapid the rewriter cannot
+        // compensate (its unnamed axes go on to the reference point in the same block)
+        if let Some(code) = axis_consumer.filter(|&c| matches!(c, GCode::G28 | GCode::G30)) {
+            let stays = st.absolute == Some(false)
+                && b"XYZABCUVW".iter().all(|&l| {
+                    b.word(l)
+                        .is_none_or(|w| matches!(w.value, Value::Number(v) if v == 0.0))
+                });
+            if has_axis && !stays {
+                issues.push(Issue {
+                    token: b.has_g(code),
+                    message: format!(
+                        "{code} with an intermediate point: the rapid to it cannot be compensated in this block; program the point as a G0 move first and give {code} G91 with zero axis words (e.g. {code} G91 Z0), or use --flatten-with rs274"
+                    ),
+                    poisons_all: false,
+                });
             }
         }
 

@@ -368,6 +368,17 @@ impl<'a> Rewriter<'a> {
         // --- G28 / G30: reference-point moves leave the axes at a position we do not know ----
         if let Some(code) = axis_consumer {
             debug_assert!(code == GCode::G28 || code == GCode::G30);
+            // the reference point is the controller's parameter (#5161-#5166, #5181-#5186):
+            // the machine goes there as without compensation, which the user is told
+            let d = self.diag(
+                self.column_of(b.has_g(code)),
+                ProblemKind::Unsupported,
+                format!("{code}: the move to the reference point is not compensated (its position is a controller parameter); the axes it sends there are taken as unknown until an absolute move"),
+            );
+            self.report.warnings_total += 1;
+            if self.report.warnings.len() < MAX_WARNINGS_KEPT {
+                self.report.warnings.push(d);
+            }
             self.st.reference_move(b, has_axis, motion_word.is_some());
             self.st.after_block(b);
             return Ok(true);
