@@ -322,6 +322,20 @@ class Frame:
         self.tool = (0.0, 0.0, 0.0)
         self.rot_deg = 0.0
         self.plane = "XY"
+        # mm per unit in which each non-zero offset in force was printed (4 decimals): after a
+        # G20 -> G21 switch an offset printed in inches carries up to 1.27 um per axis into
+        # every machine position (found by tests/rs274/generate.py seed 3)
+        self.offset_units = {}
+
+    @property
+    def offset_mm_per_unit(self):
+        return max(self.offset_units.values(), default=0.0)
+
+    def note_offset(self, name, xyz):
+        if any(abs(v) > 0.0 for v in xyz):
+            self.offset_units[name] = self.mm_per_unit
+        else:
+            self.offset_units.pop(name, None)
 
     def update(self, call):
         """Applies a state-changing canonical call; offsets come in the current units."""
@@ -331,12 +345,15 @@ class Frame:
         elif call.name == "SET_G5X_OFFSET":
             v = numbers(call.args)
             self.g5x = (v[1] * u, v[2] * u, v[3] * u)
+            self.note_offset("g5x", self.g5x)
         elif call.name == "SET_G92_OFFSET":
             v = numbers(call.args)
             self.g92 = (v[0] * u, v[1] * u, v[2] * u)
+            self.note_offset("g92", self.g92)
         elif call.name == "USE_TOOL_LENGTH_OFFSET":
             v = numbers(call.args)  # "x y z, a b c, u v w"
             self.tool = (v[0] * u, v[1] * u, v[2] * u)
+            self.note_offset("tool", self.tool)
         elif call.name == "SET_XY_ROTATION":
             self.rot_deg = numbers(call.args)[0]
         elif call.name == "SELECT_PLANE":
@@ -615,13 +632,16 @@ def arc_from_canon(frame, start_machine, v, start_mm_per_unit=None):
 class Move:
     """One canonical motion in machine mm."""
 
-    def __init__(self, kind, geom, call, mm_per_unit, abc, start_mm_per_unit=None):
+    def __init__(self, kind, geom, call, mm_per_unit, abc, start_mm_per_unit=None,
+                 offset_mm_per_unit=0.0):
         self.kind = kind  # "rapid", "feed", "probe"
         self.geom = geom
         self.call = call
         # the start was printed with the previous move, maybe in other units (G20 -> G21):
         # the coarser of the two print resolutions applies to the whole move
         self.mm_per_unit = max(mm_per_unit, start_mm_per_unit or mm_per_unit)
+        # offsets printed in coarser units than the move shift the whole move by their rounding
+        self.offset_mm_per_unit = offset_mm_per_unit if offset_mm_per_unit > self.mm_per_unit else 0.0
         self.abc = abc
         self.start, self.end, self.length = geom.start, geom.end, geom.length
         self.reference = False  # its end depends on the G28/G30 reference points (mark_reference)
@@ -630,9 +650,10 @@ class Move:
         # printed to 4 decimals: each coordinate off by half a unit; an arc's printed centre
         # too, which moves the arc by up to 2*|centre error| + |end point error|
         h = HALF_PRINT_UNIT * self.mm_per_unit * 1e3
+        shift = SQRT3 * HALF_PRINT_UNIT * self.offset_mm_per_unit * 1e3
         if self.geom.kind == "arc":
-            return (2 * math.sqrt(2) + SQRT3) * h
-        return SQRT3 * h
+            return (2 * math.sqrt(2) + SQRT3) * h + shift
+        return SQRT3 * h + shift
 
     def where(self):
         n = f" N{self.call.nword}" if self.call.nword.strip(".") else ""
@@ -663,7 +684,8 @@ def interpret(path, calls, error):
                 geom = Line(pos, frame.to_machine((v[0], v[1], v[2])))
                 abc = tuple(v[3:6])
                 kind = {"STRAIGHT_TRAVERSE": "rapid", "STRAIGHT_FEED": "feed"}.get(c.name, "probe")
-            prog.moves.append(Move(kind, geom, c, frame.mm_per_unit, abc, pos_units))
+            prog.moves.append(Move(kind, geom, c, frame.mm_per_unit, abc, pos_units,
+                                   frame.offset_mm_per_unit))
             pos, pos_units = geom.end, frame.mm_per_unit
             continue
         frame.update(c)
@@ -689,7 +711,8 @@ class Limits:
 
     def point_bound_um(self, nominal, comp):
         h = HALF_PRINT_UNIT * 1e3 * SQRT3
-        return self.tolerance_um + h * nominal.mm_per_unit + h * comp.mm_per_unit
+        return (self.tolerance_um + h * (nominal.mm_per_unit + nominal.offset_mm_per_unit)
+                + h * (comp.mm_per_unit + comp.offset_mm_per_unit))
 
 
 def sample_lengths(geom, planes):
@@ -889,6 +912,14 @@ class Walker:
             step = 0.0 if prev is None else norm(sub(q, prev))
             if progress < along <= progress + step + 2 * bound * 1e-3 + 1e-9:
                 progress = along
+            elif (along < progress and n.geom.kind == "arc"
+                  and norm(sub(n.end, n.start)) <= ZERO_LENGTH_MM
+                  and n.length <= progress + step + 2 * bound * 1e-3 + 1e-9
+                  and norm(sub(q, n.end)) * 1e3 <= bound):
+                # a closed circle's end is its start: a point just past it (displaced, or the
+                # printout's rounding) projects to the beginning, but the path has reached the end
+                # (found by tests/rs274/generate.py seed 3)
+                progress = n.length
             prev = q
         if first is not None:
             first += f" (largest on this move {worst:.3f} um)"

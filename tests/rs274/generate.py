@@ -10,7 +10,8 @@ at random: `%` wrappers, N numbers, upper/lower case and blanks inside words, nu
 (also switched mid-program), G17/G18/G19 arcs in centre (I J K) and radius (R, also negative)
 form, helices, full circles and extra turns (P), modal motion (coordinates without a G word),
 G90/G91 blocks, G90.1 absolute centres, work systems G54-G59 and G10 L2, G92 and G92.1, G53
-moves, feed, spindle, coolant, dwell, tool change, G61/G64, and the end by M2, M30 or `%`.
+moves, feed, spindle, coolant, dwell, tool change, G61/G64, parks at G28/G30 reference points
+(G91 with zero words), `G0` beside the G80 of the preamble, and the end by M2, M30 or `%`.
 Every arc is built valid: its end lies on its circle.
 """
 
@@ -158,6 +159,8 @@ class Gen:
         pre = ["G17", "G90", "G94", "G40", "G49", "G80"]
         r.shuffle(pre)
         pre = pre[: r.randint(2, 6)] + ["G20" if self.inch else "G21"]
+        if "G80" in pre and r.random() < 0.5:
+            pre.append("G0")  # the safe-start line of many posts: LinuxCNC ignores the G80
         r.shuffle(pre)
         self.emit(" ".join(pre), "preamble")
         if r.random() < 0.5:
@@ -232,6 +235,18 @@ class Gen:
                 off = [r.uniform(-50, 50) * self.scale() for _ in range(3)]
                 self.emit(f"G10 L2 P{w} " + " ".join(self.word("XYZ"[a], off[a]) for a in range(3)))
                 self.emit(f"G{53 + w}")
+                self.reposition()
+            elif k < 0.91:
+                # a park at a reference point, as posts write it: G28/G30 with G91 and zero
+                # words (the intermediate point is where the machine stands)
+                was = self.incremental
+                code = r.choice(["G28", "G30"])
+                axes = r.choice(["Z0", "X0 Y0", "X0 Y0 Z0", "Z0."])
+                self.emit(f"{code} G91 {axes}" if r.random() < 0.5 else f"G91 {code} {axes}")
+                self.incremental = True
+                if not was:
+                    self.emit("G90")
+                    self.incremental = False
                 self.reposition()
             else:
                 self.line(rapid=False)

@@ -56,6 +56,15 @@ pub struct Arc {
 const RADIUS_MISMATCH_MM: f64 = 0.02;
 const RADIUS_MISMATCH_REL: f64 = 0.001;
 
+/// LinuxCNC's motion runs an arc whose sweep (from the start to the end, in the arc's sense) is
+/// below this as a full circle (posemath `pmCircleInit`, `CIRCLE_FUZZ`, radians).
+pub const CIRCLE_FUZZ_RAD: f64 = 1e-6;
+/// An end point this close to the start (mm, in the plane) but not on it is refused: whether
+/// LinuxCNC runs a full circle or an arc of that chord depends on digits below any program's
+/// resolution (a position carried over a G20/G21 switch) and on which side of the start the
+/// end lies, and no printout or check can tell (found by tests/rs274/generate.py).
+pub const NEAR_FULL_CIRCLE_MM: f64 = 1e-3;
+
 fn in_plane(p: &[f64; 3], pl: Plane) -> [f64; 2] {
     [p[pl.first], p[pl.second]]
 }
@@ -86,22 +95,30 @@ impl Arc {
         }
         let theta_start = (s[1] - center[1]).atan2(s[0] - center[0]);
         let theta_end = (e[1] - center[1]).atan2(e[0] - center[0]);
-        let full = (e[0] - s[0]).hypot(e[1] - s[1]) < 1e-9;
-        let mut sweep = theta_end - theta_start;
+        let chord = (e[0] - s[0]).hypot(e[1] - s[1]);
+        let ambiguous = || {
+            format!(
+                "arc end point {:.4} um from its start: LinuxCNC runs this as a full circle or as an arc of that chord depending on digits below the program's resolution; give the end exactly at the start (or no axis words) for a full circle",
+                chord * 1e3
+            )
+        };
+        if chord >= 1e-9 && chord < NEAR_FULL_CIRCLE_MM {
+            return Err(ambiguous());
+        }
+        // the sweep in the arc's sense, in [0, 2π) as LinuxCNC computes it, then its rule
+        let mut sweep = (theta_end - theta_start).rem_euclid(2.0 * PI);
         if clockwise {
-            if full {
-                sweep = -2.0 * PI;
-            }
-            while sweep >= 0.0 {
-                sweep -= 2.0 * PI;
-            }
-        } else {
-            if full {
-                sweep = 2.0 * PI;
-            }
-            while sweep <= 0.0 {
-                sweep += 2.0 * PI;
-            }
+            sweep = (2.0 * PI - sweep).rem_euclid(2.0 * PI);
+        }
+        if chord >= 1e-9 && sweep < 2.0 * CIRCLE_FUZZ_RAD {
+            // a radius above 500 m: this close to LinuxCNC's threshold, refused as above
+            return Err(ambiguous());
+        }
+        if sweep < CIRCLE_FUZZ_RAD {
+            sweep = 2.0 * PI; // end on the start: a full circle
+        }
+        if clockwise {
+            sweep = -sweep;
         }
         let extra = 2.0 * PI * (turns.max(1) - 1) as f64;
         sweep += if clockwise { -extra } else { extra };
@@ -227,6 +244,37 @@ mod tests {
         let mid = b.point(0.5);
         let s = 0.5f64.sqrt();
         assert!(close(mid, [s, 0.0, -s]));
+    }
+
+    #[test]
+    fn an_end_next_to_the_start_is_a_full_circle_only_on_the_start_and_refused_near_it() {
+        // on the start (to 1e-9 mm): a full circle either way round
+        for cw in [false, true] {
+            let a = Arc::from_center([10.0, 0.0, 0.0], [10.0, 1e-12, 0.0], [0.0, 0.0], XY, cw, 1)
+                .unwrap();
+            assert!((a.sweep.abs() - 2.0 * PI).abs() < 1e-9, "{}", a.sweep);
+        }
+        // 0.04 um ahead or behind (a position carried over a G20/G21 switch): LinuxCNC makes a
+        // tiny arc or a full circle depending on the side; refused, naming the distance
+        for y in [4e-5, -4e-5] {
+            let e = Arc::from_center([10.0, 0.0, 0.0], [10.0, y, 0.0], [0.0, 0.0], XY, false, 1)
+                .unwrap_err();
+            assert!(e.contains("0.0400 um from its start"), "{e}");
+        }
+        // 1 um and more: the arc LinuxCNC runs, the short or the long way by the sense
+        let short = Arc::from_center(
+            [10.0, 0.0, 0.0],
+            [10.0, 2e-3, 0.0],
+            [0.0, 0.0],
+            XY,
+            false,
+            1,
+        )
+        .unwrap();
+        assert!((short.sweep - 2e-4).abs() < 1e-9);
+        let long =
+            Arc::from_center([10.0, 0.0, 0.0], [10.0, 2e-3, 0.0], [0.0, 0.0], XY, true, 1).unwrap();
+        assert!((long.sweep + 2.0 * PI - 2e-4).abs() < 1e-9);
     }
 
     #[test]
