@@ -102,7 +102,7 @@ impl Arc {
                 chord * 1e3
             )
         };
-        if chord >= 1e-9 && chord < NEAR_FULL_CIRCLE_MM {
+        if (1e-9..NEAR_FULL_CIRCLE_MM).contains(&chord) {
             return Err(ambiguous());
         }
         // the sweep in the arc's sense, in [0, 2π) as LinuxCNC computes it, then its rule
