@@ -17,6 +17,8 @@
 //!
 //! - [`thermal_log`]: a thermal log (CSV) as a sequence dataset, which of its columns are
 //!   features and targets, and the training configuration of a `thermal fit` on it.
+//! - [`thermal_fit`]: the networks as thermal model kinds on a thermal log: mtec-thermal's
+//!   `Fit`/`Predict`, so they are validated forward in time by the regression models' own code.
 //! - [`progress`]: the [`Monitor`] a caller passes to a training to follow its epochs and stop it,
 //!   and the typed [`StopReason`].
 //!
@@ -42,6 +44,7 @@ pub mod progress;
 mod rng;
 pub mod rotary;
 pub mod synthetic;
+pub mod thermal_fit;
 pub mod thermal_log;
 pub mod threads;
 
@@ -59,3 +62,4 @@ pub use error::NnError;
 pub use grid_fit::{fit_grid, fit_grid_monitored, GridFitConfig, GridFitReport};
 pub use metrics::ChannelMetrics;
 pub use progress::{Epoch, Monitor, Quiet, StopReason};
+pub use thermal_fit::{NeuralFit, NeuralThermalModel};

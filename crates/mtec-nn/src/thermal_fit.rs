@@ -1,0 +1,378 @@
+//! The neural models as thermal model kinds: mtec-thermal's [`Fit`] and [`Predict`] on a thermal
+//! log ([`ThermalData`], one drift target), so that the networks are validated by the same code,
+//! on the same rows and with the same metrics as the regression models: forward (rolling-origin)
+//! validation ([`mtec_thermal::validate::forward_cv`]), leave-one-block-out
+//! ([`mtec_thermal::validate::block_cv`]), the split by time ([`split_at_time`]) and
+//! [`mtec_thermal::Metrics`] (issue 18, build 2: one fit/predict/metrics set for every model).
+//!
+//! How a thermal log becomes the sequence data the networks train on ([`ThermalDataset`]):
+//! - features: the sensors (every `_c` column but `ambient_c`, or the ones named), as rises over
+//!   the first row of each experiment when `rises` is set. They are computed on the whole log
+//!   before any rows are chosen, as the regression models' lags are, so a fit on some rows sees
+//!   the same values a prediction of the whole log does;
+//! - the rows of a fit form one sequence per run of consecutive rows of one experiment. For the
+//!   CNN-LSTM the `window − 1` rows before a run (of the same experiment) come first as history
+//!   (`warmup`: their targets are neither trained on nor scored): a fit on the blocks before a
+//!   held-out block still sees the temperatures before each of its own blocks, and never the
+//!   drift of a row outside `rows`;
+//! - a prediction runs every experiment as one sequence from its first row.
+//!
+//! The network's own early stopping holds out the last 15 % of every training sequence (the
+//! library default); the validation of this module's caller is on later rows, never on those.
+
+use crate::baseline::train_bpnn_baseline;
+use crate::bpnn::Bpnn;
+use crate::cnn_lstm::{train_cnn_lstm, CnnLstm};
+use crate::dataset::{Experiment, Sequence, ThermalDataset};
+use crate::error::NnError;
+use crate::thermal_log::{NnFitOptions, NnKind};
+use mtec_thermal::{Fit, Predict, ThermalData, ThermalError};
+
+/// A neural fitter on thermal logs: the network and its training ([`NnFitOptions`]; its
+/// `sequence_by`, `features` and `angle_harmonics` are for the rotary logs and must be unset),
+/// and the sensors (all when empty).
+#[derive(Debug, Clone, PartialEq)]
+pub struct NeuralFit {
+    pub options: NnFitOptions,
+    pub sensors: Vec<String>,
+}
+
+/// The trained network.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Network {
+    Bpnn(Bpnn),
+    CnnLstm(CnnLstm),
+}
+
+/// A network fitted by [`NeuralFit`], with what it needs to build its inputs from a log.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NeuralThermalModel {
+    pub network: Network,
+    /// Sensor columns, in input order.
+    pub sensors: Vec<String>,
+    /// Inputs are rises over the first row of each experiment.
+    pub rises: bool,
+    /// The target column it was fitted to.
+    pub target: String,
+}
+
+fn nn_error(e: NnError) -> ThermalError {
+    match e {
+        NnError::Data(m) | NnError::Config(m) | NnError::Model(m) => ThermalError::Invalid(m),
+        other => ThermalError::Invalid(other.to_string()),
+    }
+}
+
+/// The sensor inputs of every row of `data`: `sensors` (all when empty) as temperatures, or as
+/// rises over the first row of each experiment.
+pub fn sensor_inputs(
+    data: &ThermalData,
+    sensors: &[String],
+    rises: bool,
+) -> Result<(Vec<String>, Vec<Vec<f64>>), ThermalError> {
+    let idx: Vec<usize> = if sensors.is_empty() {
+        (0..data.sensor_names.len()).collect()
+    } else {
+        sensors
+            .iter()
+            .map(|s| data.sensor_index(s))
+            .collect::<Result<_, _>>()?
+    };
+    let names = idx.iter().map(|&j| data.sensor_names[j].clone()).collect();
+    let mut x: Vec<Vec<f64>> = (0..data.len())
+        .map(|i| idx.iter().map(|&j| data.temps_c[(i, j)]).collect())
+        .collect();
+    if rises {
+        for (start, end) in data.segments() {
+            let first = x[start].clone();
+            for row in &mut x[start..end] {
+                for (v, v0) in row.iter_mut().zip(&first) {
+                    *v -= v0;
+                }
+            }
+        }
+    }
+    Ok((names, x))
+}
+
+/// The sequences of a fit on `rows` (see the module docs): one per run of consecutive rows of
+/// one experiment, after up to `history` earlier rows of that experiment as warmup.
+pub fn fit_sequences(
+    data: &ThermalData,
+    inputs: &[Vec<f64>],
+    target: &[f64],
+    rows: &[usize],
+    history: usize,
+) -> Vec<Sequence> {
+    let start_of = {
+        let mut s = vec![0; data.len()];
+        for (a, b) in data.segments() {
+            s[a..b].fill(a);
+        }
+        s
+    };
+    let mut out = Vec::new();
+    let mut k = 0;
+    while k < rows.len() {
+        let first = rows[k];
+        let mut last = first;
+        while k + 1 < rows.len()
+            && rows[k + 1] == last + 1
+            && data.experiment[rows[k + 1]] == data.experiment[first]
+        {
+            k += 1;
+            last = rows[k];
+        }
+        k += 1;
+        let from = first.saturating_sub(history).max(start_of[first]);
+        out.push(Sequence {
+            features: inputs[from..=last].to_vec(),
+            targets: target[from..=last].iter().map(|&y| vec![y]).collect(),
+            warmup: first - from,
+        });
+    }
+    out
+}
+
+impl NeuralFit {
+    fn history(&self) -> usize {
+        match self.options.kind {
+            NnKind::CnnLstm => self.options.cnn_lstm_config().architecture.window - 1,
+            NnKind::Bpnn => 0,
+        }
+    }
+}
+
+impl Fit for NeuralFit {
+    type Model = NeuralThermalModel;
+
+    fn fit_rows(
+        &self,
+        data: &ThermalData,
+        rows: &[usize],
+    ) -> Result<NeuralThermalModel, ThermalError> {
+        let o = &self.options;
+        if o.sequence_by.is_some() || !o.features.is_empty() || o.angle_harmonics.is_some() {
+            return Err(ThermalError::Invalid(
+                "a network on a thermal log takes its sensors only (no sequence column, extra features or angle harmonics)".into(),
+            ));
+        }
+        let target = data.target_um()?;
+        let target_name = data.target_name().unwrap_or("target_um").to_string();
+        let (names, inputs) = sensor_inputs(data, &self.sensors, o.rises)?;
+        let sequences = fit_sequences(data, &inputs, target, rows, self.history());
+        let train = ThermalDataset {
+            feature_names: names.clone(),
+            target_names: vec![target_name.clone()],
+            experiments: vec![Experiment { id: 1, sequences }],
+        };
+        let network = match o.kind {
+            NnKind::Bpnn => Network::Bpnn(
+                train_bpnn_baseline(&train, &o.bpnn_config())
+                    .map_err(nn_error)?
+                    .0,
+            ),
+            NnKind::CnnLstm => Network::CnnLstm(
+                train_cnn_lstm(&train, &o.cnn_lstm_config())
+                    .map_err(nn_error)?
+                    .0,
+            ),
+        };
+        Ok(NeuralThermalModel {
+            network,
+            sensors: names,
+            rises: o.rises,
+            target: target_name,
+        })
+    }
+}
+
+impl Predict for NeuralThermalModel {
+    fn predict(&self, data: &ThermalData) -> Result<Vec<f64>, ThermalError> {
+        let (names, inputs) = sensor_inputs(data, &self.sensors, self.rises)?;
+        match &self.network {
+            Network::Bpnn(net) => inputs
+                .iter()
+                .map(|x| net.predict(x).map(|y| y[0]).map_err(|e| nn_error(e.into())))
+                .collect(),
+            Network::CnnLstm(net) => {
+                let sequences = data
+                    .segments()
+                    .into_iter()
+                    .map(|(a, b)| Sequence {
+                        features: inputs[a..b].to_vec(),
+                        targets: vec![vec![0.0]; b - a],
+                        warmup: 0,
+                    })
+                    .collect();
+                let all = ThermalDataset {
+                    feature_names: names,
+                    target_names: vec![self.target.clone()],
+                    experiments: vec![Experiment { id: 1, sequences }],
+                };
+                Ok(net
+                    .predict(&all)
+                    .map_err(nn_error)?
+                    .into_iter()
+                    .map(|y| y[0])
+                    .collect())
+            }
+        }
+    }
+
+    /// The inputs (sensors): what adjusted R² and F count as regressors.
+    fn predictors(&self) -> usize {
+        self.sensors.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mtec_thermal::validate::{forward_cv, forward_folds, split_at_time};
+    use nalgebra::DMatrix;
+
+    /// Two experiments of a three-body thermal network: sensors s1 (fast), s2 (slow) and s3
+    /// (slower, on the far side) follow a heat input that steps on and off; the drift is
+    /// 2·s1 + 3·lag(s2) µm, the lag an unsensed body between s2 and s3.
+    fn log() -> ThermalData {
+        let (mut exp, mut time, mut temps, mut y) = (vec![], vec![], vec![], vec![]);
+        for (e, on) in [("1", 60.0), ("2", 100.0)] {
+            let (mut s1, mut s2, mut lag, mut s3) = (20.0, 20.0, 20.0, 20.0);
+            for k in 0..120 {
+                let t = k as f64 * 2.0;
+                let q = if t < on { 1.0 } else { 0.0 };
+                s1 += 0.2 * (20.0 + 8.0 * q - s1);
+                s2 += 0.05 * (s1 - s2);
+                lag += 0.1 * (s2 - lag);
+                s3 += 0.03 * (lag - s3);
+                exp.push(e.to_string());
+                time.push(t);
+                temps.push([s1, s2, s3]);
+                y.push(2.0 * (s1 - 20.0) + 3.0 * (lag - 20.0));
+            }
+        }
+        let n = y.len();
+        ThermalData {
+            experiment: exp,
+            time_min: time,
+            sensor_names: vec!["s1_c".into(), "s2_c".into(), "s3_c".into()],
+            temps_c: DMatrix::from_fn(n, 3, |i, j| temps[i][j]),
+            ambient_c: None,
+            position_mm: None,
+            target: Some(("ez_um".into(), y)),
+            source: None,
+            lines: (2..n + 2).collect(),
+        }
+    }
+
+    fn bpnn() -> NeuralFit {
+        let mut options = NnFitOptions::new(NnKind::Bpnn);
+        options.hidden = Some(4);
+        options.epochs = Some(60);
+        options.rises = true;
+        NeuralFit {
+            options,
+            sensors: vec![],
+        }
+    }
+
+    #[test]
+    fn sequences_are_runs_of_one_experiment_with_earlier_rows_as_history() {
+        let data = log();
+        let (_, x) = sensor_inputs(&data, &[], false).unwrap();
+        let y = data.target_um().unwrap();
+        // rows 10..20 and 30..40 of experiment 1, 118..122 across the experiments' border
+        let rows: Vec<usize> = (10..20).chain(30..40).chain(118..122).collect();
+        let seqs = fit_sequences(&data, &x, y, &rows, 5);
+        let shape: Vec<(usize, usize)> = seqs.iter().map(|s| (s.len(), s.warmup)).collect();
+        // 118..120 is the end of experiment 1 (history 113..118), 120..122 the start of 2 (none)
+        assert_eq!(shape, vec![(15, 5), (15, 5), (7, 5), (2, 0)]);
+        assert_eq!(seqs[1].features[0], x[25]);
+        assert_eq!(seqs[1].targets[5], vec![y[30]]);
+        assert_eq!(seqs[3].features[0], x[120]);
+    }
+
+    #[test]
+    fn rises_start_at_each_experiment() {
+        let data = log();
+        let (names, x) = sensor_inputs(&data, &["s2".into()], true).unwrap();
+        assert_eq!(names, vec!["s2_c".to_string()]);
+        assert_eq!((x[0][0], x[120][0]), (0.0, 0.0));
+        let t = &data.temps_c;
+        assert!((x[130][0] - (t[(130, 1)] - t[(120, 1)])).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_bpnn_fitted_through_fit_rows_is_the_one_trained_on_the_same_rows_by_hand() {
+        let data = log();
+        let (train, _) = split_at_time(&data, 150.0);
+        let model = bpnn().fit_rows(&data, &train).unwrap();
+        // by hand: the same rows as one plain sequence per experiment, the library's training
+        let (_, x) = sensor_inputs(&data, &[], true).unwrap();
+        let y = data.target_um().unwrap();
+        let seq = |r: std::ops::Range<usize>| Sequence {
+            features: x[r.clone()].to_vec(),
+            targets: y[r].iter().map(|&v| vec![v]).collect(),
+            warmup: 0,
+        };
+        let by_hand = ThermalDataset {
+            feature_names: vec!["s1_c".into(), "s2_c".into(), "s3_c".into()],
+            target_names: vec!["ez_um".into()],
+            experiments: vec![Experiment {
+                id: 1,
+                sequences: vec![seq(0..76), seq(120..196)],
+            }],
+        };
+        let (net, _) = train_bpnn_baseline(&by_hand, &bpnn().options.bpnn_config()).unwrap();
+        let pred = model.predict(&data).unwrap();
+        for i in [0, 80, 119, 200, 239] {
+            assert_eq!(pred[i], net.predict(&x[i]).unwrap()[0], "row {i}");
+        }
+    }
+
+    #[test]
+    fn forward_validation_of_a_network_is_the_regression_models_own() {
+        let data = log();
+        let blocks: Vec<Vec<usize>> = vec![
+            (0..120).collect(),
+            (120..180).collect(),
+            (180..240).collect(),
+        ];
+        let folds = forward_folds(&blocks);
+        let cv = forward_cv(&bpnn(), &data, &folds).unwrap();
+        assert_eq!(cv.folds.len(), folds.len());
+        // each fold scored on its own later rows; the network must beat leaving the drift
+        // uncompensated (the drift spans 0-40 um) on every fold
+        for f in &cv.folds {
+            assert!(!f.worse_than_uncompensated(), "{f:?}");
+        }
+        assert!(cv.pooled_rmse_um < 3.0, "pooled RMSE {}", cv.pooled_rmse_um);
+    }
+
+    #[test]
+    fn a_cnn_lstm_fits_and_predicts_every_row() {
+        let data = log();
+        let mut options = NnFitOptions::new(NnKind::CnnLstm);
+        (options.window, options.conv_channels, options.lstm_hidden) = (Some(4), Some(2), Some(4));
+        options.epochs = Some(3);
+        let fit = NeuralFit {
+            options,
+            sensors: vec!["s1".into(), "s2".into(), "s3".into()],
+        };
+        let (train, _) = split_at_time(&data, 150.0);
+        let model = fit.fit_rows(&data, &train).unwrap();
+        let pred = model.predict(&data).unwrap();
+        assert_eq!(pred.len(), data.len());
+        assert!(pred.iter().all(|v| v.is_finite()));
+        assert_eq!(model.predictors(), 3);
+    }
+
+    #[test]
+    fn rotary_options_are_refused() {
+        let mut f = bpnn();
+        f.options.sequence_by = Some("angle_deg".into());
+        let data = log();
+        assert!(matches!(f.fit(&data), Err(ThermalError::Invalid(_))));
+    }
+}
