@@ -47,6 +47,7 @@ mod machine_stage;
 mod pipeline;
 #[cfg(feature = "neural")]
 mod readings_section;
+mod selective_section;
 mod spec;
 mod stages;
 mod summary;
