@@ -73,7 +73,8 @@ pub(super) fn section(p: &mut Pipeline, model: &Path, chosen: &Elements) -> Resu
          over the same grid against the identified model itself (the machine taken to have the \
          model's errors, commanded from the compensated elements only), so with all elements \
          the rate is 100 % by construction; on the machine both are lower by what the model \
-         misses. The NC programs and tables of this project compensate {what} \
+         misses. The ranking is by S1 of the error's length |E|; an element small there can \
+         still be key for one of Ex, Ey, Ez. The NC programs and tables of this project compensate {what} \
          ([compensation] elements).",
         100.0 * ops::selective::KEY_SHARE
     ));
@@ -85,7 +86,11 @@ pub(super) fn section(p: &mut Pipeline, model: &Path, chosen: &Elements) -> Resu
             vec![
                 format!("{}", i + 1),
                 name.clone(),
-                format!("{s1:.3}"),
+                if *s1 >= 1e-3 || *s1 == 0.0 {
+                    format!("{s1:.3}")
+                } else {
+                    format!("{s1:.1e}")
+                },
                 if key.elements.contains(name) {
                     "key".into()
                 } else {
