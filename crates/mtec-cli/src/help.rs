@@ -1,5 +1,4 @@
-//! The help texts of the commands, in `help/*.txt`, and the `Examples` section that ends the
-//! `--help` of every leaf command.
+//! The help texts of the commands (`help/*.txt`) and the `Examples` ending every leaf's `--help`.
 //!
 //! Each command's examples are one block: `#` lines say what the next command does, `$ ` lines
 //! are the commands (a line ending in `\` continues on the next), and the block runs as written,

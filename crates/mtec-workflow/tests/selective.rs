@@ -127,3 +127,165 @@ fn lhs_poses_stratify_every_travel_and_feed_the_analysis() {
     let e = sensitivity::run(&opts, &mut Silent).unwrap_err();
     assert!(e.to_string().contains("without --at"), "{e}");
 }
+
+/// The project report's "Selective compensation" section: a project with `[lines]` and
+/// `[compensation] elements = "key"` compensates its program with the key elements only and
+/// reports the ranking and the rates. The rate with the key elements is recomputed here by
+/// another route: each command solved by fixed-point iteration p ← t − e(p) on the first-order
+/// model of the key elements (not mtec-comp's solver), the machine's error being the exact
+/// model of all of them, over the 4 × 4 × 4 grid of the travels.
+#[test]
+fn project_report_section_gives_the_key_elements_and_their_rates() {
+    use mtec_model::{Formalism, Order, VolumetricModel};
+    use mtec_workflow::project::{self, RunOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for f in mtec_sim::run_scenario("vmc-9line", 1).unwrap().files {
+        std::fs::write(d.join(&f.name), &f.contents).unwrap();
+    }
+    std::fs::write(
+        d.join("p.ngc"),
+        "G21 G90\nG0 X10 Y20 Z30\nG1 X590 Y780 Z290 F1000\nM2\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("project.toml"),
+        "name = \"sel\"\nmachine = \"machine.toml\"\n[lines]\ndata = \"lines.csv\"\n\
+         [compensation]\ngcode = [\"p.ngc\"]\nelements = \"key\"\n",
+    )
+    .unwrap();
+    let res = d.join("res");
+    let run = RunOptions {
+        project: d.join("project.toml"),
+        out: Some(res.clone()),
+        title: None,
+    };
+    let done = project::run(&run, &mut Silent).unwrap();
+    let saved: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(res.join("selective.json")).unwrap())
+            .unwrap();
+    assert_eq!(saved["compensated"], "key");
+    let key: Vec<String> = serde_json::from_value(saved["key"]["elements"].clone()).unwrap();
+    let pct = |f: &str| -> [f64; 3] { serde_json::from_value(saved["key"][f].clone()).unwrap() };
+    let (all_pct, key_pct, loss_pct) = (
+        pct("rate_all_pct"),
+        pct("rate_selected_pct"),
+        pct("loss_pct"),
+    );
+
+    let km: mtec_comp::kinematic::KinematicFile =
+        serde_json::from_str(&std::fs::read_to_string(res.join("kinematic-model.json")).unwrap())
+            .unwrap();
+    let machine = Machine::from_spec(km.machine.clone()).unwrap();
+    let full = km.errors.clone();
+    let mut part = full.clone();
+    part.elements.retain(|e, _| key.contains(&e.name()));
+    assert_eq!(part.elements.len(), key.len());
+    assert!(key.len() < full.elements.len(), "{key:?}");
+    let truth = VolumetricModel::new(&machine, &full);
+    let rate_by_iteration = |compensated: &ErrorSet| -> [f64; 3] {
+        let model = VolumetricModel::new(&machine, compensated);
+        let grid = |a: usize| {
+            let [lo, hi] = machine.travel(machine.axes[a]);
+            (0..4).map(move |k| lo + (hi - lo) * k as f64 / 3.0)
+        };
+        let (mut before, mut after) = ([0.0; 3], [0.0; 3]);
+        for x in grid(0) {
+            for y in grid(1) {
+                for z in grid(2) {
+                    let t = [x, y, z];
+                    let mut p = t;
+                    for _ in 0..30 {
+                        let e = model
+                            .error(&p, Formalism::Htm, Order::FirstOrder)
+                            .position_um;
+                        p = [0, 1, 2].map(|i| t[i] - e[i] / 1000.0);
+                    }
+                    let e0 = truth.error(&t, Formalism::Htm, Order::Exact).position_um;
+                    let e1 = truth.error(&p, Formalism::Htm, Order::Exact).position_um;
+                    for i in 0..3 {
+                        before[i] += e0[i] * e0[i];
+                        after[i] += ((p[i] - t[i]) * 1e3 + e1[i]).powi(2);
+                    }
+                }
+            }
+        }
+        [0, 1, 2].map(|i| 100.0 * (1.0 - (after[i] / before[i]).sqrt()))
+    };
+    let (all_i, key_i) = (rate_by_iteration(&full), rate_by_iteration(&part));
+    let html = std::fs::read_to_string(&done.report).unwrap();
+    assert!(html.contains("Selective compensation"));
+    for i in 0..3 {
+        println!(
+            "axis {i}: all {:.2} / {:.2} %, key {:.2} / {:.2} %, loss {:.2}",
+            all_pct[i], all_i[i], key_pct[i], key_i[i], loss_pct[i]
+        );
+        assert!((all_pct[i] - all_i[i]).abs() < 0.01, "axis {i}");
+        assert!((key_pct[i] - key_i[i]).abs() < 0.01, "axis {i}");
+        assert!(
+            (loss_pct[i] - (all_i[i] - key_i[i])).abs() < 0.02,
+            "axis {i}"
+        );
+        assert!(key_i[i] > 50.0, "axis {i}: {key_i:?}");
+        assert!(
+            html.contains(&format!("<td>{:.1} %</td>", key_pct[i])),
+            "axis {i}"
+        );
+        assert!(
+            html.contains(&format!("<td>{:.1}</td>", loss_pct[i])),
+            "axis {i}"
+        );
+    }
+    // leaving elements out costs something on one axis at least (X here: EXY, EXZ and EBY,
+    // left out, move the tool tip along X only)
+    assert!(loss_pct.iter().any(|l| *l > 1.0), "{loss_pct:?}");
+    for e in &key {
+        assert!(html.contains(&format!("<td>{e}</td>")), "{e}");
+    }
+
+    // the program is compensated with the key elements: as `compensate gcode --elements key`
+    // of the same model file gives it, and not as with all elements
+    let mut opts = Options::new(
+        res.join("kinematic-model.json"),
+        d.join("p.ngc"),
+        d.join("key.ngc"),
+    );
+    opts.elements = Elements::Key;
+    compensate_gcode::run(&opts, &mut Silent).unwrap();
+    let project_ngc = std::fs::read(res.join("p-compensated.ngc")).unwrap();
+    assert_eq!(project_ngc, std::fs::read(d.join("key.ngc")).unwrap());
+    opts.elements = Elements::All;
+    opts.output = d.join("all.ngc");
+    compensate_gcode::run(&opts, &mut Silent).unwrap();
+    assert_ne!(project_ngc, std::fs::read(d.join("all.ngc")).unwrap());
+}
+
+/// `[compensation] elements = "key"` in a project that compensates with its `[map]`: a map has
+/// no elements, so the run fails with a usage error saying so (not the key silently ignored).
+#[test]
+fn project_elements_with_a_map_is_refused() {
+    use mtec_workflow::project::{self, RunOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for sc in ["vmc-9line", "volumetric-grid"] {
+        for f in mtec_sim::run_scenario(sc, 1).unwrap().files {
+            std::fs::write(d.join(&f.name), &f.contents).unwrap();
+        }
+    }
+    std::fs::write(d.join("p.ngc"), "G21 G90\nG0 X10 Y20 Z30\nM2\n").unwrap();
+    std::fs::write(
+        d.join("project.toml"),
+        "machine = \"machine.toml\"\n[lines]\ndata = \"lines.csv\"\n[map]\ngrid = \"grid.csv\"\n\
+         [compensation]\ngcode = [\"p.ngc\"]\nelements = \"key\"\n",
+    )
+    .unwrap();
+    let run = RunOptions {
+        project: d.join("project.toml"),
+        out: Some(d.join("res")),
+        title: None,
+    };
+    let e = project::run(&run, &mut Silent).unwrap_err();
+    assert!(matches!(e, mtec_workflow::Error::Usage(_)), "{e:?}");
+    assert!(e.to_string().contains("[map] stage's map"), "{e}");
+    assert!(!d.join("res/p-compensated.ngc").exists());
+}

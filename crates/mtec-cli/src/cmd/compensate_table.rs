@@ -3,20 +3,20 @@
 use crate::{choice::choice, error::CliError, help::examples};
 use mtec_comp::table;
 use mtec_workflow::ops::compensate_table::{self as op, parse_at, parse_axis, Options, Range};
+use mtec_workflow::ops::selective::Elements;
 use std::path::PathBuf;
 
 /// `mtec compensate table`.
 #[derive(clap::Args)]
 #[command(after_long_help = examples!("compensate_table.examples"))]
 pub struct Args {
-    /// Error model JSON: a map (mtec.map/1), a kinematic model (mtec.kinematic-model/1), a BPNN
-    /// map (mtec.bpnn/1), a machine error model (mtec.machine-error/1, with --state), or a
-    /// poly/zero model; `mtec compensate gcode --help` says which command writes each.
+    /// Error model JSON: map, kinematic, BPNN, machine error (with --state), poly or zero model
+    /// (`mtec compensate gcode --help` says which command writes each).
     #[arg(long, required_unless_present = "from_iso230_2")]
     model: Option<PathBuf>,
     /// ISO 230-2 run CSV (target_mm,run,direction,deviation_um) instead of --model: a
     /// direction-dependent table of --axis at the run's targets.
-    #[arg(long, value_name = "RUN.csv", conflicts_with_all = ["model", "state", "output_axis", "range", "at", "x_range", "y_range", "z_range"])]
+    #[arg(long, value_name = "RUN.csv", conflicts_with_all = ["model", "state", "elements", "output_axis", "range", "at", "x_range", "y_range", "z_range"])]
     from_iso230_2: Option<PathBuf>,
     /// State log for a model with a state (mtec.machine-error/1): time_min and the model's
     /// state inputs; the table is for the state after the last row. Required for such a model.
@@ -87,6 +87,9 @@ pub struct Args {
     /// atomically, a device or FIFO written in place, a symlink's target written.
     #[arg(short = 'o', long = "out")]
     out: Option<PathBuf>,
+    /// Elements of a kinematic model to compensate: all, key (ranked by EFAST) or a list (EXX,EYY).
+    #[arg(long, default_value = "all")]
+    elements: Elements,
 }
 
 pub fn run(a: Args) -> Result<(), CliError> {
@@ -119,6 +122,7 @@ pub fn run(a: Args) -> Result<(), CliError> {
         cma_name: a.cma_name,
         max_correction_um: a.max_correction_um,
         out: a.out,
+        elements: a.elements,
     };
     let done = op::run(&opts, &mut crate::observer::Stderr::default())?;
     eprint!("{done}");

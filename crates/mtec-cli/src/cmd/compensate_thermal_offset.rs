@@ -1,7 +1,6 @@
 //! `mtec compensate thermal-offset`: the work-offset update (or Siemens temperature-compensation
-//! setting data) for the machine's thermal state now. The job is
-//! `mtec_workflow::ops::compensate_thermal_offset` (the method `mtec_comp::thermal_offset`);
-//! this parses and prints.
+//! setting data) for the thermal state now; the job is `ops::compensate_thermal_offset` of
+//! mtec-workflow (the method `mtec_comp::thermal_offset`). This parses and prints.
 
 use crate::{choice::choice, error::CliError, help::examples};
 use mtec_comp::table::DEFAULT_MAX_CORRECTION_UM;

@@ -1,12 +1,12 @@
 //! Whether this `mtec` has the neural models, and their command-line options.
 //!
-//! The neural models (`thermal fit --model cnn-lstm|bpnn`, `map fit --model bpnn`, and
-//! `thermal predict` with their model files) live in `mtec-nn`, which pulls in candle, a deep-
-//! learning library whose compilation is more than half of a cold release build (measured in
-//! docs/building.md). They are the cargo feature `neural` of this crate, off by default so that
-//! the README's `cargo run --release -- demo` builds in a few minutes; the options are parsed
-//! either way, so a build without them refuses such a command with exit 2 and says how to get
-//! them instead of calling the option unknown (`mtec_workflow::neural_unavailable`).
+//! The neural models (`thermal fit --model cnn-lstm|bpnn`, `map fit --model bpnn`, `thermal
+//! predict` of their files) live in `mtec-nn`, which pulls in candle, a deep-learning library
+//! that is more than half of a cold release build (docs/building.md). They are this crate's
+//! cargo feature `neural`, off by default so that the README's `cargo run --release -- demo`
+//! builds in minutes; the options are parsed either way, so a build without them refuses such
+//! a command with exit 2 saying how to get them, not calling the option unknown
+//! (`mtec_workflow::neural_unavailable`).
 
 /// Options of the neural models (ignored by the regression models).
 #[derive(clap::Args, Debug, Clone)]

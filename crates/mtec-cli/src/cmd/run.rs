@@ -1,6 +1,5 @@
-//! `mtec run PROJECT.toml`: the whole pipeline a project file asks for, with an HTML report.
-//! The run is `mtec_workflow::project::run` (stages in-process, the report, a failed stage shown
-//! as failed); this module parses the arguments and prints where the report went.
+//! `mtec run PROJECT.toml`: the pipeline a project file asks for, with an HTML report, run
+//! in-process by `mtec_workflow::project::run`; this parses and prints where the report went.
 
 use crate::error::CliError;
 use crate::help::{examples, text};

@@ -1,5 +1,4 @@
 //! `mtec thermal select|fit|predict|cv`: thermal error models from temperature logs.
-
 //!
 //! The jobs are `mtec_workflow::ops::thermal` (`select`, `fit`, `predict`, `cv`, and the neural
 //! `neural::fit`); the model kinds and their `--model` values come from

@@ -1,6 +1,7 @@
 //! `compensate table`: the compensation table a CNC controller loads, from an error model, or
 //! (`--from-iso230-2`) the direction-dependent table of one axis from an ISO 230-2 run.
 
+use super::selective::{self, Elements, Selective};
 use crate::{Error, Observer, Result};
 use mtec_comp::map::{GridMap, MAP_FORMAT};
 use mtec_comp::table::bidirectional::BidirectionalProfile;
@@ -173,6 +174,9 @@ pub struct Options {
     pub max_correction_um: f64,
     /// The table file; `None` or `-`: stdout (heidenhain needs a file).
     pub out: Option<PathBuf>,
+    /// The elements of a kinematic model the table compensates ([`selective`]): the table is
+    /// sampled from a model of those elements only.
+    pub elements: Elements,
 }
 
 impl Options {
@@ -202,6 +206,7 @@ impl Options {
             grid: [None; 3],
             max_correction_um: table::DEFAULT_MAX_CORRECTION_UM,
             out,
+            elements: Elements::All,
         }
     }
 }
@@ -225,6 +230,9 @@ pub struct Outcome {
     /// `--from-iso230-2`: the largest reversal |B_i| = |x̄_i↑ − x̄_i↓| of the run (µm), carried
     /// by the table's two directions.
     pub reversal_max_um: Option<f64>,
+    /// What a selective compensation (`--elements key|LIST`) compensates and costs.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub selective: Option<Selective>,
 }
 
 impl fmt::Display for Outcome {
@@ -246,6 +254,10 @@ impl fmt::Display for Outcome {
                 writeln!(f, "{} table from {}", self.format.name(), self.provenance)
             }
             _ => Ok(()),
+        }?;
+        match &self.selective {
+            Some(s) => write!(f, "{s}"),
+            None => Ok(()),
         }
     }
 }
@@ -274,18 +286,21 @@ impl Observer for Keep<'_> {
 /// and `max_correction_um` before anything is written.
 pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
     if let Some(run) = &opts.from_iso230_2 {
+        if opts.elements != Elements::All {
+            return Err(Error::usage(
+                "--elements selects elements of a kinematic model; an ISO 230-2 run has none",
+            ));
+        }
         return run_iso230_2(opts, run, obs);
     }
     let mut keep = Keep {
         obs,
         warnings: Vec::new(),
     };
-    let model = crate::state::model_in_state(
-        mtec_comp::load_error_model(&opts.model)?,
-        &opts.model,
-        opts.state.as_deref(),
-        &mut keep,
-    )?;
+    // all elements: the file loaded as it is; key or a list: a model of those only
+    let (loaded, selective) = selective::load(&opts.model, &opts.elements)?;
+    let model =
+        crate::state::model_in_state(loaded, &opts.model, opts.state.as_deref(), &mut keep)?;
     let warnings = keep.warnings;
     let map = load_map_if_grid(&opts.model)?;
     let axis = opts.axis;
@@ -296,7 +311,14 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
             opts.max_correction_um
         )));
     }
-    let provenance = model.describe();
+    let mut provenance = model.describe();
+    if let Some(s) = &selective {
+        provenance += &format!(
+            ", only the elements {} ({})",
+            s.elements.join(" "),
+            s.selection
+        );
+    }
     let mut guard = OutputGuard::new(&[&opts.model]);
     if let Some(p) = &opts.state {
         guard.add_input(p);
@@ -320,6 +342,7 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
         warnings: warnings.clone(),
         notes: Vec::new(),
         reversal_max_um: None,
+        selective: selective.clone(),
     };
 
     if opts.format == Format::Beckhoff {
@@ -577,6 +600,7 @@ fn run_iso230_2(opts: &Options, run: &Path, obs: &mut dyn Observer) -> Result<Ou
         warnings,
         notes,
         reversal_max_um: Some(reversal_max),
+        selective: None,
     })
 }
 

@@ -33,6 +33,7 @@
 //! [compensation]
 //! gcode = ["part.ngc"]
 //! tables = ["linuxcnc"]
+//! elements = "key"             # optional: all | key | EXX,EYY (the identified kinematic model)
 //! [machine_model]              # thermal models of the [[thermal]] stages + envelopes
 //! data = "thermal.csv"
 //! parts = [{ target = "drift_um", axis = "z" }]
@@ -47,6 +48,7 @@ mod machine_stage;
 mod pipeline;
 #[cfg(feature = "neural")]
 mod readings_section;
+mod selective_section;
 mod spec;
 mod stages;
 mod summary;

@@ -181,4 +181,7 @@ pub struct CompensationStage {
     pub gcode: Vec<PathBuf>,
     #[serde(default)]
     pub tables: Vec<String>,
+    /// The elements of the identified kinematic model the programs and tables compensate:
+    /// `all` (default), `key` (ranked by EFAST) or a list `EXX,EYY` (`compensate --elements`).
+    pub elements: Option<String>,
 }

@@ -1241,8 +1241,21 @@ pub fn compensation(
     identified: Option<&Path>,
 ) -> crate::Result<()> {
     p.progress_of("compensation outputs");
+    let elements: ops::selective::Elements = c
+        .elements
+        .as_deref()
+        .unwrap_or("all")
+        .parse()
+        .map_err(|m| Error::usage(format!("[compensation] elements: {m}")))?;
     // the model: the map if there is one, else the identified kinematic model
     let model = match (map, machine, identified) {
+        (Some(_), _, _) if elements != ops::selective::Elements::All => {
+            return Err(Error::usage(format!(
+                "[compensation] elements = \"{}\" selects elements of the identified kinematic \
+                 model, but this project compensates with the [map] stage's map (remove one)",
+                c.elements.as_deref().unwrap_or_default()
+            )))
+        }
         (Some(m), _, _) => m.to_path_buf(),
         (None, Some(mach), Some(errors)) => {
             let machine = crate::inputs::read_machine(mach)?;
@@ -1267,7 +1280,8 @@ pub fn compensation(
     for g in &c.gcode {
         let input = p.path_of(g);
         let out = p.out.join(format!("{}-compensated.ngc", stem(&input)));
-        let opts = ops::compensate_gcode::Options::new(&model, &input, &out);
+        let mut opts = ops::compensate_gcode::Options::new(&model, &input, &out);
+        opts.elements = elements.clone();
         let said = ops::compensate_gcode::run(&opts, &mut obs)?.to_string();
         p.outputs.push(s(&out));
         let lines_in = std::fs::read_to_string(&input)
@@ -1296,7 +1310,8 @@ pub fn compensation(
                 names.join(", ")
             ))
         })?;
-        let opts = ops::compensate_table::Options::new(&model, format, Some(out.clone()));
+        let mut opts = ops::compensate_table::Options::new(&model, format, Some(out.clone()));
+        opts.elements = elements.clone();
         ops::compensate_table::run(&opts, &mut obs)?;
         p.outputs.push(s(&out));
         let head: String = std::fs::read_to_string(&out)
@@ -1331,6 +1346,9 @@ pub fn compensation(
     }
     if !tables.is_empty() {
         sec.table(&["format", "file", "first lines"], tables);
+    }
+    if map.is_none() {
+        super::selective_section::section(p, &model, &elements)?;
     }
     Ok(())
 }
