@@ -32,13 +32,31 @@ pub const CANDIDATES: std::ops::RangeInclusive<usize> = 3..=9;
 /// Interior knot counts of the splines tried (4..9 coefficients, the sizes of degrees 4..9).
 pub const KNOT_CANDIDATES: std::ops::RangeInclusive<usize> = 1..=6;
 
+/// Half-decade exponents e of the smoothing penalties λ = 10^(e/2) tried (10⁻⁶ .. 10²).
+pub const PENALTY_CANDIDATES: std::ops::RangeInclusive<i32> = -12..=4;
+
+/// Which bases the selection may choose from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Family {
+    /// Legendre degrees [`CANDIDATES`] (the default).
+    Legendre,
+    /// Legendre degrees and cubic splines with [`KNOT_CANDIDATES`] interior knots.
+    WithSplines,
+    /// Smoothing splines with a penalty of [`PENALTY_CANDIDATES`].
+    Smoothing,
+}
+
 /// Every basis a kind may take, in the order tried (splines only when asked: see
 /// docs/methods.md §3 for why the default does not try them).
-fn candidates(splines: bool) -> Vec<Basis> {
-    CANDIDATES
-        .map(Basis::Legendre)
-        .chain(KNOT_CANDIDATES.filter(|_| splines).map(Basis::Spline))
-        .collect()
+fn candidates(family: Family) -> Vec<Basis> {
+    match family {
+        Family::Legendre => CANDIDATES.map(Basis::Legendre).collect(),
+        Family::WithSplines => CANDIDATES
+            .map(Basis::Legendre)
+            .chain(KNOT_CANDIDATES.map(Basis::Spline))
+            .collect(),
+        Family::Smoothing => PENALTY_CANDIDATES.rev().map(Basis::Smooth).collect(),
+    }
 }
 
 /// The order of parsimony: size, then a polynomial before a spline.
@@ -115,13 +133,25 @@ pub fn point_cv_score(
     degrees: KindDegrees,
     pitch: bool,
 ) -> Result<Option<f64>, ModelError> {
-    let deg = |e: &ErrorElement| degrees.of(e);
-    let layout = match Layout::with_bases(machine, data, &deg, pitch) {
+    point_cv_score_of(machine, data, &|e| degrees.of(e), pitch, None)
+}
+
+/// [`point_cv_score`] with a basis per element; `structural` are the elements the design
+/// cannot identify ([`super::structural_drops`]), needed when a basis is a smoothing spline
+/// (computed if None).
+pub fn point_cv_score_of(
+    machine: &Machine,
+    data: &LineData,
+    deg: &dyn Fn(&ErrorElement) -> Basis,
+    pitch: bool,
+    structural: Option<&[super::Dropped]>,
+) -> Result<Option<f64>, ModelError> {
+    let layout = match Layout::with_bases(machine, data, deg, pitch) {
         // a knot count the measured positions cannot support is no candidate
         Err(ModelError::Knots(..)) => return Ok(None),
         l => l?,
     };
-    let (a, y) = design_matrix(machine, &layout, data);
+    let (mut a, mut y) = design_matrix(machine, &layout, data);
     let mut fold_of = Vec::with_capacity(y.len());
     for c in &data.channels {
         for k in 0..c.readings_um.len() {
@@ -130,8 +160,21 @@ pub fn point_cv_score(
     }
     // what the whole design cannot identify, once: a fold keeps the same positions, so the
     // same elements are dropped and each fold needs only its QR
-    let Ok(full) = identifiability::analyse(&a, &y, &layout) else {
-        return Ok(None);
+    let dropped = if layout.blocks.iter().any(|b| b.penalty.is_some()) {
+        // a smoothing spline's penalty rows stay in every fold (they are no readings)
+        let dropped = match structural {
+            Some(d) => d.to_vec(),
+            None => super::structural_drops(machine, data, pitch)?,
+        };
+        let (aa, ya) = super::model::penalised(a, y, &layout, 1.0);
+        fold_of.resize(ya.len(), usize::MAX);
+        (a, y) = (aa, ya);
+        dropped
+    } else {
+        let Ok(full) = identifiability::analyse(&a, &y, &layout) else {
+            return Ok(None);
+        };
+        full.dropped
     };
     let (mut ss, mut n) = (0.0, 0usize);
     for f in 0..POINT_FOLDS {
@@ -139,7 +182,7 @@ pub fn point_cv_score(
         let test: Vec<usize> = (0..y.len()).filter(|&i| fold_of[i] == f).collect();
         let at = a.select_rows(train.iter());
         let yt = y.select_rows(train.iter());
-        let Ok(an) = identifiability::analyse_with(&at, &yt, &layout, Some(&full.dropped)) else {
+        let Ok(an) = identifiability::analyse_with(&at, &yt, &layout, Some(&dropped)) else {
             return Ok(None);
         };
         let fit = solve::solve(&at, &yt, &an);
@@ -157,17 +200,93 @@ pub const POINT_FOLDS: usize = 3;
 
 /// Chooses the degrees by cross-validation over the measured points (Legendre bases).
 pub fn select(machine: &Machine, data: &LineData, pitch: bool) -> Result<Selection, ModelError> {
-    select_among(machine, data, pitch, false)
+    select_among(machine, data, pitch, Family::Legendre)
 }
 
-/// Chooses the bases by cross-validation over the measured points, splines included with
-/// `splines`.
+/// Chooses the penalty of the smoothing splines per kind of element by cross-validation over
+/// the measured points: the best common penalty walking down from the stiffest (stopping two
+/// half-decades after the score stops falling), then each kind in turn moves its penalty by a
+/// half decade while that lowers the score, until no kind moves (at most [`SWEEPS`] passes).
+/// As elsewhere a smaller penalty (a more flexible model) must lower the score by [`MIN_GAIN`].
+fn select_smoothing(
+    machine: &Machine,
+    data: &LineData,
+    pitch: bool,
+) -> Result<Selection, ModelError> {
+    let structural = super::structural_drops(machine, data, pitch)?;
+    let mut trials: Vec<Trial> = Vec::new();
+    let mut score = |d: KindDegrees| -> Result<f64, ModelError> {
+        if let Some(t) = trials.iter().find(|t| t.degrees == d) {
+            return Ok(t.cv_rms_um);
+        }
+        let s = point_cv_score_of(machine, data, &|e| d.of(e), pitch, Some(&structural))?
+            .unwrap_or(f64::INFINITY);
+        trials.push(Trial {
+            degrees: d,
+            cv_rms_um: s,
+        });
+        Ok(s)
+    };
+    let (lo, hi) = (*PENALTY_CANDIDATES.start(), *PENALTY_CANDIDATES.end());
+    let mut best = KindDegrees::all(Basis::Smooth(hi));
+    let mut best_s = score(best)?;
+    let mut worse = 0;
+    for e in (lo..hi).rev() {
+        let s = score(KindDegrees::all(Basis::Smooth(e)))?;
+        if s < best_s * (1.0 - MIN_GAIN) {
+            (best, best_s, worse) = (KindDegrees::all(Basis::Smooth(e)), s, 0);
+        } else {
+            worse += 1;
+            if worse == 2 {
+                break;
+            }
+        }
+    }
+    let exponent = |b: Basis| match b {
+        Basis::Smooth(e) => e,
+        _ => hi,
+    };
+    for _ in 0..SWEEPS {
+        let mut changed = false;
+        for k in 0..3 {
+            for step in [1, -1] {
+                loop {
+                    let e = exponent(best.get(k)) + step;
+                    if !PENALTY_CANDIDATES.contains(&e) {
+                        break;
+                    }
+                    let cand = best.with(k, Basis::Smooth(e));
+                    let s = score(cand)?;
+                    let gain = if step < 0 { 1.0 - MIN_GAIN } else { 1.0 };
+                    if s < best_s * gain {
+                        (best, best_s, changed) = (cand, s, true);
+                    } else {
+                        break;
+                    }
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    Ok(Selection {
+        chosen: best,
+        cv_rms_um: best_s,
+        trials,
+    })
+}
+
+/// Chooses the bases of a family by cross-validation over the measured points.
 pub fn select_among(
     machine: &Machine,
     data: &LineData,
     pitch: bool,
-    splines: bool,
+    family: Family,
 ) -> Result<Selection, ModelError> {
+    if family == Family::Smoothing {
+        return select_smoothing(machine, data, pitch);
+    }
     let mut trials: Vec<Trial> = Vec::new();
     let score = |d: KindDegrees, trials: &mut Vec<Trial>| -> Result<f64, ModelError> {
         if let Some(t) = trials.iter().find(|t| t.degrees == d) {
@@ -180,13 +299,14 @@ pub fn select_among(
         });
         Ok(s)
     };
-    // best common degree (ascending: a higher degree must gain MIN_GAIN)
-    let mut best = KindDegrees::all(Basis::Legendre(*CANDIDATES.start()));
+    // best common basis (ascending size: a larger model must gain MIN_GAIN)
+    let common: Vec<Basis> = CANDIDATES.map(Basis::Legendre).collect();
+    let mut best = KindDegrees::all(common[0]);
     let mut best_s = score(best, &mut trials)?;
-    for d in CANDIDATES.skip(1) {
-        let s = score(KindDegrees::all(Basis::Legendre(d)), &mut trials)?;
+    for &d in &common[1..] {
+        let s = score(KindDegrees::all(d), &mut trials)?;
         if s < best_s * (1.0 - MIN_GAIN) {
-            best = KindDegrees::all(Basis::Legendre(d));
+            best = KindDegrees::all(d);
             best_s = s;
         }
     }
@@ -194,7 +314,7 @@ pub fn select_among(
         let mut changed = false;
         for k in 0..3 {
             let mut kind_best = (best.get(k), best_s);
-            for d in candidates(splines) {
+            for d in candidates(family) {
                 if d == best.get(k) {
                     continue;
                 }
