@@ -95,14 +95,47 @@ fn main() {
         straightness_noise_um: noise,
         alignment_urad: 20.0,
     };
-    let family = if std::env::var_os("SMOOTH").is_some() {
+    let family = if std::env::var_os("PER_ELEMENT").is_some() {
+        Family::SmoothingPerElement
+    } else if std::env::var_os("HYBRID").is_some() {
+        Family::Hybrid
+    } else if std::env::var_os("SMOOTH").is_some() {
         Family::Smoothing
     } else if std::env::var_os("SPLINES").is_some() {
         Family::WithSplines
     } else {
         Family::Legendre
     };
-    for seed in 1..=5u64 {
+    for seed in std::env::var("SEED").map_or(1..=5u64, |s| {
+        let v = s.parse().unwrap();
+        v..=v
+    }) {
+        if let Ok(scenario) = std::env::var("SCENARIO") {
+            // a whole scenario as the tests read it (e.g. the nearly cubic `vmc-9line`), with
+            // the family asked and at degree 3
+            let out = mtec_sim::run_scenario(&scenario, seed).unwrap();
+            let file = |n: &str| &out.files.iter().find(|f| f.name == n).unwrap().contents;
+            let data = LineData::from_table(
+                &Table::parse(Path::new("lines.csv"), file("lines.csv")).unwrap(),
+            )
+            .unwrap();
+            let spec: mtec_model::MachineSpec = toml::from_str(file("machine.toml")).unwrap();
+            let truth: ErrorSet = serde_json::from_value(out.truth["errors"].clone()).unwrap();
+            let m = Machine::from_spec(spec).unwrap();
+            let t0 = std::time::Instant::now();
+            let id = identify_family(&m, &data, family).unwrap();
+            let took = t0.elapsed();
+            let three = mtec_identify::lines::identify(&m, &data, 3).unwrap();
+            for (name, set) in [("chosen", &id.errors), ("degree 3", &three.errors)] {
+                let [p, b, a] = evaluate(&m, &truth, set, seed);
+                println!(
+                    "{scenario} seed {seed} {name:>8}: pred {p:.3?} rate {:.1?} {:?} ({took:.2?})",
+                    [0, 1, 2].map(|i| 100.0 * (1.0 - a[i] / b[i])),
+                    id.report.selection.as_ref().map(|s| s.chosen)
+                );
+            }
+            continue;
+        }
         if std::env::var_os("ORACLE").is_some() {
             // the best any identification could do if it knew everything but the waviness
             // (resp. neither the waviness nor the bump): compensate with that part of the truth
@@ -141,7 +174,33 @@ fn main() {
             let id = identify_family(&machine, &data, family).unwrap();
             let took = t0.elapsed();
             let [p, b, a] = evaluate(&machine, &truth, &id.errors, seed);
-            let c = id.report.selection.as_ref().map(|s| s.chosen);
+            if let Ok(name) = std::env::var("CURVE") {
+                let e = *truth.elements.keys().find(|e| e.name() == name).unwrap();
+                let [lo, hi] = machine.travel(e.axis);
+                let mut q = lo;
+                while q <= hi {
+                    println!(
+                        "{q:.1} {:.4} {:.4}",
+                        truth.value(&e, q),
+                        id.errors.value(&e, q)
+                    );
+                    q += 1.0;
+                }
+            }
+            if std::env::var_os("DIAG").is_some() {
+                // what each element costs: the prediction with it replaced by the truth
+                for (e, f) in &truth.elements {
+                    let mut fixed = id.errors.clone();
+                    fixed.insert(*e, f.clone());
+                    let [pf, _, _] = evaluate(&machine, &truth, &fixed, seed);
+                    println!("  {}: pred {pf:.3?}", e.name());
+                }
+            }
+            let c = id
+                .report
+                .selection
+                .as_ref()
+                .map(|s| (s.chosen, s.per_element.clone()));
             println!(
                 "seed {seed} {name:>9}: pred {p:.3?} before {b:.2?} after {a:.3?} rate {:.1?} {c:?} ({took:.2?})",
                 [0, 1, 2].map(|i| 100.0 * (1.0 - a[i] / b[i]))

@@ -55,12 +55,16 @@ pub enum Degree {
     Auto,
     /// The same degree (2..=12) for every element.
     Fixed(usize),
+    /// Per kind of element the better of the `Auto` degree and a smoothing spline whose
+    /// penalty is chosen by the same cross-validation ([`select::Family::Hybrid`]).
+    Smooth,
 }
 
 impl std::fmt::Display for Degree {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Degree::Auto => f.write_str("auto"),
+            Degree::Smooth => f.write_str("smooth"),
             Degree::Fixed(d) => write!(f, "{d}"),
         }
     }
@@ -73,10 +77,13 @@ impl std::str::FromStr for Degree {
         if s.eq_ignore_ascii_case("auto") {
             return Ok(Degree::Auto);
         }
+        if s.eq_ignore_ascii_case("smooth") {
+            return Ok(Degree::Smooth);
+        }
         match s.parse::<usize>() {
             Ok(d) if (model::MIN_DEGREE..=model::MAX_DEGREE).contains(&d) => Ok(Degree::Fixed(d)),
             _ => Err(format!(
-                "`{s}` is not a degree: give `auto` (chosen by cross-validation) or a whole number from {} to {}",
+                "`{s}` is not a degree: give `auto` (chosen by cross-validation), `smooth` (smoothing splines where they cross-validate better) or a whole number from {} to {}",
                 model::MIN_DEGREE,
                 model::MAX_DEGREE
             )),
@@ -145,7 +152,7 @@ pub fn identify_with(
     match degree {
         Degree::Fixed(d) => identify(machine, data, d),
         // a design without readings (`--design` alone) has nothing to cross-validate
-        Degree::Auto
+        Degree::Auto | Degree::Smooth
             if data
                 .channels
                 .iter()
@@ -154,6 +161,7 @@ pub fn identify_with(
             identify(machine, data, AUTO_WITHOUT_READINGS)
         }
         Degree::Auto => identify_auto(machine, data, false),
+        Degree::Smooth => identify_family(machine, data, select::Family::Hybrid),
     }
 }
 
@@ -183,8 +191,7 @@ pub fn identify_family(
 ) -> Result<LineIdentification, LinesError> {
     model::check_machine(machine)?;
     let sel = select::select_among(machine, data, true, family)?;
-    let d = sel.chosen;
-    let layout = Layout::with_bases(machine, data, &|e| d.of(e), true)?;
+    let layout = Layout::with_bases(machine, data, &|e| sel.of(e), true)?;
     let mut id = identify_layout(machine, data, layout)?;
     id.report.selection = Some(sel);
     Ok(id)

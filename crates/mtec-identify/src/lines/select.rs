@@ -26,6 +26,7 @@ use super::model::{design_matrix, Basis, ElementKind, Layout, ModelError};
 use super::solve;
 use mtec_model::{ErrorElement, Machine};
 use serde::Serialize;
+use std::collections::BTreeMap;
 
 /// Degrees tried (2 stays available as an explicit `--degree 2`).
 pub const CANDIDATES: std::ops::RangeInclusive<usize> = 3..=9;
@@ -44,6 +45,10 @@ pub enum Family {
     WithSplines,
     /// Smoothing splines with a penalty of [`PENALTY_CANDIDATES`].
     Smoothing,
+    /// Per kind the better of the Legendre choice and the smoothing choice.
+    Hybrid,
+    /// Smoothing splines, the penalty per kind and then per element.
+    SmoothingPerElement,
 }
 
 /// Every basis a kind may take, in the order tried (splines only when asked: see
@@ -55,7 +60,9 @@ fn candidates(family: Family) -> Vec<Basis> {
             .map(Basis::Legendre)
             .chain(KNOT_CANDIDATES.map(Basis::Spline))
             .collect(),
-        Family::Smoothing => PENALTY_CANDIDATES.rev().map(Basis::Smooth).collect(),
+        Family::Smoothing | Family::Hybrid | Family::SmoothingPerElement => {
+            PENALTY_CANDIDATES.rev().map(Basis::Smooth).collect()
+        }
     }
 }
 
@@ -121,6 +128,19 @@ pub struct Selection {
     pub cv_rms_um: f64,
     /// Every choice scored, in the order tried.
     pub trials: Vec<Trial>,
+    /// Elements whose basis differs from their kind's (per-element selection), by name.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub per_element: BTreeMap<String, Basis>,
+}
+
+impl Selection {
+    /// The basis chosen for an element.
+    pub fn of(&self, e: &ErrorElement) -> Basis {
+        self.per_element
+            .get(&e.name())
+            .copied()
+            .unwrap_or(self.chosen.of(e))
+    }
 }
 
 /// Leave-points-out score (µm): fold f holds out the points with step index ≡ f (mod
@@ -208,10 +228,13 @@ pub fn select(machine: &Machine, data: &LineData, pitch: bool) -> Result<Selecti
 /// half-decades after the score stops falling), then each kind in turn moves its penalty by a
 /// half decade while that lowers the score, until no kind moves (at most [`SWEEPS`] passes).
 /// As elsewhere a smaller penalty (a more flexible model) must lower the score by [`MIN_GAIN`].
+/// With `per_element`, each element then moves its own penalty by half decades from its kind's
+/// while that lowers the score by [`MIN_GAIN`] (one pass over the elements).
 fn select_smoothing(
     machine: &Machine,
     data: &LineData,
     pitch: bool,
+    per_element: bool,
 ) -> Result<Selection, ModelError> {
     let structural = super::structural_drops(machine, data, pitch)?;
     let mut trials: Vec<Trial> = Vec::new();
@@ -270,10 +293,109 @@ fn select_smoothing(
             break;
         }
     }
+    let mut overrides: BTreeMap<String, Basis> = BTreeMap::new();
+    if per_element {
+        let chosen = best;
+        let of = |o: &BTreeMap<String, Basis>, e: &ErrorElement| {
+            o.get(&e.name()).copied().unwrap_or(chosen.of(e))
+        };
+        for el in mtec_model::three_axis_elements() {
+            if super::model::element_kind(&el) == ElementKind::Squareness {
+                continue;
+            }
+            for step in [1, -1] {
+                loop {
+                    let e = exponent(of(&overrides, &el)) + step;
+                    if !PENALTY_CANDIDATES.contains(&e) {
+                        break;
+                    }
+                    let mut cand = overrides.clone();
+                    cand.insert(el.name(), Basis::Smooth(e));
+                    let s = point_cv_score_of(
+                        machine,
+                        data,
+                        &|x| of(&cand, x),
+                        pitch,
+                        Some(&structural),
+                    )?
+                    .unwrap_or(f64::INFINITY);
+                    let gain = if step < 0 { 1.0 - MIN_GAIN } else { 1.0 };
+                    if s < best_s * gain {
+                        (overrides, best_s) = (cand, s);
+                    } else {
+                        break;
+                    }
+                }
+            }
+        }
+    }
     Ok(Selection {
         chosen: best,
         cv_rms_um: best_s,
         trials,
+        per_element: overrides,
+    })
+}
+
+/// Per kind of element the better of the two selections ([`Family::Legendre`] and
+/// [`Family::Smoothing`]): from the one with the lower score, each kind in turn takes the
+/// other's basis if that lowers the score by [`MIN_GAIN`] (a smoothing spline is the larger
+/// model), until no kind changes (at most [`SWEEPS`] passes).
+fn select_hybrid(machine: &Machine, data: &LineData, pitch: bool) -> Result<Selection, ModelError> {
+    let poly = select_among(machine, data, pitch, Family::Legendre)?;
+    let smooth = select_smoothing(machine, data, pitch, false)?;
+    let structural = super::structural_drops(machine, data, pitch)?;
+    let mut trials: Vec<Trial> = poly.trials.iter().chain(&smooth.trials).cloned().collect();
+    let (mut best, mut best_s) = if smooth.cv_rms_um < poly.cv_rms_um * (1.0 - MIN_GAIN) {
+        (smooth.chosen, smooth.cv_rms_um)
+    } else {
+        (poly.chosen, poly.cv_rms_um)
+    };
+    for _ in 0..SWEEPS {
+        let mut changed = false;
+        for k in 0..3 {
+            let other = if best.get(k) == poly.chosen.get(k) {
+                smooth.chosen.get(k)
+            } else {
+                poly.chosen.get(k)
+            };
+            let cand = best.with(k, other);
+            let s = match trials.iter().find(|t| t.degrees == cand) {
+                Some(t) => t.cv_rms_um,
+                None => {
+                    let s = point_cv_score_of(
+                        machine,
+                        data,
+                        &|e| cand.of(e),
+                        pitch,
+                        Some(&structural),
+                    )?
+                    .unwrap_or(f64::INFINITY);
+                    trials.push(Trial {
+                        degrees: cand,
+                        cv_rms_um: s,
+                    });
+                    s
+                }
+            };
+            let gain = if matches!(other, Basis::Smooth(_)) {
+                1.0 - MIN_GAIN
+            } else {
+                1.0
+            };
+            if s < best_s * gain {
+                (best, best_s, changed) = (cand, s, true);
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    Ok(Selection {
+        chosen: best,
+        cv_rms_um: best_s,
+        trials,
+        per_element: BTreeMap::new(),
     })
 }
 
@@ -285,7 +407,13 @@ pub fn select_among(
     family: Family,
 ) -> Result<Selection, ModelError> {
     if family == Family::Smoothing {
-        return select_smoothing(machine, data, pitch);
+        return select_smoothing(machine, data, pitch, false);
+    }
+    if family == Family::SmoothingPerElement {
+        return select_smoothing(machine, data, pitch, true);
+    }
+    if family == Family::Hybrid {
+        return select_hybrid(machine, data, pitch);
     }
     let mut trials: Vec<Trial> = Vec::new();
     let score = |d: KindDegrees, trials: &mut Vec<Trial>| -> Result<f64, ModelError> {
@@ -343,5 +471,6 @@ pub fn select_among(
         chosen: best,
         cv_rms_um: best_s,
         trials,
+        per_element: BTreeMap::new(),
     })
 }
