@@ -95,7 +95,9 @@ fn main() {
         straightness_noise_um: noise,
         alignment_urad: 20.0,
     };
-    let family = if std::env::var_os("PER_ELEMENT").is_some() {
+    let family = if std::env::var_os("LEGENDRE_PER_ELEMENT").is_some() {
+        Family::LegendrePerElement
+    } else if std::env::var_os("PER_ELEMENT").is_some() {
         Family::SmoothingPerElement
     } else if std::env::var_os("HYBRID").is_some() {
         Family::Hybrid
@@ -185,6 +187,33 @@ fn main() {
                         id.errors.value(&e, q)
                     );
                     q += 1.0;
+                }
+            }
+            if std::env::var_os("COND").is_some() {
+                // the least-determined direction of the kept design: which columns it moves
+                let svd = id.analysis.kept_r.clone().svd(false, true);
+                let v_t = svd.v_t.unwrap();
+                let (imin, smin) = svd
+                    .singular_values
+                    .iter()
+                    .enumerate()
+                    .min_by(|a, b| a.1.total_cmp(b.1))
+                    .unwrap();
+                println!(
+                    "  smallest singular value {smin:.3e} (largest {:.3e})",
+                    svd.singular_values.max()
+                );
+                for (j, &c) in id.analysis.active.iter().enumerate() {
+                    let w = v_t[(imin, j)];
+                    if w.abs() > 0.05 {
+                        let owner = id
+                            .layout
+                            .blocks
+                            .iter()
+                            .find(|b| b.cols().contains(&c))
+                            .map_or("slope".to_string(), |b| b.element.name());
+                        println!("    col {c} ({owner}): {w:.3}");
+                    }
                 }
             }
             if std::env::var_os("DIAG").is_some() {

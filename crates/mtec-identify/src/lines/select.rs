@@ -49,13 +49,15 @@ pub enum Family {
     Hybrid,
     /// Smoothing splines, the penalty per kind and then per element.
     SmoothingPerElement,
+    /// Legendre degrees per kind and then per element.
+    LegendrePerElement,
 }
 
 /// Every basis a kind may take, in the order tried (splines only when asked: see
 /// docs/methods.md §3 for why the default does not try them).
 fn candidates(family: Family) -> Vec<Basis> {
     match family {
-        Family::Legendre => CANDIDATES.map(Basis::Legendre).collect(),
+        Family::Legendre | Family::LegendrePerElement => CANDIDATES.map(Basis::Legendre).collect(),
         Family::WithSplines => CANDIDATES
             .map(Basis::Legendre)
             .chain(KNOT_CANDIDATES.map(Basis::Spline))
@@ -293,41 +295,11 @@ fn select_smoothing(
             break;
         }
     }
-    let mut overrides: BTreeMap<String, Basis> = BTreeMap::new();
+    let mut overrides = BTreeMap::new();
     if per_element {
-        let chosen = best;
-        let of = |o: &BTreeMap<String, Basis>, e: &ErrorElement| {
-            o.get(&e.name()).copied().unwrap_or(chosen.of(e))
-        };
-        for el in mtec_model::three_axis_elements() {
-            if super::model::element_kind(&el) == ElementKind::Squareness {
-                continue;
-            }
-            for step in [1, -1] {
-                loop {
-                    let e = exponent(of(&overrides, &el)) + step;
-                    if !PENALTY_CANDIDATES.contains(&e) {
-                        break;
-                    }
-                    let mut cand = overrides.clone();
-                    cand.insert(el.name(), Basis::Smooth(e));
-                    let s = point_cv_score_of(
-                        machine,
-                        data,
-                        &|x| of(&cand, x),
-                        pitch,
-                        Some(&structural),
-                    )?
-                    .unwrap_or(f64::INFINITY);
-                    let gain = if step < 0 { 1.0 - MIN_GAIN } else { 1.0 };
-                    if s < best_s * gain {
-                        (overrides, best_s) = (cand, s);
-                    } else {
-                        break;
-                    }
-                }
-            }
-        }
+        let ladder: Vec<Basis> = PENALTY_CANDIDATES.rev().map(Basis::Smooth).collect();
+        (overrides, best_s) =
+            refine_per_element(machine, data, pitch, best, best_s, &ladder, &structural)?;
     }
     Ok(Selection {
         chosen: best,
@@ -335,6 +307,53 @@ fn select_smoothing(
         trials,
         per_element: overrides,
     })
+}
+
+/// Per element, from the per-kind choice `chosen` (score `score`): each element in turn moves
+/// one step up or down `ladder` (candidates from the smallest model to the largest) while that
+/// lowers the score (a larger model by [`MIN_GAIN`]); one pass over the elements. Returns the
+/// elements whose basis differs from their kind's, and the score.
+fn refine_per_element(
+    machine: &Machine,
+    data: &LineData,
+    pitch: bool,
+    chosen: KindDegrees,
+    score: f64,
+    ladder: &[Basis],
+    structural: &[super::Dropped],
+) -> Result<(BTreeMap<String, Basis>, f64), ModelError> {
+    let mut overrides: BTreeMap<String, Basis> = BTreeMap::new();
+    let mut best_s = score;
+    let of = |o: &BTreeMap<String, Basis>, e: &ErrorElement| {
+        o.get(&e.name()).copied().unwrap_or(chosen.of(e))
+    };
+    for el in mtec_model::three_axis_elements() {
+        if super::model::element_kind(&el) == ElementKind::Squareness {
+            continue;
+        }
+        for step in [1isize, -1] {
+            loop {
+                let Some(at) = ladder.iter().position(|b| *b == of(&overrides, &el)) else {
+                    break;
+                };
+                let Some(&next) = ladder.get((at as isize + step) as usize) else {
+                    break;
+                };
+                let mut cand = overrides.clone();
+                cand.insert(el.name(), next);
+                let s =
+                    point_cv_score_of(machine, data, &|x| of(&cand, x), pitch, Some(structural))?
+                        .unwrap_or(f64::INFINITY);
+                let gain = if step > 0 { 1.0 - MIN_GAIN } else { 1.0 };
+                if s < best_s * gain {
+                    (overrides, best_s) = (cand, s);
+                } else {
+                    break;
+                }
+            }
+        }
+    }
+    Ok((overrides, best_s))
 }
 
 /// Per kind of element the better of the two selections ([`Family::Legendre`] and
@@ -414,6 +433,21 @@ pub fn select_among(
     }
     if family == Family::Hybrid {
         return select_hybrid(machine, data, pitch);
+    }
+    if family == Family::LegendrePerElement {
+        let mut sel = select_among(machine, data, pitch, Family::Legendre)?;
+        let structural = super::structural_drops(machine, data, pitch)?;
+        let ladder: Vec<Basis> = CANDIDATES.map(Basis::Legendre).collect();
+        (sel.per_element, sel.cv_rms_um) = refine_per_element(
+            machine,
+            data,
+            pitch,
+            sel.chosen,
+            sel.cv_rms_um,
+            &ladder,
+            &structural,
+        )?;
+        return Ok(sel);
     }
     let mut trials: Vec<Trial> = Vec::new();
     let score = |d: KindDegrees, trials: &mut Vec<Trial>| -> Result<f64, ModelError> {
