@@ -332,10 +332,7 @@ fn refine_per_element(
             continue;
         }
         for step in [1isize, -1] {
-            loop {
-                let Some(at) = ladder.iter().position(|b| *b == of(&overrides, &el)) else {
-                    break;
-                };
+            while let Some(at) = ladder.iter().position(|b| *b == of(&overrides, &el)) {
                 let Some(&next) = ladder.get((at as isize + step) as usize) else {
                     break;
                 };
