@@ -5,9 +5,14 @@
 //!
 //! Run: `cargo run -p mtec-identify --example lines_floor [NOISE_UM]`; `ALL_ONLY=1` only the
 //! whole truth, `SPLINES=1` with cubic splines among the cross-validated candidates, `SMOOTH=1`
-//! smoothing splines (penalty chosen by the same cross-validation), `STEPS=N`
-//! N intervals per line instead of the scenario's 20, `ORACLE=1` the rate of a compensation that
-//! knows the truth but its waviness (and bump): the ceiling no identification can pass.
+//! smoothing splines (penalty chosen by the same cross-validation), `HYBRID=1` the better of
+//! the two per kind (`--degree smooth`), `PER_ELEMENT=1` / `LEGENDRE_PER_ELEMENT=1` the penalty
+//! / degree refined per element, `STEPS=N` N intervals per line instead of the scenario's 20,
+//! `ORACLE=1` the rate of a compensation that knows the truth but its waviness' oscillation (and
+//! bump): the ceiling no identification can pass; `SEED=S` one seed; `SCENARIO=vmc-9line` a
+//! whole scenario against degree 3; `CURVE=EZZ` an element's truth and identification every
+//! mm; `DIAG=1` the prediction with each element replaced by the truth; `COND=1` the
+//! least-determined direction of the kept design.
 
 use mtec_comp::kinematic::KinematicModel;
 use mtec_comp::{command_for_target, CorrectionOptions};

@@ -51,7 +51,7 @@ fn evaluate(
 }
 
 /// Issue 19 Done-when, measured (debug build: ~1 min): `--degree auto` on 5 seeds. Prediction
-/// ≤ 1.0 µm RMS on every axis is met (worst 0.75 µm); the compensation rate is ≥ 95 % on 13 of
+/// ≤ 1.0 µm RMS on every axis is met (worst 0.75 µm); the compensation rate is ≥ 95 % on 12 of
 /// the 15 seed-axes and ≥ 92.5 % on all: what remains (0.2–0.3 µm) is the local bumps and the
 /// waviness between the 29–39 mm measurement steps, which no function of the measured points
 /// can see, against machines whose error on an axis is as small as 4 µm RMS (seed 3, X).
