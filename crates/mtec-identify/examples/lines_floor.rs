@@ -7,7 +7,7 @@
 //! whole truth, `SPLINES=1` with cubic splines among the cross-validated candidates, `SMOOTH=1`
 //! smoothing splines (penalty chosen by the same cross-validation), `HYBRID=1` the better of
 //! the two per kind (`--degree smooth`), `PER_ELEMENT=1` / `LEGENDRE_PER_ELEMENT=1` the penalty
-//! / degree refined per element, `STEPS=N` N intervals per line instead of the scenario's 20,
+//! / degree refined per element, `GCV=1` the penalty by generalised cross-validation, `STEPS=N` N intervals per line instead of the scenario's 20,
 //! `ORACLE=1` the rate of a compensation that knows the truth but its waviness' oscillation (and
 //! bump): the ceiling no identification can pass; `SEED=S` one seed; `SCENARIO=vmc-9line` a
 //! whole scenario against degree 3; `CURVE=EZZ` an element's truth and identification every
@@ -100,7 +100,9 @@ fn main() {
         straightness_noise_um: noise,
         alignment_urad: 20.0,
     };
-    let family = if std::env::var_os("LEGENDRE_PER_ELEMENT").is_some() {
+    let family = if std::env::var_os("GCV").is_some() {
+        Family::SmoothingGcv
+    } else if std::env::var_os("LEGENDRE_PER_ELEMENT").is_some() {
         Family::LegendrePerElement
     } else if std::env::var_os("PER_ELEMENT").is_some() {
         Family::SmoothingPerElement

@@ -51,6 +51,9 @@ pub enum Family {
     SmoothingPerElement,
     /// Legendre degrees per kind and then per element.
     LegendrePerElement,
+    /// Smoothing splines with the penalty per kind chosen by generalised cross-validation
+    /// (a study).
+    SmoothingGcv,
 }
 
 /// Every basis a kind may take, in the order tried (splines only when asked: see
@@ -62,7 +65,7 @@ fn candidates(family: Family) -> Vec<Basis> {
             .map(Basis::Legendre)
             .chain(KNOT_CANDIDATES.map(Basis::Spline))
             .collect(),
-        Family::Smoothing | Family::Hybrid | Family::SmoothingPerElement => {
+        Family::Smoothing | Family::Hybrid | Family::SmoothingPerElement | Family::SmoothingGcv => {
             PENALTY_CANDIDATES.rev().map(Basis::Smooth).collect()
         }
     }
@@ -217,6 +220,47 @@ pub fn point_cv_score_of(
     Ok(Some((ss / n.max(1) as f64).sqrt()))
 }
 
+/// Generalised cross-validation (Craven & Wahba 1979, eq. 1.6) of a penalised layout, as an RMS
+/// in µm: √(m·RSS / (m − tr H)²), H the hat matrix of the readings, tr H = ‖A_s R⁻¹‖²_F with
+/// [A_s; P_s] = QR the column-scaled kept augmented design (A_s its reading rows). It treats
+/// each reading as its own point: the repeat runs at the same position stay in when one is left
+/// out.
+pub fn gcv_score_of(
+    machine: &Machine,
+    data: &LineData,
+    deg: &dyn Fn(&ErrorElement) -> Basis,
+    pitch: bool,
+    structural: &[super::Dropped],
+) -> Result<Option<f64>, ModelError> {
+    let layout = match Layout::with_bases(machine, data, deg, pitch) {
+        Err(ModelError::Knots(..)) => return Ok(None),
+        l => l?,
+    };
+    let (a, y) = design_matrix(machine, &layout, data);
+    let m = y.len();
+    let (aa, ya) = super::model::penalised(a.clone(), y.clone(), &layout, 1.0);
+    let Ok(an) = identifiability::analyse_with(&aa, &ya, &layout, Some(structural)) else {
+        return Ok(None);
+    };
+    let fit = solve::solve(&aa, &ya, &an);
+    let rss = (&y - &a * &fit.theta).norm_squared();
+    let mut a_s = a.select_columns(an.active.iter());
+    for (j, mut c) in a_s.column_iter_mut().enumerate() {
+        c /= an.scale[an.active[j]];
+    }
+    // (A_s R⁻¹)ᵀ = R⁻ᵀ A_sᵀ
+    let Some(x) = an
+        .kept_r
+        .transpose()
+        .solve_lower_triangular(&a_s.transpose())
+    else {
+        return Ok(None);
+    };
+    let trace = x.norm_squared();
+    let m_f = m as f64;
+    Ok(Some((m_f * rss).sqrt() / (m_f - trace)))
+}
+
 /// Folds of [`point_cv_score`].
 pub const POINT_FOLDS: usize = 3;
 
@@ -232,11 +276,23 @@ pub fn select(machine: &Machine, data: &LineData, pitch: bool) -> Result<Selecti
 /// As elsewhere a smaller penalty (a more flexible model) must lower the score by [`MIN_GAIN`].
 /// With `per_element`, each element then moves its own penalty by half decades from its kind's
 /// while that lowers the score by [`MIN_GAIN`] (one pass over the elements).
+/// With `gcv` the score is generalised cross-validation ([`gcv_score_of`]) instead of the
+/// leave-points-out folds (a study: see docs/methods.md §3).
 fn select_smoothing(
     machine: &Machine,
     data: &LineData,
     pitch: bool,
     per_element: bool,
+) -> Result<Selection, ModelError> {
+    select_smoothing_by(machine, data, pitch, per_element, false)
+}
+
+fn select_smoothing_by(
+    machine: &Machine,
+    data: &LineData,
+    pitch: bool,
+    per_element: bool,
+    gcv: bool,
 ) -> Result<Selection, ModelError> {
     let structural = super::structural_drops(machine, data, pitch)?;
     let mut trials: Vec<Trial> = Vec::new();
@@ -244,8 +300,12 @@ fn select_smoothing(
         if let Some(t) = trials.iter().find(|t| t.degrees == d) {
             return Ok(t.cv_rms_um);
         }
-        let s = point_cv_score_of(machine, data, &|e| d.of(e), pitch, Some(&structural))?
-            .unwrap_or(f64::INFINITY);
+        let s = if gcv {
+            gcv_score_of(machine, data, &|e| d.of(e), pitch, &structural)?
+        } else {
+            point_cv_score_of(machine, data, &|e| d.of(e), pitch, Some(&structural))?
+        }
+        .unwrap_or(f64::INFINITY);
         trials.push(Trial {
             degrees: d,
             cv_rms_um: s,
@@ -427,6 +487,9 @@ pub fn select_among(
     }
     if family == Family::SmoothingPerElement {
         return select_smoothing(machine, data, pitch, true);
+    }
+    if family == Family::SmoothingGcv {
+        return select_smoothing_by(machine, data, pitch, false, true);
     }
     if family == Family::Hybrid {
         return select_hybrid(machine, data, pitch);
