@@ -20,8 +20,8 @@ pub struct Args {
     /// A built-in design: the data must contain its lines; without --data, analyse it alone.
     #[arg(long, value_parser = ["nine-line", "fifteen-line"])]
     pub design: Option<String>,
-    /// Polynomial degree of the error functions: `auto` (per kind of element, by
-    /// cross-validation over the measured points) or 2..12 for every element.
+    /// Degree of the error functions: `auto` (per kind of element, by cross-validation over the
+    /// points), `smooth` (or a smoothing spline where it validates better), 2..12 for all.
     #[arg(long, default_value_t = DEFAULT_DEGREE)]
     pub degree: Degree,
     /// Print the report as JSON ("format": "mtec.identify-lines/1") instead of text.

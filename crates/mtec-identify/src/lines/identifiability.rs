@@ -129,7 +129,14 @@ pub fn analyse_with(
         }
     }
     if let Some(known) = known {
-        dropped.extend(known.iter().filter(|d| !d.zero_sensitivity).cloned());
+        // an element known to reach no reading stays dropped even where other rows (the
+        // penalty rows of a smoothing spline, which are no readings) make its columns non-zero
+        let known: Vec<Dropped> = known
+            .iter()
+            .filter(|d| !dropped.iter().any(|x| x.element == d.element))
+            .cloned()
+            .collect();
+        dropped.extend(known);
     }
     let is_dropped = |c: usize| {
         dropped.iter().any(|d| {

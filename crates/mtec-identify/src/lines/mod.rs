@@ -55,12 +55,16 @@ pub enum Degree {
     Auto,
     /// The same degree (2..=12) for every element.
     Fixed(usize),
+    /// Per kind of element the better of the `Auto` degree and a smoothing spline whose
+    /// penalty is chosen by the same cross-validation ([`select::Family::Hybrid`]).
+    Smooth,
 }
 
 impl std::fmt::Display for Degree {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Degree::Auto => f.write_str("auto"),
+            Degree::Smooth => f.write_str("smooth"),
             Degree::Fixed(d) => write!(f, "{d}"),
         }
     }
@@ -73,10 +77,13 @@ impl std::str::FromStr for Degree {
         if s.eq_ignore_ascii_case("auto") {
             return Ok(Degree::Auto);
         }
+        if s.eq_ignore_ascii_case("smooth") {
+            return Ok(Degree::Smooth);
+        }
         match s.parse::<usize>() {
             Ok(d) if (model::MIN_DEGREE..=model::MAX_DEGREE).contains(&d) => Ok(Degree::Fixed(d)),
             _ => Err(format!(
-                "`{s}` is not a degree: give `auto` (chosen by cross-validation) or a whole number from {} to {}",
+                "`{s}` is not a degree: give `auto` (chosen by cross-validation), `smooth` (smoothing splines where they cross-validate better) or a whole number from {} to {}",
                 model::MIN_DEGREE,
                 model::MAX_DEGREE
             )),
@@ -145,7 +152,7 @@ pub fn identify_with(
     match degree {
         Degree::Fixed(d) => identify(machine, data, d),
         // a design without readings (`--design` alone) has nothing to cross-validate
-        Degree::Auto
+        Degree::Auto | Degree::Smooth
             if data
                 .channels
                 .iter()
@@ -154,6 +161,7 @@ pub fn identify_with(
             identify(machine, data, AUTO_WITHOUT_READINGS)
         }
         Degree::Auto => identify_auto(machine, data, false),
+        Degree::Smooth => identify_family(machine, data, select::Family::Hybrid),
     }
 }
 
@@ -166,9 +174,24 @@ pub fn identify_auto(
     splines: bool,
 ) -> Result<LineIdentification, LinesError> {
     model::check_machine(machine)?;
-    let sel = select::select_among(machine, data, true, splines)?;
-    let d = sel.chosen;
-    let layout = Layout::with_bases(machine, data, &|e| d.of(e), true)?;
+    let family = if splines {
+        select::Family::WithSplines
+    } else {
+        select::Family::Legendre
+    };
+    identify_family(machine, data, family)
+}
+
+/// Identifies with the bases of `family` chosen by cross-validation ([`select`]); the
+/// selection is in the report.
+pub fn identify_family(
+    machine: &Machine,
+    data: &LineData,
+    family: select::Family,
+) -> Result<LineIdentification, LinesError> {
+    model::check_machine(machine)?;
+    let sel = select::select_among(machine, data, true, family)?;
+    let layout = Layout::with_bases(machine, data, &|e| sel.of(e), true)?;
     let mut id = identify_layout(machine, data, layout)?;
     id.report.selection = Some(sel);
     Ok(id)
@@ -195,15 +218,73 @@ pub fn identify_layout(
         readings,
         parameters,
     };
+    let smooth = layout.blocks.iter().any(|b| b.penalty.is_some());
+    let m = y.len();
+    // a smoothing spline: the design with its penalty rows (the elements the design cannot
+    // identify are those of the polynomials: the penalty must not make a confounded element
+    // look determined)
+    let structural = if smooth {
+        Some(structural_drops(
+            machine,
+            data,
+            layout.blocks.iter().any(|b| b.period_mm.is_some()),
+        )?)
+    } else {
+        None
+    };
+    let penalised_fit = |a: &DMatrix<f64>,
+                         y: &DVector<f64>,
+                         scale: f64,
+                         dropped: Option<&[Dropped]>|
+     -> Result<(Analysis, Fit), LinesError> {
+        let (aa, ya) = model::penalised(a.clone(), y.clone(), &layout, scale);
+        let mut an = identifiability::analyse_with(&aa, &ya, &layout, dropped).map_err(too_few)?;
+        if dropped.is_some() {
+            // the singular values of the kept (penalised) design, for its condition number
+            let mut sv: Vec<f64> = an.kept_r.singular_values().iter().copied().collect();
+            sv.sort_by(|a, b| b.total_cmp(a));
+            an.kept_singular_values = sv.clone();
+            an.singular_values = sv;
+        }
+        let mut fit = solve::solve(&aa, &ya, &an);
+        // residuals and σ̂ of the readings (the penalty rows are no readings)
+        fit.residual_um = y - a * &fit.theta;
+        fit.dof = m.saturating_sub(an.active.len());
+        fit.sigma_um = (fit.residual_um.norm_squared() / fit.dof.max(1) as f64).sqrt();
+        Ok((an, fit))
+    };
     // ordinary least squares first, then weighted by the noise each kind of optics shows
-    let analysis = identifiability::analyse(&a, &y, &layout).map_err(too_few)?;
-    let fit = solve::solve(&a, &y, &analysis);
+    let (analysis, fit) = match &structural {
+        Some(d) => penalised_fit(&a, &y, 1.0, Some(d))?,
+        None => {
+            let analysis = identifiability::analyse(&a, &y, &layout).map_err(too_few)?;
+            let fit = solve::solve(&a, &y, &analysis);
+            (analysis, fit)
+        }
+    };
     let weights = kind_weights(data, &fit);
     let (analysis, fit) = match &weights {
         None => (analysis, fit),
         Some(w) => {
             let aw = DMatrix::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)] * w[i]);
             let yw = y.component_mul(w);
+            if smooth {
+                // the penalty weighted as the readings are on average, so that the λ chosen on
+                // the unweighted readings keeps its balance against them
+                let w_rms = (w.norm_squared() / m as f64).sqrt();
+                let (an, mut fit) = penalised_fit(&aw, &yw, w_rms, Some(&analysis.dropped))?;
+                fit.residual_um = &y - &a * &fit.theta;
+                fit.sigma_um = (fit.residual_um.norm_squared() / fit.dof.max(1) as f64).sqrt();
+                let errors = error_set(machine, data, degree, &layout, &an, &fit);
+                let report = report::build(machine, data, degree, &layout, &an, &fit);
+                return Ok(LineIdentification {
+                    errors,
+                    report,
+                    layout,
+                    analysis: an,
+                    fit,
+                });
+            }
             let analysis_w =
                 identifiability::analyse_with(&aw, &yw, &layout, Some(&analysis.dropped))
                     .map_err(too_few)?;
@@ -229,6 +310,21 @@ pub fn identify_layout(
         analysis,
         fit,
     })
+}
+
+/// The elements the design cannot identify, from the rank of its degree-3 polynomial model
+/// (with the pitch pairs when `pitch`): what a confounding of whole functions drops, for the
+/// layouts whose penalty would hide it.
+pub fn structural_drops(
+    machine: &Machine,
+    data: &LineData,
+    pitch: bool,
+) -> Result<Vec<Dropped>, ModelError> {
+    let layout = Layout::with_degrees(machine, data, &|_| 3, pitch)?;
+    let (a, y) = model::design_matrix(machine, &layout, data);
+    Ok(identifiability::analyse(&a, &y, &layout)
+        .map(|an| an.dropped)
+        .unwrap_or_default())
 }
 
 /// Row weights 1/σ_kind from the residuals of a first fit: displacement optics and straightness

@@ -59,6 +59,9 @@ pub struct Block {
     /// Cubic B-spline columns with knots from the data, instead of Legendre orders (`orders`
     /// is then empty), see [`super::spline`].
     pub spline: Option<Spline>,
+    /// Smoothing penalty λ of a smoothing spline (`spline` then holds its knots), see
+    /// [`penalty_rows`].
+    pub penalty: Option<f64>,
     /// Screw lead (mm) of a positioning element with a pitch-error pair (two more columns).
     pub period_mm: Option<f64>,
     /// Columns `first_col .. first_col + n_cols()`.
@@ -115,9 +118,10 @@ impl Block {
     }
     /// The function's basis.
     pub fn basis_choice(&self) -> Basis {
-        match &self.spline {
-            Some(s) => Basis::Spline(s.interior.len()),
-            None => Basis::Legendre(self.degree()),
+        match (&self.spline, self.penalty) {
+            (Some(_), Some(l)) => Basis::Smooth((2.0 * l.log10()).round() as i32),
+            (Some(s), None) => Basis::Spline(s.interior.len()),
+            (None, _) => Basis::Legendre(self.degree()),
         }
     }
     /// The highest Legendre order (the polynomial degree; 3 for a spline, 0 for a constant).
@@ -131,18 +135,31 @@ impl Block {
 
 /// The basis of an error function: Legendre polynomials of a degree, or cubic B-splines with
 /// a number of interior knots placed at the quantiles of the measured positions. Written as
-/// the degree (a number, as before splines existed) or as `"spline:K"`.
+/// the degree (a number, as before splines existed) or as `"spline:K"`; a smoothing spline
+/// (cubic B-splines with [`SMOOTH_KNOTS`] interior knots and the penalty λ = 10^e on the
+/// curvature, [`penalty_rows`]) as `"smooth:λ"`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Basis {
     Legendre(usize),
     Spline(usize),
+    /// The penalty λ = 10^(e/2) in half decades e.
+    Smooth(i32),
 }
+
+/// Interior knots of a smoothing spline (at most; fewer when the measured positions of the axis
+/// cannot carry them): about one per measured step of a 21-point line, so that the penalty, not
+/// the knots, decides how far the function bends (Eilers & Marx 1996: many knots, then a
+/// penalty).
+pub const SMOOTH_KNOTS: usize = 16;
 
 impl serde::Serialize for Basis {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         match *self {
             Basis::Legendre(d) => s.serialize_u64(d as u64),
             Basis::Spline(k) => s.serialize_str(&format!("spline:{k}")),
+            Basis::Smooth(_) => {
+                s.serialize_str(&format!("smooth:{:.1e}", self.penalty().unwrap_or(0.0)))
+            }
         }
     }
 }
@@ -153,6 +170,16 @@ impl Basis {
         match *self {
             Basis::Legendre(d) => d,
             Basis::Spline(k) => k + 3,
+            // for parsimony only: a smoothing spline ranks above every polynomial and spline,
+            // a smaller penalty above a larger one
+            Basis::Smooth(e) => (100 - e) as usize,
+        }
+    }
+    /// The smoothing penalty λ of a smoothing spline.
+    pub fn penalty(&self) -> Option<f64> {
+        match *self {
+            Basis::Smooth(e) => Some(10f64.powf(e as f64 / 2.0)),
+            _ => None,
         }
     }
 }
@@ -162,6 +189,11 @@ impl std::fmt::Display for Basis {
         match self {
             Basis::Legendre(d) => write!(f, "{d}"),
             Basis::Spline(k) => write!(f, "cubic spline with {k} interior knots"),
+            Basis::Smooth(_) => write!(
+                f,
+                "smoothing spline, penalty {:.1e}",
+                self.penalty().unwrap_or(0.0)
+            ),
         }
     }
 }
@@ -258,6 +290,25 @@ impl Layout {
                     .ok_or(ModelError::Knots(k, element.name()))?;
                     (0, Some(s))
                 }
+                (_, Basis::Smooth(_)) => {
+                    // as many knots as the axis' measured positions carry, up to SMOOTH_KNOTS
+                    let s = (1..=SMOOTH_KNOTS)
+                        .rev()
+                        .find_map(|k| {
+                            Spline::new(
+                                &positions[element.axis.index()],
+                                machine.travel(element.axis),
+                                k,
+                                kind == ElementKind::Straightness,
+                            )
+                        })
+                        .ok_or(ModelError::Knots(1, element.name()))?;
+                    (0, Some(s))
+                }
+            };
+            let penalty = match kind {
+                ElementKind::Squareness => None,
+                _ => basis_of(&element).penalty(),
             };
             if kind != ElementKind::Squareness
                 && spline.is_none()
@@ -282,6 +333,7 @@ impl Layout {
                 travel: machine.travel(element.axis),
                 orders,
                 spline,
+                penalty,
                 period_mm,
                 first_col: col,
                 tool_side: machine.chain.tool_side.contains(&element.axis),
@@ -456,4 +508,90 @@ pub fn design_matrix(
         }
     }
     (a, y)
+}
+
+/// The roughness penalty of the smoothing splines as rows to append to the design: for a block
+/// with penalty λ, rows R with RᵀR = λ·Ω, Ω_jk = ∫_{−1}^{1} φ_j''(x)·φ_k''(x) dx (x the position
+/// mapped to [−1, 1], φ_j the block's spline columns; the pitch pair is not penalised), so that
+/// least squares on [A; R] minimises ‖y − Aθ‖² + Σ λ ∫ f''(x)² dx: the penalised regression
+/// spline of O'Sullivan (1986, eq. 2.2), the P-spline idea of Eilers & Marx (1996) with the
+/// integral instead of coefficient differences (the columns are not plain B-splines: B_0 and,
+/// for a straightness, the reference line are taken out). φ'' is linear on each knot interval,
+/// so two Gauss points per interval integrate Ω exactly; the quadrature rows are reduced to
+/// their R factor (Householder QR). `row_scale` multiplies every row (the row weights of a
+/// weighted fit). None if no block is penalised.
+pub fn penalty_rows(layout: &Layout, row_scale: f64) -> Option<DMatrix<f64>> {
+    let mut blocks: Vec<DMatrix<f64>> = Vec::new();
+    for b in &layout.blocks {
+        let (Some(lambda), Some(spline)) = (b.penalty, &b.spline) else {
+            continue;
+        };
+        let n = spline.n_cols();
+        let [lo, hi] = b.travel;
+        let half_len = (hi - lo) / 2.0;
+        let mut edges = vec![lo];
+        edges.extend(&spline.interior);
+        edges.push(hi);
+        // d²f/dx² = (L/2)² d²f/dq², by a central difference (exact on a cubic piece)
+        let h = 1e-2;
+        let second = |q: f64| -> Vec<f64> {
+            let (m, c, p): (Vec<f64>, Vec<f64>, Vec<f64>) = (
+                b.basis(q - h).take(n).collect(),
+                b.basis(q).take(n).collect(),
+                b.basis(q + h).take(n).collect(),
+            );
+            (0..n)
+                .map(|j| (m[j] - 2.0 * c[j] + p[j]) / (h * h) * half_len * half_len)
+                .collect()
+        };
+        let g = 1.0 / 3f64.sqrt();
+        let mut rows = Vec::new();
+        for w in edges.windows(2) {
+            let (mid, hw) = ((w[0] + w[1]) / 2.0, (w[1] - w[0]) / 2.0);
+            // Gauss–Legendre, 2 points: weight hw (in q) · 1/half_len (dx/dq) each
+            let weight = (lambda * hw / half_len).sqrt();
+            for t in [-g, g] {
+                rows.push(
+                    second(mid + t * hw)
+                        .into_iter()
+                        .map(|v| v * weight)
+                        .collect::<Vec<_>>(),
+                );
+            }
+        }
+        let quad = DMatrix::from_fn(rows.len(), n, |i, j| rows[i][j]);
+        let r = quad.qr().r();
+        let mut full = DMatrix::zeros(r.nrows(), layout.n_cols);
+        full.view_mut((0, b.first_col), (r.nrows(), n))
+            .copy_from(&(r * row_scale));
+        blocks.push(full);
+    }
+    if blocks.is_empty() {
+        return None;
+    }
+    let total: usize = blocks.iter().map(|m| m.nrows()).sum();
+    let mut out = DMatrix::zeros(total, layout.n_cols);
+    let mut at = 0;
+    for m in blocks {
+        out.rows_mut(at, m.nrows()).copy_from(&m);
+        at += m.nrows();
+    }
+    Some(out)
+}
+
+/// The design with the penalty rows of [`penalty_rows`] appended (readings 0 for them), or the
+/// design as it is when nothing is penalised.
+pub fn penalised(
+    a: DMatrix<f64>,
+    y: DVector<f64>,
+    layout: &Layout,
+    row_scale: f64,
+) -> (DMatrix<f64>, DVector<f64>) {
+    let Some(p) = penalty_rows(layout, row_scale) else {
+        return (a, y);
+    };
+    let m = a.nrows();
+    let mut aa = a.resize_vertically(m + p.nrows(), 0.0);
+    aa.rows_mut(m, p.nrows()).copy_from(&p);
+    (aa, y.resize_vertically(m + p.nrows(), 0.0))
 }
