@@ -232,6 +232,8 @@ struct Flattener {
     ended: bool,
     /// Machine position (mm) after the last move; starts at machine 0 as rs274 does.
     machine_mm: [f64; 3],
+    /// Half a unit of the 4 decimals that position was printed with (mm per axis).
+    machine_print_mm: f64,
     live: [bool; 3],
     /// Machine angles A, B, C (deg) after the last move.
     rotary_deg: [f64; 3],
@@ -287,6 +289,7 @@ impl Flattener {
             pallet: false,
             ended: false,
             machine_mm: [0.0; 3],
+            machine_print_mm: 0.0,
             live: if opt.held.is_some() {
                 [false; 3]
             } else {
@@ -467,6 +470,7 @@ impl Flattener {
             }
             self.machine_mm[a] = m;
         }
+        self.machine_print_mm = 5e-5 * s;
         Ok(out)
     }
 
@@ -583,7 +587,20 @@ impl Flattener {
         self.live[f] = true;
         self.live[se] = true;
         self.live[n] |= self.held.is_some() && !held[n];
+        let (from_mm, from_print_mm) = (self.machine_mm, self.machine_print_mm);
         let out = self.target(c, end)?;
+        // an end within the printouts' rounding of the start but not on it: rs274's 4 decimals
+        // cannot tell a full circle from an arc of a micrometre (LinuxCNC's motion decides by
+        // digits below them); on it, the start is written as the end and the arc is whole
+        let chord = (self.machine_mm[f] - from_mm[f]).hypot(self.machine_mm[se] - from_mm[se]);
+        if chord > 1e-9
+            && chord <= std::f64::consts::SQRT_2 * (from_print_mm + self.machine_print_mm) + 1e-9
+        {
+            return Err(c.err(format!(
+                "an arc whose end lies {:.3} um from its start, within the rounding of rs274's printout (start and end printed in different units, or a micrometre arc): whether LinuxCNC runs a full circle cannot be told; give the full circle without axis words, or its end exactly at its start, in one unit system",
+                chord * 1e3
+            )));
+        }
         let mut line = String::from(if rot < 0.0 { "G2" } else { "G3" });
         self.axis_words(&out, &mut line);
         for (a, l) in ["I", "J", "K"].iter().enumerate() {
@@ -1131,6 +1148,30 @@ mod tests {
             assert!(t.lines().any(|l| l == want), "{want} missing in\n{t}");
         }
         assert!(t.starts_with("G90 G91.1 "), "{t}");
+    }
+
+    #[test]
+    fn a_circle_whose_end_lies_within_the_printouts_rounding_of_its_start_is_refused() {
+        // a full circle after G20 -> G21 (generate.py seed 4): the start printed in inches
+        // (Y -1.9528 in = -49.60112 mm), the end in mm 1.5 um away; rs274's digits cannot tell
+        // LinuxCNC's full circle from a micrometre arc
+        let e = flat(&canon(&[
+            "USE_LENGTH_UNITS(CANON_UNITS_INCHES)",
+            "SELECT_PLANE(CANON_PLANE_YZ)",
+            "STRAIGHT_FEED(5.8071, -1.9528, 1.4637, 0.0000, 0.0000, 0.0000)",
+            "USE_LENGTH_UNITS(CANON_UNITS_MM)",
+            "ARC_FEED(-49.5999, 37.1788, -41.6078, 25.4381, -1, 138.2051, 0.0000, 0.0000, 0.0000)",
+        ]))
+        .unwrap_err();
+        assert!(e.to_string().contains("1.4"), "{e}");
+        assert!(e.to_string().contains("cannot be told"), "{e}");
+        // printed on the start in the same units: a whole circle, its end written as its start
+        let t = flat(&canon(&[
+            "STRAIGHT_FEED(1.0000, 2.0000, 3.0000, 0.0000, 0.0000, 0.0000)",
+            "ARC_FEED(1.0000, 2.0000, 6.0000, 2.0000, -1, 3.0000, 0.0000, 0.0000, 0.0000)",
+        ]))
+        .unwrap();
+        assert!(t.lines().any(|l| l == "G2 X1.0 Y2.0 Z3.0 I5.0 J0.0"), "{t}");
     }
 
     #[test]
