@@ -300,6 +300,30 @@ fn bpnn_on_changes_predicts_motions_from_the_first_measurement() {
     // which the change model alone (without the first measurement) could not give
     let spread = rows.iter().map(|r| r[meas].abs()).fold(0.0, f64::max);
     assert!(rmse < 0.2 * spread, "{rmse} of {spread}");
+    // data without the targets lack the first measurement: refused, naming the data file
+    let bare = dir.path().join("temps_only.csv");
+    let text_in = std::fs::read_to_string(&data).unwrap();
+    let keep = |l: &str| -> String {
+        let f: Vec<&str> = l.split(',').collect();
+        [&f[..3], &f[8..]].concat().join(",")
+    };
+    let lines: Vec<String> = text_in.lines().map(keep).collect();
+    assert!(lines[0].starts_with("experiment,time_min,angle_deg,T1_c"));
+    std::fs::write(&bare, lines.join("\n") + "\n").unwrap();
+    let o = mtec(&[
+        "thermal",
+        "predict",
+        "--model",
+        bp.to_str().unwrap(),
+        "--data",
+        bare.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("temps_only.csv") && text(&o).contains("first row"),
+        "{}",
+        text(&o)
+    );
 }
 
 #[test]
