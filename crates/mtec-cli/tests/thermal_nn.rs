@@ -219,6 +219,113 @@ fn cnn_lstm_and_bpnn_fit_and_predict_rotary_motions() {
     );
 }
 
+/// `--changes`: the BPNN learns each motion's change since the angle's first measurement;
+/// predict adds that measurement back, so its residuals on the test experiment (motion minus
+/// first measurement minus predicted change) have the RMSE the fit reported on the changes.
+#[test]
+fn bpnn_on_changes_predicts_motions_from_the_first_measurement() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = motions(dir.path());
+    let d = data.to_str().unwrap();
+    let bp = dir.path().join("bpnn.json");
+    let o = mtec(&[
+        "thermal",
+        "fit",
+        "--model",
+        "bpnn",
+        "--data",
+        d,
+        "--target",
+        TARGETS,
+        "--sequence-by",
+        "angle_deg",
+        "--features",
+        "angle_deg",
+        "--angle-harmonics",
+        "2",
+        "--rises",
+        "--changes",
+        "--hidden",
+        "4",
+        "--epochs",
+        "3",
+        "--train",
+        "1,2,4",
+        "--test",
+        "3",
+        "--quiet",
+        "-o",
+        bp.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let b: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&bp).unwrap()).unwrap();
+    assert_eq!(b["provenance"]["changes"], true);
+    let csv_path = dir.path().join("pred.csv");
+    let o = mtec(&[
+        "thermal",
+        "predict",
+        "--model",
+        bp.to_str().unwrap(),
+        "--data",
+        d,
+        "-o",
+        csv_path.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let csv = std::fs::read_to_string(&csv_path).unwrap();
+    let cols: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let (pred, meas) = (
+        cols.iter().position(|c| *c == "pred_EXC_um").unwrap(),
+        cols.iter().position(|c| *c == "EXC_um").unwrap(),
+    );
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .filter(|l| l.starts_with("3,"))
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let rmse = (rows
+        .iter()
+        .map(|r| (r[meas] - r[pred]).powi(2))
+        .sum::<f64>()
+        / rows.len() as f64)
+        .sqrt();
+    let fit_rmse = b["provenance"]["test_metrics"][0]["rmse"].as_f64().unwrap();
+    assert!(
+        (rmse - fit_rmse).abs() < 1e-3 * fit_rmse,
+        "{rmse} vs {fit_rmse}"
+    );
+    // the motions themselves: predictions near the measured static pattern (tens of µm),
+    // which the change model alone (without the first measurement) could not give
+    let spread = rows.iter().map(|r| r[meas].abs()).fold(0.0, f64::max);
+    assert!(rmse < 0.2 * spread, "{rmse} of {spread}");
+    // data without the targets lack the first measurement: refused, naming the data file
+    let bare = dir.path().join("temps_only.csv");
+    let text_in = std::fs::read_to_string(&data).unwrap();
+    let keep = |l: &str| -> String {
+        let f: Vec<&str> = l.split(',').collect();
+        [&f[..3], &f[8..]].concat().join(",")
+    };
+    let lines: Vec<String> = text_in.lines().map(keep).collect();
+    assert!(lines[0].starts_with("experiment,time_min,angle_deg,T1_c"));
+    std::fs::write(&bare, lines.join("\n") + "\n").unwrap();
+    let o = mtec(&[
+        "thermal",
+        "predict",
+        "--model",
+        bp.to_str().unwrap(),
+        "--data",
+        bare.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("temps_only.csv") && text(&o).contains("first row"),
+        "{}",
+        text(&o)
+    );
+}
+
 #[test]
 fn bad_neural_fits_exit_2_with_the_reason() {
     let dir = tempfile::tempdir().unwrap();

@@ -52,6 +52,9 @@ pub struct BpnnTrainConfig {
     pub batch_size: Option<usize>,
     /// Share of rows held out for early stopping when no validation rows are given.
     pub validation_fraction: f64,
+    /// Time series ([`crate::baseline::train_bpnn_baseline`]): early stopping on this whole
+    /// training experiment instead of every sequence's tail. Unused for plain rows.
+    pub validation_experiment: Option<u32>,
     /// Epochs without validation improvement before stopping; `None` = 6 (LM) or 50 (Adam).
     pub patience: Option<usize>,
     pub seed: u64,
@@ -67,6 +70,7 @@ impl Default for BpnnTrainConfig {
             learning_rate: 0.01,
             batch_size: None,
             validation_fraction: 0.15,
+            validation_experiment: None,
             patience: None,
             seed: 42,
         }

@@ -15,8 +15,9 @@
 //! - A window ending at row t uses rows t−W+1..=t; rows before the start of a sequence repeat
 //!   its first row (the machine was at its initial state before the log started).
 //! - Early stopping holds out the last `validation_fraction` of the scored rows of every
-//!   training sequence (a block at the end of each series, never random rows) and keeps the
-//!   weights of the best validation epoch.
+//!   training sequence (a block at the end of each series, never random rows), or one whole
+//!   training experiment (`validation_experiment`), and keeps the weights of the best
+//!   validation epoch.
 //! - Initialisation as PyTorch's defaults (uniform ±1/√fan_in), drawn from a seeded StdRng;
 //!   mini-batch order from a seeded shuffle: the same seed gives the same weights.
 //!
@@ -63,6 +64,9 @@ pub struct CnnLstmConfig {
     /// `learning_rate × final_learning_rate_fraction` (1 = constant step size).
     pub final_learning_rate_fraction: f64,
     pub validation_fraction: f64,
+    /// Early stopping on this whole training experiment instead of every sequence's tail
+    /// (`validation_fraction` is then unused); it must be one of the training experiments.
+    pub validation_experiment: Option<u32>,
     /// Epochs without validation improvement before stopping.
     pub patience: usize,
     pub seed: u64,
@@ -83,6 +87,7 @@ impl Default for CnnLstmConfig {
             learning_rate: 3e-3,
             final_learning_rate_fraction: 1.0,
             validation_fraction: 0.15,
+            validation_experiment: None,
             patience: 15,
             seed: 42,
         }
@@ -274,6 +279,18 @@ fn all_rows(d: &ThermalDataset, targets: bool) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// A validation experiment must be one of the training experiments, and not the only one.
+pub(crate) fn check_validation_experiment(train: &ThermalDataset, v: Option<u32>) -> Result<()> {
+    let Some(v) = v else { return Ok(()) };
+    let ids: Vec<u32> = train.experiments.iter().map(|e| e.id).collect();
+    if !ids.contains(&v) || ids.len() < 2 {
+        return Err(NnError::Config(format!(
+            "the validation experiment {v} must be one of at least two training experiments (training: {ids:?})"
+        )));
+    }
+    Ok(())
+}
+
 /// Trains a CNN-LSTM on every experiment of `train` (split the dataset first with
 /// [`ThermalDataset::split`]).
 pub fn train_cnn_lstm(
@@ -312,15 +329,21 @@ pub fn train_cnn_lstm_monitored(
     let start = Instant::now();
     let fnorm = Affine::z_score(&all_rows(train, false), nf);
     let tnorm = Affine::z_score(&all_rows(train, true), no);
-    // block-wise validation: the tail of each training sequence
+    check_validation_experiment(train, config.validation_experiment)?;
+    // block-wise validation: the tail of each training sequence, or one whole experiment
     let (mut tr, mut va) = (Windows::new(), Windows::new());
-    for seq in train.experiments.iter().flat_map(|e| &e.sequences) {
-        let rows = seq.scored_rows();
-        let n_val = ((rows.len() as f64) * config.validation_fraction).round() as usize;
-        let split = rows.end - n_val;
-        for t in rows {
-            let target = if t < split { &mut tr } else { &mut va };
-            target.push(seq, t, arch.window, &fnorm, &tnorm);
+    for e in &train.experiments {
+        for seq in &e.sequences {
+            let split = ThermalDataset::validation_start(
+                e.id,
+                seq,
+                config.validation_fraction,
+                config.validation_experiment,
+            );
+            for t in seq.scored_rows() {
+                let target = if t < split { &mut tr } else { &mut va };
+                target.push(seq, t, arch.window, &fnorm, &tnorm);
+            }
         }
     }
     if tr.n == 0 {

@@ -160,6 +160,88 @@ impl ThermalDataset {
         out
     }
 
+    /// The same data with every target as its change since the sequence's first row (the
+    /// static measurement that starts an experiment): a model trained on it predicts the
+    /// thermal change, and the motion is that first measurement plus the prediction.
+    pub fn target_changes(&self) -> ThermalDataset {
+        let mut out = self.clone();
+        for seq in out.experiments.iter_mut().flat_map(|e| &mut e.sequences) {
+            let Some(first) = seq.targets.first().cloned() else {
+                continue;
+            };
+            for row in &mut seq.targets {
+                for (v, v0) in row.iter_mut().zip(&first) {
+                    *v -= v0;
+                }
+            }
+        }
+        out
+    }
+
+    /// Each scored row's first-row targets, in the order of [`ThermalDataset::rows`]: what
+    /// turns predictions on [`ThermalDataset::target_changes`] back into targets.
+    pub fn first_targets(&self) -> Vec<Vec<f64>> {
+        let mut out = Vec::new();
+        for seq in self.experiments.iter().flat_map(|e| &e.sequences) {
+            for _ in seq.scored_rows() {
+                out.push(seq.targets[0].clone());
+            }
+        }
+        out
+    }
+
+    /// The same data with the first `n` features (the sensors) also `1..=lags` rows earlier:
+    /// row t becomes [x₁…xₙ(t), x₁…xₙ(t − 1), …, x₁…xₙ(t − lags), the other features(t)],
+    /// named `<sensor>_lag<l>`. Rows before a sequence's start take its first row, as the
+    /// CNN-LSTM's windows do (the campaigns start after hours switched off). This is how a
+    /// static network (the BPNN) sees history: the lagged linear model's φ(t) as inputs.
+    pub fn lagged(&self, n: usize, lags: usize) -> ThermalDataset {
+        let n = n.min(self.feature_names.len());
+        let mut names: Vec<String> = self.feature_names[..n].to_vec();
+        for l in 1..=lags {
+            names.extend(
+                self.feature_names[..n]
+                    .iter()
+                    .map(|s| format!("{s}_lag{l}")),
+            );
+        }
+        names.extend_from_slice(&self.feature_names[n..]);
+        let mut out = self.clone();
+        out.feature_names = names;
+        for seq in out.experiments.iter_mut().flat_map(|e| &mut e.sequences) {
+            let x = std::mem::take(&mut seq.features);
+            seq.features = (0..x.len())
+                .map(|t| {
+                    let mut row: Vec<f64> = Vec::with_capacity(x[t].len() + n * lags);
+                    for l in 0..=lags {
+                        row.extend_from_slice(&x[t.saturating_sub(l)][..n]);
+                    }
+                    row.extend_from_slice(&x[t][n..]);
+                    row
+                })
+                .collect();
+        }
+        out
+    }
+
+    /// Where early stopping's hold-out starts in the scored rows of `seq` of experiment
+    /// `experiment` (rows from it on are validation rows): with a validation experiment, all of
+    /// that experiment's rows and none of the others'; without, the last `fraction` of every
+    /// sequence (a block at the end of each series, never random rows).
+    pub fn validation_start(
+        experiment: u32,
+        seq: &Sequence,
+        fraction: f64,
+        validation_experiment: Option<u32>,
+    ) -> usize {
+        let rows = seq.scored_rows();
+        match validation_experiment {
+            Some(v) if v == experiment => rows.start,
+            Some(_) => rows.end,
+            None => rows.end - ((rows.len() as f64) * fraction).round() as usize,
+        }
+    }
+
     /// Every row as CSV `experiment,sequence,step,<features>,<targets>` (sequence and step
     /// counted from 0): the exchange format of `bench/cnn_lstm.sh` with its PyTorch peer.
     pub fn to_csv(&self) -> String {
@@ -252,6 +334,78 @@ mod tests {
             r.experiments[1].sequences[0].targets,
             d.experiments[1].sequences[0].targets
         );
+    }
+
+    #[test]
+    fn lagged_sensors_by_hand() {
+        // one sequence: sensors (a, b), then an angle column
+        let mut d = ds();
+        d.feature_names = vec!["a".into(), "b".into(), "angle".into()];
+        for seq in d.experiments.iter_mut().flat_map(|e| &mut e.sequences) {
+            seq.features = vec![
+                vec![1.0, 10.0, 0.5],
+                vec![2.0, 20.0, 0.6],
+                vec![4.0, 40.0, 0.7],
+            ];
+        }
+        let l = d.lagged(2, 2);
+        assert_eq!(
+            l.feature_names,
+            ["a", "b", "a_lag1", "b_lag1", "a_lag2", "b_lag2", "angle"]
+        );
+        // rows before the start repeat row 0; the angle stays the current row's
+        assert_eq!(
+            l.experiments[0].sequences[0].features,
+            vec![
+                vec![1.0, 10.0, 1.0, 10.0, 1.0, 10.0, 0.5],
+                vec![2.0, 20.0, 1.0, 10.0, 1.0, 10.0, 0.6],
+                vec![4.0, 40.0, 2.0, 20.0, 1.0, 10.0, 0.7],
+            ]
+        );
+        assert_eq!(
+            l.experiments[0].sequences[0].targets,
+            d.experiments[0].sequences[0].targets
+        );
+        l.validate().unwrap();
+        // lags 0 is the data itself; rises of every lagged sensor are over the first row
+        assert_eq!(d.lagged(2, 0), d);
+        let r = l.rises(6);
+        assert_eq!(
+            r.experiments[0].sequences[0].features[2],
+            vec![3.0, 30.0, 1.0, 10.0, 0.0, 0.0, 0.7]
+        );
+    }
+
+    #[test]
+    fn target_changes_by_hand() {
+        let d = ds(); // targets 0, 1, 2 in every sequence, warmup 1
+        let mut d2 = d.clone();
+        d2.experiments[0].sequences[0].targets = vec![vec![5.0], vec![7.0], vec![4.0]];
+        let c = d2.target_changes();
+        assert_eq!(
+            c.experiments[0].sequences[0].targets,
+            vec![vec![0.0], vec![2.0], vec![-1.0]]
+        );
+        assert_eq!(
+            c.experiments[0].sequences[0].features,
+            d2.experiments[0].sequences[0].features
+        );
+        // the first targets of the scored rows (1 and 2) undo it
+        let first = d2.select(&[1]).unwrap().first_targets();
+        assert_eq!(first, vec![vec![5.0], vec![5.0]]);
+        let (_, y) = c.select(&[1]).unwrap().rows();
+        let back: Vec<f64> = y.iter().zip(&first).map(|(a, b)| a[0] + b[0]).collect();
+        assert_eq!(back, vec![7.0, 4.0]);
+    }
+
+    #[test]
+    fn validation_rows_tail_or_whole_experiment() {
+        let d = ds(); // 3 rows, warmup 1: scored rows 1..3
+        let seq = &d.experiments[0].sequences[0];
+        assert_eq!(ThermalDataset::validation_start(1, seq, 0.5, None), 2);
+        assert_eq!(ThermalDataset::validation_start(1, seq, 0.0, None), 3);
+        assert_eq!(ThermalDataset::validation_start(1, seq, 0.5, Some(1)), 1);
+        assert_eq!(ThermalDataset::validation_start(1, seq, 0.5, Some(2)), 3);
     }
 
     #[test]

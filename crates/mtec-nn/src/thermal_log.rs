@@ -10,6 +10,8 @@
 //!   angle column.
 //! - Rises: the sensor features as rises over each sequence's first row; the model file records
 //!   how many leading features are rises (`provenance.rises`) and prediction does the same.
+//! - Changes: the targets as their change since each sequence's first row
+//!   (`provenance.changes`); prediction adds the first row's measured targets back.
 //! - Rows of one sequence are time steps in `time_min` order (sorted here, a repeated time is an
 //!   error); the CNN-LSTM's window counts rows, so the time step must be one interval.
 
@@ -63,6 +65,10 @@ pub struct NnFitOptions {
     pub angle_harmonics: Option<u8>,
     /// The sensors as rises over the first row of each sequence.
     pub rises: bool,
+    /// The targets as their change since each sequence's first row
+    /// ([`crate::dataset::ThermalDataset::target_changes`]); prediction adds the data's first
+    /// row back, so the data to predict must hold it.
+    pub changes: bool,
     /// Largest number of epochs (bpnn: Levenberg–Marquardt iterations; default 200).
     pub epochs: Option<usize>,
     pub patience: Option<usize>,
@@ -88,6 +94,7 @@ impl NnFitOptions {
             features: Vec::new(),
             angle_harmonics: None,
             rises: false,
+            changes: false,
             epochs: None,
             patience: None,
             window: None,

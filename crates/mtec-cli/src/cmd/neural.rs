@@ -1,12 +1,10 @@
 //! Whether this `mtec` has the neural models, and their command-line options.
 //!
 //! The neural models (`thermal fit --model cnn-lstm|bpnn`, `map fit --model bpnn`, `thermal
-//! predict` of their files) live in `mtec-nn`, which pulls in candle, a deep-learning library
-//! that is more than half of a cold release build (docs/building.md). They are this crate's
-//! cargo feature `neural`, off by default so that the README's `cargo run --release -- demo`
-//! builds in minutes; the options are parsed either way, so a build without them refuses such
-//! a command with exit 2 saying how to get them, not calling the option unknown
-//! (`mtec_workflow::neural_unavailable`).
+//! predict`) live in `mtec-nn`, which pulls in candle: more than half of a cold release build
+//! (docs/building.md). So they are the cargo feature `neural`, off by default (the README's
+//! demo builds in minutes); the options are parsed either way, and a build without them refuses
+//! such a command with exit 2 saying how to get them (`mtec_workflow::neural_unavailable`).
 
 /// Options of the neural models (ignored by the regression models).
 #[derive(clap::Args, Debug, Clone)]
@@ -25,19 +23,21 @@ pub struct NnArgs {
     #[arg(long, value_name = "N")]
     pub angle_harmonics: Option<u8>,
     /// The sensors as rises over the first row of each sequence (of each experiment without
-    /// --sequence-by) instead of absolute temperatures: thermal errors are defined against the
-    /// state of the first (static) measurement, and a room that starts warmer or colder than in
-    /// the training runs then does not throw the model. `thermal predict` applies it again.
+    /// --sequence-by): thermal errors are defined against the first (static) measurement, and a
+    /// room warmer or colder than in training then does not throw the model. Predict does too.
     #[arg(long)]
     pub rises: bool,
+    /// The targets as their change since each sequence's first row (the static measurement);
+    /// `thermal predict` adds that row's measured targets back (the data must hold them).
+    #[arg(long)]
+    pub changes: bool,
     /// Largest number of training epochs (cnn-lstm, bpnn: Levenberg–Marquardt iterations).
     #[arg(long)]
     pub epochs: Option<usize>,
     /// Epochs without improvement of the validation loss before stopping.
     #[arg(long)]
     pub patience: Option<usize>,
-    /// cnn-lstm: time steps per window, in rows of the log [default: 16]; in minutes that is
-    /// rows × the log's sampling interval, which the model records (predict refuses another)
+    /// cnn-lstm: time steps per window, in rows of the log (interval recorded) [default: 16]
     #[arg(long)]
     pub window: Option<usize>,
     /// cnn-lstm: convolution filters [default: 16].
@@ -49,8 +49,7 @@ pub struct NnArgs {
     /// cnn-lstm: Adam step size [default: 0.003].
     #[arg(long)]
     pub learning_rate: Option<f64>,
-    /// cnn-lstm: cosine decay of the step size over --epochs down to this fraction of
-    /// --learning-rate (1 = constant) [default: 1].
+    /// cnn-lstm: cosine decay of the step size to this fraction of it (1: constant) [default: 1]
     #[arg(long, value_name = "F")]
     pub final_lr_fraction: Option<f64>,
     /// cnn-lstm: mini-batch size [default: 64].
@@ -79,6 +78,7 @@ impl NnArgs {
             features: self.features.clone(),
             angle_harmonics: self.angle_harmonics,
             rises: self.rises,
+            changes: self.changes,
             epochs: self.epochs,
             patience: self.patience,
             window: self.window,

@@ -188,6 +188,9 @@ pub fn fit(opts: &FitOptions, obs: &mut dyn Observer) -> Result<FitOutcome> {
     // the leading sensor features as rises (0: absolute temperatures)
     let rises = if nn.rises { cols.n_sensors } else { 0 };
     loaded.data = loaded.data.rises(rises);
+    if nn.changes {
+        loaded.data = loaded.data.target_changes();
+    }
     let train_ids = parse_ids(&opts.train, "train")?;
     let test_ids = parse_ids(&opts.test, "test")?;
     if !test_ids.is_empty() && train_ids.is_empty() {
@@ -207,6 +210,7 @@ pub fn fit(opts: &FitOptions, obs: &mut dyn Observer) -> Result<FitOutcome> {
             "data": opts.data.display().to_string(),
             "sequence_by": cols.sequence_by,
             "rises": rises,
+            "changes": nn.changes,
             "train_experiments": train_exps,
             "test_experiments": test_exps,
             "train_metrics": train_m,
@@ -545,7 +549,7 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
         .and_then(|v| v.as_u64())
         .unwrap_or(0) as usize;
     loaded.data = loaded.data.rises(rises.min(features.len()));
-    let pred: Vec<Vec<f64>> = match &model {
+    let mut pred: Vec<Vec<f64>> = match &model {
         NnModel::CnnLstm(m) => m.predict(&loaded.data).map_err(|e| nn_error(data, e))?,
         NnModel::Bpnn(m) => loaded
             .data
@@ -556,6 +560,19 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
             .collect::<std::result::Result<_, _>>()
             .map_err(|e| nn_error(data, e.into()))?,
     };
+    // trained on the targets' change since each sequence's first row (`thermal fit
+    // --changes`): the prediction is that first measurement plus the predicted change
+    if provenance.get("changes").and_then(|v| v.as_bool()) == Some(true) {
+        if !loaded.has_targets {
+            return Err(Error::Input(InputError::file(
+                data,
+                "the model predicts changes since each sequence's first row (fit --changes): the data must hold the targets, at least of that first row",
+            )));
+        }
+        for (p, y0) in pred.iter_mut().zip(loaded.data.first_targets()) {
+            p.iter_mut().zip(&y0).for_each(|(p, y0)| *p += y0);
+        }
+    }
     let meas = loaded.has_targets.then(|| loaded.data.rows().1);
     let metrics = meas.as_ref().map(|y| channel_metrics(targets, &pred, y));
     let mut header = vec!["experiment".to_string(), "time_min".to_string()];
