@@ -35,10 +35,16 @@ fn shared_programs(root: &Path) -> Option<PathBuf> {
     if let Some(dir) = std::env::var_os("MTEC_SHARED_GCODE") {
         return Some(PathBuf::from(dir));
     }
-    root.ancestors()
-        .skip(1)
-        .map(|a| a.join("shared/data/gcode/linuxcnc"))
-        .find(|d| d.is_dir())
+    // `$MTEC_SHARED_DIR` as the other tests of the real programs read it, else beside a parent
+    let from_env = std::env::var_os("MTEC_SHARED_DIR")
+        .map(|d| PathBuf::from(d).join("data/gcode/linuxcnc"))
+        .filter(|d| d.is_dir());
+    from_env.or_else(|| {
+        root.ancestors()
+            .skip(1)
+            .map(|a| a.join("shared/data/gcode/linuxcnc"))
+            .find(|d| d.is_dir())
+    })
 }
 
 /// The number in `text` just before `word` on the line starting with `prefix`.
