@@ -134,12 +134,17 @@ impl<'a> Rewriter<'a> {
         match self.opt.on_unsupported {
             OnUnsupported::Refuse => Err(GcodeError::At(d)),
             OnUnsupported::PassThroughWithWarning => {
-                self.report.warnings_total += 1;
-                if self.report.warnings.len() < MAX_WARNINGS_KEPT {
-                    self.report.warnings.push(d);
-                }
+                self.warn(d);
                 Ok(())
             }
+        }
+    }
+
+    /// Counts a warning and keeps it among the first [`MAX_WARNINGS_KEPT`].
+    pub(super) fn warn(&mut self, d: Diagnostic) {
+        self.report.warnings_total += 1;
+        if self.report.warnings.len() < MAX_WARNINGS_KEPT {
+            self.report.warnings.push(d);
         }
     }
 
@@ -375,10 +380,7 @@ impl<'a> Rewriter<'a> {
                 ProblemKind::Unsupported,
                 format!("{code}: the move to the reference point is not compensated (its position is a controller parameter); the axes it sends there are taken as unknown until an absolute move"),
             );
-            self.report.warnings_total += 1;
-            if self.report.warnings.len() < MAX_WARNINGS_KEPT {
-                self.report.warnings.push(d);
-            }
+            self.warn(d);
             self.st.reference_move(b, has_axis, motion_word.is_some());
             self.st.after_block(b);
             return Ok(true);
