@@ -645,6 +645,7 @@ class Move:
         self.abc = abc
         self.start, self.end, self.length = geom.start, geom.end, geom.length
         self.reference = False  # its end depends on the G28/G30 reference points (mark_reference)
+        self.inverse_time_feed_mm = None  # under G93: the feed rs274 derived from F, in mm/min
 
     def rounding_um(self):
         # printed to 4 decimals: each coordinate off by half a unit; an arc's printed centre
@@ -673,7 +674,14 @@ def interpret(path, calls, error):
     frame = Frame()
     pos = (0.0, 0.0, 0.0)  # rs274 stand-alone starts at machine zero (found by experiment)
     pos_units = None  # units in which the current position was printed
+    inverse_time, feed = False, None  # G93, and the last SET_FEED_RATE (units/min)
     for c in calls:
+        if c.name == "COMMENT" and "feed mode set to" in c.args:
+            inverse_time = "inverse time" in c.args
+        if c.name == "SET_FEED_RATE":
+            feed = numbers(c.args)[0]
+            if inverse_time:
+                continue  # compared as each move's time by check_inverse_time
         if c.name in MOTION_CALLS:
             v = numbers(c.args)
             if c.name == "ARC_FEED":
@@ -684,8 +692,10 @@ def interpret(path, calls, error):
                 geom = Line(pos, frame.to_machine((v[0], v[1], v[2])))
                 abc = tuple(v[3:6])
                 kind = {"STRAIGHT_TRAVERSE": "rapid", "STRAIGHT_FEED": "feed"}.get(c.name, "probe")
-            prog.moves.append(Move(kind, geom, c, frame.mm_per_unit, abc, pos_units,
-                                   frame.offset_mm_per_unit))
+            move = Move(kind, geom, c, frame.mm_per_unit, abc, pos_units, frame.offset_mm_per_unit)
+            if kind == "feed" and inverse_time and feed:
+                move.inverse_time_feed_mm = feed * frame.mm_per_unit  # mm/min rs274 computed
+            prog.moves.append(move)
             pos, pos_units = geom.end, frame.mm_per_unit
             continue
         frame.update(c)
@@ -997,6 +1007,41 @@ def check_events(nominal, comp, match):
     return None
 
 
+def check_inverse_time(nominal, comp, match):
+    """(d) for G93: rs274 turns each inverse-time F into a feed in mm/min (length x F), so a
+    compensated move's feed differs from the original's by the length change, and a split move
+    has a feed per piece. What must hold is the time: the pieces of a nominal move together take
+    as long as it does (T = L / f). Bound: the print rounding of each end point (length) and of
+    each printed feed, on both sides. Returns the first violation or None."""
+    times = {}
+    for c, j in zip(comp.moves, match):
+        if c.kind == "feed" and 0 <= j < len(nominal.moves):
+            times.setdefault(j, []).append(c)
+    for j, n in enumerate(nominal.moves):
+        if n.inverse_time_feed_mm is None:
+            continue
+        pieces = times.get(j, [])
+        if any(c.inverse_time_feed_mm is None for c in pieces):
+            return (f"{comp.path}: {n.where()} is an inverse-time (G93) move, but a compensated "
+                    f"piece of it is not")
+        if not pieces or n.length <= ZERO_LENGTH_MM:
+            continue
+
+        def time_and_bound(m):
+            f = m.inverse_time_feed_mm
+            dl = 2 * SQRT3 * HALF_PRINT_UNIT * m.mm_per_unit  # both end points' rounding
+            df = HALF_PRINT_UNIT * m.mm_per_unit  # the printed feed's rounding
+            return m.length / f, dl / f + m.length * df / f ** 2
+        t_n, b_n = time_and_bound(n)
+        tb = [time_and_bound(c) for c in pieces]
+        t_c, b_c = sum(t for t, _ in tb), sum(b for _, b in tb)
+        if abs(t_c - t_n) > b_n + b_c + 1e-12:
+            return (f"{comp.path}: {n.where()} is an inverse-time (G93) move of {t_n * 60:.6f} s; "
+                    f"its {len(pieces)} compensated piece(s) take {t_c * 60:.6f} s "
+                    f"(bound {(b_n + b_c) * 60:.2e} s)")
+    return None
+
+
 def long_lines(path, limit=MAX_LINE_CHARS):
     """(line number, length) of every line longer than `limit` characters."""
     out = []
@@ -1133,7 +1178,7 @@ def check(original, compensated, model_path, offsets=None, tool_table=None, limi
     violations += walker.violations[:1]
     if len(walker.violations) > 1:
         violations.append(f"... and {len(walker.violations) - 1} more path/end-point violations")
-    event = check_events(nominal, comp, walker.match)
+    event = check_events(nominal, comp, walker.match) or check_inverse_time(nominal, comp, walker.match)
     if event:
         violations.append(event)
     return Result(nominal, comp, walker, violations)

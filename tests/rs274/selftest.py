@@ -28,7 +28,7 @@ CASES = os.path.join(HERE, "cases")
 TRANSLATABLE = ["arc-g17-cw-quarter", "arc-g18-cw", "arc-g18-ccw", "arc-g19-cw", "arc-g19-ccw",
                 "helix-g17", "helix-g18-g19", "helix-turns", "full-circle-no-axis-words",
                 "full-circle-p2", "r-semicircle", "r-negative-large", "mixed-planes",
-                "g20-inch-arcs", "events-spindle-coolant", "back-and-forth"]
+                "g20-inch-arcs", "events-spindle-coolant", "back-and-forth", "g93-inverse-time"]
 E_UM = (20.0, -15.0, 10.0)
 WORD = re.compile(r"([XYZxyz])(-?\d*\.?\d+)")
 
@@ -122,6 +122,19 @@ def main():
         (failures.append("g28-reference-park: a move after G28 left uncompensated was accepted")
          if not v else None)
         passed += bool(v)
+        # G93: a move split in two pieces that each keep the move's F takes twice as long
+        prog = os.path.join(CASES, "g93-inverse-time.ngc")
+        right = translated(open(prog, encoding="utf-8").read(), tuple(-e for e in E_UM))
+        first = next(ln for ln in right.splitlines() if ln.startswith("G93 G1"))
+        words = dict(re.findall(r"([XYF])(-?[\d.]+)", first))
+        mid = [(float(words[a]) - E_UM[i] * 1e-3) / 2 for i, a in enumerate("XY")]  # from X0 Y0
+        half = f"G93 G1 X{mid[0]:.6f} Y{mid[1]:.6f} F{words['F']}"
+        slow = right.replace(first, half + "\n" + first.replace("G93 ", ""))
+        v = outcome(prog, slow, constant, work, "g93.slow.ngc")
+        ok = len(v) == 1 and "inverse-time (G93) move of 10.000000 s" in v[0]
+        (failures.append(f"g93-inverse-time: a split move that doubles its duration: {v}")
+         if not ok else None)
+        passed += ok
         ok, mid = g18_direction(work)
         (failures.append(f"G18 G2 midpoint {mid}, expected (30, 0, -20)") if not ok else None)
         passed += ok
