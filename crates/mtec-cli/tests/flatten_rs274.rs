@@ -335,7 +335,9 @@ fn real_linuxcnc_programs_flatten_to_the_same_motion_or_are_refused_with_the_rea
     let lathe = data.join("lathe.tbl");
     use Expect::*;
     let cases: [(&str, Option<&Path>, &[&str], Expect); 14] = [
-        ("3D_Chips", None, &[], Same),
+        // T1 M6: with no table rs274 would take its built-in T1 (0.511 in), so mtec gives it
+        // the user's table or an empty one (refused: see tool_lengths_come_from_the_user_only)
+        ("3D_Chips", Some(&mill), &[], Same),
         ("arcspiral", None, &[], Same),
         ("cds", Some(&mill), &[], Same),
         ("comp", Some(&mill), &[], Same),
@@ -694,4 +696,97 @@ fn model_is_evaluated_at_machine_positions_with_the_var_files_work_offsets() {
     // machine X 0: no correction; machine X 76.2: p + 0.001 p = 76.2, p = 76.1239
     assert!(first_x[0].abs() < 1e-9, "{first_x:?}");
     assert!((first_x[1] - 76.2 / 1.001).abs() < 2e-4, "{first_x:?}");
+}
+
+/// Stand-alone rs274 given no tool table uses a built-in one (T1 = 0.511 in): flattening baked
+/// those lengths into every coordinate after a G43 (found 2026-11-27 on a FreeCAD drilling
+/// program: 72 mm in Z). rs274 now gets the user's table, the lengths of `--offsets`, or an
+/// empty table; a G43 that takes the tool the spindle holds at start is refused.
+#[test]
+fn tool_lengths_come_from_the_user_only() {
+    let Some(bin) = rs274() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, body: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, body).unwrap();
+        p
+    };
+    let model = write("zero.json", ZERO_MODEL);
+    let run = |program: &Path, extra: &[&Path], flag: &str| {
+        let out = dir.path().join("flat.ngc");
+        let _ = std::fs::remove_file(&out);
+        let mut c = mtec();
+        c.args(["compensate", "gcode", "--model"])
+            .arg(&model)
+            .args(["--flatten-with", "rs274", "--rs274"])
+            .arg(&bin);
+        for p in extra {
+            c.arg(flag).arg(p);
+        }
+        let o = c.arg(program).arg("-o").arg(&out).output().unwrap();
+        (
+            o.status.code(),
+            text(&o),
+            std::fs::read_to_string(&out).ok(),
+        )
+    };
+    let drill = write(
+        "drill.ngc",
+        "G21 G90\nT1 M6\nG43 H1\nG0 X1 Y1 Z8\nG1 Z-2 F100\nM2\n",
+    );
+    // no table, no lengths: refused at the tool change, saying what to give
+    let (code, msg, out) = run(&drill, &[], "");
+    assert_eq!(code, Some(2), "{msg}");
+    assert!(
+        msg.contains("drill.ngc:2:1:") && msg.contains("Requested tool 1 not found"),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("--tool-table") && msg.contains("[tool_lengths_mm]"),
+        "{msg}"
+    );
+    assert!(out.is_none());
+    // the lengths of --offsets reach rs274: Z8 with an 85.25 mm tool is Z93.25 without G43
+    let offsets = write(
+        "offsets.toml",
+        "format = \"mtec.gcode-offsets/1\"\nactive = \"G54\"\n[work_offsets_mm]\nG54 = [0.0, 0.0, 0.0]\n[tool_lengths_mm]\n1 = 85.25\n",
+    );
+    let (code, msg, out) = run(&drill, &[&offsets], "--offsets");
+    assert_eq!(code, Some(0), "{msg}");
+    let flat = out.unwrap();
+    let rapid = flat.lines().find(|l| l.starts_with("G0 X1.0")).unwrap();
+    assert_eq!(rapid, "G0 X1.0 Y1.0 Z93.25", "{flat}");
+    assert!(
+        flat.lines().any(|l| l == "G1 X1.0 Y1.0 Z83.25 F100.0"),
+        "{flat}"
+    );
+    // G43 without H before any tool change, and M6 without T: the spindle's tool at start
+    let table = data_dir().join("mill.tbl");
+    for (name, body, at) in [
+        (
+            "bare.ngc",
+            "G21 G90\nG0 X1 Y1 Z8\ng 43 (tool in the spindle)\nG0 Z5\nT1 M6\nG43\nM2\n",
+            "bare.ngc:3:1:",
+        ),
+        (
+            "m6.ngc",
+            "G21 G90\nM6\nG43\nG0 X1 Y1 Z5\nM2\n",
+            "m6.ngc:3:1:",
+        ),
+    ] {
+        let p = write(name, body);
+        let (code, msg, out) = run(&p, &[&table], "--tool-table");
+        assert_eq!(code, Some(2), "{name}: {msg}");
+        assert!(
+            msg.contains(at) && msg.contains("depends on the tool in the spindle"),
+            "{name}: {msg}"
+        );
+        assert!(out.is_none(), "{name}");
+    }
+    // after a T… M6 a bare G43 is that tool's: flattened to the same motion
+    let after = write(
+        "after.ngc",
+        "G21 G90\nG49\nT1 M6\nG43\nG0 X1 Y1 Z5\nG1 Z-1 F100\nM2\n",
+    );
+    check(&bin, &after, Some(&table), None, &[], &Expect::Same);
 }

@@ -12,7 +12,9 @@ use mtec_comp::gcode::flatten::{
     WORK_OFFSET_PROBE,
 };
 use mtec_comp::gcode::runtime_params::machine_state_parameter;
-use mtec_comp::gcode::start_probe::{held_axes, probe_program};
+use mtec_comp::gcode::start_probe::{
+    held_axes, probe_program, spindle_tool_probe_program, tool_length_offsets, PROBE_TOOL_LINE,
+};
 use mtec_comp::gcode::tooltable::MachineUnits;
 use mtec_io::InputError;
 use std::io::Read;
@@ -48,6 +50,12 @@ impl Default for Rs274 {
 pub struct FlattenInputs<'a> {
     pub rs274: &'a Rs274,
     pub tool_table: Option<&'a Path>,
+    /// Without `tool_table`: the tool lengths of `--offsets` (`[tool_lengths_mm]`), handed to
+    /// rs274 as its table. Stand-alone rs274 given no table uses a built-in one (T1 = 0.511 in):
+    /// lengths no machine has, baked into every coordinate after a G43. So rs274 always gets a
+    /// table, empty when the user gave no lengths: a program that selects or measures a tool
+    /// then stops at that line ("Requested tool N not found in the tool table").
+    pub tool_lengths_mm: &'a std::collections::BTreeMap<u32, f64>,
     pub machine_units: MachineUnits,
     /// `Some(true)`: block delete on (`-b`).
     pub block_delete: Option<bool>,
@@ -197,6 +205,63 @@ fn rs274_message(stderr: &str) -> String {
     }
 }
 
+/// The name of the spindle-tool probe's run (its table gets the probe tool).
+const SPINDLE_TOOL_PROBE: &str = "spindle-tool-probe";
+
+/// The first `G43` block without an `H` word (comments skipped; not G43.1/G43.2): line and
+/// column, 1-based. Where a refusal of the spindle-tool probe points when it can.
+fn bare_g43(program: &[u8]) -> Option<(usize, usize)> {
+    let text = String::from_utf8_lossy(program);
+    text.lines().enumerate().find_map(|(i, line)| {
+        let code: String = without_comments(line)
+            .chars()
+            .filter(|c| !c.is_whitespace())
+            .map(|c| c.to_ascii_uppercase())
+            .collect();
+        let plain_g43 = code
+            .match_indices("G43")
+            .any(|(k, _)| !matches!(code[k + 3..].chars().next(), Some('.' | '0'..='9')));
+        if !plain_g43 || code.contains('H') {
+            return None;
+        }
+        // the column of the G whose digits (blanks allowed between) are 43
+        let column = line.char_indices().find_map(|(k, c)| {
+            let digits: String = line[k + 1..]
+                .chars()
+                .filter(|c| !c.is_whitespace())
+                .take(2)
+                .collect();
+            (c.eq_ignore_ascii_case(&'g') && digits == "43").then(|| line[..k].chars().count() + 1)
+        });
+        Some((i + 1, column.unwrap_or(1)))
+    })
+}
+
+/// A line without its `( … )` and `;` comments.
+fn without_comments(line: &str) -> String {
+    let mut out = String::with_capacity(line.len());
+    let mut depth = 0;
+    for c in line.chars() {
+        match c {
+            ';' if depth == 0 => break,
+            '(' => depth += 1,
+            ')' if depth > 0 => depth -= 1,
+            _ if depth == 0 => out.push(c),
+            _ => {}
+        }
+    }
+    out
+}
+
+/// A LinuxCNC tool table of `lengths` (tool → length in mm), in inches as stand-alone rs274
+/// reads it; each tool in the pocket of its number.
+fn tool_table_in_inches(lengths: &std::collections::BTreeMap<u32, f64>) -> String {
+    lengths
+        .iter()
+        .map(|(t, mm)| format!("T{t} P{t} Z{} ;\n", mm / 25.4))
+        .collect()
+}
+
 /// Where in `program` rs274 stopped: rs274 prints the offending line last on stderr; when
 /// exactly one line of the program reads the same (blanks around it ignored), its 1-based line
 /// and the column of the first non-blank, or of the character a "Bad character 'c' used" names.
@@ -316,10 +381,24 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     // (rs274 writes the parameter file back when it ends)
     let program_flags = |name: &str| -> Result<Vec<String>, CliError> {
         let mut flags = Vec::new();
-        if let Some(t) = &args.tool_table {
-            flags.push("-t".to_string());
-            flags.push(copy(t, &format!("{name}.tbl"))?.display().to_string());
+        flags.push("-t".to_string());
+        let table = match &args.tool_table {
+            Some(t) => copy(t, &format!("{name}.tbl"))?,
+            None => {
+                let table = tmp.0.join(format!("{name}.tbl"));
+                std::fs::write(&table, tool_table_in_inches(args.tool_lengths_mm))?;
+                table
+            }
+        };
+        if name == SPINDLE_TOOL_PROBE {
+            let mut text = std::fs::read_to_string(&table)?;
+            if !text.is_empty() && !text.ends_with('\n') {
+                text.push('\n');
+            }
+            text.push_str(PROBE_TOOL_LINE);
+            std::fs::write(&table, text)?;
         }
+        flags.push(table.display().to_string());
         if let Some(v) = &args.rs274.var_file {
             flags.push("-v".to_string());
             flags.push(copy(v, &format!("{name}.var"))?.display().to_string());
@@ -332,11 +411,14 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     let flags = program_flags("program")?;
     let run = run_rs274(&bin, &tmp.0, &flags, &abs_input, timeout)?;
     if run.status != Some(0) {
-        let message = format!(
+        let mut message = format!(
             "rs274 stopped with an error (exit {}): {}",
             run.status.map_or("by a signal".into(), |c| c.to_string()),
             rs274_message(&run.stderr)
         );
+        if args.tool_table.is_none() && run.stderr.contains("not found in the tool table") {
+            message.push_str(" (give the controller's tool table with --tool-table, or the tool's length under [tool_lengths_mm] in --offsets: without them mtec does not let rs274 use its built-in lengths)");
+        }
         return Err(match rs274_error_at(&program, &run.stderr) {
             Some((line, column)) => InputError::at(input, line, column, message),
             None => InputError::file(input, message),
@@ -358,6 +440,24 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
             ),
         )
         .into());
+    }
+    // 4. the same program started with another tool in the spindle: a G43 without H (or an M6
+    // without T) before the first tool change takes the tool the machine happens to hold, which
+    // stand-alone rs274 takes for tool 0 (length 0)
+    let offsets = tool_length_offsets(&run.stdout);
+    if !offsets.is_empty() {
+        let tool_file = tmp.0.join("spindle-tool-probe.ngc");
+        std::fs::write(&tool_file, spindle_tool_probe_program(&program))?;
+        let flags = program_flags(SPINDLE_TOOL_PROBE)?;
+        let tool_run = run_rs274(&bin, &tmp.0, &flags, &tool_file, timeout)?;
+        if tool_run.status != Some(0) || tool_length_offsets(&tool_run.stdout) != offsets {
+            let message = "a tool length offset depends on the tool in the spindle when the program starts (a G43 without H, or an M6 without T, before the first T… M6), which mtec does not know and stand-alone rs274 takes for tool 0: write G43 Hn, or a T… M6 before it";
+            return Err(match bare_g43(&program) {
+                Some((line, column)) => InputError::at(input, line, column, message),
+                None => InputError::file(input, message),
+            }
+            .into());
+        }
     }
     let held = held_axes(&run.stdout, &probe_run.stdout);
     let name = input
@@ -402,4 +502,20 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         report,
         work_offsets_mm: table,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_bare_g43_is_found_past_comments_blanks_and_its_dotted_forms() {
+        let p = b"G21 (G43 in a comment)\nG43.1 Z2\nG43 H1\ng0 x1 ; G43\nX2  g 4 3 (here)\n";
+        assert_eq!(bare_g43(p), Some((5, 5)));
+        assert_eq!(bare_g43(b"G43 H2\nG430\n"), None);
+        assert_eq!(
+            tool_table_in_inches(&[(1, 25.4), (12, 50.8)].into()),
+            "T1 P1 Z1 ;\nT12 P12 Z2 ;\n"
+        );
+    }
 }

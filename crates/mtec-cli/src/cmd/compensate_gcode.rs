@@ -110,7 +110,7 @@ pub struct FlattenArgs {
     #[arg(long, value_name = "PATH", requires = "flatten_with")]
     pub rs274: Option<PathBuf>,
     /// LinuxCNC tool table (.tbl): tool lengths for G43 (Z offsets, in --machine-units);
-    /// with --flatten-with, passed to rs274 (`-t`), which bakes lengths and cutter radii in.
+    /// --flatten-with passes it (else the --offsets lengths, never rs274's built-in) to rs274.
     #[arg(long, value_name = "FILE.tbl")]
     pub tool_table: Option<PathBuf>,
     /// The machine's units (LinuxCNC's INI LINEAR_UNITS), in which tool tables and parameter

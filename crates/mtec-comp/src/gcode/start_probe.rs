@@ -34,6 +34,36 @@ pub fn probe_program(program: &[u8]) -> Vec<u8> {
         "G53 G0 X{} Y{} Z{} A{} B{} C{}\n",
         p[0], p[1], p[2], p[3], p[4], p[5]
     );
+    with_first_line(program, &line)
+}
+
+/// A tool no table is likely to hold, loaded by the spindle-tool probe
+/// ([`spindle_tool_probe_program`]); its table line (inches, as stand-alone rs274 reads it) is
+/// [`PROBE_TOOL_LINE`].
+pub const PROBE_TOOL: u32 = 99999;
+/// The probe tool's line of a LinuxCNC tool table: 4.8607 in (123.46 mm) long.
+pub const PROBE_TOOL_LINE: &str = "T99999 P99999 Z4.8607 ;\n";
+
+/// The program with `T99999 M6` in front (after a leading `%`): the tool in the spindle when it
+/// starts is then the probe tool instead of stand-alone rs274's tool 0. A program whose tool
+/// length offsets differ between the two runs ([`tool_length_offsets`]) uses the tool the
+/// machine happens to hold at start: a `G43` without `H`, or an `M6` without a `T`, before its
+/// first tool change.
+pub fn spindle_tool_probe_program(program: &[u8]) -> Vec<u8> {
+    with_first_line(program, &format!("T{PROBE_TOOL} M6\n"))
+}
+
+/// The arguments of every `USE_TOOL_LENGTH_OFFSET` call of a canonical printout, in order.
+pub fn tool_length_offsets(canon: &str) -> Vec<&str> {
+    canon
+        .lines()
+        .filter_map(|l| l.split_once("USE_TOOL_LENGTH_OFFSET("))
+        .map(|(_, args)| args.trim_end().trim_end_matches(')'))
+        .collect()
+}
+
+/// `program` with `line` put in front, after a leading `%` line if there is one.
+fn with_first_line(program: &[u8], line: &str) -> Vec<u8> {
     // the first line that is not blank: LinuxCNC wants a leading % there
     let mut at = 0;
     let mut rest = program;
@@ -278,6 +308,28 @@ mod tests {
         assert!(String::from_utf8(probe_program(b"(hi)\nG0 X1\n"))
             .unwrap()
             .starts_with("G53 G0 X7.1234"));
+    }
+
+    #[test]
+    fn the_spindle_tool_probe_loads_its_tool_first_and_lists_the_tool_offsets() {
+        assert_eq!(
+            String::from_utf8(spindle_tool_probe_program(b"%\nG43\n%\n")).unwrap(),
+            "%\nT99999 M6\nG43\n%\n"
+        );
+        assert!(PROBE_TOOL_LINE.starts_with(&format!("T{PROBE_TOOL} ")));
+        let run = canon(&[
+            "USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)",
+            "STRAIGHT_TRAVERSE(1.0000, 1.0000, 8.0000, 0.0000, 0.0000, 0.0000)",
+            "USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 25.4000, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)",
+        ]);
+        assert_eq!(
+            tool_length_offsets(&run),
+            [
+                "0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000",
+                "0.0000 0.0000 25.4000, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000"
+            ]
+        );
+        assert!(tool_length_offsets(&canon(&[PROBE_MOVE])).is_empty());
     }
 
     #[test]

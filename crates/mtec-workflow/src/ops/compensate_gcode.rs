@@ -166,6 +166,7 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
             &FlattenInputs {
                 rs274,
                 tool_table: opts.tool_table.as_deref(),
+                tool_lengths_mm: &options.offsets.tool_length_mm,
                 machine_units: opts.machine_units,
                 block_delete: opts.block_delete,
             },
