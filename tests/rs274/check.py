@@ -230,6 +230,9 @@ def write_reference_var_file(path, var_file):
             lines = [ln.rstrip("\n") for ln in f if ln.split()[:1] and
                      int(float(ln.split()[0])) not in REFERENCE_PROBE_MM]
     lines += [f"{k}\t{v / MM_PER_INCH:.12f}" for k, v in sorted(REFERENCE_PROBE_MM.items())]
+    # rs274 refuses a parameter file out of order ("Parameter file out of order"), which left
+    # the reference moves unmarked whenever an offsets file came with a G28/G30
+    lines.sort(key=lambda ln: float(ln.split()[0]))
     with open(path, "w", encoding="ascii") as f:
         f.write("\n".join(lines) + "\n")
 
@@ -238,6 +241,8 @@ def mark_reference(prog, moved):
     """Marks the moves of `prog` whose end differs in `moved` (the same program run with other
     reference points). Nothing is marked when the runs differ in their number of moves."""
     if len(prog.moves) != len(moved.moves):
+        if not moved.moves and moved.error:
+            raise CheckFailure(f"rs274 with moved reference points: {moved.error}")
         return
     for m, r in zip(prog.moves, moved.moves):
         m.reference = norm(sub(m.end, r.end)) > 1e-9
@@ -848,8 +853,11 @@ class Walker:
         check when nominal move j is such a move, every move before it was one too, and the
         compensated move c is one as well."""
         n = self.nom.moves[j]
+        # zero within the print rounding: from the start (machine 0) to a point printed in
+        # inches, e.g. -5.9055 in after a G54 X of 150 mm, is 0.3 um
         if (j == self.i + 1 and (self.i < 0 or self.i in self.at_start)
-                and n.kind == c.kind and n.length <= ZERO_LENGTH_MM and c.length <= ZERO_LENGTH_MM
+                and n.kind == c.kind and n.length * 1e3 <= n.rounding_um()
+                and c.length * 1e3 <= c.rounding_um()
                 and norm(sub(c.end, n.end)) <= ZERO_LENGTH_MM):
             self.at_start.add(j)
             self.i, self.progress = j, n.length
