@@ -760,6 +760,24 @@ fn tool_lengths_come_from_the_user_only() {
         flat.lines().any(|l| l == "G1 X1.0 Y1.0 Z83.25 F100.0"),
         "{flat}"
     );
+    // G41/G42 take the radius from the table: a table made of --offsets lengths has none
+    let comp = write(
+        "comp.ngc",
+        "G21 G90\nT1 M6\nG0 X-10 Y-10 Z5\nG1 Z-1 F100\nG41 D1 X0 Y0\nY20\nG40 X30\nM2\n",
+    );
+    let (code, msg, _) = run(&comp, &[&offsets], "--offsets");
+    assert_eq!(code, Some(2), "{msg}");
+    assert!(
+        msg.contains("comp.ngc:5:1:") && msg.contains("--tool-table"),
+        "{msg}"
+    );
+    // G41.1 carries its diameter: flattened
+    let dynamic = write(
+        "dynamic.ngc",
+        "G21 G90\nG0 X-10 Y-10 Z5\nG1 Z-1 F100\nG41.1 D6 X0 Y0\nY20\nG40 X30\nM2\n",
+    );
+    let (code, msg, _) = run(&dynamic, &[&offsets], "--offsets");
+    assert_eq!(code, Some(0), "{msg}");
     // G43 without H before any tool change, and M6 without T: the spindle's tool at start
     let table = data_dir().join("mill.tbl");
     for (name, body, at) in [

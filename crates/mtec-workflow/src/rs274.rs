@@ -208,36 +208,43 @@ fn rs274_message(stderr: &str) -> String {
 /// The name of the spindle-tool probe's run (its table gets the probe tool).
 const SPINDLE_TOOL_PROBE: &str = "spindle-tool-probe";
 
-/// The first `G43` block without an `H` word (comments skipped; not G43.1/G43.2): line and
-/// column, 1-based. Where a refusal of the spindle-tool probe points when it can.
-fn bare_g43(program: &[u8]) -> Option<(usize, usize)> {
+/// Every G word of `program` outside comments: (line, column of the G, 1-based; the code ×10,
+/// so that `G043`, `g 43` and `G43.0` are all 430 and `G41.1` is 411; whether the block has an
+/// `H` word). Where refusals after an rs274 run point when they can.
+fn g_words(program: &[u8]) -> Vec<(usize, usize, i64, bool)> {
     let text = String::from_utf8_lossy(program);
-    text.lines().enumerate().find_map(|(i, line)| {
-        let code: String = without_comments(line)
-            .chars()
-            .filter(|c| !c.is_whitespace())
-            .map(|c| c.to_ascii_uppercase())
-            .collect();
-        let plain_g43 = code
-            .match_indices("G43")
-            .any(|(k, _)| !matches!(code[k + 3..].chars().next(), Some('.' | '0'..='9')));
-        if !plain_g43 || code.contains('H') {
-            return None;
-        }
-        // the column of the G whose digits (blanks allowed between) are 43
-        let column = line.char_indices().find_map(|(k, c)| {
-            let digits: String = line[k + 1..]
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let code = without_comments(line);
+        let has_h = code.chars().any(|c| c.eq_ignore_ascii_case(&'h'));
+        for (k, c) in code.char_indices() {
+            if !c.eq_ignore_ascii_case(&'g') {
+                continue;
+            }
+            let number: String = code[k + 1..]
                 .chars()
                 .filter(|c| !c.is_whitespace())
-                .take(2)
+                .take_while(|c| c.is_ascii_digit() || *c == '.')
                 .collect();
-            (c.eq_ignore_ascii_case(&'g') && digits == "43").then(|| line[..k].chars().count() + 1)
-        });
-        Some((i + 1, column.unwrap_or(1)))
-    })
+            if let Ok(v) = number.parse::<f64>() {
+                // `code` keeps the line's characters up to its first comment: columns agree
+                let column = code[..k].chars().count() + 1;
+                out.push((i + 1, column, (v * 10.0).round() as i64, has_h));
+            }
+        }
+    }
+    out
 }
 
-/// A line without its `( … )` and `;` comments.
+/// The first `G43` block without an `H` word (not G43.1/G43.2): line and column.
+fn bare_g43(program: &[u8]) -> Option<(usize, usize)> {
+    g_words(program)
+        .into_iter()
+        .find(|&(_, _, g, h)| g == 430 && !h)
+        .map(|(l, c, _, _)| (l, c))
+}
+
+/// A line with its `( … )` comments blanked and cut at a `;` comment (columns kept).
 fn without_comments(line: &str) -> String {
     let mut out = String::with_capacity(line.len());
     let mut depth = 0;
@@ -246,9 +253,13 @@ fn without_comments(line: &str) -> String {
             ';' if depth == 0 => break,
             '(' => depth += 1,
             ')' if depth > 0 => depth -= 1,
-            _ if depth == 0 => out.push(c),
+            _ if depth == 0 => {
+                out.push(c);
+                continue;
+            }
             _ => {}
         }
+        out.push(' ');
     }
     out
 }
@@ -425,6 +436,20 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         }
         .into());
     }
+    // G41/G42 take the cutter radius from the tool table (D); a table mtec made from
+    // --offsets lengths (or an empty one) has none, and rs274 then offsets the path by 0
+    if args.tool_table.is_none() && run.stdout.contains("cutter radius compensation on") {
+        let words = g_words(&program);
+        let at = words.iter().find(|w| w.2 == 410 || w.2 == 420);
+        if at.is_some() || !words.iter().any(|w| w.2 == 411 || w.2 == 421) {
+            let message = "G41/G42 take the cutter radius from the controller's tool table, which was not given (without it rs274 offsets the path by a radius of 0): give it with --tool-table, or write G41.1/G42.1 D<diameter>";
+            return Err(match at {
+                Some(&(line, column, _, _)) => InputError::at(input, line, column, message),
+                None => InputError::file(input, message),
+            }
+            .into());
+        }
+    }
     // 3. the same program started elsewhere: which axes each move leaves where the machine
     // stood, and whether anything else depends on it (mtec_comp::gcode::start_probe)
     let probe_file = tmp.0.join("start-probe.ngc");
@@ -513,6 +538,12 @@ mod tests {
         let p = b"G21 (G43 in a comment)\nG43.1 Z2\nG43 H1\ng0 x1 ; G43\nX2  g 4 3 (here)\n";
         assert_eq!(bare_g43(p), Some((5, 5)));
         assert_eq!(bare_g43(b"G43 H2\nG430\n"), None);
+        assert_eq!(bare_g43(b"(\xc3\xa9\xc3\xa9) G043\n"), Some((1, 6)));
+        let codes: Vec<i64> = g_words(b"G41.1 D6 G042 (G41)\ng 4 1 ; G42\n")
+            .iter()
+            .map(|w| w.2)
+            .collect();
+        assert_eq!(codes, [411, 420, 410]);
         assert_eq!(
             tool_table_in_inches(&[(1, 25.4), (12, 50.8)].into()),
             "T1 P1 Z1 ;\nT12 P12 Z2 ;\n"
