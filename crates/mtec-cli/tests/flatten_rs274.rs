@@ -396,7 +396,13 @@ fn hand_written_programs_with_control_flow_cycles_and_compensation_flatten_exact
         "coverage",
     ] {
         let p = data.join(format!("{name}.ngc"));
-        summary.push(check(&bin, &p, Some(&mill), None, &[], &Expect::Same));
+        // G10 L2/L20 folded relative to a table at start that nobody gave: refused
+        let unknown_start = if name == "offsets" {
+            Expect::Refused("changes a work offset (G10 L2/L20)")
+        } else {
+            Expect::Same
+        };
+        summary.push(check(&bin, &p, Some(&mill), None, &[], &unknown_start));
         // the same with non-zero work offsets read from a parameter file (G54, G55 set)
         summary.push(check(&bin, &p, Some(&mill), Some(&var), &[], &Expect::Same));
     }
@@ -807,4 +813,81 @@ fn tool_lengths_come_from_the_user_only() {
         "G21 G90\nG49\nT1 M6\nG43\nG0 X1 Y1 Z5\nG1 Z-1 F100\nM2\n",
     );
     check(&bin, &after, Some(&table), None, &[], &Expect::Same);
+}
+
+/// Stand-alone rs274 given no parameter file starts in G54 with a zero table, and flattening
+/// wrote that G54 into the output: a program meant for the machine's active G55 (as
+/// `--offsets` said) was cut in G54 (found 2026-11-27). rs274 now reads `--var-file`, or a
+/// parameter file made of `--offsets`, or starts in a system that stands for the machine's
+/// unknown one and is never written.
+#[test]
+fn the_work_system_at_start_is_the_users_or_left_unnamed() {
+    let Some(bin) = rs274() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, body: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, body).unwrap();
+        p
+    };
+    let model = write("zero.json", ZERO_MODEL);
+    let run = |program: &Path, offsets: Option<&Path>| {
+        let out = dir.path().join("flat.ngc");
+        let _ = std::fs::remove_file(&out);
+        let mut c = mtec();
+        c.args(["compensate", "gcode", "--model"])
+            .arg(&model)
+            .args(["--flatten-with", "rs274", "--rs274"])
+            .arg(&bin);
+        if let Some(o) = offsets {
+            c.arg("--offsets").arg(o);
+        }
+        let o = c.arg(program).arg("-o").arg(&out).output().unwrap();
+        (
+            o.status.code(),
+            text(&o),
+            std::fs::read_to_string(&out).ok(),
+        )
+    };
+    let before_first_move = |flat: &str| -> Vec<String> {
+        flat.lines()
+            .take_while(|l| !l.starts_with("G0 ") && !l.starts_with("G1 "))
+            .map(str::to_string)
+            .collect()
+    };
+    let plain = write(
+        "plain.ngc",
+        "G21 G90\nG0 X10 Y10 Z5\nG1 Z-1 F100\nX20\nM2\n",
+    );
+    let g55 = write(
+        "g55.toml",
+        "format = \"mtec.gcode-offsets/1\"\nactive = \"G55\"\n[work_offsets_mm]\nG54 = [250.0, 120.0, -300.0]\nG55 = [-100.0, 50.0, -250.0]\n",
+    );
+    let (code, msg, out) = run(&plain, Some(&g55));
+    assert_eq!(code, Some(0), "{msg}");
+    let flat = out.unwrap();
+    let head = before_first_move(&flat);
+    assert!(head.iter().any(|l| l == "G55"), "{flat}");
+    assert!(!head.iter().any(|l| l == "G54"), "{flat}");
+    assert!(flat.contains("G0 X10.0 Y10.0 Z5.0"), "{flat}");
+    // nothing given: the output names no system before the program does
+    let (code, msg, out) = run(&plain, None);
+    assert_eq!(code, Some(0), "{msg}");
+    let flat = out.unwrap();
+    assert!(
+        !before_first_move(&flat).iter().any(|l| l.starts_with("G5")),
+        "{flat}"
+    );
+    // a program that selects G55 needs its offset, as without flattening
+    let sel = write("sel.ngc", "G21 G90 G55\nG0 X10 Y10 Z5\nM2\n");
+    let (code, msg, _) = run(&sel, None);
+    assert_eq!(code, Some(2), "{msg}");
+    assert!(
+        msg.contains("G55 is selected but its offset is not known"),
+        "{msg}"
+    );
+    // G59.3 stands for the unknown start system: a program naming it is refused
+    let last = write("last.ngc", "G21 G90\nG0 X1 Y1 Z1\nG59.3\nG0 X2\nM2\n");
+    let (code, msg, _) = run(&last, None);
+    assert_eq!(code, Some(2), "{msg}");
+    assert!(msg.contains("last.ngc:3:1:"), "{msg}");
 }

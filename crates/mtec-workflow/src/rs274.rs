@@ -11,6 +11,7 @@ use mtec_comp::gcode::flatten::{
     axes_named, flatten, rotary_axes_named, work_offsets_from_probe, FlattenOptions, FlattenReport,
     WORK_OFFSET_PROBE,
 };
+use mtec_comp::gcode::offsets::Offsets;
 use mtec_comp::gcode::runtime_params::machine_state_parameter;
 use mtec_comp::gcode::start_probe::{
     held_axes, probe_program, spindle_tool_probe_program, tool_length_offsets, PROBE_TOOL_LINE,
@@ -56,6 +57,12 @@ pub struct FlattenInputs<'a> {
     /// table, empty when the user gave no lengths: a program that selects or measures a tool
     /// then stops at that line ("Requested tool N not found in the tool table").
     pub tool_lengths_mm: &'a std::collections::BTreeMap<u32, f64>,
+    /// Without `rs274.var_file`: the work offsets of `--offsets` (the system active at start
+    /// and each system's entry), handed to rs274 as its parameter file. Without either, rs274
+    /// starts in a system that stands for the machine's active one (G59.3, table zero), which
+    /// the output never names, and a program that changes a table entry is refused: the
+    /// flattened coordinates fold the change relative to a table nobody gave.
+    pub start_offsets: Option<&'a Offsets>,
     pub machine_units: MachineUnits,
     /// `Some(true)`: block delete on (`-b`).
     pub block_delete: Option<bool>,
@@ -308,6 +315,9 @@ pub struct Flattened {
     /// The work-offset table at program start (G54…G59.3, mm) as rs274 read it: the flattened
     /// program's coordinates are machine positions minus these.
     pub work_offsets_mm: [[f64; 3]; 9],
+    /// Whether the work offsets at start were given (`--var-file` or `--offsets`); if not, the
+    /// output names no system until the program selects one, and only G54 counts as known.
+    pub start_known: bool,
 }
 
 /// Flattens `input` with rs274; returns the plain program and what flattening did.
@@ -364,13 +374,27 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         Ok(dst)
     };
     let timeout = Duration::from_secs_f64(args.rs274.timeout_s.min(1e6));
+    // the parameter file: the user's, else one made of --offsets, else the unknown start
+    let unstated = args.rs274.var_file.is_none() && args.start_offsets.is_none();
+    if unstated {
+        if let Some(&(line, column, _, _)) = g_words(&program).iter().find(|w| w.2 == 593) {
+            return Err(InputError::at(input, line, column, "G59.3 with no --offsets or --var-file: flattening stands G59.3 for the machine's unknown active system; give the work offsets").into());
+        }
+    }
+    let var_file = |name: &str| -> Result<PathBuf, CliError> {
+        if let Some(v) = &args.rs274.var_file {
+            return copy(v, name);
+        }
+        let dst = tmp.0.join(name);
+        std::fs::write(&dst, var_file_in_inches(args.start_offsets))?;
+        Ok(dst)
+    };
 
     // 1. the work-offset table at program start, read by rs274 itself from the same var file
-    let mut probe_flags = Vec::new();
-    if let Some(v) = &args.rs274.var_file {
-        probe_flags.push("-v".to_string());
-        probe_flags.push(copy(v, "probe.var")?.display().to_string());
-    }
+    let probe_flags = vec![
+        "-v".to_string(),
+        var_file("probe.var")?.display().to_string(),
+    ];
     let probe = tmp.0.join("work-offsets.ngc");
     std::fs::write(&probe, WORK_OFFSET_PROBE)?;
     let run = run_rs274(&bin, &tmp.0, &probe_flags, &probe, timeout)?;
@@ -410,10 +434,8 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
             std::fs::write(&table, text)?;
         }
         flags.push(table.display().to_string());
-        if let Some(v) = &args.rs274.var_file {
-            flags.push("-v".to_string());
-            flags.push(copy(v, &format!("{name}.var"))?.display().to_string());
-        }
+        flags.push("-v".to_string());
+        flags.push(var_file(&format!("{name}.var"))?.display().to_string());
         if args.block_delete == Some(true) {
             flags.push("-b".to_string());
         }
@@ -508,6 +530,7 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
             "(mtec: {name} flattened by rs274 -g: LinuxCNC-only plain program; cutter comp, tool lengths and G92 baked in for the tool table given)"
         )),
         held: None,
+        unstated_start_system: unstated.then_some(UNSTATED_SYSTEM),
     };
     let cannot = |e| InputError::file(input, format!("cannot flatten: {e}"));
     let (text, report) = match held {
@@ -522,11 +545,36 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         // a call flattening refuses anyway is the plainer reason (a probe, a rigid tap)
         Err(e) => return Err(cannot(flatten(&run.stdout, &options).err().unwrap_or(e)).into()),
     };
+    if unstated && report.table_change_folded {
+        return Err(InputError::file(input, "the program changes a work offset (G10 L2/L20) and the flattened program folds the change into its coordinates, relative to the work-offset table at start, which was not given: give --offsets (the setup's work offsets) or --var-file (the controller's parameter file)").into());
+    }
     Ok(Flattened {
         text: text.into_bytes(),
         report,
         work_offsets_mm: table,
+        start_known: !unstated,
     })
+}
+
+/// The work system rs274 starts in when nobody gave the machine's (G59.3: the last one a
+/// program would select; one that does is refused).
+const UNSTATED_SYSTEM: usize = 8;
+
+/// A LinuxCNC parameter file (inches, as stand-alone rs274 reads it) of the work offsets at
+/// start: `offsets` (the active system as 5220, each entry at 5221 + 20·k), or, without them,
+/// G59.3 active and every entry zero ([`UNSTATED_SYSTEM`]).
+fn var_file_in_inches(offsets: Option<&Offsets>) -> String {
+    let (active, table) = match offsets {
+        Some(o) => (o.active, o.work_mm),
+        None => (UNSTATED_SYSTEM, [[0.0; 3]; 9]),
+    };
+    let mut text = format!("5220\t{}\n", active + 1);
+    for (k, xyz) in table.iter().enumerate() {
+        for (a, mm) in xyz.iter().enumerate() {
+            text.push_str(&format!("{}\t{}\n", 5221 + 20 * k + a, mm / 25.4));
+        }
+    }
+    text
 }
 
 #[cfg(test)]

@@ -79,6 +79,10 @@ pub struct FlattenOptions {
     /// commanded yet ([`super::start_probe::held_axes`]): those are not written, as in the
     /// original. `None`: the rules of `axes_named` and `rotary_named` alone.
     pub held: Option<Vec<[bool; 6]>>,
+    /// The work system rs274 started in (0 = G54 … 8 = G59.3) stands for the machine's active
+    /// one, which nobody gave: it is not written, so the output runs in whatever system the
+    /// machine is in, as the original does, until the program selects another one.
+    pub unstated_start_system: Option<usize>,
 }
 
 impl Default for FlattenOptions {
@@ -89,6 +93,7 @@ impl Default for FlattenOptions {
             rotary_named: [true; 3],
             header: None,
             held: None,
+            unstated_start_system: None,
         }
     }
 }
@@ -103,6 +108,9 @@ pub struct FlattenReport {
     /// Whether any offset (G92/G52, changed work offset, tool length) was folded into the
     /// coordinates of some move.
     pub offsets_folded: bool,
+    /// Whether a work-offset table entry changed by the program (G10 L2/L20) was folded in:
+    /// the output is then right only where the table at start is the one rs274 read.
+    pub table_change_folded: bool,
 }
 
 /// The program the CLI runs through rs274 (with the same parameter file) to learn the
@@ -246,6 +254,8 @@ struct Flattener {
     // --- what the output has set ---
     out_inch: Option<bool>,
     out_work: Option<usize>,
+    /// FlattenOptions::unstated_start_system, until rs274 prints the start system.
+    unstated_start_system: Option<usize>,
     out_plane: Option<usize>,
     out_feed: Option<f64>,
     out_feed_per_rev: Option<bool>,
@@ -301,6 +311,7 @@ impl Flattener {
             rotary_named: opt.rotary_named,
             out_inch: None,
             out_work: None,
+            unstated_start_system: opt.unstated_start_system,
             out_plane: None,
             out_feed: None,
             out_feed_per_rev: None,
@@ -456,6 +467,10 @@ impl Flattener {
         let fold = self.fold(c)?;
         if fold.iter().any(|v| *v != 0.0) {
             self.report.offsets_folded = true;
+        }
+        let table = self.table_mm[self.work];
+        if (0..3).any(|a| (self.work_offset_mm[a] - table[a]).abs() > 1e-9) {
+            self.report.table_change_folded = true;
         }
         if self.css_max.is_some() && fold[0] != 0.0 {
             return Err(c.err("constant surface speed (G96) while an X offset is folded into the coordinates: the spindle speed would change"));
@@ -674,6 +689,16 @@ impl Flattener {
                 self.check_rotary(c, &extra)?;
                 let s = self.scale();
                 self.work = idx;
+                // the first SET_G5X_OFFSET is the interpreter's start state, not a selection
+                if let Some(start) = self.unstated_start_system.take() {
+                    if start != idx {
+                        return Err(c.err(format!(
+                            "rs274 started in {}, not in {}",
+                            WORK_SYSTEMS[idx], WORK_SYSTEMS[start]
+                        )));
+                    }
+                    self.out_work = Some(idx);
+                }
                 self.work_offset_mm = [v[1] * s, v[2] * s, v[3] * s];
                 if !self.table_known[idx] {
                     self.table_mm[idx] = self.work_offset_mm;
@@ -1039,6 +1064,50 @@ mod tests {
             work_offsets_mm: Some([[0.0; 3]; 9]),
             ..FlattenOptions::default()
         }
+    }
+
+    #[test]
+    fn an_unstated_start_system_is_never_written_and_a_changed_entry_is_reported() {
+        let start = "    1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n    2 N..... SET_G5X_OFFSET(9, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n";
+        let listing = |calls: &[&str]| {
+            let mut t = start.to_string();
+            for (i, c) in calls.iter().enumerate() {
+                t.push_str(&format!("{:5} N..... {c}\n", i + 3));
+            }
+            t
+        };
+        let opt = FlattenOptions {
+            unstated_start_system: Some(8),
+            ..zero_table()
+        };
+        let (t, r) = flatten(
+            &listing(&[
+                "STRAIGHT_TRAVERSE(1.0000, 2.0000, 3.0000, 0.0000, 0.0000, 0.0000)",
+                "SET_G5X_OFFSET(2, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                "STRAIGHT_TRAVERSE(4.0000, 2.0000, 3.0000, 0.0000, 0.0000, 0.0000)",
+                "PROGRAM_END()",
+            ]),
+            &opt,
+        )
+        .unwrap();
+        assert!(!t.contains("G59.3"), "{t}");
+        let g55 = t.find("G55\n").unwrap();
+        assert!(t.find("G0 X1.0").unwrap() < g55, "{t}");
+        assert!(!r.table_change_folded);
+        // G10 L2 P2 X100 (an entry changed while G55 is active) is folded and reported
+        let (_, r) = flatten(
+            &listing(&[
+                "SET_G5X_OFFSET(2, 100.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+                "STRAIGHT_TRAVERSE(4.0000, 2.0000, 3.0000, 0.0000, 0.0000, 0.0000)",
+            ]),
+            &opt,
+        )
+        .unwrap();
+        assert!(r.table_change_folded && r.offsets_folded);
+        // rs274 started elsewhere than the system that stands for the machine's: an error
+        let mut g54 = listing(&[]);
+        g54 = g54.replace("SET_G5X_OFFSET(9", "SET_G5X_OFFSET(1");
+        assert!(flatten(&g54, &opt).is_err());
     }
 
     fn flat(canon: &str) -> Result<String, FlattenError> {
@@ -1443,6 +1512,7 @@ mod tests {
             rotary_named: [false; 3],
             header: Some("(flattened)".into()),
             held: None,
+            unstated_start_system: None,
         };
         let (t, _) = flatten(
             &canon(&[

@@ -161,22 +161,26 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
             text,
             report,
             work_offsets_mm,
+            start_known,
         } = flatten_input(
             &opts.input,
             &FlattenInputs {
                 rs274,
                 tool_table: opts.tool_table.as_deref(),
                 tool_lengths_mm: &options.offsets.tool_length_mm,
+                start_offsets: opts.offsets.is_some().then_some(&options.offsets),
                 machine_units: opts.machine_units,
                 block_delete: opts.block_delete,
             },
         )?;
         // the model is evaluated at machine positions: without offsets, take the work offsets
-        // rs274 read from the var file; with them, say when the two disagree
-        if opts.offsets.is_none() {
+        // rs274 read from the var file (without one, G54 = 0 as without flattening); with
+        // them, say when the two disagree
+        if opts.offsets.is_none() && start_known {
             options.offsets.work_mm = work_offsets_mm;
             options.offsets.known = [true; 9];
         } else if let Some(i) = (0..9).find(|&i| {
+            // (rs274 read --offsets itself unless a --var-file was given)
             (0..3).any(|a| (options.offsets.work_mm[i][a] - work_offsets_mm[i][a]).abs() > 1e-6)
         }) {
             warn(
@@ -266,7 +270,8 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
         );
     }
     let mut notes = Vec::new();
-    if opts.offsets.is_none() && opts.flatten.is_none() && report.moves_compensated > 0 {
+    let var_file = opts.flatten.as_ref().is_some_and(|f| f.var_file.is_some());
+    if opts.offsets.is_none() && !var_file && report.moves_compensated > 0 {
         notes.push(
             "no --offsets: program coordinates were taken as machine coordinates (G54 = 0); \
              if the part is set up with work offsets, give them with --offsets (see --help)"
