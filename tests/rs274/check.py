@@ -651,6 +651,7 @@ class Move:
         self.start, self.end, self.length = geom.start, geom.end, geom.length
         self.reference = False  # its end depends on the G28/G30 reference points (mark_reference)
         self.inverse_time_feed_mm = None  # under G93: the feed rs274 derived from F, in mm/min
+        self.feed_mm = None  # under G94: the feed in effect, mm/min
 
     def rounding_um(self):
         # printed to 4 decimals: each coordinate off by half a unit; an arc's printed centre
@@ -679,10 +680,11 @@ def interpret(path, calls, error):
     frame = Frame()
     pos = (0.0, 0.0, 0.0)  # rs274 stand-alone starts at machine zero (found by experiment)
     pos_units = None  # units in which the current position was printed
-    inverse_time, feed = False, None  # G93, and the last SET_FEED_RATE (units/min)
+    inverse_time, per_rev, feed = False, False, None  # G93, G95, the last SET_FEED_RATE
     for c in calls:
         if c.name == "COMMENT" and "feed mode set to" in c.args:
             inverse_time = "inverse time" in c.args
+            per_rev = "per revolution" in c.args
         if c.name == "SET_FEED_RATE":
             feed = numbers(c.args)[0]
             if inverse_time:
@@ -700,6 +702,8 @@ def interpret(path, calls, error):
             move = Move(kind, geom, c, frame.mm_per_unit, abc, pos_units, frame.offset_mm_per_unit)
             if kind == "feed" and inverse_time and feed:
                 move.inverse_time_feed_mm = feed * frame.mm_per_unit  # mm/min rs274 computed
+            elif kind == "feed" and not per_rev and feed:
+                move.feed_mm = feed * frame.mm_per_unit  # G94: mm/min
             prog.moves.append(move)
             pos, pos_units = geom.end, frame.mm_per_unit
             continue
@@ -1029,9 +1033,17 @@ def check_inverse_time(nominal, comp, match):
         if n.inverse_time_feed_mm is None:
             continue
         pieces = times.get(j, [])
-        if any(c.inverse_time_feed_mm is None for c in pieces):
-            return (f"{comp.path}: {n.where()} is an inverse-time (G93) move, but a compensated "
-                    f"piece of it is not")
+        for c in pieces:
+            if c.inverse_time_feed_mm is not None:
+                continue
+            # a flattened program states the feed rs274 derived, in G94: the same number
+            f_n, f_c = n.inverse_time_feed_mm, c.feed_mm
+            tol = HALF_PRINT_UNIT * (n.mm_per_unit + c.mm_per_unit) + 1e-9
+            if f_c is None or abs(f_c - f_n) > tol:
+                return (f"{comp.path}: {n.where()} is an inverse-time (G93) move at {f_n:.4f} "
+                        f"mm/min; a compensated piece of it runs at "
+                        f"{'no feed per minute' if f_c is None else f'{f_c:.4f} mm/min'}")
+        pieces = [c for c in pieces if c.inverse_time_feed_mm is not None]
         if not pieces or n.length <= ZERO_LENGTH_MM:
             continue
 

@@ -205,8 +205,9 @@ def nominal_moves(program, kw):
     return check.interpret(program, calls, err).moves
 
 
-def run_one(mtec, program, map_name, map_path, words, out_dir):
-    """Returns (outcome, max deviation um, bound um, note)."""
+def run_one(mtec, program, map_name, map_path, words, out_dir, always_flatten=False):
+    """Returns (outcome, max deviation um, bound um, note). `always_flatten`: through
+    `--flatten-with rs274` even when the rewriter would take the program itself."""
     stem = os.path.splitext(os.path.basename(program))[0]
     out = os.path.join(out_dir, f"{stem}.{map_name}.ngc")
     # mtec runs in the map's folder with a relative model path: the provenance comment names
@@ -214,8 +215,10 @@ def run_one(mtec, program, map_name, map_path, words, out_dir):
     cmd = [mtec, "compensate", "gcode", "--model", os.path.basename(map_path), program, "-o", out] + words
     if "--start-position-mm" not in words:
         cmd += ["--start-position-mm", "0,0,0"]
+    flattened = always_flatten and "--flatten-with" not in words
+    if flattened:
+        cmd += ["--flatten-with", "rs274"]
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=300, cwd=os.path.dirname(map_path))
-    flattened = False
     if r.returncode == 2 and "--flatten-with" not in words:
         # refused directly: the LinuxCNC route flattens the program with rs274 first; its
         # output is checked against the ORIGINAL program like any other
@@ -254,7 +257,7 @@ SHARED_OPTIONS = {
 }
 
 
-def run_program(mtec, program, out_dir, shared_maps, only_maps):
+def run_program(mtec, program, out_dir, shared_maps, only_maps, always_flatten=False):
     words = program_options(program) or list(SHARED_OPTIONS.get(os.path.basename(program), []))
     kw = checker_args(words)
     try:
@@ -267,7 +270,8 @@ def run_program(mtec, program, out_dir, shared_maps, only_maps):
     for name, path in maps:
         if only_maps and name not in only_maps:
             continue
-        outcome, dev, bound, note = run_one(mtec, program, name, path, words, out_dir)
+        outcome, dev, bound, note = run_one(mtec, program, name, path, words, out_dir,
+                                            always_flatten)
         rows.append((program, name, outcome, dev, bound, note))
     return rows
 
@@ -293,6 +297,8 @@ def main(argv=None):
     ap.add_argument("--maps", help="comma-separated subset of tilt,smooth,bump-line,bump-arc,clamp")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--only", help="regular expression on program file names")
+    ap.add_argument("--flatten", choices=["refused", "always"], default="refused",
+                    help="flatten with rs274 the programs the rewriter refuses (default), or all")
     a = ap.parse_args(argv)
 
     real = sorted(glob.glob(os.path.join(a.shared, "*.ngc"))) if a.shared else []
@@ -307,7 +313,8 @@ def main(argv=None):
     write_tilt_map(shared_maps[0][1])
     write_smooth_map(shared_maps[1][1])
     with concurrent.futures.ProcessPoolExecutor(max_workers=max(1, a.jobs)) as pool:
-        futures = [pool.submit(run_program, mtec, p, work, shared_maps, only_maps) for p in programs]
+        futures = [pool.submit(run_program, mtec, p, work, shared_maps, only_maps,
+                               a.flatten == "always") for p in programs]
         rows = [row for f in futures for row in f.result()]
 
     def label(p):

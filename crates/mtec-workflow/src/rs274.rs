@@ -546,7 +546,12 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         Err(e) => return Err(cannot(flatten(&run.stdout, &options).err().unwrap_or(e)).into()),
     };
     if unstated && report.table_change_folded {
-        return Err(InputError::file(input, "the program changes a work offset (G10 L2/L20) and the flattened program folds the change into its coordinates, relative to the work-offset table at start, which was not given: give --offsets (the setup's work offsets) or --var-file (the controller's parameter file)").into());
+        let message = "the program changes a work offset (G10 L2/L20) and the flattened program folds the change into its coordinates, relative to the work-offset table at start, which was not given: give --offsets (the setup's work offsets) or --var-file (the controller's parameter file)";
+        return Err(match g_words(&program).iter().find(|w| w.2 == 100) {
+            Some(&(line, column, _, _)) => InputError::at(input, line, column, message),
+            None => InputError::file(input, message),
+        }
+        .into());
     }
     Ok(Flattened {
         text: text.into_bytes(),
