@@ -396,9 +396,10 @@ fn hand_written_programs_with_control_flow_cycles_and_compensation_flatten_exact
         "coverage",
     ] {
         let p = data.join(format!("{name}.ngc"));
-        // G10 L2/L20 folded relative to a table at start that nobody gave: refused
+        // its G52 replaces a G92 offset the machine may keep (and its G10 L2 changes a table
+        // nobody gave): refused without the parameter file
         let unknown_start = if name == "offsets" {
-            Expect::Refused("changes a work offset (G10 L2/L20)")
+            Expect::Refused("offsets.ngc:10:1: this G52/G92.x replaces the G92 offset")
         } else {
             Expect::Same
         };
@@ -890,4 +891,50 @@ fn the_work_system_at_start_is_the_users_or_left_unnamed() {
     let (code, msg, _) = run(&last, None);
     assert_eq!(code, Some(2), "{msg}");
     assert!(msg.contains("last.ngc:3:1:"), "{msg}");
+}
+
+/// LinuxCNC keeps a G92 offset between programs; stand-alone rs274 starts without one. A
+/// program that cancels it (G92.1 in its preamble: 44 of LinuxCNC's own example programs)
+/// lost that cancel when flattened, and a machine still holding an offset ran every move
+/// beside the part (found 2026-11-27).
+#[test]
+fn the_g92_offset_linuxcnc_keeps_is_cancelled_as_the_original_does_or_refused() {
+    let Some(bin) = rs274() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, body: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, body).unwrap();
+        p
+    };
+    let preamble = write(
+        "preamble.ngc",
+        "G17 G21 G40 G49 G80 G90 G92.1\nG0 X1 Y1 Z1\nG92 X0\nG1 X2 F100\nM2\n",
+    );
+    check(&bin, &preamble, None, None, &[], &Expect::Same);
+    let flat = flatten_text(&bin, &preamble);
+    let first = flat.lines().find(|l| !l.starts_with('(')).unwrap();
+    assert!(first.ends_with(" G92.1"), "{flat}");
+    for (name, body, at) in [
+        (
+            "late.ngc",
+            "G21 G90\nG0 X1 Y1 Z1\nG92.1\nG0 X3\nM2\n",
+            "late.ngc:3:1:",
+        ),
+        (
+            "g52.ngc",
+            "G21 G90\nG0 X1 Y1 Z1\nG52 X5\nG0 X3\nM2\n",
+            "g52.ngc:3:1:",
+        ),
+    ] {
+        let p = write(name, body);
+        check(&bin, &p, None, None, &[], &Expect::Refused(at));
+    }
+    // a G92 offset in the controller's parameter file: rs274 reads it, flattening folds it
+    // into the coordinates and cancels it on the machine first (inches, as rs274 reads it)
+    let var = write(
+        "g92.var",
+        "5210\t1\n5211\t1.0\n5212\t0\n5213\t0\n5220\t1\n5221\t0\n5222\t0\n5223\t0\n",
+    );
+    let plain = write("plain.ngc", "G21 G90\nG0 X1 Y1 Z1\nG1 X3 F100\nM2\n");
+    check(&bin, &plain, None, Some(&var), &[], &Expect::Same);
 }

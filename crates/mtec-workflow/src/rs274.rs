@@ -215,15 +215,39 @@ fn rs274_message(stderr: &str) -> String {
 /// The name of the spindle-tool probe's run (its table gets the probe tool).
 const SPINDLE_TOOL_PROBE: &str = "spindle-tool-probe";
 
-/// Every G word of `program` outside comments: (line, column of the G, 1-based; the code ×10,
-/// so that `G043`, `g 43` and `G43.0` are all 430 and `G41.1` is 411; whether the block has an
-/// `H` word). Where refusals after an rs274 run point when they can.
-fn g_words(program: &[u8]) -> Vec<(usize, usize, i64, bool)> {
+/// A G word of a program, outside comments.
+#[derive(Debug, Clone, Copy)]
+struct GWord {
+    /// Line and column of the G, 1-based.
+    line: usize,
+    column: usize,
+    /// The code ×10: `G043`, `g 43` and `G43.0` are all 430, `G41.1` is 411.
+    code: i64,
+    /// Whether the block has an `H` word.
+    has_h: bool,
+    /// The block's `L` word, when it is a plain number.
+    l: Option<i64>,
+}
+
+/// A plain number after `letter` in a comment-free block (blanks allowed), if any.
+fn word_value(code: &str, letter: char) -> Option<f64> {
+    let k = code.find(|c: char| c.eq_ignore_ascii_case(&letter))?;
+    let number: String = code[k + 1..]
+        .chars()
+        .filter(|c| !c.is_whitespace())
+        .take_while(|c| c.is_ascii_digit() || *c == '.')
+        .collect();
+    number.parse().ok()
+}
+
+/// Every G word of `program` outside comments. Where refusals after an rs274 run point.
+fn g_words(program: &[u8]) -> Vec<GWord> {
     let text = String::from_utf8_lossy(program);
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let code = without_comments(line);
         let has_h = code.chars().any(|c| c.eq_ignore_ascii_case(&'h'));
+        let l = word_value(&code, 'l').map(|v| v.round() as i64);
         for (k, c) in code.char_indices() {
             if !c.eq_ignore_ascii_case(&'g') {
                 continue;
@@ -234,21 +258,56 @@ fn g_words(program: &[u8]) -> Vec<(usize, usize, i64, bool)> {
                 .take_while(|c| c.is_ascii_digit() || *c == '.')
                 .collect();
             if let Ok(v) = number.parse::<f64>() {
-                // `code` keeps the line's characters up to its first comment: columns agree
-                let column = code[..k].chars().count() + 1;
-                out.push((i + 1, column, (v * 10.0).round() as i64, has_h));
+                out.push(GWord {
+                    line: i + 1,
+                    column: code[..k].chars().count() + 1,
+                    code: (v * 10.0).round() as i64,
+                    has_h,
+                    l,
+                });
             }
         }
     }
     out
 }
 
+/// What flattening does about the G92 offset LinuxCNC keeps between programs (stand-alone
+/// rs274 always starts with none; mtec does not know the machine's): the original's first
+/// G92-family word before its first move being G92.1/G92.2 gives that cancel for the preamble;
+/// no G92-family word, or a G92 that sets the offset from the current position, needs none
+/// (the kept offset carries through both programs alike); a cancel after the first move, or
+/// G52/G92.3 (which set the offset outright) with no cancel first, is refused: the flattened
+/// program would keep a kept offset that the original drops.
+fn g92_family(input: &Path, program: &[u8]) -> Result<Option<&'static str>, CliError> {
+    let words = g_words(program);
+    // moves: G0–G3, splines, G28/G30, threading, probing, canned cycles (not G80)
+    let motion = |w: &GWord| matches!(w.code, 0 | 10 | 20 | 30 | 50 | 51 | 52 | 280 | 300 | 330 | 331 | 382..=385 | 730 | 740 | 760 | 810..=890);
+    let first_motion = words.iter().find(|w| motion(w)).map(|w| w.line);
+    // a G92.x runs before the move of its own block (LinuxCNC's order of execution)
+    let before_motion = |w: &GWord| first_motion.is_none_or(|m| w.line <= m);
+    let family = |w: &GWord| matches!(w.code, 520 | 920 | 921 | 922 | 923);
+    let cancel = words
+        .iter()
+        .find(|w| family(w))
+        .filter(|w| matches!(w.code, 921 | 922) && before_motion(w))
+        .map(|w| if w.code == 921 { "G92.1" } else { "G92.2" });
+    if cancel.is_none() {
+        if let Some(w) = words
+            .iter()
+            .find(|w| matches!(w.code, 520 | 921 | 922 | 923))
+        {
+            return Err(InputError::at(input, w.line, w.column, "this G52/G92.x replaces the G92 offset that LinuxCNC keeps between programs, which stand-alone rs274 does not have: the flattened program could keep an offset the original drops. Put G92.1 before the first move (or compensate without flattening)").into());
+        }
+    }
+    Ok(cancel)
+}
+
 /// The first `G43` block without an `H` word (not G43.1/G43.2): line and column.
 fn bare_g43(program: &[u8]) -> Option<(usize, usize)> {
     g_words(program)
         .into_iter()
-        .find(|&(_, _, g, h)| g == 430 && !h)
-        .map(|(l, c, _, _)| (l, c))
+        .find(|w| w.code == 430 && !w.has_h)
+        .map(|w| (w.line, w.column))
 }
 
 /// A line with its `( … )` comments blanked and cut at a `;` comment (columns kept).
@@ -377,8 +436,9 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     // the parameter file: the user's, else one made of --offsets, else the unknown start
     let unstated = args.rs274.var_file.is_none() && args.start_offsets.is_none();
     if unstated {
-        if let Some(&(line, column, _, _)) = g_words(&program).iter().find(|w| w.2 == 593) {
-            return Err(InputError::at(input, line, column, "G59.3 with no --offsets or --var-file: flattening stands G59.3 for the machine's unknown active system; give the work offsets").into());
+        let words = g_words(&program);
+        if let Some(w) = words.iter().find(|w| w.code == 593) {
+            return Err(InputError::at(input, w.line, w.column, "G59.3 with no --offsets or --var-file: flattening stands G59.3 for the machine's unknown active system; give the work offsets").into());
         }
     }
     let var_file = |name: &str| -> Result<PathBuf, CliError> {
@@ -462,11 +522,11 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     // --offsets lengths (or an empty one) has none, and rs274 then offsets the path by 0
     if args.tool_table.is_none() && run.stdout.contains("cutter radius compensation on") {
         let words = g_words(&program);
-        let at = words.iter().find(|w| w.2 == 410 || w.2 == 420);
-        if at.is_some() || !words.iter().any(|w| w.2 == 411 || w.2 == 421) {
+        let at = words.iter().find(|w| w.code == 410 || w.code == 420);
+        if at.is_some() || !words.iter().any(|w| w.code == 411 || w.code == 421) {
             let message = "G41/G42 take the cutter radius from the controller's tool table, which was not given (without it rs274 offsets the path by a radius of 0): give it with --tool-table, or write G41.1/G42.1 D<diameter>";
             return Err(match at {
-                Some(&(line, column, _, _)) => InputError::at(input, line, column, message),
+                Some(w) => InputError::at(input, w.line, w.column, message),
                 None => InputError::file(input, message),
             }
             .into());
@@ -522,6 +582,12 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         })
         .take(80)
         .collect();
+    // the G92 offset at start: in the controller's parameter file (rs274 reads it and
+    // flattening cancels and folds it), else unknown
+    let g92 = match &args.rs274.var_file {
+        Some(_) => Ok(None),
+        None => g92_family(input, &program),
+    };
     let options = FlattenOptions {
         work_offsets_mm: Some(table),
         axes_named: axes_named(&program),
@@ -531,6 +597,7 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         )),
         held: None,
         unstated_start_system: unstated.then_some(UNSTATED_SYSTEM),
+        g92_cancel_at_start: g92.as_ref().ok().copied().flatten(),
     };
     let cannot = |e| InputError::file(input, format!("cannot flatten: {e}"));
     let (text, report) = match held {
@@ -545,10 +612,19 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         // a call flattening refuses anyway is the plainer reason (a probe, a rigid tap)
         Err(e) => return Err(cannot(flatten(&run.stdout, &options).err().unwrap_or(e)).into()),
     };
+    g92?;
+    // G10 L2/L20 sets an entry of a table nobody gave (P1… a system that may or may not be
+    // the active one): what the flattened coordinates should fold is unknown
+    if let Some(w) = g_words(&program)
+        .iter()
+        .find(|w| unstated && w.code == 100 && matches!(w.l, Some(2 | 20)))
+    {
+        return Err(InputError::at(input, w.line, w.column, "G10 L2/L20 with no --offsets or --var-file: the work-offset table and the active system at start are not known, so what the change does to later moves is not known; give the work offsets").into());
+    }
     if unstated && report.table_change_folded {
         let message = "the program changes a work offset (G10 L2/L20) and the flattened program folds the change into its coordinates, relative to the work-offset table at start, which was not given: give --offsets (the setup's work offsets) or --var-file (the controller's parameter file)";
-        return Err(match g_words(&program).iter().find(|w| w.2 == 100) {
-            Some(&(line, column, _, _)) => InputError::at(input, line, column, message),
+        return Err(match g_words(&program).iter().find(|w| w.code == 100) {
+            Some(w) => InputError::at(input, w.line, w.column, message),
             None => InputError::file(input, message),
         }
         .into());
@@ -594,7 +670,7 @@ mod tests {
         assert_eq!(bare_g43(b"(\xc3\xa9\xc3\xa9) G043\n"), Some((1, 6)));
         let codes: Vec<i64> = g_words(b"G41.1 D6 G042 (G41)\ng 4 1 ; G42\n")
             .iter()
-            .map(|w| w.2)
+            .map(|w| w.code)
             .collect();
         assert_eq!(codes, [411, 420, 410]);
         assert_eq!(

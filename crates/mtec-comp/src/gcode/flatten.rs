@@ -83,6 +83,11 @@ pub struct FlattenOptions {
     /// one, which nobody gave: it is not written, so the output runs in whatever system the
     /// machine is in, as the original does, until the program selects another one.
     pub unstated_start_system: Option<usize>,
+    /// `G92.1` or `G92.2` when the original cancels the G92 offset before its first move:
+    /// written in the preamble. LinuxCNC keeps a G92 offset between programs, which
+    /// stand-alone rs274 never has; a program that cancels it first runs the same whatever
+    /// the machine held, and so does its flattened form only if it cancels it too.
+    pub g92_cancel_at_start: Option<&'static str>,
 }
 
 impl Default for FlattenOptions {
@@ -94,6 +99,7 @@ impl Default for FlattenOptions {
             header: None,
             held: None,
             unstated_start_system: None,
+            g92_cancel_at_start: None,
         }
     }
 }
@@ -958,7 +964,21 @@ pub fn flatten(canon: &str, opt: &FlattenOptions) -> Result<(String, FlattenRepo
         f.line(&h);
     }
     // G8: rs274 prints lathe X as a radius (G7 diameter mode is already undone)
-    f.line("G90 G91.1 G40 G49 G94 G80 G8");
+    // a G92 offset rs274 read from the parameter file is folded into the coordinates: the
+    // machine, which keeps it too, must drop it first
+    let kept_g92 = canon
+        .lines()
+        .filter_map(|l| l.split_once("SET_G92_OFFSET("))
+        .next()
+        .is_some_and(|(_, a)| {
+            a.trim_end_matches([')', ' '])
+                .split(',')
+                .any(|v| v.trim().parse::<f64>().is_ok_and(|x| x != 0.0))
+        });
+    match opt.g92_cancel_at_start.or(kept_g92.then_some("G92.1")) {
+        Some(cancel) => f.line(&format!("G90 G91.1 G40 G49 G94 G80 G8 {cancel}")),
+        None => f.line("G90 G91.1 G40 G49 G94 G80 G8"),
+    }
     f.out_feed_per_rev = Some(false);
     for (i, raw) in canon.lines().enumerate() {
         f.report.canonical_lines += 1;
@@ -1513,6 +1533,7 @@ mod tests {
             header: Some("(flattened)".into()),
             held: None,
             unstated_start_system: None,
+            g92_cancel_at_start: None,
         };
         let (t, _) = flatten(
             &canon(&[
