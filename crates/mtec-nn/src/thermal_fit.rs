@@ -111,6 +111,10 @@ pub fn off_interval(data: &ThermalData, interval: f64, trained: bool) -> Option<
             (dt - interval).abs() > INTERVAL_TOLERANCE * interval
         })
         .map(|i| {
+            let (t, e) = (data.time_min[i], &data.experiment[i]);
+            if t == data.time_min[i - 1] {
+                return (i, format!("time {t} min appears twice in one sequence of experiment {e}: a sequence model needs one row per time step"));
+            }
             let why = if trained {
                 format!("the model was trained on data sampled every {interval} min")
             } else {

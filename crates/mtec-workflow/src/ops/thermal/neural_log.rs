@@ -16,8 +16,10 @@ use super::{load_table, located, metrics_line, write_candidates, FitOptions};
 use crate::observer::Relay;
 use crate::{Error, Observer, Result};
 use mtec_io::{InputError, OutputGuard, Table};
+use mtec_nn::cnn_lstm::CnnLstmConfig;
 use mtec_nn::thermal_fit::{
-    off_interval, sample_interval, Monitored, Network, NeuralFit, NeuralThermalModel, Training,
+    off_interval, sample_interval, sensor_inputs, Monitored, Network, NeuralFit,
+    NeuralThermalModel, Training,
 };
 use mtec_nn::thermal_log::{NnFitOptions, NnKind};
 use mtec_nn::Quiet;
@@ -201,17 +203,34 @@ fn prepared(
         return Err(Error::usage("the training selection holds no rows"));
     }
     if cnn_lstm {
-        check_interval(&data, &table.path, None)?;
+        // the convolution runs over the inputs: at least its width of them
+        let kernel = CnnLstmConfig::default().architecture.kernel;
+        let (names, _) = sensor_inputs(&data, &fit.sensors, false)
+            .map_err(|e| located(&data, &table.path, e))?;
+        if names.len() < kernel {
+            return Err(Error::Input(data.header_error(format!(
+                "the CNN-LSTM's convolution (width {kernel}) needs at least {kernel} features; the data have {}: {}",
+                names.len(),
+                names.join(", ")
+            ))));
+        }
+        check_interval(&data, table, None)?;
     }
     Ok((data, rows))
 }
 
 /// A CNN-LSTM's refusal of a log sampled at other steps than `trained` (or than its own median
-/// step), located at the first such row.
-fn check_interval(data: &ThermalData, path: &Path, trained: Option<f64>) -> Result<()> {
+/// step), located at the first such row's time.
+fn check_interval(data: &ThermalData, table: &Table, trained: Option<f64>) -> Result<()> {
     if let Some(interval) = trained.or_else(|| sample_interval(data)) {
         if let Some((i, why)) = off_interval(data, interval, trained.is_some()) {
-            return Err(Error::Input(InputError::line(path, data.lines[i], why)));
+            let column = table.header.iter().position(|h| h == "time_min");
+            return Err(Error::Input(InputError::at(
+                &table.path,
+                data.lines[i],
+                column.map_or(0, |c| c + 1),
+                why,
+            )));
         }
     }
     Ok(())
@@ -487,7 +506,7 @@ pub fn predict_log(
     let table = Table::read(path)?;
     let data = load_table(&table, Some(&model.target), false, None)?;
     if matches!(model.network, Network::CnnLstm(_)) {
-        check_interval(&data, path, trained_interval)?;
+        check_interval(&data, &table, trained_interval)?;
     }
     let pred = model.predict(&data).map_err(|e| located(&data, path, e))?;
     Ok((data, pred))
