@@ -208,7 +208,7 @@ fn prepared(
         let (names, _) = sensor_inputs(&data, &fit.sensors, false)
             .map_err(|e| located(&data, &table.path, e))?;
         if names.len() < kernel {
-            return Err(Error::Input(data.header_error(format!(
+            return Err(Error::Input(InputError::at(&table.path, table.header_line, 1, format!(
                 "the CNN-LSTM's convolution (width {kernel}) needs at least {kernel} features; the data have {}: {}",
                 names.len(),
                 names.join(", ")
