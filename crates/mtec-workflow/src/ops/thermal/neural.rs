@@ -90,9 +90,9 @@ pub use mtec_nn::thermal_fit::Training;
 #[serde(untagged)]
 pub enum NeuralFitOutcome {
     /// A network on a rotary log (this module's route).
-    Rotary(FitOutcome),
+    Rotary(Box<FitOutcome>),
     /// A network on a log of one target ([`super::neural_log`]).
-    Log(LogFitOutcome),
+    Log(Box<LogFitOutcome>),
     /// `--model auto --with-networks`.
     Auto(AutoOutcome),
 }
@@ -128,9 +128,10 @@ pub fn fit_thermal(
         return neural_log::fit_auto(opts, &networks, obs).map(NeuralFitOutcome::Auto);
     }
     if log {
-        return neural_log::fit(opts, nn, obs).map(NeuralFitOutcome::Log);
+        return neural_log::fit(opts, nn, obs).map(|o| NeuralFitOutcome::Log(Box::new(o)));
     }
-    fit(&FitOptions::from_thermal_fit(opts, nn.clone())?, obs).map(NeuralFitOutcome::Rotary)
+    fit(&FitOptions::from_thermal_fit(opts, nn.clone())?, obs)
+        .map(|o| NeuralFitOutcome::Rotary(Box::new(o)))
 }
 
 /// The trained network (written to `output`) and its scores.

@@ -96,8 +96,8 @@ impl fmt::Display for LogFitOutcome {
 #[derive(Debug, Clone, Serialize)]
 #[serde(untagged)]
 pub enum AutoOutcome {
-    Regression(super::FitOutcome),
-    Network(LogFitOutcome),
+    Regression(Box<super::FitOutcome>),
+    Network(Box<LogFitOutcome>),
 }
 
 impl fmt::Display for AutoOutcome {
@@ -445,11 +445,11 @@ pub fn fit_auto_table(
                 warnings: Vec::new(),
             };
             let file = file_of(validated, &data, rows).map_err(err)?;
-            Ok(AutoOutcome::Regression(super::FitOutcome {
+            Ok(AutoOutcome::Regression(Box::new(super::FitOutcome {
                 output: opts.output.clone(),
                 warnings: file.warnings.clone(),
                 file,
-            }))
+            })))
         }
         AutoModel::Network(model) => {
             // the report of auto's refit of the chosen network (its last training)
@@ -474,7 +474,7 @@ pub fn fit_auto_table(
                 Vec::new(),
                 &opts.output,
             )
-            .map(AutoOutcome::Network)
+            .map(|o| AutoOutcome::Network(Box::new(o)))
         }
     }
 }
