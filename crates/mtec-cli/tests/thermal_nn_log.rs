@@ -409,3 +409,69 @@ fn a_cnn_lstm_fits_by_time_and_predict_reads_it_back() {
         text(&o)
     );
 }
+
+/// A drift quadratic in the fast sensor's rise (0.4·ΔT1² − 2·ΔT2), no spindle column: every
+/// linear candidate is worse than no compensation on some fold, the BPNN is not, so auto
+/// chooses it and writes the network's own file, which predict reads.
+#[test]
+fn auto_that_chooses_a_network_writes_the_networks_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut csv = String::from("experiment,time_min,T1_c,T2_c,T3_c,ez_um\n");
+    let (mut s1, mut s2, mut s3) = (20.0, 20.0, 20.0);
+    for k in 0..300 {
+        let t = k as f64 * 2.0;
+        let q = [0.0, 9.0, 3.0, 12.0, 6.0, 0.0, 10.0, 4.0][(t / 75.0) as usize];
+        s1 += 0.2 * (20.0 + q - s1);
+        s2 += 0.05 * (s1 - s2);
+        s3 += 0.02 * (s1 - s3);
+        let ez = 0.4 * (s1 - 20.0_f64).powi(2) - 2.0 * (s2 - 20.0);
+        csv.push_str(&format!("1,{t},{s1:.4},{s2:.4},{s3:.4},{ez:.4}\n"));
+    }
+    let log = dir.path().join("quad.csv");
+    std::fs::write(&log, csv).unwrap();
+    let model = dir.path().join("auto.json");
+    let (l, m) = (log.to_str().unwrap(), model.to_str().unwrap());
+    let o = mtec(&[
+        "thermal",
+        "fit",
+        "--model",
+        "auto",
+        "--with-networks",
+        "bpnn",
+        "--hidden",
+        "4",
+        "--epochs",
+        "60",
+        "--quiet",
+        "--data",
+        l,
+        "--target",
+        "ez_um",
+        "--train-until",
+        "460",
+        "-o",
+        m,
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let file = json(&model);
+    assert_eq!(file["format"], "mtec.bpnn/1", "{}", text(&o));
+    let p = &file["provenance"];
+    let cands = p["candidates"].as_array().unwrap();
+    let chosen: Vec<&serde_json::Value> = cands.iter().filter(|c| c["chosen"] == true).collect();
+    assert_eq!(chosen.len(), 1);
+    assert_eq!(chosen[0]["family"], "bpnn");
+    assert_eq!(chosen[0]["forward"], p["validation"]);
+    // every regression candidate was worse than no compensation on a fold
+    for c in cands.iter().filter(|c| c["family"] != "bpnn") {
+        assert!(
+            !c["worse_than_uncompensated"].as_array().unwrap().is_empty(),
+            "{c}"
+        );
+    }
+    let o = mtec(&["thermal", "predict", "--model", m, "--data", l, "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["n"], 300);
+    // every row, the test rows after 460 min too, within 1 um of a drift spanning ~50 um
+    assert!(v["metrics"][0]["rmse"].as_f64().unwrap() < 1.0, "{v}");
+}
