@@ -317,6 +317,33 @@ fn auto_with_networks_scores_them_on_the_same_forward_folds() {
         net["forward"]["pooled_rmse_um"].as_f64().unwrap(),
         cv.pooled_rmse_um
     ));
+    // within auto's sensor budget only: three sensors are more than --max-sensors 2
+    let mut args = vec![
+        "thermal",
+        "fit",
+        "--model",
+        "auto",
+        "--with-networks",
+        "bpnn",
+        "--max-sensors",
+        "2",
+        "--data",
+        l,
+        "--target",
+        "ez_um",
+        "--train-until",
+        "460",
+        "-o",
+        m,
+    ];
+    args.extend(BPNN);
+    let o = mtec(&args);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("bpnn          not fitted: a network takes all its 3 sensors, more than --max-sensors 2"),
+        "{}",
+        text(&o)
+    );
     // and --with-networks goes with auto only
     let o = mtec(&[
         "thermal",

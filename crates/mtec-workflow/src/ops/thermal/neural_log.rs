@@ -155,8 +155,11 @@ impl Predict for AutoModel {
 
 /// A network as auto's candidate (a fitter of [`AutoModel`]); `last` keeps the report of its
 /// latest training (after auto's choice: the refit on every training row).
+/// A network takes every sensor it is given, so within auto's sensor budget (issue 17:
+/// `--max-sensors`, default 6) it is a candidate only when those are few enough.
 struct NetworkCandidate {
     fit: NeuralFit,
+    max_sensors: usize,
     last: Rc<RefCell<Option<Training>>>,
 }
 
@@ -167,6 +170,13 @@ impl Fit for NetworkCandidate {
         data: &ThermalData,
         rows: &[usize],
     ) -> std::result::Result<AutoModel, ThermalError> {
+        let n = sensor_inputs(data, &self.fit.sensors, false)?.0.len();
+        if n > self.max_sensors {
+            return Err(ThermalError::Invalid(format!(
+                "a network takes all its {n} sensors, more than --max-sensors {}: name at most that many with --sensors, or raise --max-sensors",
+                self.max_sensors
+            )));
+        }
         let (model, training) = self.fit.fit_rows_monitored(data, rows, &mut Quiet)?;
         *self.last.borrow_mut() = Some(training);
         Ok(AutoModel::Network(model))
@@ -377,6 +387,7 @@ pub fn fit(opts: &FitOptions, nn: &NnFitOptions, obs: &mut dyn Observer) -> Resu
     let dest = OutputGuard::new(&[&opts.data]).check(&opts.output)?;
     let outcome = fit_table(&Table::read(&opts.data)?, opts, nn, obs)?;
     dest.write(outcome.model_json.as_bytes())?;
+    super::warn_all(obs, &outcome.warnings);
     Ok(outcome)
 }
 
@@ -427,6 +438,7 @@ pub fn fit_auto_table(
                     options: nn.clone(),
                     sensors: opts.fit.sensors.clone(),
                 },
+                max_sensors: auto.max_sensors,
                 last: Rc::clone(last),
             });
             (name.to_string(), rank, fitter)
@@ -490,9 +502,7 @@ pub fn fit_auto(
     let dest = OutputGuard::new(&[&opts.data]).check(&opts.output)?;
     let outcome = fit_auto_table(&Table::read(&opts.data)?, opts, networks, obs)?;
     dest.write(outcome.model_json()?.as_bytes())?;
-    if let AutoOutcome::Regression(o) = &outcome {
-        super::warn_all(obs, &o.warnings);
-    }
+    super::warn_all(obs, outcome.warnings());
     Ok(outcome)
 }
 
