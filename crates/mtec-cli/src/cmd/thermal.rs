@@ -272,10 +272,9 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
 /// `--model cnn-lstm|bpnn` in a build without the neural models.
 #[cfg(not(feature = "neural"))]
 fn fit_neural(a: FitArgs) -> Result<(), CliError> {
-    Err(mtec_workflow::neural_unavailable(&format!(
-        "`thermal fit --model {}`",
-        a.common.model
-    )))
+    let with = ["", " --with-networks"][usize::from(!a.nn.with_networks.is_empty())];
+    let what = format!("`thermal fit --model {}{with}`", a.common.model);
+    Err(mtec_workflow::neural_unavailable(&what))
 }
 
 /// `--model cnn-lstm|bpnn`, or `auto --with-networks` (the networks' options as bpnn's).
