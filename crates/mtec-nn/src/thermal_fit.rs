@@ -19,14 +19,25 @@
 //!
 //! The network's own early stopping holds out the last 15 % of every training sequence (the
 //! library default); the validation of this module's caller is on later rows, never on those.
+//!
+//! The model file is the network's own format (`mtec.bpnn/1`, `mtec.cnn-lstm/1`): its input and
+//! output names are the sensors and the target, and `provenance` says how it was fitted
+//! ([`NeuralThermalModel::to_json`]: `thermal_data: true`, `rises`, the sampling interval, and
+//! whatever the caller adds, e.g. the split and the forward validation); such a file reads back
+//! as this model ([`NeuralThermalModel::from_json`]). A long training reports its epochs to a
+//! [`Monitor`] and stops when asked ([`NeuralFit::fit_rows_monitored`], [`Monitored`]).
 
-use crate::baseline::train_bpnn_baseline;
+use crate::baseline::train_bpnn_baseline_monitored;
 use crate::bpnn::Bpnn;
-use crate::cnn_lstm::{train_cnn_lstm, CnnLstm};
+use crate::bpnn_train::TrainReport;
+use crate::cnn_lstm::{train_cnn_lstm_monitored, CnnLstm, CnnLstmReport};
 use crate::dataset::{Experiment, Sequence, ThermalDataset};
 use crate::error::NnError;
+use crate::progress::{Monitor, Quiet, StopReason};
 use crate::thermal_log::{NnFitOptions, NnKind};
 use mtec_thermal::{Fit, Predict, ThermalData, ThermalError};
+use serde::Serialize;
+use std::cell::RefCell;
 
 /// A neural fitter on thermal logs: the network and its training ([`NnFitOptions`]; its
 /// `sequence_by`, `features` and `angle_harmonics` are for the rotary logs and must be unset),
@@ -56,6 +67,64 @@ pub struct NeuralThermalModel {
     pub target: String,
 }
 
+/// How the network trained.
+#[derive(Debug, Clone, Serialize)]
+#[serde(untagged)]
+pub enum Training {
+    CnnLstm(CnnLstmReport),
+    Bpnn(TrainReport),
+}
+
+impl Training {
+    pub fn stop_reason(&self) -> &StopReason {
+        match self {
+            Training::CnnLstm(r) => &r.stop_reason,
+            Training::Bpnn(r) => &r.stop_reason,
+        }
+    }
+}
+
+/// Relative difference of a time step from the sampling interval that is still that interval
+/// (a logger's clock jitter), as for the rotary logs ([`crate::thermal_log`]).
+const INTERVAL_TOLERANCE: f64 = 0.01;
+
+/// The sampling interval of a log (the median time step within its experiments, min).
+pub fn sample_interval(data: &ThermalData) -> Option<f64> {
+    let mut steps: Vec<f64> = data
+        .segments()
+        .into_iter()
+        .flat_map(|(a, b)| (a + 1..b).map(|i| data.time_min[i] - data.time_min[i - 1]))
+        .filter(|d| *d > 0.0)
+        .collect();
+    steps.sort_by(f64::total_cmp);
+    steps.get(steps.len() / 2).copied()
+}
+
+/// The first row (index) whose time step from the row before (same experiment) is not
+/// `interval`, with the reason: a CNN-LSTM's window counts rows, so every step must be one.
+pub fn off_interval(data: &ThermalData, interval: f64, trained: bool) -> Option<(usize, String)> {
+    data.segments()
+        .into_iter()
+        .flat_map(|(a, b)| a + 1..b)
+        .find(|&i| {
+            let dt = data.time_min[i] - data.time_min[i - 1];
+            (dt - interval).abs() > INTERVAL_TOLERANCE * interval
+        })
+        .map(|i| {
+            let (t, e) = (data.time_min[i], &data.experiment[i]);
+            if t == data.time_min[i - 1] {
+                return (i, format!("time {t} min appears twice in one sequence of experiment {e}: a sequence model needs one row per time step"));
+            }
+            let why = if trained {
+                format!("the model was trained on data sampled every {interval} min")
+            } else {
+                format!("the log is sampled every {interval} min (median step)")
+            };
+            let dt = data.time_min[i] - data.time_min[i - 1];
+            (i, format!("a time step of {dt} min, but {why}: the CNN-LSTM's window counts rows, so it would span other minutes here; resample the log to one step of {interval} min (each gap becomes its own experiment)"))
+        })
+}
+
 fn nn_error(e: NnError) -> ThermalError {
     match e {
         NnError::Data(m) | NnError::Config(m) | NnError::Model(m) => ThermalError::Invalid(m),
@@ -63,7 +132,7 @@ fn nn_error(e: NnError) -> ThermalError {
     }
 }
 
-/// The sensor inputs of every row of `data`: `sensors` (all when empty) as temperatures, or as
+/// The sensor inputs of every row of `data`: `sensors` (every `_c` column when empty) as temperatures, or as
 /// rises over the first row of each experiment.
 pub fn sensor_inputs(
     data: &ThermalData,
@@ -71,7 +140,10 @@ pub fn sensor_inputs(
     rises: bool,
 ) -> Result<(Vec<String>, Vec<Vec<f64>>), ThermalError> {
     let idx: Vec<usize> = if sensors.is_empty() {
-        (0..data.sensor_names.len()).collect()
+        // every `_c` column (not a heat-input column attached to the data, e.g. spindle_rpm)
+        (0..data.sensor_names.len())
+            .filter(|&j| data.sensor_names[j].ends_with("_c"))
+            .collect()
     } else {
         sensors
             .iter()
@@ -141,16 +213,15 @@ impl NeuralFit {
             NnKind::Bpnn => 0,
         }
     }
-}
 
-impl Fit for NeuralFit {
-    type Model = NeuralThermalModel;
-
-    fn fit_rows(
+    /// [`Fit::fit_rows`] that reports the epochs to `monitor` and stops when it asks (keeping
+    /// the best epoch's weights), and returns how the training went.
+    pub fn fit_rows_monitored(
         &self,
         data: &ThermalData,
         rows: &[usize],
-    ) -> Result<NeuralThermalModel, ThermalError> {
+        monitor: &mut dyn Monitor,
+    ) -> Result<(NeuralThermalModel, Training), ThermalError> {
         let o = &self.options;
         if o.sequence_by.is_some() || !o.features.is_empty() || o.angle_harmonics.is_some() {
             return Err(ThermalError::Invalid(
@@ -166,24 +237,127 @@ impl Fit for NeuralFit {
             target_names: vec![target_name.clone()],
             experiments: vec![Experiment { id: 1, sequences }],
         };
-        let network = match o.kind {
-            NnKind::Bpnn => Network::Bpnn(
-                train_bpnn_baseline(&train, &o.bpnn_config())
-                    .map_err(nn_error)?
-                    .0,
-            ),
-            NnKind::CnnLstm => Network::CnnLstm(
-                train_cnn_lstm(&train, &o.cnn_lstm_config())
-                    .map_err(nn_error)?
-                    .0,
-            ),
+        let (network, training) = match o.kind {
+            NnKind::Bpnn => {
+                let (net, report) =
+                    train_bpnn_baseline_monitored(&train, &o.bpnn_config(), monitor)
+                        .map_err(nn_error)?;
+                (Network::Bpnn(net), Training::Bpnn(report))
+            }
+            NnKind::CnnLstm => {
+                let (net, report) = train_cnn_lstm_monitored(&train, &o.cnn_lstm_config(), monitor)
+                    .map_err(nn_error)?;
+                (Network::CnnLstm(net), Training::CnnLstm(report))
+            }
         };
-        Ok(NeuralThermalModel {
+        let model = NeuralThermalModel {
             network,
             sensors: names,
             rises: o.rises,
             target: target_name,
-        })
+        };
+        Ok((model, training))
+    }
+}
+
+impl Fit for NeuralFit {
+    type Model = NeuralThermalModel;
+
+    fn fit_rows(
+        &self,
+        data: &ThermalData,
+        rows: &[usize],
+    ) -> Result<NeuralThermalModel, ThermalError> {
+        self.fit_rows_monitored(data, rows, &mut Quiet).map(|m| m.0)
+    }
+}
+
+/// A [`NeuralFit`] whose every training (one per validation fold) reports to one monitor and
+/// stops when it asks: the forward validation of a long training shows progress and obeys
+/// Ctrl-C.
+pub struct Monitored<'a> {
+    pub fit: &'a NeuralFit,
+    monitor: RefCell<&'a mut dyn Monitor>,
+}
+
+impl<'a> Monitored<'a> {
+    pub fn new(fit: &'a NeuralFit, monitor: &'a mut dyn Monitor) -> Self {
+        Monitored {
+            fit,
+            monitor: RefCell::new(monitor),
+        }
+    }
+}
+
+impl Fit for Monitored<'_> {
+    type Model = NeuralThermalModel;
+    fn fit_rows(
+        &self,
+        data: &ThermalData,
+        rows: &[usize],
+    ) -> Result<NeuralThermalModel, ThermalError> {
+        let mut m = self.monitor.borrow_mut();
+        self.fit
+            .fit_rows_monitored(data, rows, &mut **m)
+            .map(|m| m.0)
+    }
+}
+
+impl NeuralThermalModel {
+    /// The model file: the network's own format, its `provenance` the training's
+    /// (`training.model`) and `extra`'s keys, plus `thermal_data: true`, `rises` (the number of
+    /// leading inputs that are rises, as the rotary files count them) and the log's sampling
+    /// interval (a CNN-LSTM refuses data sampled otherwise).
+    pub fn to_json(&self, data: &ThermalData, extra: serde_json::Value) -> String {
+        let mut p = serde_json::json!({
+            "thermal_data": true,
+            "target": self.target,
+            "rises": if self.rises { self.sensors.len() } else { 0 },
+            "sequence_by": null,
+            "changes": false,
+            "sample_interval_min": sample_interval(data),
+        });
+        if let serde_json::Value::Object(extra) = extra {
+            p.as_object_mut().expect("object").extend(extra);
+        }
+        match &self.network {
+            Network::Bpnn(n) => {
+                let mut n = n.clone();
+                p["training"] = serde_json::json!({"model": n.provenance});
+                n.provenance = p;
+                n.to_json()
+            }
+            Network::CnnLstm(n) => {
+                let mut n = n.clone();
+                p["training"] = serde_json::json!({"model": n.provenance});
+                n.provenance = p;
+                n.to_json()
+            }
+        }
+    }
+
+    /// The model a file of [`NeuralThermalModel::to_json`] holds (`None`: a network fitted
+    /// otherwise, e.g. on a rotary log), and the sampling interval it was trained on.
+    pub fn from_network(network: Network) -> Option<(NeuralThermalModel, Option<f64>)> {
+        let (p, sensors, targets) = match &network {
+            Network::Bpnn(n) => (&n.provenance, &n.input_names, &n.output_names),
+            Network::CnnLstm(n) => (&n.provenance, &n.feature_names, &n.target_names),
+        };
+        if p.get("thermal_data").and_then(|v| v.as_bool()) != Some(true) || targets.len() != 1 {
+            return None;
+        }
+        let rises = p.get("rises").and_then(|v| v.as_u64()).unwrap_or(0) > 0;
+        let interval = p.get("sample_interval_min").and_then(|v| v.as_f64());
+        let (sensors, target) = (sensors.clone(), targets[0].clone());
+        Some((
+            NeuralThermalModel {
+                network,
+                sensors,
+                rises,
+                target,
+            },
+            interval,
+        ))
     }
 }
 
@@ -229,6 +403,7 @@ impl Predict for NeuralThermalModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::baseline::train_bpnn_baseline;
     use mtec_thermal::validate::{forward_cv, forward_folds, split_at_time};
     use nalgebra::DMatrix;
 
@@ -366,6 +541,44 @@ mod tests {
         assert_eq!(pred.len(), data.len());
         assert!(pred.iter().all(|v| v.is_finite()));
         assert_eq!(model.predictors(), 3);
+    }
+
+    #[test]
+    fn the_model_file_reads_back_as_the_same_model() {
+        let data = log();
+        let model = bpnn().fit(&data).unwrap();
+        let text = model.to_json(&data, serde_json::json!({"split": {"train_rows": 240}}));
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(v["format"], "mtec.bpnn/1");
+        assert_eq!(v["provenance"]["split"]["train_rows"], 240);
+        assert_eq!(v["provenance"]["rises"], 3);
+        let net = Network::Bpnn(Bpnn::from_json(&text).unwrap());
+        let (back, interval) = NeuralThermalModel::from_network(net).unwrap();
+        // the same weights up to serde_json's parsing of the last digit (its `float_roundtrip`
+        // feature is off): 1e-12 um
+        let (b, m) = (back.predict(&data).unwrap(), model.predict(&data).unwrap());
+        assert!(b.iter().zip(&m).all(|(b, m)| (b - m).abs() < 1e-12));
+        assert_eq!((back.rises, back.target.as_str()), (true, "ez_um"));
+        assert_eq!(interval, Some(2.0));
+        // a network fitted otherwise (no `thermal_data` mark) is not read as one
+        let mut other = Bpnn::from_json(&text).unwrap();
+        other.provenance = serde_json::Value::Null;
+        assert!(NeuralThermalModel::from_network(Network::Bpnn(other)).is_none());
+    }
+
+    #[test]
+    fn a_time_step_off_the_interval_is_found_where_it_is() {
+        let mut data = log();
+        assert_eq!(off_interval(&data, 2.0, false), None);
+        data.time_min[50] += 0.5;
+        let (row, why) = off_interval(&data, sample_interval(&data).unwrap(), true).unwrap();
+        assert_eq!(row, 50);
+        assert!(
+            why.contains("a time step of 2.5 min") && why.contains("trained"),
+            "{why}"
+        );
+        // the step from one experiment to the next is not a time step
+        assert_eq!(data.time_min[120], 0.0);
     }
 
     #[test]

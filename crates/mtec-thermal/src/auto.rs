@@ -5,11 +5,15 @@
 //! selection of at most `max_sensors` temperature sensors, the heat input not counted),
 //! `heat-input` ([`crate::heat_input`]) when the data has the input column, and `exp-ambient`
 //! when the caller supplies its fitter (its columns exist), and every kind that offers itself
-//! ([`crate::kind::Kind::auto_candidate`]: `pls`). Neural models are never candidates.
+//! ([`crate::kind::Kind::auto_candidate`]: `pls`), and the candidates of other crates a caller
+//! adds ([`Auto::fit_with_extra`]: the networks of mtec-nn, when the user asks for them).
 //!
 //! Auto does not know the registry of the kinds (it is one of them): the kinds that may offer a
 //! candidate are passed in ([`Auto::fit_with`], a list of [`Offer`]s). `Auto::fit_auto` and
 //! auto's [`Fit`], which pass every kind of the registry, are defined in [`crate::registry`].
+//! A candidate of another crate fits to a model type of the caller's (`M`: any [`Predict`] that
+//! a [`ThermalModel`] converts into), so auto's own candidates are scored and chosen with it on
+//! the same folds.
 //!
 //! 1. Forward folds of the training rows ([`crate::validate::forward_folds_of`]).
 //! 2. Each candidate is fitted on each fold's training rows, with every choice it makes
@@ -90,8 +94,8 @@ impl CandidateScore {
 
 /// The chosen model, its forward validation and every candidate's score.
 #[derive(Debug, Clone)]
-pub struct AutoFit {
-    pub model: ThermalModel,
+pub struct AutoFit<M = ThermalModel> {
+    pub model: M,
     pub family: String,
     pub validation: ForwardCv,
     pub candidates: Vec<CandidateScore>,
@@ -107,6 +111,20 @@ pub type Offer = (
     &'static str,
     fn(&Auto, &ThermalData) -> Option<AutoCandidate>,
 );
+
+/// A candidate of another crate ([`Auto::fit_with_extra`]): its name, simplicity rank (after
+/// auto's own, e.g. 6 bpnn, 7 cnn-lstm) and fitter.
+pub type ExtraCandidate<M> = (String, usize, Box<dyn Fit<Model = M>>);
+
+/// A [`ThermalModel`] fitter as a fitter of the caller's model type `M`.
+struct Into<C, M>(C, std::marker::PhantomData<fn() -> M>);
+
+impl<C: Fit<Model = ThermalModel>, M: Predict + From<ThermalModel>> Fit for Into<C, M> {
+    type Model = M;
+    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<M, ThermalError> {
+        self.0.fit_rows(data, rows).map(M::from)
+    }
+}
 
 /// A candidate fitter as a [`ThermalModel`] fitter.
 enum Candidate {
@@ -191,6 +209,18 @@ impl Auto {
         rows: &[usize],
         offers: &[Offer],
     ) -> Result<AutoFit, ThermalError> {
+        self.fit_with_extra(data, rows, offers, Vec::new())
+    }
+
+    /// [`Auto::fit_with`] with the `extra` candidates of another crate, which fit to `M`: every
+    /// candidate is scored on the same forward folds of `rows` and the rule chooses among all.
+    pub fn fit_with_extra<M: Predict + From<ThermalModel> + 'static>(
+        &self,
+        data: &ThermalData,
+        rows: &[usize],
+        offers: &[Offer],
+        extra: Vec<ExtraCandidate<M>>,
+    ) -> Result<AutoFit<M>, ThermalError> {
         let spec = BlockSpec {
             block_min: self.block_min,
             input: Some(self.input.clone()),
@@ -201,7 +231,15 @@ impl Auto {
                 "auto: forward validation needs at least two blocks in the training rows (a longer record, experiments, or --block-min)".into(),
             ));
         }
-        let cands = self.candidates(data, offers);
+        let mut cands: Vec<ExtraCandidate<M>> = self
+            .candidates(data, offers)
+            .into_iter()
+            .map(|(name, rank, c)| {
+                let f: Box<dyn Fit<Model = M>> = Box::new(Into(c, std::marker::PhantomData));
+                (name, rank, f)
+            })
+            .collect();
+        cands.extend(extra);
         let mut scores: Vec<CandidateScore> = Vec::new();
         for (name, complexity, c) in &cands {
             let (forward, error) = match forward_cv(c, data, &folds) {
@@ -276,7 +314,7 @@ pub fn one_standard_error(scores: &[CandidateScore]) -> Option<usize> {
 }
 
 /// `Predict` of the chosen model (so an `AutoFit` can be used where a model is).
-impl Predict for AutoFit {
+impl<M: Predict> Predict for AutoFit<M> {
     fn predict(&self, data: &ThermalData) -> Result<Vec<f64>, ThermalError> {
         self.model.predict(data)
     }

@@ -19,6 +19,14 @@ pub trait Fit {
     }
 }
 
+/// A boxed fitter (auto's candidates of several kinds) is a fitter.
+impl<F: Fit + ?Sized> Fit for Box<F> {
+    type Model = F::Model;
+    fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<F::Model, ThermalError> {
+        (**self).fit_rows(data, rows)
+    }
+}
+
 /// A fitted thermal model.
 pub trait Predict {
     /// Predicted drift (µm) for every row of `data`.

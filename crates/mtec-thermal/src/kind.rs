@@ -94,7 +94,7 @@ impl<K: Kind> Fit for AsModel<'_, K> {
 
 /// Forward validation of `fitter` on the rows `train` (`None`: fewer than two blocks, or the
 /// validation failed), and the warning that says so.
-pub fn validate_forward<F: Fit<Model = ThermalModel>>(
+pub fn validate_forward<F: Fit>(
     fitter: &F,
     data: &ThermalData,
     train: &[usize],

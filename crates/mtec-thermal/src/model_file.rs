@@ -147,8 +147,8 @@ pub fn split_rows(data: &ThermalData, by: &SplitBy) -> Result<Rows, ThermalError
 }
 
 /// Metrics of the predictions `pred` (every row of `data`) on the rows `rows`.
-pub fn metrics_on(
-    model: &ThermalModel,
+pub fn metrics_on<P: Predict + ?Sized>(
+    model: &P,
     data: &ThermalData,
     rows: &[usize],
     pred: &[f64],
@@ -188,12 +188,22 @@ pub fn fit_file(
     rows: Rows,
     blocks: &BlockSpec,
 ) -> Result<ModelFile, ThermalError> {
+    file_of(spec.fit_validated(data, &rows.train, blocks)?, data, rows)
+}
+
+/// The model file of a model fitted and validated on `rows.train` (e.g. chosen by auto among
+/// candidates of other crates too): its metrics on both sets of rows, envelope and warnings.
+pub fn file_of(
+    validated: Validated,
+    data: &ThermalData,
+    rows: Rows,
+) -> Result<ModelFile, ThermalError> {
     let Validated {
         model,
         validation,
         candidates,
         mut warnings,
-    } = spec.fit_validated(data, &rows.train, blocks)?;
+    } = validated;
     warnings.splice(0..0, model.warnings());
     warnings.extend(validation.as_ref().and_then(worse_warning));
     let pred = model.predict(data)?;

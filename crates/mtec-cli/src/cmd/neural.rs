@@ -1,10 +1,7 @@
-//! Whether this `mtec` has the neural models, and their command-line options.
-//!
-//! The neural models (`thermal fit --model cnn-lstm|bpnn`, `map fit --model bpnn`, `thermal
-//! predict`) live in `mtec-nn`, which pulls in candle: more than half of a cold release build
-//! (docs/building.md). So they are the cargo feature `neural`, off by default (the README's
-//! demo builds in minutes); the options are parsed either way, and a build without them refuses
-//! such a command with exit 2 saying how to get them (`mtec_workflow::neural_unavailable`).
+//! The neural models' command-line options. The models (`mtec-nn`, candle: more than half of a
+//! cold release build, docs/building.md) are the cargo feature `neural`, off by default; the
+//! options are parsed either way, and a build without them refuses such a command with exit 2
+//! saying how to get them (`mtec_workflow::neural_unavailable`).
 
 /// Options of the neural models (ignored by the regression models).
 #[derive(clap::Args, Debug, Clone)]
@@ -17,18 +14,15 @@ pub struct NnArgs {
     /// `cos_K(COL)` / `sin_K(COL)` is cos/sin of K times the angle column COL (degrees).
     #[arg(long, value_delimiter = ',')]
     pub features: Vec<String>,
-    /// Give each --features angle column (name ending in `_deg`) as its first N harmonics
-    /// cos_k(COL), sin_k(COL), k = 1..N, instead of degrees: continuous across 0°/360°, and the
-    /// static error motions of a rotary axis are sums of such harmonics (3 is a good start).
+    /// Each --features angle column (`*_deg`) as harmonics cos_k(COL), sin_k(COL), k = 1..N:
+    /// continuous across 0°/360°, as the static motions of a rotary axis are (3 is a good start).
     #[arg(long, value_name = "N")]
     pub angle_harmonics: Option<u8>,
-    /// The sensors as rises over the first row of each sequence (of each experiment without
-    /// --sequence-by): thermal errors are defined against the first (static) measurement, and a
-    /// room warmer or colder than in training then does not throw the model. Predict does too.
+    /// The sensors as rises over the first row of each sequence (experiment): thermal errors are
+    /// defined against the first (static) measurement, so a warmer room does not throw the model.
     #[arg(long)]
     pub rises: bool,
-    /// The targets as their change since each sequence's first row (the static measurement);
-    /// `thermal predict` adds that row's measured targets back (the data must hold them).
+    /// The targets as their change since each sequence's first row; predict adds it back.
     #[arg(long)]
     pub changes: bool,
     /// Largest number of training epochs (cnn-lstm, bpnn: Levenberg–Marquardt iterations).
@@ -61,6 +55,10 @@ pub struct NnArgs {
     /// Seed of the weight initialisation and batch order (same seed, same weights).
     #[arg(long, default_value_t = 42)]
     pub seed: u64,
+    /// auto: these networks (bpnn, cnn-lstm; the options above) are candidates too, scored on
+    /// the same forward folds (one training per fold: slow); a chosen one is its own file.
+    #[arg(long, value_delimiter = ',', value_name = "NETS")]
+    pub with_networks: Vec<String>,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,

@@ -225,7 +225,9 @@ impl FitArgs {
 pub fn run(args: Args) -> Result<(), CliError> {
     match args.cmd {
         Sub::Select(a) => select(a),
-        Sub::Fit(a) if op::is_neural(&a.common.model) => fit_neural(*a),
+        Sub::Fit(a) if op::is_neural(&a.common.model) || !a.nn.with_networks.is_empty() => {
+            fit_neural(*a)
+        }
         Sub::Fit(a) => fit(*a),
         Sub::Predict(a) => predict(a),
         Sub::Cv(a) => cv(a),
@@ -270,22 +272,21 @@ fn fit(a: FitArgs) -> Result<(), CliError> {
 /// `--model cnn-lstm|bpnn` in a build without the neural models.
 #[cfg(not(feature = "neural"))]
 fn fit_neural(a: FitArgs) -> Result<(), CliError> {
-    Err(mtec_workflow::neural_unavailable(&format!(
-        "`thermal fit --model {}`",
-        a.common.model
-    )))
+    let with = ["", " --with-networks"][usize::from(!a.nn.with_networks.is_empty())];
+    let what = format!("`thermal fit --model {}{with}`", a.common.model);
+    Err(mtec_workflow::neural_unavailable(&what))
 }
 
-/// `--model cnn-lstm|bpnn`: the neural fit of the same options (what goes with the regression
-/// models only is refused by `from_thermal_fit`).
+/// `--model cnn-lstm|bpnn`, or `auto --with-networks` (the networks' options as bpnn's).
 #[cfg(feature = "neural")]
 fn fit_neural(a: FitArgs) -> Result<(), CliError> {
-    let kind = mtec_nn::thermal_log::NnKind::from_name(&a.common.model)
-        .ok_or_else(|| CliError::usage("not a neural model"))?;
-    let opts = op::neural::FitOptions::from_thermal_fit(&a.options(), a.nn.fit_options(kind))?;
+    use mtec_nn::thermal_log::NnKind;
+    let kind = NnKind::from_name(&a.common.model).unwrap_or(NnKind::Bpnn);
+    let (opts, nn) = (a.options(), a.nn.fit_options(kind));
     single_candle_thread();
     let mut term = Terminal::new(a.nn.quiet);
-    let outcome = ctrl_c::during(|| op::neural::fit(&opts, &mut term));
+    let with = &a.nn.with_networks;
+    let outcome = ctrl_c::during(|| op::neural::fit_thermal(&opts, &nn, with, &mut term));
     term.done();
     let _ = write!(say_for(&opts.output), "{}", outcome?);
     Ok(())

@@ -25,6 +25,8 @@ use std::path::{Path, PathBuf};
 
 #[cfg(feature = "neural")]
 pub mod neural;
+#[cfg(feature = "neural")]
+pub mod neural_log;
 
 /// The `--model` values of the neural models (cargo feature `neural`; see [`neural`]).
 pub const NEURAL_KINDS: [&str; 2] = ["cnn-lstm", "bpnn"];

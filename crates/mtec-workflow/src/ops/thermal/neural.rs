@@ -1,15 +1,22 @@
 //! `thermal fit|predict` with the neural models of `mtec-nn` (cargo feature `neural`):
-//! `cnn-lstm` and `bpnn` on thermal logs with any number of targets.
+//! `cnn-lstm` and `bpnn`. [`fit_thermal`] sends a log of one target and its sensors to
+//! [`super::neural_log`] (the networks through mtec-thermal's `Fit`/`Predict`: split by time or
+//! experiments, validated forward like the regression models), and `--model auto
+//! --with-networks` there too; the rotary logs (several targets, `--sequence-by`, `--features`,
+//! `--angle-harmonics`, `--changes`) stay on this module's route ([`fit`]), split by whole
+//! experiments.
 //!
-//! The log format, feature resolution and training configuration are
+//! On this route the log format, feature resolution and training configuration are
 //! [`mtec_nn::thermal_log`]'s. The model file is the network's own versioned format
 //! (`mtec.cnn-lstm/1`, `mtec.bpnn/1`); this job adds under `provenance` the data file,
 //! `sequence_by`, the split, the metrics and the sampling interval, and [`predict`] reads
-//! `sequence_by`, `rises` and the interval back from there. The training reports its epochs to
+//! `sequence_by`, `rises` and the interval back from there (a file of [`super::neural_log`],
+//! `provenance.thermal_data`, is predicted there). The training reports its epochs to
 //! the observer ([`Observer::progress`]) and stops after the current epoch, keeping the best
 //! epoch's weights, when [`Observer::stop_requested`] turns true (the file is still written).
 //! candle's thread count is the calling program's to set ([`mtec_nn::threads`]).
 
+use super::neural_log::{self, AutoOutcome, LogFitOutcome};
 use super::PredictOptions;
 use crate::{Error, Observer, Result};
 use mtec_identify::ballbar::{Measurements, Setup};
@@ -18,10 +25,10 @@ use mtec_nn::metrics::{channel_metrics, ChannelMetrics};
 use mtec_nn::rotary::{
     reading_metrics, reading_rows, MotionRow, ReadingComparison, ReadingRow, TARGET_NAMES,
 };
+use mtec_nn::thermal_fit::{Network, NeuralThermalModel};
 use mtec_nn::thermal_log::{self, LoadSpec, NnFitOptions, NnKind};
 use mtec_nn::{
-    train_bpnn_baseline_monitored, train_cnn_lstm_monitored, Bpnn, CnnLstm, CnnLstmReport, NnError,
-    StopReason, ThermalDataset, TrainReport,
+    train_bpnn_baseline_monitored, train_cnn_lstm_monitored, Bpnn, CnnLstm, NnError, ThermalDataset,
 };
 use mtec_thermal::model_file::SplitBy;
 use serde::Serialize;
@@ -61,7 +68,7 @@ impl FitOptions {
                 (train.clone(), test.clone())
             }
             _ => return Err(Error::usage(
-                "--k, --lag, --block-min and --train-until go with the regression models; the neural models split by --train/--test experiments",
+                "--k, --lag, --block-min and --train-until go with the regression models and with a network on one target and its sensors; a network of several targets, --sequence-by, --features, --angle-harmonics or --changes splits by --train/--test experiments",
             )),
         };
         Ok(FitOptions {
@@ -76,21 +83,55 @@ impl FitOptions {
     }
 }
 
-/// How the network trained.
+pub use mtec_nn::thermal_fit::Training;
+
+/// What [`fit_thermal`] fitted.
 #[derive(Debug, Clone, Serialize)]
 #[serde(untagged)]
-pub enum Training {
-    CnnLstm(CnnLstmReport),
-    Bpnn(TrainReport),
+pub enum NeuralFitOutcome {
+    /// A network on a rotary log (this module's route).
+    Rotary(Box<FitOutcome>),
+    /// A network on a log of one target ([`super::neural_log`]).
+    Log(Box<LogFitOutcome>),
+    /// `--model auto --with-networks`.
+    Auto(AutoOutcome),
 }
 
-impl Training {
-    pub fn stop_reason(&self) -> &StopReason {
+impl fmt::Display for NeuralFitOutcome {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Training::CnnLstm(r) => &r.stop_reason,
-            Training::Bpnn(r) => &r.stop_reason,
+            NeuralFitOutcome::Rotary(o) => write!(f, "{o}"),
+            NeuralFitOutcome::Log(o) => write!(f, "{o}"),
+            NeuralFitOutcome::Auto(o) => write!(f, "{o}"),
         }
     }
+}
+
+/// `thermal fit` with a network (`nn.kind`), or `--model auto` with the networks named in
+/// `with_networks` (their options `nn`'s) as candidates: a log of one target and its sensors
+/// goes through [`super::neural_log`], a rotary log through [`fit`].
+pub fn fit_thermal(
+    opts: &super::FitOptions,
+    nn: &NnFitOptions,
+    with_networks: &[String],
+    obs: &mut dyn Observer,
+) -> Result<NeuralFitOutcome> {
+    let log = neural_log::takes(&opts.target, nn);
+    if !with_networks.is_empty() {
+        if opts.model != "auto" {
+            return Err(Error::usage("--with-networks goes with --model auto"));
+        }
+        if !log {
+            return Err(Error::usage("--with-networks takes a log of one target and its sensors (no --sequence-by, --features, --angle-harmonics or --changes)"));
+        }
+        let networks = neural_log::network_options(with_networks, nn)?;
+        return neural_log::fit_auto(opts, &networks, obs).map(NeuralFitOutcome::Auto);
+    }
+    if log {
+        return neural_log::fit(opts, nn, obs).map(|o| NeuralFitOutcome::Log(Box::new(o)));
+    }
+    fit(&FitOptions::from_thermal_fit(opts, nn.clone())?, obs)
+        .map(|o| NeuralFitOutcome::Rotary(Box::new(o)))
 }
 
 /// The trained network (written to `output`) and its scores.
@@ -308,24 +349,17 @@ pub fn fit(opts: &FitOptions, obs: &mut dyn Observer) -> Result<FitOutcome> {
     })
 }
 
-/// A neural model file, by its `format`.
-#[derive(Debug, Clone)]
-pub enum NnModel {
-    CnnLstm(CnnLstm),
-    Bpnn(Bpnn),
-}
-
 /// Reads `path` as a neural model when its `format` says so (`None`: another model kind).
-pub fn read_model(path: &Path) -> Result<Option<NnModel>> {
+pub fn read_model(path: &Path) -> Result<Option<Network>> {
     let Some(format) = super::neural_format(path)? else {
         return Ok(None);
     };
     let text = std::fs::read_to_string(path)?;
     let bad = |e: NnError| Error::Input(InputError::file(path, e.to_string()));
     Ok(Some(if format == super::CNN_LSTM_FORMAT {
-        NnModel::CnnLstm(CnnLstm::from_json(&text).map_err(bad)?)
+        Network::CnnLstm(CnnLstm::from_json(&text).map_err(bad)?)
     } else {
-        NnModel::Bpnn(Bpnn::from_json(&text).map_err(|e| bad(e.into()))?)
+        Network::Bpnn(Bpnn::from_json(&text).map_err(|e| bad(e.into()))?)
     }))
 }
 
@@ -516,9 +550,23 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
             "not a neural model file (`format` is not mtec.cnn-lstm/1 or mtec.bpnn/1)",
         ))
     })?;
+    // a network fitted on a log of one target (`neural_log`): predicted as the library does
+    if let Some((m, interval)) = NeuralThermalModel::from_network(model.clone()) {
+        if opts.readings.is_some() {
+            return Err(Error::Input(InputError::file(
+                &opts.model,
+                "predicted ballbar readings need a rotary model of the five error motions fitted with --sequence-by angle_deg (this one predicts one target from the sensors)",
+            )));
+        }
+        let p = predict_log(&opts.data, &m, interval)?;
+        if let Some(d) = &dest {
+            d.write(p.csv.as_bytes())?;
+        }
+        return Ok(p);
+    }
     let (features, targets, provenance) = match &model {
-        NnModel::CnnLstm(m) => (&m.feature_names, &m.target_names, &m.provenance),
-        NnModel::Bpnn(m) => (&m.input_names, &m.output_names, &m.provenance),
+        Network::CnnLstm(m) => (&m.feature_names, &m.target_names, &m.provenance),
+        Network::Bpnn(m) => (&m.input_names, &m.output_names, &m.provenance),
     };
     // the sequences of the fit (a BPNN takes rows one by one; its sequences only matter for
     // where the rises start)
@@ -538,7 +586,7 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
             targets,
             sequence_by: seq_by.as_deref(),
             need_targets: false,
-            strict_time: matches!(model, NnModel::CnnLstm(_)),
+            strict_time: matches!(model, Network::CnnLstm(_)),
             trained_interval_min: trained_interval,
         },
     )
@@ -550,8 +598,8 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
         .unwrap_or(0) as usize;
     loaded.data = loaded.data.rises(rises.min(features.len()));
     let mut pred: Vec<Vec<f64>> = match &model {
-        NnModel::CnnLstm(m) => m.predict(&loaded.data).map_err(|e| nn_error(data, e))?,
-        NnModel::Bpnn(m) => loaded
+        Network::CnnLstm(m) => m.predict(&loaded.data).map_err(|e| nn_error(data, e))?,
+        Network::Bpnn(m) => loaded
             .data
             .rows()
             .0
@@ -623,6 +671,53 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
         metrics,
         csv,
         readings,
+    })
+}
+
+/// The predictions of a network fitted on a log of one target ([`neural_log::predict_log`]):
+/// `experiment,time_min,pred_<t>[,<t>,res_<t>]`.
+fn predict_log(
+    path: &Path,
+    model: &NeuralThermalModel,
+    interval: Option<f64>,
+) -> Result<Prediction> {
+    let (data, pred) = neural_log::predict_log(path, model, interval)?;
+    let t = &model.target;
+    let measured = data.target_um().ok();
+    let mut header = vec![
+        "experiment".to_string(),
+        "time_min".into(),
+        format!("pred_{t}"),
+    ];
+    if measured.is_some() {
+        header.extend([t.clone(), format!("res_{t}")]);
+    }
+    let mut csv = CsvWriter::new(header);
+    for (i, p) in pred.iter().enumerate() {
+        let mut row = vec![
+            data.experiment[i].clone(),
+            data.time_min[i].to_string(),
+            format!("{p:.4}"),
+        ];
+        if let Some(y) = measured {
+            row.extend([format!("{:.4}", y[i]), format!("{:.4}", y[i] - p)]);
+        }
+        csv.row(row);
+    }
+    let targets = vec![t.clone()];
+    let predictions: Vec<Vec<f64>> = pred.iter().map(|&p| vec![p]).collect();
+    let metrics = measured.map(|y| {
+        let y: Vec<Vec<f64>> = y.iter().map(|&v| vec![v]).collect();
+        channel_metrics(&targets, &predictions, &y)
+    });
+    Ok(Prediction {
+        format: "mtec.thermal-prediction/1".into(),
+        targets,
+        n: pred.len(),
+        predictions,
+        metrics,
+        csv: csv.finish(),
+        readings: None,
     })
 }
 
