@@ -348,11 +348,12 @@ mod r_svd_tests {
     use super::*;
 
     /// The trace through QR + SVD of R equals the ridge normal equations (R + kI)β* = r solved
-    /// directly (Hoerl & Kennard 1970, eq. 2.2), for a tall design and for a wide one (n < p,
-    /// where R is n × p).
+    /// directly (Hoerl & Kennard 1970, eq. 2.2), for tall designs (some longer than one block of
+    /// the blocked QR, 128 rows, and one not a multiple of it) and for a wide one (n < p, where R
+    /// is n × p).
     #[test]
     fn r_svd_ridge_equals_the_direct_solution() {
-        for (n, p) in [(40, 5), (4, 6)] {
+        for (n, p) in [(40, 5), (4, 6), (1000, 16), (257, 3)] {
             let x = DMatrix::from_fn(n, p, |i, j| {
                 ((i * 7 + j * 13) % 11) as f64 + (i * j) as f64 * 0.1
             });
