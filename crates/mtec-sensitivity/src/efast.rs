@@ -196,10 +196,7 @@ fn search_curve_column(
     quantile: impl Fn(f64) -> f64,
 ) {
     let inv_n = 1.0 / n as f64;
-    // ω·k mod N, advanced by ω < N per point; whole numbers below 2⁵³ are exact in a double
-    let (w, nf) = (omega as f64, n as f64);
-    let mut turn = 0.0;
-    for row in curve.chunks_exact_mut(d) {
+    let point = |turn: f64| {
         // t ∈ [−¼, 7/4): ⌊t⌋ ∈ {−1, 0, 1}, chosen without a call to floor
         let t = turn * inv_n + offset;
         let whole = if t < 0.0 {
@@ -209,11 +206,27 @@ fn search_curve_column(
         } else {
             0.0
         };
-        row[j] = quantile((2.0 * (t - whole) - 1.0).abs());
-        turn += w;
-        if turn >= nf {
-            turn -= nf;
+        quantile((2.0 * (t - whole) - 1.0).abs())
+    };
+    // ω·k mod N for LANES rows at a time, each lane advanced by LANES·ω mod N: independent
+    // chains, so the loop is not bound by the latency of one running sum. Whole numbers below
+    // 2⁵³ are exact in a double, and so is `%` (fmod): the same values as one chain.
+    const LANES: usize = 4;
+    let (w, nf) = (omega as f64, n as f64);
+    let step = (LANES as f64 * w) % nf;
+    let mut turn: [f64; LANES] = std::array::from_fn(|l| (l as f64 * w) % nf);
+    let mut groups = curve.chunks_exact_mut(d * LANES);
+    for group in &mut groups {
+        for (l, row) in group.chunks_exact_mut(d).enumerate() {
+            row[j] = point(turn[l]);
+            turn[l] += step;
+            if turn[l] >= nf {
+                turn[l] -= nf;
+            }
         }
+    }
+    for (l, row) in groups.into_remainder().chunks_exact_mut(d).enumerate() {
+        row[j] = point(turn[l]);
     }
 }
 

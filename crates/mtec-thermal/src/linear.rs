@@ -149,9 +149,10 @@ impl RidgeProblem {
             return Err(ThermalError::ConstantColumn("target".into()));
         }
         // SVD of the tall Z = (X − x̄)/(s_x√n) through its QR (Golub & Van Loan 2013, §8.6.3,
-        // "R-SVD"): Z = QR, R = U_r Σ Vᵀ, so Z = (Q U_r) Σ Vᵀ and Uᵀy* = U_rᵀ (Qᵀy*)[..p]. Neither Z,
-        // the n × p U nor Q is formed: the blocked QR standardises as it goes and carries
-        // y* = (y − ȳ)/(s_y√n) along as an extra column, which comes out as Qᵀy* (issue 22).
+        // "R-SVD"): Z = QR, R = U_r Σ Vᵀ, so Z = (Q U_r) Σ Vᵀ and Uᵀy* = U_rᵀ (Qᵀy*)[..p].
+        // Neither Z, the n × p U nor Q is formed: the blocked QR standardises as it goes and
+        // carries y* = (y − ȳ)/(s_y√n) along as an extra column, which comes out as Qᵀy*
+        // (issue 22).
         let mut cols = columns;
         cols.push(y);
         let shift: Vec<f64> = x_mean.iter().copied().chain([y_mean]).collect();

@@ -3,13 +3,13 @@
 //! spent most of their time in a generic column-by-column QR of the whole 7709 × 16 matrix, which
 //! sweeps 1 MB through the cache once per column).
 //!
-//! Sequential ("flat tree") TSQR (Golub & Van Loan 2013, §5.2.2 and §5.5.x; Demmel et al. 2012,
-//! "Communication-optimal parallel and sequential QR"): with R₀ = 0 and the rows split into blocks
-//! B₁, B₂, …, the QR of the stacked [R_{i−1}; B_i] gives R_i, and R_last is the R of the whole
-//! matrix (up to the signs of its rows). The stacked matrix is structured: R_{i−1} is upper
-//! triangular, so the Householder vector of column k is v = [v₀ e_k; B_i[:, k]] (Golub & Van Loan
-//! eq. 5.1.2 with x = [R_kk; B_i[:, k]]), and a reflection touches row k of R and the block only.
-//! The flops are those of one Householder QR, 2np², with every block (≤ 128 rows) in cache.
+//! Sequential ("flat tree") TSQR (Demmel, Grigori, Hoemmen & Langou 2012, SIAM J. Sci. Comput.
+//! 34(1), "Communication-optimal parallel and sequential QR and LU factorizations"): with R₀ = 0
+//! and the rows split into blocks B₁, B₂, …, the QR of the stacked [R_{i−1}; B_i] gives R_i, and
+//! R_last is the R of the whole matrix (up to the signs of its rows). The stacked matrix is
+//! structured: R_{i−1} is upper triangular, so the Householder vector of column k is
+//! v = [v₀ e_k; B_i[:, k]] (Golub & Van Loan 2013, §5.1.2, for x = [R_kk; B_i[:, k]]), and a
+//! reflection touches row k of R and the block only. The flops are those of one Householder QR, 2np², with every block (≤ 128 rows) in cache.
 //!
 //! Extra columns to the right of the first p are carried along without being triangularised: their
 //! top p entries become Qᵀ·column (the ridge problem passes y* as one extra column and gets Qᵀy*).
