@@ -35,7 +35,7 @@ use crate::problem::{check_outputs, Indices, Problem, Replicates, SampleMatrix};
 use crate::SensitivityError;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
-use rustfft::{num_complex::Complex, Fft, FftPlanner};
+use realfft::{num_complex::Complex, RealFftPlanner, RealToComplex};
 
 /// Design settings of an EFAST analysis.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -164,21 +164,70 @@ pub fn sample(
                 .iter()
                 .map(|p| (p - std::f64::consts::FRAC_PI_2) / std::f64::consts::TAU)
                 .collect();
-            let mut turns = vec![0usize; d]; // ω_j·k mod N, advanced by ω_j < N per point
-            let inv_n = 1.0 / n as f64;
-            for row in curve.chunks_exact_mut(d) {
-                for j in 0..d {
-                    let t = turns[j] as f64 * inv_n + offset[j];
-                    row[j] = (2.0 * (t - t.floor()) - 1.0).abs();
-                    turns[j] += omega[j];
-                    if turns[j] >= n {
-                        turns[j] -= n;
+            // one input at a time down the curve, so that the quantile function's choice is made
+            // once per input and the loop has no inner loop (issue 22)
+            for (j, dist) in problem.distributions.iter().enumerate() {
+                match *dist {
+                    // the same arithmetic as `Distribution::quantile`, inlined into the loop
+                    crate::Distribution::Uniform { low, high } => {
+                        search_curve_column(curve, d, j, n, omega[j], offset[j], |u| {
+                            low + u * (high - low)
+                        })
                     }
+                    _ => search_curve_column(curve, d, j, n, omega[j], offset[j], |u| {
+                        dist.quantile(u)
+                    }),
                 }
-                problem.scale_row(row);
             }
         });
     SampleMatrix::from_rows(d, data)
+}
+
+/// Column `j` of one curve's rows: the quantile of the search curve at θ = ω·2πk/N + φ, in the
+/// form (turns mod 1) with the whole turns ω·k/N counted exactly (see `sample`); `offset` is
+/// (φ − π/2)/2π.
+fn search_curve_column(
+    curve: &mut [f64],
+    d: usize,
+    j: usize,
+    n: usize,
+    omega: usize,
+    offset: f64,
+    quantile: impl Fn(f64) -> f64,
+) {
+    let inv_n = 1.0 / n as f64;
+    let point = |turn: f64| {
+        // t ∈ [−¼, 7/4): ⌊t⌋ ∈ {−1, 0, 1}, chosen without a call to floor
+        let t = turn * inv_n + offset;
+        let whole = if t < 0.0 {
+            -1.0
+        } else if t >= 1.0 {
+            1.0
+        } else {
+            0.0
+        };
+        quantile((2.0 * (t - whole) - 1.0).abs())
+    };
+    // ω·k mod N for LANES rows at a time, each lane advanced by LANES·ω mod N: independent
+    // chains, so the loop is not bound by the latency of one running sum. Whole numbers below
+    // 2⁵³ are exact in a double, and so is `%` (fmod): the same values as one chain.
+    const LANES: usize = 4;
+    let (w, nf) = (omega as f64, n as f64);
+    let step = (LANES as f64 * w) % nf;
+    let mut turn: [f64; LANES] = std::array::from_fn(|l| (l as f64 * w) % nf);
+    let mut groups = curve.chunks_exact_mut(d * LANES);
+    for group in &mut groups {
+        for (l, row) in group.chunks_exact_mut(d).enumerate() {
+            row[j] = point(turn[l]);
+            turn[l] += step;
+            if turn[l] >= nf {
+                turn[l] -= nf;
+            }
+        }
+    }
+    for (l, row) in groups.into_remainder().chunks_exact_mut(d).enumerate() {
+        row[j] = point(turn[l]);
+    }
 }
 
 /// The search curve ½ + arcsin(sin θ)/π (Saltelli et al. 1999 eq. 19), evaluated through the
@@ -193,36 +242,52 @@ pub fn search_curve(theta: f64) -> f64 {
 /// `compute_orders`), and the curve's variance V.
 pub fn curve_indices(y: &[f64], m: usize, omega_max: usize) -> (f64, f64, f64) {
     let plan = fft_plan(y.len());
-    let mut buf = Vec::new();
-    curve_indices_with(&*plan, &mut buf, y, m, omega_max)
+    let mut bufs = FftBuffers::default();
+    curve_indices_with(&*plan, &mut bufs, y, m, omega_max)
 }
 
-/// The forward FFT plan of length `n` from one process-wide planner, which keeps the plans it
-/// made: planning a length of 10 000 takes about as long as one transform (130 µs), and an
-/// analysis over many outputs or poses needs the same length every time.
-fn fft_plan(n: usize) -> std::sync::Arc<dyn Fft<f64>> {
-    static PLANNER: std::sync::OnceLock<std::sync::Mutex<FftPlanner<f64>>> =
+/// The forward real-input FFT plan of length `n` from one process-wide planner, which keeps the
+/// plans it made: planning a length of 10 000 takes about as long as one transform, and an
+/// analysis over many outputs or poses needs the same length every time. The output is real, so
+/// a real-to-complex transform gives F_0..F_{N/2} for half the work of a complex FFT (issue 22).
+fn fft_plan(n: usize) -> std::sync::Arc<dyn RealToComplex<f64>> {
+    static PLANNER: std::sync::OnceLock<std::sync::Mutex<RealFftPlanner<f64>>> =
         std::sync::OnceLock::new();
-    let planner = PLANNER.get_or_init(|| std::sync::Mutex::new(FftPlanner::new()));
+    let planner = PLANNER.get_or_init(|| std::sync::Mutex::new(RealFftPlanner::new()));
     // a poisoned lock only means another thread panicked while planning: the cache is intact
     let mut p = planner.lock().unwrap_or_else(|e| e.into_inner());
     p.plan_fft_forward(n)
 }
 
-/// [`curve_indices`] with a prepared FFT plan of length `y.len()` and a reusable buffer (the
+/// Reusable buffers of one thread's transforms: the input (the transform overwrites it), the
+/// spectrum F_0..F_{N/2} and the plan's scratch.
+#[derive(Default)]
+struct FftBuffers {
+    input: Vec<f64>,
+    spectrum: Vec<Complex<f64>>,
+    scratch: Vec<Complex<f64>>,
+}
+
+/// [`curve_indices`] with a prepared FFT plan of length `y.len()` and reusable buffers (the
 /// analysis plans once for all D·R curves).
 fn curve_indices_with(
-    plan: &dyn Fft<f64>,
-    buf: &mut Vec<Complex<f64>>,
+    plan: &dyn RealToComplex<f64>,
+    bufs: &mut FftBuffers,
     y: &[f64],
     m: usize,
     omega_max: usize,
 ) -> (f64, f64, f64) {
     let n = y.len();
-    buf.clear();
-    buf.extend(y.iter().map(|&v| Complex::new(v, 0.0)));
-    plan.process(buf);
-    // Λ_p = |F_p / N|², p = 1 .. ceil(N/2) − 1
+    bufs.input.clear();
+    bufs.input.extend_from_slice(y);
+    bufs.spectrum
+        .resize(plan.complex_len(), Complex::new(0.0, 0.0));
+    bufs.scratch
+        .resize(plan.get_scratch_len(), Complex::new(0.0, 0.0));
+    plan.process_with_scratch(&mut bufs.input, &mut bufs.spectrum, &mut bufs.scratch)
+        .expect("buffer lengths from the plan");
+    let buf = &bufs.spectrum;
+    // Λ_p = |F_p / N|², p = 1 .. ceil(N/2) − 1 (all ≤ N/2: within the real transform's output)
     let spectrum = |p: usize| (buf[p] / n as f64).norm_sqr();
     let top = n.div_ceil(2);
     let v: f64 = 2.0 * (1..top).map(spectrum).sum::<f64>();
@@ -268,8 +333,8 @@ pub fn analyze(
     let plan = fft_plan(n);
     let per_curve: Vec<(f64, f64, f64)> = y
         .par_chunks_exact(n)
-        .map_init(Vec::new, |buf, c| {
-            curve_indices_with(&*plan, buf, c, m, omega_max)
+        .map_init(FftBuffers::default, |bufs, c| {
+            curve_indices_with(&*plan, bufs, c, m, omega_max)
         })
         .collect();
     if let Some(c) = per_curve.iter().position(|r| r.2.is_nan() || r.2 <= 0.0) {

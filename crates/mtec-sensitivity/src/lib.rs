@@ -24,6 +24,7 @@ pub mod distribution;
 pub mod efast;
 mod error;
 pub mod error_model;
+mod fastmath;
 pub mod interval;
 pub mod lhs;
 pub mod morris;

@@ -71,6 +71,17 @@ pub trait Model: Sync {
     }
     /// Writes f(x) into `out` (length `n_outputs()`).
     fn evaluate(&self, x: &[f64], out: &mut [f64]);
+    /// Writes f at each row of `xs` (rows of `dim` inputs) into `out` (`n_outputs()` per row).
+    /// The default calls [`Model::evaluate`] row by row; a model whose arithmetic vectorises
+    /// across rows overrides it (it must give the same values as `evaluate`).
+    fn evaluate_rows(&self, xs: &[f64], dim: usize, out: &mut [f64]) {
+        for (o, x) in out
+            .chunks_exact_mut(self.n_outputs())
+            .zip(xs.chunks_exact(dim))
+        {
+            self.evaluate(x, o);
+        }
+    }
 }
 
 /// A scalar model made from a closure `Fn(&[f64]) -> f64`.
@@ -126,11 +137,7 @@ pub fn evaluate<M: Model + ?Sized>(model: &M, samples: &SampleMatrix) -> Vec<Vec
     const ROWS_PER_TASK: usize = 256;
     flat.par_chunks_mut(ROWS_PER_TASK * k)
         .zip(samples.data.par_chunks(ROWS_PER_TASK * samples.n_cols))
-        .for_each(|(out, xs)| {
-            for (o, x) in out.chunks_exact_mut(k).zip(xs.chunks_exact(samples.n_cols)) {
-                model.evaluate(x, o);
-            }
-        });
+        .for_each(|(out, xs)| model.evaluate_rows(xs, samples.n_cols, out));
     if k == 1 {
         return vec![flat]; // one output: the rows' values are already its column
     }

@@ -46,6 +46,7 @@ pub mod select;
 pub mod stepwise;
 pub mod stream;
 pub mod summary;
+mod tall_qr;
 pub mod validate;
 
 pub use data::ThermalData;

@@ -129,40 +129,46 @@ impl RidgeProblem {
             });
         }
         let nf = n as f64;
-        let mut z = x.clone();
         let mut x_mean = Vec::with_capacity(p);
         let mut x_std = Vec::with_capacity(p);
-        for j in 0..p {
-            let m = x.column(j).sum() / nf;
-            let s = (x.column(j).iter().map(|v| (v - m).powi(2)).sum::<f64>() / nf).sqrt();
+        let columns: Vec<&[f64]> = x.as_slice().chunks_exact(n).collect();
+        for (j, col) in columns.iter().enumerate() {
+            let (m, ss) = crate::tall_qr::mean_and_ss(col);
+            let s = (ss / nf).sqrt();
             if !(s > 1e-12 * m.abs().max(1.0)) {
                 return Err(ThermalError::ConstantColumn(
                     names.get(j).cloned().unwrap_or_else(|| format!("x{j}")),
                 ));
             }
-            for v in z.column_mut(j).iter_mut() {
-                *v = (*v - m) / (s * nf.sqrt());
-            }
             x_mean.push(m);
             x_std.push(s);
         }
-        let y_mean = y.iter().sum::<f64>() / nf;
-        let y_std = (y.iter().map(|v| (v - y_mean).powi(2)).sum::<f64>() / nf).sqrt();
+        let (y_mean, y_ss) = crate::tall_qr::mean_and_ss(y);
+        let y_std = (y_ss / nf).sqrt();
         if !(y_std > 0.0) {
             return Err(ThermalError::ConstantColumn("target".into()));
         }
-        let mut yc =
-            DVector::from_iterator(n, y.iter().map(|v| (v - y_mean) / (y_std * nf.sqrt())));
-        // SVD of the tall Z through its QR (Golub & Van Loan 2013, §8.6.3, "R-SVD"): Z = QR,
-        // R = U_r Σ Vᵀ, so Z = (Q U_r) Σ Vᵀ and Uᵀy* = U_rᵀ (Qᵀy*)[..p]. The n × p U is never
-        // formed: one Householder QR of Z and an SVD of the p × p R (issue 22: the trace was
-        // dominated by the SVD of the 7709 × 16 design accumulating U).
-        let qr = z.qr();
-        qr.q_tr_mul(&mut yc);
-        let svd = qr.r().svd(true, true);
+        // SVD of the tall Z = (X − x̄)/(s_x√n) through its QR (Golub & Van Loan 2013, §8.6.3,
+        // "R-SVD"): Z = QR, R = U_r Σ Vᵀ, so Z = (Q U_r) Σ Vᵀ and Uᵀy* = U_rᵀ (Qᵀy*)[..p].
+        // Neither Z, the n × p U nor Q is formed: the blocked QR standardises as it goes and
+        // carries y* = (y − ȳ)/(s_y√n) along as an extra column, which comes out as Qᵀy*
+        // (issue 22).
+        let mut cols = columns;
+        cols.push(y);
+        let shift: Vec<f64> = x_mean.iter().copied().chain([y_mean]).collect();
+        let scale: Vec<f64> = x_std
+            .iter()
+            .chain([&y_std])
+            .map(|s| 1.0 / (s * nf.sqrt()))
+            .collect();
+        let rq = crate::tall_qr::tall_r(&cols, &shift, &scale, p);
+        let rows = n.min(p); // a wide design (n < p) has only n non-zero rows of R
+        let r = DMatrix::from_fn(rows, p, |i, j| rq[i * (p + 1) + j]);
+        let qty = DVector::from_fn(rows, |i, _| rq[i * (p + 1) + p]);
+        let svd = r.svd(true, true);
         let u = svd.u.expect("u requested");
         let v = svd.v_t.expect("v requested").transpose();
-        let uty = u.transpose() * yc.rows(0, n.min(p));
+        let uty = u.transpose() * qty;
         Ok(RidgeProblem {
             std: Standardisation {
                 x_mean,
@@ -224,18 +230,24 @@ pub fn vif(x: &DMatrix<f64>, names: &[String]) -> Result<Vec<f64>, ThermalError>
             params: p + 1,
         });
     }
-    let mut xc = x.clone();
-    for j in 0..p {
-        let m = xc.column(j).sum() / n as f64;
-        xc.column_mut(j).add_scalar_mut(-m);
-        if xc.column(j).norm() <= 1e-12 * m.abs().max(1.0) * (n as f64).sqrt() {
+    // X_c = X − x̄ is formed block by block inside the QR (`tall_qr`), never as a whole copy
+    let nf = n as f64;
+    let mut mean = Vec::with_capacity(p);
+    let mut ss = Vec::with_capacity(p);
+    let cols: Vec<&[f64]> = x.as_slice().chunks_exact(n).collect();
+    for (j, col) in cols.iter().enumerate() {
+        let (m, s2) = crate::tall_qr::mean_and_ss(col);
+        if s2.sqrt() <= 1e-12 * m.abs().max(1.0) * nf.sqrt() {
             return Err(ThermalError::ConstantColumn(names[j].clone()));
         }
+        mean.push(m);
+        ss.push(s2);
     }
-    let ss: Vec<f64> = (0..p).map(|j| xc.column(j).norm_squared()).collect();
-    let r = xc.qr().r();
+    let rq = crate::tall_qr::tall_r(&cols, &mean, &vec![1.0; p], p);
+    let r = DMatrix::from_fn(p, p, |i, j| rq[i * p + j]);
     let rmax = (0..p).map(|i| r[(i, i)].abs()).fold(0.0, f64::max);
     if (0..p).all(|i| r[(i, i)].abs() > RANK_TOL * rmax * 1e3) {
+        // VIF_j = [(X_cᵀX_c)⁻¹]_jj (X_cᵀX_c)_jj = ‖row j of R⁻¹‖²·Σ(x_j − x̄_j)²
         if let Some(rinv) = r.solve_upper_triangular(&DMatrix::identity(p, p)) {
             return Ok((0..p).map(|j| rinv.row(j).norm_squared() * ss[j]).collect());
         }
@@ -337,11 +349,12 @@ mod r_svd_tests {
     use super::*;
 
     /// The trace through QR + SVD of R equals the ridge normal equations (R + kI)β* = r solved
-    /// directly (Hoerl & Kennard 1970, eq. 2.2), for a tall design and for a wide one (n < p,
-    /// where R is n × p).
+    /// directly (Hoerl & Kennard 1970, eq. 2.2), for tall designs (some longer than one block of
+    /// the blocked QR, 128 rows, and one not a multiple of it) and for a wide one (n < p, where R
+    /// is n × p).
     #[test]
     fn r_svd_ridge_equals_the_direct_solution() {
-        for (n, p) in [(40, 5), (4, 6)] {
+        for (n, p) in [(40, 5), (4, 6), (1000, 16), (257, 3)] {
             let x = DMatrix::from_fn(n, p, |i, j| {
                 ((i * 7 + j * 13) % 11) as f64 + (i * j) as f64 * 0.1
             });
