@@ -130,8 +130,9 @@ const VALUE_NAMES: [&str; 3] = ["ex_um", "ey_um", "ez_um"];
 #[derive(Debug, Clone, PartialEq)]
 pub struct GridMap {
     axes_mm: [Vec<f64>; 3],
-    /// [ex, ey, ez] µm of node (i, j, k) at (i·ny + j)·nz + k.
-    values_um: Vec<[f64; 3]>,
+    /// [ex, ey, ez, 0] µm of node (i, j, k) at (i·ny + j)·nz + k: padded to four so that a
+    /// corner is one aligned 32-byte load and its three components one vector operation.
+    values_um: Vec<[f64; 4]>,
     outside: Outside,
     source: String,
     /// 1 / step of each equally spaced axis (0 when unequal): cell lookup without a search.
@@ -169,6 +170,11 @@ impl GridMap {
             if a.is_empty() {
                 return Err(MapShapeError(format!("axis `{name}` has no values")));
             }
+            if a.len() > i32::MAX as usize {
+                return Err(MapShapeError(format!(
+                    "axis `{name}` has more than 2³¹ values"
+                )));
+            }
             if let Some(v) = a.iter().find(|v| !v.is_finite()) {
                 return Err(MapShapeError(format!(
                     "axis `{name}` has a non-finite value {v}"
@@ -199,7 +205,7 @@ impl GridMap {
         }
         let mut map = GridMap {
             axes_mm,
-            values_um,
+            values_um: values_um.iter().map(|&[x, y, z]| [x, y, z, 0.0]).collect(),
             outside,
             source: source.into(),
             inv_step: [0.0; 3],
@@ -468,7 +474,8 @@ impl GridMap {
     /// Error [ex, ey, ez] µm stored at node (i, j, k).
     pub fn node_um(&self, i: usize, j: usize, k: usize) -> [f64; 3] {
         let n = [self.axes_mm[1].len(), self.axes_mm[2].len()];
-        self.values_um[(i * n[0] + j) * n[1] + k]
+        let [x, y, z, _] = self.values_um[(i * n[0] + j) * n[1] + k];
+        [x, y, z]
     }
 
     /// The behaviour outside the grid.
@@ -498,7 +505,7 @@ impl GridMap {
     pub fn try_error_um(&self, p_mm: [f64; 3]) -> Result<[f64; 3], OutsideGrid> {
         let lookup = self.lookup();
         match lookup.eval(&self.values_um, p_mm) {
-            Some(e) => Ok(e),
+            Some([x, y, z, _]) => Ok([x, y, z]),
             None => Err(self.outside_error(p_mm)),
         }
     }
@@ -507,6 +514,13 @@ impl GridMap {
     /// [`ErrorModel::error_um`](crate::ErrorModel::error_um) of `points[i]`, bit for bit (NaN
     /// outside the grid when the policy is `refuse`). No allocation; the per-map constants (axis
     /// ranges, steps, strides, the policy) are read once per call instead of once per point.
+    ///
+    /// How: blocks of [`BATCH_BLOCK`] points; per block, first each axis locates all points
+    /// (cell and fraction, without a branch per point on equally spaced axes, so the compiler
+    /// vectorises it), then each point sums its 8 corners, one 4-wide vector operation per
+    /// corner. On x86-64 with AVX2 (checked at run time) the same code is compiled for AVX2.
+    /// The arithmetic is that of [`GridMap::try_error_um`] operation for operation (no fused
+    /// multiply-add), hence the same bits.
     ///
     /// Panics when `out` and `points` differ in length.
     pub fn eval_batch(&self, points: &[[f64; 3]], out: &mut [[f64; 3]]) {
@@ -517,9 +531,13 @@ impl GridMap {
         );
         let lookup = self.lookup();
         let v = self.values_um.as_slice();
-        for (o, p) in out.iter_mut().zip(points) {
-            *o = lookup.eval(v, *p).unwrap_or([f64::NAN; 3]);
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2 (checked just above), all the function needs.
+            unsafe { eval_batch_avx2(&lookup, v, points, out) };
+            return;
         }
+        eval_batch_blocks(&lookup, v, points, out);
     }
 
     /// The error of a point the policy refuses, naming the first axis outside.
@@ -565,6 +583,65 @@ impl GridMap {
     }
 }
 
+/// Points per block of [`GridMap::eval_batch`]: the cells and fractions of a block stay in L1.
+const BATCH_BLOCK: usize = 64;
+
+/// [`eval_batch_blocks`] compiled for AVX2 (same source, same operations, wider registers).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn eval_batch_avx2(
+    lookup: &Lookup<'_>,
+    v: &[[f64; 4]],
+    points: &[[f64; 3]],
+    out: &mut [[f64; 3]],
+) {
+    eval_batch_blocks(lookup, v, points, out)
+}
+
+/// The batch kernel of [`GridMap::eval_batch`].
+#[inline(always)]
+fn eval_batch_blocks(
+    lookup: &Lookup<'_>,
+    v: &[[f64; 4]],
+    points: &[[f64; 3]],
+    out: &mut [[f64; 3]],
+) {
+    let mut cell = [[0u32; BATCH_BLOCK]; 3];
+    let mut frac = [[0.0f64; BATCH_BLOCK]; 3];
+    let mut refused = [false; BATCH_BLOCK];
+    let mut errors = [[0.0f64; 4]; BATCH_BLOCK];
+    let mut weights = [[0.0f64; BATCH_BLOCK]; 8];
+    for (pts, outs) in points.chunks(BATCH_BLOCK).zip(out.chunks_mut(BATCH_BLOCK)) {
+        let n = pts.len();
+        refused[..n].fill(false);
+        for a in 0..3 {
+            lookup.axes[a].locate_block(
+                pts,
+                a,
+                lookup.outside,
+                &mut cell[a][..n],
+                &mut frac[a][..n],
+                &mut refused[..n],
+            );
+        }
+        // the weights of the 8 corners of every point, then the sums (all four lanes kept,
+        // dropped below, so that each corner is one 4-wide operation)
+        for q in 0..n {
+            let wq = trilinear_weights([frac[0][q], frac[1][q], frac[2][q]]);
+            for (wk, wqk) in weights.iter_mut().zip(wq) {
+                wk[q] = wqk;
+            }
+        }
+        for (q, e) in errors[..n].iter_mut().enumerate() {
+            let base = lookup.base([cell[0][q], cell[1][q], cell[2][q]]);
+            *e = lookup.sum(base, std::array::from_fn(|k| weights[k][q]), v);
+        }
+        for ((o, &[x, y, z, _]), &r) in outs.iter_mut().zip(&errors[..n]).zip(&refused[..n]) {
+            *o = if r { [f64::NAN; 3] } else { [x, y, z] };
+        }
+    }
+}
+
 /// One axis of a [`Lookup`]: the grid values, their range, 1 / step when equally spaced (else
 /// 0), the last cell, the index stride of one step (0 for a single-value axis).
 #[derive(Clone, Copy)]
@@ -585,83 +662,201 @@ impl AxisLookup<'_> {
         if self.stride == 0 {
             return Some((0, 0.0));
         }
-        let (lo, hi) = (self.lo, self.hi);
-        let mut x = x;
-        if x < lo || x > hi {
-            let slack = x >= lo - INSIDE_SLACK_MM && x <= hi + INSIDE_SLACK_MM;
-            match outside {
-                _ if slack => x = x.clamp(lo, hi),
-                Outside::Clamp => x = x.clamp(lo, hi),
-                Outside::Extrapolate => {}
-                Outside::Refuse => return None,
-            }
+        let (x, refuse) = self.admit(x, outside);
+        if refuse {
+            return None;
         }
-        // lower node of the cell: last grid value ≤ x, kept within 0..n−2 (direct for equal
-        // spacing, binary search otherwise). `as usize` truncates, which for the non-negative
-        // (or NaN → 0) value after `max(0.0)` is the floor, without a call to libm's floor.
-        let i = if self.inv_step > 0.0 {
-            (((x - lo) * self.inv_step).max(0.0) as usize).min(self.last_cell)
+        let i = self.cell(x);
+        Some((i, self.fraction(i, x)))
+    }
+
+    /// The coordinate the policy evaluates at for `x`, and whether it refuses `x`. Within
+    /// [`INSIDE_SLACK_MM`] of the range a point is clamped onto it under every policy; beyond,
+    /// `clamp` clamps, `extrapolate` keeps `x`, `refuse` refuses (the clamped value it also
+    /// gives is only there to keep a batch's cell index in range). NaN stays NaN, unrefused.
+    #[inline(always)]
+    fn admit(&self, x: f64, outside: Outside) -> (f64, bool) {
+        let (lo, hi) = (self.lo, self.hi);
+        match outside {
+            Outside::Clamp => (x.clamp(lo, hi), false),
+            Outside::Extrapolate => {
+                let near = x >= lo - INSIDE_SLACK_MM && x <= hi + INSIDE_SLACK_MM;
+                (if near { x.clamp(lo, hi) } else { x }, false)
+            }
+            Outside::Refuse => (
+                x.clamp(lo, hi),
+                x < lo - INSIDE_SLACK_MM || x > hi + INSIDE_SLACK_MM,
+            ),
+        }
+    }
+
+    /// Lower node of the cell of the admitted `x`: the last grid value ≤ x, kept within
+    /// 0..n−2 (direct for equal spacing, binary search otherwise). For equal spacing the
+    /// index is clamped as a float, then truncated, which for the value in [0, n−2] (NaN → 0)
+    /// is the floor, without a call to libm's floor.
+    #[inline(always)]
+    fn cell(&self, x: f64) -> usize {
+        if self.inv_step > 0.0 {
+            ((x - self.lo) * self.inv_step)
+                .max(0.0)
+                .min(self.last_cell as f64) as i32 as usize
         } else {
             self.ax
                 .partition_point(|&v| v <= x)
                 .saturating_sub(1)
                 .min(self.last_cell)
-        };
-        let frac = (x - self.ax[i]) / (self.ax[i + 1] - self.ax[i]);
-        Some((i, frac))
+        }
+    }
+
+    /// The fraction of the way from node `i` to node `i + 1` at `x`.
+    #[inline(always)]
+    fn fraction(&self, i: usize, x: f64) -> f64 {
+        (x - self.ax[i]) / (self.ax[i + 1] - self.ax[i])
+    }
+
+    /// [`AxisLookup::locate`] of coordinate `a` of every point of a block: cells, fractions,
+    /// and `refused` set for the points the policy refuses. Each step is its own loop over the
+    /// block, without branches on equally spaced axes, so that it is vectorised.
+    #[inline(always)]
+    fn locate_block(
+        &self,
+        pts: &[[f64; 3]],
+        a: usize,
+        outside: Outside,
+        cell: &mut [u32],
+        frac: &mut [f64],
+        refused: &mut [bool],
+    ) {
+        if self.stride == 0 {
+            cell.fill(0);
+            frac.fill(0.0);
+            return;
+        }
+        // the admitted coordinate, kept in `frac` until the fraction replaces it
+        match outside {
+            Outside::Clamp => self.admit_block(pts, a, Outside::Clamp, frac, refused),
+            Outside::Extrapolate => self.admit_block(pts, a, Outside::Extrapolate, frac, refused),
+            Outside::Refuse => self.admit_block(pts, a, Outside::Refuse, frac, refused),
+        }
+        if self.inv_step > 0.0 {
+            // as `cell`, with the index clamped as a float (the same integer)
+            let last = self.last_cell as f64;
+            for (c, &x) in cell.iter_mut().zip(frac.iter()) {
+                let i = ((x - self.lo) * self.inv_step).max(0.0).min(last);
+                // SAFETY: `i` is finite and in [0, n − 2] (`max` maps NaN to 0), and n − 2
+                // fits in an i32 (a grid has fewer than 2³¹ values per axis, checked in
+                // `GridMap::new`), so the truncation is defined.
+                *c = unsafe { i.to_int_unchecked::<i32>() } as u32;
+            }
+        } else {
+            for (c, &x) in cell.iter_mut().zip(frac.iter()) {
+                *c = self.cell(x) as u32;
+            }
+        }
+        // the lower and upper nodes of the cells, sliced so that the index needs no check
+        let last = self.last_cell;
+        let (lower, upper) = (&self.ax[..=last], &self.ax[1..=last + 1]);
+        for (f, &c) in frac.iter_mut().zip(cell.iter()) {
+            let i = (c as usize).min(last);
+            *f = (*f - lower[i]) / (upper[i] - lower[i]);
+        }
+    }
+
+    /// The admitted coordinates of a block ([`AxisLookup::admit`]), one policy per loop.
+    #[inline(always)]
+    fn admit_block(
+        &self,
+        pts: &[[f64; 3]],
+        a: usize,
+        outside: Outside,
+        xs: &mut [f64],
+        refused: &mut [bool],
+    ) {
+        for ((p, x), r) in pts.iter().zip(xs.iter_mut()).zip(refused.iter_mut()) {
+            let (xa, refuse) = self.admit(p[a], outside);
+            *x = xa;
+            *r |= refuse;
+        }
     }
 }
 
 /// What one trilinear evaluation needs of a map, gathered once per call of
 /// [`GridMap::try_error_um`] or per batch of [`GridMap::eval_batch`] (both go through
-/// [`Lookup::eval`], so they agree bit for bit).
+/// [`Lookup::corners`], so they agree bit for bit).
 struct Lookup<'a> {
     axes: [AxisLookup<'a>; 3],
     outside: Outside,
 }
 
 impl Lookup<'_> {
-    /// The interpolated error at `p`, `None` when the policy refuses it.
+    /// The interpolated error at `p` (padded to four), `None` when the policy refuses it.
     #[inline(always)]
-    fn eval(&self, v: &[[f64; 3]], p: [f64; 3]) -> Option<[f64; 3]> {
+    fn eval(&self, v: &[[f64; 4]], p: [f64; 3]) -> Option<[f64; 4]> {
         let [ax, ay, az] = &self.axes;
         let (i0, tx) = ax.locate(p[0], self.outside)?;
         let (j0, ty) = ay.locate(p[1], self.outside)?;
         let (k0, tz) = az.locate(p[2], self.outside)?;
-        // the 8 corners of the cell: base index and the strides of a step in x, y, z
-        let base = i0 * ax.stride + j0 * ay.stride + k0;
-        let (sx, sy, sz) = (ax.stride, ay.stride, az.stride);
-        let c = [
-            v[base],
-            v[base + sz],
-            v[base + sy],
-            v[base + sy + sz],
-            v[base + sx],
-            v[base + sx + sz],
-            v[base + sx + sy],
-            v[base + sx + sy + sz],
-        ];
-        // trilinear interpolation: e = Σ w_ijk · e_ijk with w = Π (1 − t) or t per axis
-        // (Numerical Recipes 3rd ed. §3.6, eq. 3.6.5 extended to 3-D)
-        let (ux, uy, uz) = (1.0 - tx, 1.0 - ty, 1.0 - tz);
-        let w = [
-            ux * uy * uz,
-            ux * uy * tz,
-            ux * ty * uz,
-            ux * ty * tz,
-            tx * uy * uz,
-            tx * uy * tz,
-            tx * ty * uz,
-            tx * ty * tz,
-        ];
-        let mut out = [0.0; 3];
-        for (ck, wk) in c.iter().zip(w) {
-            out[0] += wk * ck[0];
-            out[1] += wk * ck[1];
-            out[2] += wk * ck[2];
-        }
-        Some(out)
+        Some(self.corners([i0 as u32, j0 as u32, k0 as u32], [tx, ty, tz], v))
     }
+
+    /// The trilinear interpolation in the cell with lower node `ijk` at fractions `t`.
+    #[inline(always)]
+    fn corners(&self, ijk: [u32; 3], t: [f64; 3], v: &[[f64; 4]]) -> [f64; 4] {
+        self.sum(self.base(ijk), trilinear_weights(t), v)
+    }
+
+    /// Index of node `ijk` (the lower corner of its cell).
+    #[inline(always)]
+    fn base(&self, ijk: [u32; 3]) -> usize {
+        let [ax, ay, _] = &self.axes;
+        ijk[0] as usize * ax.stride + ijk[1] as usize * ay.stride + ijk[2] as usize
+    }
+
+    /// Σ w_k · e_k over the 8 corners of the cell with lower node `base`, in the order of
+    /// [`trilinear_weights`].
+    #[inline(always)]
+    fn sum(&self, base: usize, w: [f64; 8], v: &[[f64; 4]]) -> [f64; 4] {
+        let [ax, ay, az] = &self.axes;
+        // the 8 corners of the cell: the strides of a step in x, y, z
+        let (sx, sy, sz) = (ax.stride, ay.stride, az.stride);
+        // one bounds check for the cell
+        let v = &v[base..=base + sx + sy + sz];
+        let c = [
+            v[0],
+            v[sz],
+            v[sy],
+            v[sy + sz],
+            v[sx],
+            v[sx + sz],
+            v[sx + sy],
+            v[sx + sy + sz],
+        ];
+        let mut out = [0.0; 4];
+        for (ck, wk) in c.iter().zip(w) {
+            for (o, cl) in out.iter_mut().zip(ck) {
+                *o += wk * cl;
+            }
+        }
+        out
+    }
+}
+
+/// The weights of the 8 corners of a cell at fractions t = (tx, ty, tz), corners ordered
+/// (0,0,0), (0,0,1), (0,1,0), (0,1,1), (1,0,0), …: w = Π (1 − t) or t per axis (trilinear
+/// interpolation, Numerical Recipes 3rd ed. §3.6, eq. 3.6.5 extended to 3-D).
+#[inline(always)]
+fn trilinear_weights([tx, ty, tz]: [f64; 3]) -> [f64; 8] {
+    let (ux, uy, uz) = (1.0 - tx, 1.0 - ty, 1.0 - tz);
+    [
+        ux * uy * uz,
+        ux * uy * tz,
+        ux * ty * uz,
+        ux * ty * tz,
+        tx * uy * uz,
+        tx * uy * tz,
+        tx * ty * uz,
+        tx * ty * tz,
+    ]
 }
 
 /// Index of the grid value `x` (within [`SAME_VALUE_MM`]) in the sorted `nodes`.
@@ -771,15 +966,22 @@ mod tests {
                 m.eval_batch(&points, &mut batch);
                 let mut through_trait = vec![[0.0; 3]; points.len()];
                 ErrorModel::eval_batch(&m, &points, &mut through_trait);
+                // the kernel as compiled without AVX2 (the other path on machines with it)
+                let mut generic = vec![[0.0; 3]; points.len()];
+                eval_batch_blocks(&m.lookup(), &m.values_um, &points, &mut generic);
                 let mut refused = 0;
-                for ((p, b), t) in points.iter().zip(&batch).zip(&through_trait) {
+                for (((p, b), t), g) in points.iter().zip(&batch).zip(&through_trait).zip(&generic)
+                {
                     let one = m.error_um(*p);
                     let same = |a: &[f64; 3]| {
                         a.iter()
                             .zip(one)
                             .all(|(u, v)| u.to_bits() == v.to_bits() || (u.is_nan() && v.is_nan()))
                     };
-                    assert!(same(b) && same(t), "{outside:?} at {p:?}: {b:?} vs {one:?}");
+                    assert!(
+                        same(b) && same(t) && same(g),
+                        "{outside:?} at {p:?}: {b:?}, {g:?} vs {one:?}"
+                    );
                     match m.try_error_um(*p) {
                         Ok(e) => assert_eq!(e.map(f64::to_bits), one.map(f64::to_bits)),
                         Err(_) => {
