@@ -227,7 +227,8 @@ def run_one(mtec, program, map_name, map_path, words, out_dir, always_flatten=Fa
         if r2.returncode == 0:
             r, flattened = r2, True
     if r.returncode == 2:
-        msg = (r.stderr.strip().splitlines() or ["(no message)"])[0]
+        lines = r.stderr.strip().splitlines() or ["(no message)"]
+        msg = next((ln for ln in lines if ln.startswith("error:")), lines[0])
         located = re.search(r":\d+:\d+", msg) is not None
         return ("refused" if located else "CRASH"), None, None, msg
     if r.returncode != 0:
