@@ -323,3 +323,31 @@ fn block_delete_follows_the_operators_switch() {
         0.5e-3,
     );
 }
+
+/// LinuxCNC's interpreter (rs274, linuxcnc-uspace 2.9) subtracts a tool length offset applied in
+/// mm from a G53 position in inches unconverted after G20 (`G53 G0 Z1` with a 25.4 mm tool goes
+/// to Z −24.4 in): the move does not go where G53 says, so the rewriter refuses it (found
+/// 2026-11-27 by generator seed 10). After a fresh G43 in the new units, or with G49, it is
+/// compensated as before.
+#[test]
+fn g53_with_a_tool_length_offset_from_other_units_is_refused() {
+    let mut offsets = Offsets::all_known([[0.0; 3]; 9]);
+    offsets.tool_length_mm.insert(1, 25.4);
+    let o = RewriteOptions {
+        offsets,
+        ..RewriteOptions::default()
+    };
+    let prefix = "G21 G90\nG0 X0 Y0 Z100\nT1 M6\nG43 H1\n";
+    let (line, column, msg) = refused(&format!("{prefix}G20\nG53 G0 Z1\n"), &PolyModel, &o);
+    assert_eq!((line, column), (6, 8), "{msg}");
+    assert!(msg.contains("G53 with a tool length offset"), "{msg}");
+    for tail in [
+        "G20\nG43 H1\nG53 G0 Z1\n",
+        "G20\nG49\nG53 G0 Z1\n",
+        "G53 G0 Z25\n",
+        "G21\nG53 G0 Z25\n",
+    ] {
+        let out = run(&format!("{prefix}{tail}"), &PolyModel, &o);
+        assert!(out.contains("G53 G0"), "{tail}: {out}");
+    }
+}

@@ -93,6 +93,9 @@ pub(super) struct State {
     pub(super) plane: Option<Plane>,
     pub(super) work: Option<usize>,
     pub(super) tool_length_mm: Option<f64>,
+    /// G20/G21 changed the units since the tool length offset was applied (G43/G49): LinuxCNC's
+    /// interpreter then puts a G53 move elsewhere (it subtracts the offset unconverted).
+    pub(super) units_changed_since_tool_length: bool,
     pub(super) selected_tool: Option<u32>,
     pub(super) current_tool: Option<u32>,
     pub(super) motion: Motion,
@@ -157,6 +160,7 @@ impl State {
             plane: Some(arc::XY),
             work: Some(opt.offsets.active),
             tool_length_mm: Some(0.0),
+            units_changed_since_tool_length: false,
             selected_tool: None,
             current_tool: None,
             motion: Motion::Cancelled,
@@ -335,8 +339,13 @@ impl State {
                 G17 => st.plane = Some(arc::XY),
                 G18 => st.plane = Some(arc::ZX),
                 G19 => st.plane = Some(arc::YZ),
-                G20 => st.units = Some(Units::Inch),
-                G21 => st.units = Some(Units::Mm),
+                G20 | G21 => {
+                    let units = if code == G20 { Units::Inch } else { Units::Mm };
+                    if st.units != Some(units) {
+                        st.units_changed_since_tool_length = true;
+                    }
+                    st.units = Some(units);
+                }
                 G40 => st.cutter_comp = false,
                 G41 | G41_1 | G42 | G42_1 => st.cutter_comp = true,
                 G43 => {
@@ -350,6 +359,7 @@ impl State {
                         None => st.current_tool,
                     };
                     st.tool_length_mm = tool.and_then(|t| st.tools.get(&t).copied());
+                    st.units_changed_since_tool_length = false;
                     if st.tool_length_mm.is_none() {
                         let what = match tool {
                             Some(t) => format!("tool {t} has no length in the offsets file (--offsets, [tool_lengths_mm])"),
@@ -362,7 +372,10 @@ impl State {
                         });
                     }
                 }
-                G49 => st.tool_length_mm = Some(0.0),
+                G49 => {
+                    st.tool_length_mm = Some(0.0);
+                    st.units_changed_since_tool_length = false;
+                }
                 G54 | G55 | G56 | G57 | G58 | G59 | G59_1 | G59_2 | G59_3 => {
                     st.work = work_system_index(code);
                     if let Some(i) = st.work.filter(|&i| st.frames[PROG].work_of(i).is_none()) {

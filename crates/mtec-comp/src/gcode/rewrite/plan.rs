@@ -147,6 +147,19 @@ impl Rewriter<'_> {
             );
             return self.unsupported(d);
         }
+        if g53
+            && self.st.units_changed_since_tool_length
+            && self.st.tool_length_mm.is_some_and(|l| l != 0.0)
+        {
+            // found with rs274 (linuxcnc-uspace 2.9): after G43 in mm and G20, `G53 G0 Z1`
+            // goes to Z −24.4 in for a 25.4 mm tool, not to machine Z 1 in
+            let d = self.diag(
+                col,
+                ProblemKind::Unsupported,
+                "G53 with a tool length offset applied before a G20/G21 change: LinuxCNC's interpreter subtracts that offset in the wrong units, so the move does not go where G53 says; apply G43 again after the unit change (or G49 before the G53)".into(),
+            );
+            return self.unsupported(d);
+        }
         self.g53 = g53;
         let scale = units.mm_per_unit();
         // program coordinates → machine: `offsets` as the original program has set them (its
