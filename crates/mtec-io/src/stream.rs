@@ -298,17 +298,7 @@ impl<R: BufRead> CsvReader<R> {
         fields.resize_with(n, String::new);
         for (dst, f) in fields.iter_mut().zip(self.record.iter()) {
             let f = f.trim();
-            dst.clear();
-            match self.dialect {
-                Dialect::Spreadsheet(_) => match decimal_comma(f) {
-                    Some(v) => {
-                        self.decimal_commas += 1;
-                        dst.push_str(&v);
-                    }
-                    None => dst.push_str(f),
-                },
-                Dialect::Comma => dst.push_str(f),
-            }
+            put_field(self.dialect, &mut self.decimal_commas, dst, f);
         }
         self.row.line = end;
         Ok(Some(end))
@@ -364,17 +354,7 @@ impl<R: BufRead> CsvReader<R> {
         for (dst, &end) in fields.iter_mut().zip(ends.iter()) {
             let f = text[start..end].trim();
             start = end + 1;
-            dst.clear();
-            match self.dialect {
-                Dialect::Spreadsheet(_) => match decimal_comma(f) {
-                    Some(v) => {
-                        self.decimal_commas += 1;
-                        dst.push_str(&v);
-                    }
-                    None => dst.push_str(f),
-                },
-                Dialect::Comma => dst.push_str(f),
-            }
+            put_field(self.dialect, &mut self.decimal_commas, dst, f);
         }
         let end = lines.line;
         lines.pos = lines.pending.len();
@@ -565,6 +545,22 @@ impl<'a> Row<'a> {
             Some(c) => InputError::at(self.path, self.row.line, c + 1, message),
             None => InputError::line(self.path, self.row.line, message),
         }
+    }
+}
+
+/// A trimmed field into `dst`, a decimal comma made a point in a spreadsheet dialect (counted
+/// in `decimal_commas`): the one rule of both the csv-parser and the quote-free paths.
+fn put_field(dialect: Dialect, decimal_commas: &mut usize, dst: &mut String, f: &str) {
+    dst.clear();
+    match dialect {
+        Dialect::Spreadsheet(_) => match decimal_comma(f) {
+            Some(v) => {
+                *decimal_commas += 1;
+                dst.push_str(&v);
+            }
+            None => dst.push_str(f),
+        },
+        Dialect::Comma => dst.push_str(f),
     }
 }
 
