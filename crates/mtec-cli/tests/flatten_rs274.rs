@@ -529,6 +529,33 @@ fn what_the_machine_decides_at_run_time_is_kept_or_refused() {
     }
 }
 
+/// `compensate gcode --flatten-with rs274` of `program` with the zero `model` and the options
+/// `given` (flag, file), written to `dir/flat.ngc`: exit code, messages, the output if written.
+fn flatten_zero(
+    bin: &Path,
+    dir: &Path,
+    model: &Path,
+    program: &Path,
+    given: &[(&str, &Path)],
+) -> (Option<i32>, String, Option<String>) {
+    let out = dir.join("flat.ngc");
+    let _ = std::fs::remove_file(&out);
+    let mut c = mtec();
+    c.args(["compensate", "gcode", "--model"])
+        .arg(model)
+        .args(["--flatten-with", "rs274", "--rs274"])
+        .arg(bin);
+    for (flag, file) in given {
+        c.arg(flag).arg(file);
+    }
+    let o = c.arg(program).arg("-o").arg(&out).output().unwrap();
+    (
+        o.status.code(),
+        text(&o),
+        std::fs::read_to_string(&out).ok(),
+    )
+}
+
 /// The flattened text of `program` (zero model).
 fn flatten_text(bin: &Path, program: &Path) -> String {
     let dir = tempfile::tempdir().unwrap();
@@ -720,22 +747,8 @@ fn tool_lengths_come_from_the_user_only() {
     };
     let model = write("zero.json", ZERO_MODEL);
     let run = |program: &Path, extra: &[&Path], flag: &str| {
-        let out = dir.path().join("flat.ngc");
-        let _ = std::fs::remove_file(&out);
-        let mut c = mtec();
-        c.args(["compensate", "gcode", "--model"])
-            .arg(&model)
-            .args(["--flatten-with", "rs274", "--rs274"])
-            .arg(&bin);
-        for p in extra {
-            c.arg(flag).arg(p);
-        }
-        let o = c.arg(program).arg("-o").arg(&out).output().unwrap();
-        (
-            o.status.code(),
-            text(&o),
-            std::fs::read_to_string(&out).ok(),
-        )
+        let given: Vec<(&str, &Path)> = extra.iter().map(|p| (flag, *p)).collect();
+        flatten_zero(&bin, dir.path(), &model, program, &given)
     };
     let drill = write(
         "drill.ngc",
@@ -832,22 +845,8 @@ fn the_work_system_at_start_is_the_users_or_left_unnamed() {
     };
     let model = write("zero.json", ZERO_MODEL);
     let run = |program: &Path, offsets: Option<&Path>| {
-        let out = dir.path().join("flat.ngc");
-        let _ = std::fs::remove_file(&out);
-        let mut c = mtec();
-        c.args(["compensate", "gcode", "--model"])
-            .arg(&model)
-            .args(["--flatten-with", "rs274", "--rs274"])
-            .arg(&bin);
-        if let Some(o) = offsets {
-            c.arg("--offsets").arg(o);
-        }
-        let o = c.arg(program).arg("-o").arg(&out).output().unwrap();
-        (
-            o.status.code(),
-            text(&o),
-            std::fs::read_to_string(&out).ok(),
-        )
+        let given: Vec<(&str, &Path)> = offsets.map(|o| ("--offsets", o)).into_iter().collect();
+        flatten_zero(&bin, dir.path(), &model, program, &given)
     };
     let before_first_move = |flat: &str| -> Vec<String> {
         flat.lines()
