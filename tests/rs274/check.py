@@ -923,8 +923,11 @@ class Walker:
         Returns (largest deviation um, bound um, new progress, first violation or None)."""
         n = self.nom.moves[j]
         bound = self.limits.path_bound_um(n, c)
-        if j == 0:
-            # the first move starts wherever the machine happens to be: end point only
+        if j == 0 or self.from_reference(j):
+            # the first move starts wherever the machine happens to be, and a move out of a
+            # G28/G30 reference point starts at the controller's point, uncorrected in both
+            # programs (mtec: "feed moves from an unknown start corrected at their end point
+            # only"): end point only
             _, s = n.geom.nearest(displaced(self.model, c.end), n.length)
             self.end_only += 1
             return 0.0, bound, s, None
@@ -956,6 +959,13 @@ class Walker:
         if first is not None:
             first += f" (largest on this move {worst:.3f} um)"
         return worst, bound, progress, first
+
+    def from_reference(self, j):
+        """Nominal move j and the compensated move being matched both start where a move to a
+        G28/G30 reference point ended (found by a G1 straight after G28)."""
+        if not self.match:
+            return False
+        return self.nom.moves[j - 1].reference and self.comp.moves[len(self.match) - 1].reference
 
     def check_abc(self, c, n):
         if any(abs(a - b) > 1e-4 for a, b in zip(c.abc, n.abc)):

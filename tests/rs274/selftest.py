@@ -7,7 +7,8 @@
      plane, for helices, full circles and inch programs;
   3. the same programs moved by -e + 3 um per axis (6 um in inch programs, whose printout is
      coarser), or with one word moved by 10 um, must fail;
-  4. G28/G30 moves are matched without an end-point check, the moves after them are checked;
+  4. G28/G30 moves are matched without an end-point check, the moves after them are checked
+     (a feed straight out of one at its end point);
   5. the G18 reading of ARC_FEED: G2 X50 Z0 I20 K0 from X10 Z0 passes through Z = -20.
 
     python3 tests/rs274/selftest.py     # prints "selftest: N passed" or the failures, exit 1
@@ -121,6 +122,19 @@ def main():
         v = outcome(prog, wrong, constant, work, "g28.wrong.ngc")
         (failures.append("g28-reference-park: a move after G28 left uncompensated was accepted")
          if not v else None)
+        passed += bool(v)
+        # a feed straight out of a reference point is checked at its end point: left
+        # uncompensated there, it must fail
+        prog = os.path.join(CASES, "g28-then-feed.ngc")
+        text = open(prog, encoding="utf-8").read()
+        right = keep_ref(text, tuple(-e for e in E_UM))
+        v = outcome(prog, right, constant, work, "g28feed.right.ngc")
+        (failures.append(f"g28-then-feed compensated exactly: {v[0]}") if v else None)
+        passed += not v
+        wrong = right.replace("G1 X19.98", "G1 X20.0")
+        v = outcome(prog, wrong, constant, work, "g28feed.wrong.ngc")
+        (failures.append("g28-then-feed: a feed out of G28 left uncompensated was accepted")
+         if not v or "G1 X19.98" not in right else None)
         passed += bool(v)
         # G93: a move split in two pieces that each keep the move's F takes twice as long
         prog = os.path.join(CASES, "g93-inverse-time.ngc")
