@@ -937,3 +937,40 @@ fn the_g92_offset_linuxcnc_keeps_is_cancelled_as_the_original_does_or_refused() 
     let plain = write("plain.ngc", "G21 G90\nG0 X1 Y1 Z1\nG1 X3 F100\nM2\n");
     check(&bin, &plain, None, Some(&var), &[], &Expect::Same);
 }
+
+#[test]
+fn a_stop_on_a_block_written_on_several_lines_names_the_line_rs274_stopped_at() {
+    // rs274 echoes the block it stops at, not its line: when the text repeats, a second run on
+    // the program with every line numbered by its N word names the line
+    let Some(bin) = rs274() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("zero.json");
+    std::fs::write(&model, ZERO_MODEL).unwrap();
+    for (body, at, words) in [
+        // the second `G1 X20` runs with a zero feed
+        (
+            "G21 G90\nG1 X10 F100\nG1 X20\nF0\nG1 X20\nM2\n",
+            ":5:1:",
+            "zero feed rate",
+        ),
+        // the first arc starts where the machine stands: from elsewhere its radii differ
+        (
+            "G21 G90 G17\n  G2 X10 Y0 I5 J0 F100\nG0 X0 Y0\nG2 X10 Y0 I5 J0 F100\nM2\n",
+            ":2:3:",
+            "started at another position",
+        ),
+        // N words are replaced (here one repeated), a block delete slash stays
+        (
+            "G21 G90\nN10 G1 X10 F100\nN20 G1 X20\n/N30 F0\nN20 G1 X20\nM2\n",
+            ":5:1:",
+            "zero feed rate",
+        ),
+    ] {
+        let p = dir.path().join("repeat.ngc");
+        std::fs::write(&p, body).unwrap();
+        let (code, msg, _) = flatten_zero(&bin, dir.path(), &model, &p, &[]);
+        assert_eq!(code, Some(2), "{msg}");
+        assert!(msg.contains(&format!("repeat.ngc{at}")), "{at}: {msg}");
+        assert!(msg.contains(words), "{msg}");
+    }
+}

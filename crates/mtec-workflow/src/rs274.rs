@@ -343,28 +343,66 @@ fn tool_table_in_inches(lengths: &std::collections::BTreeMap<u32, f64>) -> Strin
 /// exactly one line of the program reads the same (blanks around it ignored), its 1-based line
 /// and the column of the first non-blank, or of the character a "Bad character 'c' used" names.
 fn rs274_error_at(program: &[u8], stderr: &str) -> Option<(usize, usize)> {
-    let last = stderr
-        .lines()
-        .rev()
-        .map(str::trim)
-        .find(|l| !l.is_empty())?;
+    let last = last_line(stderr)?;
     let text = String::from_utf8_lossy(program);
     let mut found = text.lines().enumerate().filter(|(_, l)| l.trim() == last);
     let (i, line) = found.next()?;
     if found.next().is_some() {
         return None;
     }
-    let mut column = line.len() - line.trim_start().len() + 1;
+    Some((i + 1, error_column(line, stderr)))
+}
+
+/// The last line of rs274's standard error that is not blank, trimmed.
+fn last_line(stderr: &str) -> Option<&str> {
+    stderr.lines().rev().map(str::trim).find(|l| !l.is_empty())
+}
+
+/// The column of `line` where rs274's error points: the character a "Bad character 'c' used"
+/// names, else the first non-blank.
+fn error_column(line: &str, stderr: &str) -> usize {
     let bad = stderr
         .lines()
         .find_map(|l| l.trim().strip_prefix("Bad character '"))
         .and_then(|r| r.chars().next());
-    if let Some(c) = bad {
-        if let Some(k) = line.find(|x: char| x.eq_ignore_ascii_case(&c)) {
-            column = line[..k].chars().count() + 1;
-        }
+    if let Some(k) = bad.and_then(|c| line.find(|x: char| x.eq_ignore_ascii_case(&c))) {
+        return line[..k].chars().count() + 1;
     }
-    Some((i + 1, column))
+    line.len() - line.trim_start().len() + 1
+}
+
+/// Where rs274 stopped when the text it echoes is on several lines of `program` (or on none):
+/// the same run again on the program with every line numbered by its N word
+/// (`mtec_comp::gcode::line_numbers`, `prepare` making the same probe of it), whose echo names
+/// the line. Only a stop at the same block text with the same message counts.
+fn numbered_error_at(
+    program: &[u8],
+    stderr: &str,
+    run: impl FnOnce(&[u8]) -> Result<Run, CliError>,
+) -> Option<(usize, usize)> {
+    use mtec_comp::gcode::line_numbers::{block_text, numbered_line, numbered_program};
+    let echo = last_line(stderr)?;
+    let numbered = run(&numbered_program(program)?).ok()?;
+    if numbered.status == Some(0) {
+        return None;
+    }
+    let (line, text) = numbered_line(last_line(&numbered.stderr)?)?;
+    let original = String::from_utf8_lossy(program);
+    let at = original.lines().nth(line.checked_sub(1)?)?;
+    // the message without the echoed block
+    fn same_message(s: &str) -> Vec<&str> {
+        let mut lines: Vec<&str> = s
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty() && *l != "executing")
+            .collect();
+        lines.pop();
+        lines
+    }
+    (block_text(at)? == text
+        && block_text(echo)? == text
+        && same_message(stderr) == same_message(&numbered.stderr))
+    .then(|| (line, error_column(at, stderr)))
 }
 
 /// A flattened program.
@@ -512,7 +550,14 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         if args.tool_table.is_none() && run.stderr.contains("not found in the tool table") {
             message.push_str(" (give the controller's tool table with --tool-table, or the tool's length under [tool_lengths_mm] in --offsets: without them mtec does not let rs274 use its built-in lengths)");
         }
-        return Err(match rs274_error_at(&program, &run.stderr) {
+        let at = rs274_error_at(&program, &run.stderr).or_else(|| {
+            numbered_error_at(&program, &run.stderr, |numbered| {
+                let file = tmp.0.join("numbered.ngc");
+                std::fs::write(&file, numbered)?;
+                run_rs274(&bin, &tmp.0, &program_flags("numbered")?, &file, timeout)
+            })
+        });
+        return Err(match at {
             Some((line, column)) => InputError::at(input, line, column, message),
             None => InputError::file(input, message),
         }
@@ -539,13 +584,21 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     let probe_flags = program_flags("start-probe")?;
     let probe_run = run_rs274(&bin, &tmp.0, &probe_flags, &probe_file, timeout)?;
     if probe_run.status != Some(0) {
-        return Err(InputError::file(
-            input,
-            format!(
-                "cannot flatten: rs274 stopped when the program was started at another position ({}), so whether its path depends on the start position cannot be checked",
-                rs274_message(&probe_run.stderr)
-            ),
-        )
+        let message = format!(
+            "cannot flatten: rs274 stopped when the program was started at another position ({}), so whether its path depends on the start position cannot be checked",
+            rs274_message(&probe_run.stderr)
+        );
+        let at = rs274_error_at(&program, &probe_run.stderr).or_else(|| {
+            numbered_error_at(&program, &probe_run.stderr, |numbered| {
+                let file = tmp.0.join("numbered-start-probe.ngc");
+                std::fs::write(&file, probe_program(numbered))?;
+                run_rs274(&bin, &tmp.0, &program_flags("start-probe")?, &file, timeout)
+            })
+        });
+        return Err(match at {
+            Some((line, column)) => InputError::at(input, line, column, message),
+            None => InputError::file(input, message),
+        }
         .into());
     }
     // 4. the same program started with another tool in the spindle: a G43 without H (or an M6

@@ -78,6 +78,7 @@ pub mod expr;
 pub mod flatten;
 pub mod format;
 pub mod lexer;
+pub mod line_numbers;
 pub mod modal;
 pub mod offsets;
 pub mod rewrite;

@@ -1,0 +1,112 @@
+//! Finding the line where LinuxCNC's interpreter stopped.
+//!
+//! Stand-alone `rs274` prints the text of the block it stopped at, not its line number. When that
+//! text occurs on more than one line of the program (a repeated `G1 X0`, a block inside a
+//! subroutine called twice), the line is found by running the interpreter once more on
+//! [`numbered_program`]: every line carries its own line number as its `N` word, which LinuxCNC
+//! ignores for execution and echoes with the block ([`numbered_line`]).
+
+/// LinuxCNC refuses a line number above 99999 (`NCE_LINE_NUMBER_GREATER_THAN_99999`).
+pub const MAX_LINE_NUMBER: usize = 99_999;
+
+/// `program` with every line that holds a block numbered by its 1-based line: `N17 ` in front
+/// of the block, after a block-delete `/`, an `N` word already there replaced. Blank lines and
+/// `%` tape marks stay as they are, and so does a line whose `N` word has a fraction. `None`
+/// when the program has more lines than LinuxCNC numbers.
+pub fn numbered_program(program: &[u8]) -> Option<Vec<u8>> {
+    let mut out = Vec::with_capacity(program.len() + program.len() / 4);
+    for (i, line) in program.split_inclusive(|&b| b == b'\n').enumerate() {
+        let number = i + 1;
+        if number > MAX_LINE_NUMBER {
+            return None;
+        }
+        out.extend_from_slice(&numbered(line, number));
+    }
+    Some(out)
+}
+
+fn numbered(line: &[u8], number: usize) -> Vec<u8> {
+    let blank = |b: &u8| b == &b' ' || b == &b'\t';
+    let lead = line.iter().take_while(|b| blank(b)).count();
+    let mut at = lead;
+    match line.get(at) {
+        None | Some(b'\n' | b'\r' | b'%') => return line.to_vec(),
+        Some(b'/') => at += 1 + line[at + 1..].iter().take_while(|b| blank(b)).count(),
+        _ => {}
+    }
+    let head = &line[..at];
+    let mut rest = &line[at..];
+    if matches!(rest.first(), Some(b'N' | b'n')) {
+        // LinuxCNC reads blanks inside a word: `N 1 0` is N10
+        let digits = rest[1..]
+            .iter()
+            .take_while(|b| b.is_ascii_digit() || blank(b))
+            .count();
+        if rest.get(1 + digits) == Some(&b'.') {
+            return line.to_vec();
+        }
+        rest = &rest[1 + digits..];
+    }
+    let mut out = head.to_vec();
+    out.extend_from_slice(format!("N{number} ").as_bytes());
+    out.extend_from_slice(rest);
+    out
+}
+
+/// The line number and the block text of a line [`numbered_program`] wrote, as the interpreter
+/// echoes it (`N17 G1 X0`): `(17, "G1 X0")`.
+pub fn numbered_line(echo: &str) -> Option<(usize, &str)> {
+    let t = echo.trim_start();
+    let t = t.strip_prefix('/').map_or(t, str::trim_start);
+    let t = t.strip_prefix(['N', 'n'])?;
+    let digits = t.bytes().take_while(u8::is_ascii_digit).count();
+    let number = t[..digits].parse().ok()?;
+    Some((number, t[digits..].trim()))
+}
+
+/// The block text of `line` as [`numbered_line`] returns it for its numbered copy: the line
+/// after its blanks, block-delete slash and `N` word, trimmed.
+pub fn block_text(line: &str) -> Option<&str> {
+    let t = line.trim_start();
+    let t = t.strip_prefix('/').map_or(t, str::trim_start);
+    let t = match t.strip_prefix(['N', 'n']) {
+        Some(r) => r.trim_start_matches(|c: char| c.is_ascii_digit() || c == ' ' || c == '\t'),
+        None => t,
+    };
+    Some(t.trim())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_block_line_gets_its_number_and_keeps_its_text() {
+        let p = b"%\nG21 G90\n\n  /G1 X10\r\nN0040 G0 Z5\nn 5 0 (c)\n/ N7 M3\nN10.1 G1 X1\n%\n";
+        let n = numbered_program(p).unwrap();
+        assert_eq!(
+            String::from_utf8(n).unwrap(),
+            "%\nN2 G21 G90\n\n  /N4 G1 X10\r\nN5 G0 Z5\nN6 (c)\n/ N7 M3\nN10.1 G1 X1\n%\n"
+        );
+        // no final newline: the last line is numbered all the same
+        assert_eq!(numbered_program(b"G0 X1").unwrap(), b"N1 G0 X1".to_vec());
+    }
+
+    #[test]
+    fn an_echo_gives_back_line_and_text() {
+        assert_eq!(numbered_line("N12 G33 X5 K1"), Some((12, "G33 X5 K1")));
+        assert_eq!(numbered_line("  /N3 G1 X1 "), Some((3, "G1 X1")));
+        assert_eq!(numbered_line("G1 X1"), None);
+        assert_eq!(numbered_line("N G1"), None);
+        assert_eq!(block_text(" /N0040 G1 X1 "), Some("G1 X1"));
+        assert_eq!(block_text("G1 X1"), Some("G1 X1"));
+    }
+
+    #[test]
+    fn a_program_longer_than_linuxcnc_numbers_is_not_numbered() {
+        let p = "G0 X1\n".repeat(MAX_LINE_NUMBER + 1);
+        assert!(numbered_program(p.as_bytes()).is_none());
+        let p = "G0 X1\n".repeat(MAX_LINE_NUMBER);
+        assert!(numbered_program(p.as_bytes()).is_some());
+    }
+}
