@@ -462,6 +462,11 @@ fn constructs_without_a_plain_equivalent_are_refused_naming_the_canonical_line()
         let msg = check(&bin, &p, None, None, extra, &Expect::Refused(words));
         if words != "did not finish" && !words.starts_with("Unknown") && !words.contains("model") {
             assert!(msg.contains("canonical line"), "{msg}");
+            // and the block rs274 issued the call from, found by a numbered run: the last line
+            // of the body; the rotation of G54 is issued when M2 selects G54 (rs274 starts in
+            // G59.3 when the work offsets are not given)
+            let line = 1 + body.lines().count() + usize::from(words == "rotated");
+            assert!(msg.contains(&format!("bad.ngc:{line}:1:")), "{msg}");
         }
     }
 }

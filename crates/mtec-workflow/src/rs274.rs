@@ -652,7 +652,28 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         unstated_start_system: unstated.then_some(UNSTATED_SYSTEM),
         g92_cancel_at_start: g92.as_ref().ok().copied().flatten(),
     };
-    let cannot = |e| InputError::file(input, format!("cannot flatten: {e}"));
+    // a refused canonical call is traced to its block: the numbered run prints the block's
+    // line in the call's N field
+    let cannot = |e: mtec_comp::gcode::flatten::FlattenError| {
+        let message = format!("cannot flatten: {e}");
+        let line = mtec_comp::gcode::line_numbers::numbered_program(&program)
+            .and_then(|numbered| {
+                let file = tmp.0.join("numbered.ngc");
+                std::fs::write(&file, numbered).ok()?;
+                let flags = program_flags("numbered").ok()?;
+                run_rs274(&bin, &tmp.0, &flags, &file, timeout).ok()
+            })
+            .and_then(|n| {
+                mtec_comp::gcode::line_numbers::canonical_source_line(&run.stdout, &n.stdout, e.line)
+            });
+        let text = String::from_utf8_lossy(&program);
+        match line.and_then(|l| Some((l, text.lines().nth(l.checked_sub(1)?)?))) {
+            Some((l, at)) => {
+                InputError::at(input, l, at.len() - at.trim_start().len() + 1, message)
+            }
+            None => InputError::file(input, message),
+        }
+    };
     let (text, report) = match held {
         Ok(h) => flatten(
             &run.stdout,

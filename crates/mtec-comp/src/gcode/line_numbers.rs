@@ -76,6 +76,30 @@ pub fn block_text(line: &str) -> Option<&str> {
     Some(t.trim())
 }
 
+/// The source line of canonical line `k` (rs274's sequence number) of a run, read from the
+/// same run on the [`numbered_program`]: the block's line number is the N field of its calls
+/// (`   10 N123   TURN_PROBE_ON()`). `None` unless both runs print line `k` with the same call
+/// after the N field.
+pub fn canonical_source_line(original: &str, numbered: &str, k: usize) -> Option<usize> {
+    // (N field, call) of line k
+    let find = |out: &str| -> Option<(String, String)> {
+        out.lines().find_map(|l| {
+            let t = l.trim_start();
+            let digits = t.bytes().take_while(u8::is_ascii_digit).count();
+            if digits == 0 || t[..digits].parse::<usize>().ok()? != k {
+                return None;
+            }
+            let rest = t[digits..].trim_start().strip_prefix('N')?;
+            let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
+            Some((rest[..end].to_string(), rest[end..].trim().to_string()))
+        })
+    };
+    let (_, call) = find(original)?;
+    let (field, numbered_call) = find(numbered)?;
+    (call == numbered_call).then_some(())?;
+    field.parse().ok()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -100,6 +124,20 @@ mod tests {
         assert_eq!(numbered_line("N G1"), None);
         assert_eq!(block_text(" /N0040 G1 X1 "), Some("G1 X1"));
         assert_eq!(block_text("G1 X1"), Some("G1 X1"));
+    }
+
+    #[test]
+    fn a_canonical_line_is_traced_to_its_source_line_by_the_numbered_run() {
+        let original = "    9 N.....  SET_FEED_RATE(10.0000)\n   10 N.....  TURN_PROBE_ON()\n";
+        let numbered = "    9 N3     SET_FEED_RATE(10.0000)\n   10 N123   TURN_PROBE_ON()\n";
+        assert_eq!(canonical_source_line(original, numbered, 10), Some(123));
+        assert_eq!(canonical_source_line(original, numbered, 9), Some(3));
+        assert_eq!(canonical_source_line(original, numbered, 11), None);
+        // another call on that line: the runs differ, nothing is claimed
+        let other = "   10 N123   TURN_PROBE_OFF()\n";
+        assert_eq!(canonical_source_line(original, other, 10), None);
+        // no line number in the N field
+        assert_eq!(canonical_source_line(original, original, 10), None);
     }
 
     #[test]
