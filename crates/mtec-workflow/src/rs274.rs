@@ -664,7 +664,11 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
                 run_rs274(&bin, &tmp.0, &flags, &file, timeout).ok()
             })
             .and_then(|n| {
-                mtec_comp::gcode::line_numbers::canonical_source_line(&run.stdout, &n.stdout, e.line)
+                mtec_comp::gcode::line_numbers::canonical_source_line(
+                    &run.stdout,
+                    &n.stdout,
+                    e.line,
+                )
             });
         let text = String::from_utf8_lossy(&program);
         match line.and_then(|l| Some((l, text.lines().nth(l.checked_sub(1)?)?))) {
