@@ -40,6 +40,10 @@ pub struct Pls {
     pub components: Option<usize>,
     /// Validation blocks of that choice.
     pub blocks: BlockSpec,
+    /// As `auto`'s candidate: its sensor budget (`--max-sensors`). PLS weighs every sensor it
+    /// is given, so with more sensors than that it refuses to fit, as a network does.
+    #[serde(skip)]
+    pub max_sensors: Option<usize>,
 }
 
 /// PLS1 coefficients β of the standardised design `z` (centred, unit-variance columns) for the
@@ -198,6 +202,12 @@ impl Pls {
 impl Fit for Pls {
     type Model = LinearModel;
     fn fit_rows(&self, data: &ThermalData, rows: &[usize]) -> Result<LinearModel, ThermalError> {
+        let n = temp_features(data, &self.sensors)?.len();
+        if let Some(max) = self.max_sensors.filter(|&m| n > m) {
+            return Err(ThermalError::Invalid(format!(
+                "pls weighs all its {n} sensors, more than --max-sensors {max}: name at most that many with --sensors, or raise --max-sensors"
+            )));
+        }
         let a = match self.components {
             Some(a) => a,
             None => self.choose_components(data, rows)?,
@@ -220,6 +230,7 @@ impl Kind for Pls {
             sensors: o.sensors.clone(),
             components: None,
             blocks: o.blocks(),
+            max_sensors: None,
         })
     }
     fn fit_model(&self, d: &ThermalData, r: &[usize]) -> Result<ThermalModel, ThermalError> {
@@ -236,6 +247,7 @@ impl Kind for Pls {
                     block_min: auto.block_min,
                     input: Some(auto.input.clone()),
                 },
+                max_sensors: Some(auto.max_sensors),
             },
         ))
     }
@@ -335,5 +347,30 @@ mod tests {
             ..FitOptions::default()
         })
         .is_err());
+    }
+
+    #[test]
+    fn as_autos_candidate_it_keeps_the_sensor_budget() {
+        // PLS weighs every sensor it is given: with more than auto's --max-sensors it refuses,
+        // as a network does (issue 17: at most `max_sensors` sensors on the machine)
+        let d = data();
+        let rows: Vec<usize> = (0..d.len()).collect();
+        let offer = |max_sensors| {
+            let auto = Auto {
+                max_sensors,
+                block_min: Some(60.0),
+                ..Auto::default()
+            };
+            Pls::auto_candidate(&auto, &d).unwrap().1
+        };
+        let e = offer(2).fit_rows(&d, &rows).unwrap_err().to_string();
+        assert!(
+            e.contains("all its 3 sensors, more than --max-sensors 2"),
+            "{e}"
+        );
+        let within = offer(3).fit_rows(&d, &rows).unwrap();
+        assert_eq!(within.features.len(), 3);
+        // named alone (thermal fit --model pls) it takes what it is given
+        assert!(Pls::default().fit_components(&d, &rows, 2).is_ok());
     }
 }
