@@ -80,6 +80,24 @@ fn bench(c: &mut Criterion) {
         })
     });
     g.finish();
+    // the threaded batch (issue 22 "each at its best"): wall time, as threads are the point
+    let pts = points(1_000_000, [600.0, 400.0, 300.0]);
+    let mut out = vec![[0.0; 3]; pts.len()];
+    let mut g = c.benchmark_group("trilinear_batch_wall");
+    g.sample_size(20);
+    g.throughput(Throughput::Elements(pts.len() as u64));
+    for threads in [1, 2] {
+        g.bench_function(
+            format!("grid25_eval_batch_1m_points_{threads}_threads"),
+            |b| {
+                b.iter(|| {
+                    mtec_comp::eval_batch_threads(&map, black_box(&pts), &mut out, threads);
+                    out[0][0]
+                })
+            },
+        );
+    }
+    g.finish();
 }
 
 /// CPU time of the benchmarking thread (Linux `/proc/thread-self/schedstat`, ns on CPU), so that

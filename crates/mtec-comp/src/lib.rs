@@ -39,7 +39,7 @@ pub use correction::{command_for_target, CorrectionError, CorrectionOptions};
 pub use load::load_error_model;
 pub use machine::MachineErrorModel;
 pub use map::{GridLimits, GridMap, Outside};
-pub use model::{ErrorModel, StateError, StateStatus};
+pub use model::{eval_batch_threads, ErrorModel, StateError, StateStatus};
 pub use pose::{command_for_pose, ChainKinematics, Pose, PoseError, PoseSolveOptions};
 pub use rt::Compensator;
 pub use state_log::{advance_through_log, LogStatus, WithState};

@@ -996,6 +996,40 @@ mod tests {
         }
     }
 
+    /// The threaded batch gives every point exactly what one `eval_batch` call gives, for any
+    /// thread count and for sizes around the run quantum (1024) and the thread split.
+    #[test]
+    fn threaded_batch_equals_one_call() {
+        let m = affine_map(Outside::Refuse);
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        // x in −3..33 (the grid is 0..30: some refused), y and z inside and a little out
+        let points: Vec<[f64; 3]> = (0..5000)
+            .map(|_| [next() * 36.0 - 3.0, next() * 2.2 - 0.1, next() * 1.1 - 0.05])
+            .collect();
+        for n in [0, 1, 1023, 2047, 2048, 2049, 3073, 5000] {
+            let mut one = vec![[0.0; 3]; n];
+            m.eval_batch(&points[..n], &mut one);
+            for threads in [0, 1, 2, 3, 8] {
+                let mut split = vec![[7.0; 3]; n];
+                crate::eval_batch_threads(&m, &points[..n], &mut split, threads);
+                for (a, b) in one.iter().zip(&split) {
+                    for (u, v) in a.iter().zip(b) {
+                        assert!(
+                            u.to_bits() == v.to_bits() || (u.is_nan() && v.is_nan()),
+                            "{n} points, {threads} threads: {a:?} vs {b:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     /// The refusal names the first axis outside (x before y before z), as before the batch.
     #[test]
     fn refusal_names_the_first_axis_outside() {

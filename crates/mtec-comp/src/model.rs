@@ -132,6 +132,45 @@ pub trait ErrorModel: Send + Sync {
     }
 }
 
+/// [`ErrorModel::eval_batch`] on `threads` threads: the points are cut into `threads` equal
+/// contiguous runs (whole blocks of 1024, so every run but the last is the same size) and each
+/// run is one `eval_batch` call on its own scoped thread; the caller's thread takes the first.
+/// `out[i]` is exactly what one `eval_batch` call gives (each point is evaluated on its own),
+/// so the thread count never changes a result. `threads` ≤ 1, or fewer than 2 × 1024 points:
+/// one call on the caller's thread. Unlike `eval_batch` this spawns threads (their stacks are
+/// allocated), so it is for large batches (issue 22: 1 M points), not a real-time loop.
+///
+/// Panics when `out` and `points` differ in length.
+pub fn eval_batch_threads(
+    model: &dyn ErrorModel,
+    points: &[[f64; 3]],
+    out: &mut [[f64; 3]],
+    threads: usize,
+) {
+    assert_eq!(
+        points.len(),
+        out.len(),
+        "eval_batch: as many outputs as points"
+    );
+    const RUN_QUANTUM: usize = 1024;
+    let threads = threads.min(points.len() / RUN_QUANTUM).max(1);
+    if threads == 1 {
+        model.eval_batch(points, out);
+        return;
+    }
+    let run = points.len().div_ceil(threads).div_ceil(RUN_QUANTUM) * RUN_QUANTUM;
+    std::thread::scope(|s| {
+        let mut runs = points.chunks(run).zip(out.chunks_mut(run));
+        let first = runs.next();
+        for (p, o) in runs {
+            s.spawn(move || model.eval_batch(p, o));
+        }
+        if let Some((p, o)) = first {
+            model.eval_batch(p, o);
+        }
+    });
+}
+
 /// The grid map is the one model the trait has a concrete view of (`as_grid`, for the exact
 /// path bounds of the G-code rewriter), so its implementation lives beside the trait and
 /// `map` stays plain data and interpolation.

@@ -174,35 +174,46 @@ pub fn system_parameters_written_by(
     m_codes: &[(u32, usize)],
     moves: bool,
 ) -> Vec<std::ops::RangeInclusive<u32>> {
-    use GCode::*;
     let mut out = Vec::new();
+    for_each_system_parameter_range(g_codes, m_codes, moves, |r| out.push(r));
+    out
+}
+
+/// [`system_parameters_written_by`] without the vector: `f` gets each range (the rewriter
+/// calls it for every block, so it allocates nothing).
+pub fn for_each_system_parameter_range(
+    g_codes: &[(GCode, usize)],
+    m_codes: &[(u32, usize)],
+    moves: bool,
+    mut f: impl FnMut(std::ops::RangeInclusive<u32>),
+) {
+    use GCode::*;
     for &(g, _) in g_codes {
         match g {
             G10 => {
-                out.push(5221..=5390);
-                out.push(5400..=5413);
+                f(5221..=5390);
+                f(5400..=5413);
             }
-            G28_1 => out.push(5161..=5169),
-            G30_1 => out.push(5181..=5189),
-            G52 | G92 | G92_1 | G92_2 | G92_3 => out.push(5210..=5219),
-            G54 | G55 | G56 | G57 | G58 | G59 | G59_1 | G59_2 | G59_3 => out.push(5220..=5220),
-            G43 | G43_1 | G43_2 | G49 => out.push(5081..=5089),
-            G38_2 | G38_3 | G38_4 | G38_5 => out.push(5061..=5070),
+            G28_1 => f(5161..=5169),
+            G30_1 => f(5181..=5189),
+            G52 | G92 | G92_1 | G92_2 | G92_3 => f(5210..=5219),
+            G54 | G55 | G56 | G57 | G58 | G59 | G59_1 | G59_2 | G59_3 => f(5220..=5220),
+            G43 | G43_1 | G43_2 | G49 => f(5081..=5089),
+            G38_2 | G38_3 | G38_4 | G38_5 => f(5061..=5070),
             _ => {}
         }
     }
     for &(m, _) in m_codes {
         match m {
-            6 | 61 => out.push(5400..=5413),
-            66 => out.push(5399..=5399),
+            6 | 61 => f(5400..=5413),
+            66 => f(5399..=5399),
             _ => {}
         }
     }
     if moves {
-        out.push(5021..=5029);
-        out.push(5420..=5428);
+        f(5021..=5029);
+        f(5420..=5428);
     }
-    out
 }
 
 /// LinuxCNC 2.9's predefined (read-only) named parameters, without the leading `_`.
@@ -352,10 +363,12 @@ impl Params {
     /// interpreter rewrote (a G92, a G10, a move) is never read stale; re-seed with
     /// [`Params::set_numbered`] what the caller tracks exactly.
     pub fn forget_numbered(&mut self, range: std::ops::RangeInclusive<u32>) {
-        for n in range {
-            if let Some(slot) = self.numbered.get_mut(n as usize) {
-                *slot = None;
-            }
+        let start = *range.start() as usize;
+        let end = (*range.end() as usize)
+            .saturating_add(1)
+            .min(self.numbered.len());
+        if start < end {
+            self.numbered[start..end].fill(None);
         }
     }
 

@@ -348,15 +348,130 @@ fn exponent_check(line: &[u8], i: usize, end: usize) -> Result<(), LexError> {
 
 /// Parses `[+-]digits[.digits]` (either side of the point may be empty) as f64.
 pub fn parse_number(text: &[u8]) -> Option<f64> {
+    if let Some(v) = parse_short_decimal(text) {
+        return Some(v);
+    }
     let s = std::str::from_utf8(text).ok()?;
     let s = s.strip_prefix('+').unwrap_or(s);
     // Rust's parser accepts "5." and ".5" and "-.5"; a lone "." or "-" is refused.
     s.parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
+/// 10^k, k = 0..=15: each exact in f64 (10^22 is the largest power of ten that is).
+const POW10: [f64; 16] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+];
+
+/// The G-code numbers nearly every line has (`X12.3456`, `N120`, `F1500`): `[+-]digits[.digits]`
+/// with at most 15 digits in all, read as m / 10^k with the digits as the integer m < 10^15 and
+/// k digits after the point. Both are exact in f64 (m < 2^53, k ≤ 22) and IEEE division rounds
+/// correctly, so the quotient is the correctly rounded value of the decimal, the same f64 the
+/// standard parser gives (Clinger, "How to read floating point numbers accurately", PLDI 1990,
+/// the fast path; Rust's own parser takes it too). `None` for anything else (more digits, no
+/// digit, another character): the caller then uses the standard parser.
+fn parse_short_decimal(text: &[u8]) -> Option<f64> {
+    let (negative, body) = match text.first()? {
+        b'-' => (true, &text[1..]),
+        b'+' => (false, &text[1..]),
+        _ => (false, text),
+    };
+    if body.len() > 16 {
+        return None;
+    }
+    let mut m = 0u64;
+    let (mut digits, mut after_point) = (0usize, 0usize);
+    let mut point = false;
+    for &c in body {
+        match c {
+            b'0'..=b'9' => {
+                m = m * 10 + u64::from(c - b'0');
+                digits += 1;
+                after_point += usize::from(point);
+            }
+            b'.' if !point => point = true,
+            _ => return None,
+        }
+    }
+    if digits == 0 || digits > 15 {
+        return None;
+    }
+    let v = m as f64 / POW10[after_point];
+    Some(if negative { -v } else { v })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The short-decimal path gives the standard parser's f64, bit for bit (signs, zeros,
+    /// points at either end, 1 to 15 digits), and leaves the rest to it.
+    #[test]
+    fn short_decimals_read_as_the_standard_parser_reads_them() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |n: u64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed % n
+        };
+        let mut checked = 0;
+        for _ in 0..200_000 {
+            let digits = 1 + next(15) as usize;
+            let mut s: String = (0..digits)
+                .map(|_| char::from(b'0' + next(10) as u8))
+                .collect();
+            let point = next(digits as u64 + 2) as usize;
+            if point <= digits {
+                s.insert(point, '.');
+            }
+            match next(3) {
+                0 => s.insert(0, '-'),
+                1 => s.insert(0, '+'),
+                _ => {}
+            }
+            let std = s.trim_start_matches('+').parse::<f64>().unwrap();
+            let fast = parse_short_decimal(s.as_bytes()).expect(&s);
+            assert_eq!(fast.to_bits(), std.to_bits(), "{s}: {fast} vs {std}");
+            assert_eq!(
+                parse_number(s.as_bytes()).map(f64::to_bits),
+                Some(std.to_bits())
+            );
+            checked += 1;
+        }
+        assert_eq!(checked, 200_000);
+        for s in [
+            "-0",
+            "-0.",
+            "-.0",
+            "0",
+            "+0.000",
+            "999999999999999",
+            ".000000000000001",
+        ] {
+            let std = s.trim_start_matches('+').parse::<f64>().unwrap();
+            assert_eq!(
+                parse_short_decimal(s.as_bytes()).map(f64::to_bits),
+                Some(std.to_bits()),
+                "{s}"
+            );
+        }
+        // left to the standard parser (or refused by it)
+        for s in [
+            "",
+            ".",
+            "-",
+            "+.",
+            "1.2.3",
+            "1e5",
+            "1234567890123456",
+            "0.1234567890123456",
+        ] {
+            assert_eq!(parse_short_decimal(s.as_bytes()), None, "{s}");
+        }
+        assert_eq!(parse_number(b"1234567890123456"), Some(1234567890123456.0));
+        assert_eq!(parse_number(b"."), None);
+        assert_eq!(parse_number(b"-"), None);
+    }
 
     fn kinds(line: &str) -> Vec<TokenKind> {
         let mut v = Vec::new();

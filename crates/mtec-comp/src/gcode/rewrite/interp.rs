@@ -137,8 +137,9 @@ pub(super) struct Interpreted {
     /// The axis words move in a mode the interpreter follows (no refusal of its own): the
     /// caller checks next whether the move can be compensated.
     pub axis_words_followed: bool,
-    /// The offsets after a G10 / G92 / G52 block.
-    pub offset_change: Option<OffsetChange>,
+    /// The offsets after a G10 / G92 / G52 block (boxed: two frames are ~1 kB, which every
+    /// block would otherwise copy when the result is returned and taken apart).
+    pub offset_change: Option<Box<OffsetChange>>,
 }
 
 impl State {
@@ -446,7 +447,7 @@ impl State {
                 });
             }
             match self.offset_change(b, code, kinematic) {
-                Ok(c) => offset_change = Some(c),
+                Ok(c) => offset_change = Some(Box::new(c)),
                 Err((tok, message)) => issues.push(Issue {
                     token: tok,
                     message,

@@ -9,7 +9,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::super::arc::Arc;
-use super::super::bound::{norm, PathBound};
+use super::super::bound::{norm, MoveEnd, PathBound};
 use super::super::rotary::RotaryView;
 use super::super::solve::{correction_mm, SolveError};
 use super::options::{rounding_in_effect_um, RewriteOptions, Units};
@@ -33,6 +33,10 @@ pub(super) struct Planner<'a> {
     split_stack: Vec<(f64, [f64; 3], f64, [f64; 3])>,
     /// The model's box ([`ErrorModel::domain_mm`]).
     domain: Option<[[f64; 2]; 3]>,
+    /// The last piece end [`Planner::piece_bound_um`] computed, with its target, correction
+    /// and rotary angles (bits): the next piece starts there (one model evaluation saved per
+    /// piece of a program of short moves).
+    last_end: Option<([[u64; 3]; 3], MoveEnd)>,
 }
 
 /// Where a planning step is and what it answers to: the options, the units in effect (for the
@@ -87,6 +91,7 @@ impl<'a> Planner<'a> {
             bound: PathBound::new(opt.check_step_mm),
             split_stack: Vec::new(),
             domain: model.domain_mm(),
+            last_end: None,
         }
     }
 
@@ -178,14 +183,33 @@ impl<'a> Planner<'a> {
         cb: [f64; 3],
         at: &At,
     ) -> f64 {
-        let (a, b) = (
-            PathBound::end(&self.view, ta, ca),
-            PathBound::end(&self.view, tb, cb),
-        );
+        let (a, b) = (self.end(ta, ca), self.end(tb, cb));
         self.bound
             .chord_departure_um(&self.view, a.p, b.p, a.e, b.e)
             + a.residual_um.max(b.residual_um)
             + at.rounding_um()
+    }
+
+    /// [`PathBound::end`] of target `t` corrected by `c` in the current view, computed again
+    /// only when `t`, `c` or the rotary angles differ (in any bit) from the last end's. The
+    /// model is borrowed unchanged for the whole rewrite, so the same point gives the same
+    /// value: the cache changes no result.
+    fn end(&mut self, t: [f64; 3], c: [f64; 3]) -> MoveEnd {
+        let key = [t, c, self.view.rotary_deg()].map(|v| v.map(f64::to_bits));
+        if let Some((k, e)) = self.last_end {
+            // an OR of XORs (no early exit, no memcmp call)
+            let differ = k
+                .iter()
+                .flatten()
+                .zip(key.iter().flatten())
+                .fold(0, |acc, (a, b)| acc | (a ^ b));
+            if differ == 0 {
+                return e;
+            }
+        }
+        let e = PathBound::end(&self.view, t, c);
+        self.last_end = Some((key, e));
+        e
     }
 
     #[allow(clippy::too_many_arguments)]

@@ -6,7 +6,7 @@
 
 use super::super::block::Block;
 use super::super::code::GCode;
-use super::super::expr::{system_parameters_written_by, LineValues, Params};
+use super::super::expr::{for_each_system_parameter_range, LineValues, Params};
 use super::super::format::Edit;
 use super::super::lexer::{lex_line, Token, TokenKind, Value};
 use super::interp::{Interpreted, Motion, State};
@@ -34,8 +34,9 @@ pub(super) struct Rewriter<'a> {
     pub(super) emitted: bool,
     /// The pieces of the current move (reused).
     pub(super) pieces: Vec<Piece>,
-    /// The current block's words (buffers reused from line to line).
-    pub(super) block: Block,
+    /// The current block's words (buffers reused from line to line); boxed so that lending it
+    /// out for a line moves a pointer, not its ~0.7 kB.
+    pub(super) block: Option<Box<Block>>,
     /// Corrections, path-error bounds and splitting (`planner`).
     pub(super) planner: Planner<'a>,
     /// The current block moves in machine coordinates (G53).
@@ -79,7 +80,7 @@ impl<'a> Rewriter<'a> {
             ends: Vec::new(),
             line_values: LineValues::default(),
             params_lost: false,
-            block: Block::default(),
+            block: None,
             planner: Planner::new(model, opt),
             pieces: Vec::new(),
         }
@@ -251,7 +252,7 @@ impl<'a> Rewriter<'a> {
             }
             self.line_values = lv;
         }
-        let mut block = std::mem::take(&mut self.block);
+        let mut block = self.block.take().unwrap_or_default();
         block.read_into(&self.tokens, body);
         let r = self.line_block(&block, body, ending, output);
         if r.is_ok() && evaluated {
@@ -263,11 +264,12 @@ impl<'a> Rewriter<'a> {
             let moved = [b'X', b'Y', b'Z', b'A', b'B', b'C', b'U', b'V', b'W']
                 .iter()
                 .any(|&l| block.word(l).is_some());
-            for range in system_parameters_written_by(&block.g, &block.m, moved) {
-                self.params.forget_numbered(range);
-            }
+            let params = &mut self.params;
+            for_each_system_parameter_range(&block.g, &block.m, moved, |range| {
+                params.forget_numbered(range)
+            });
         }
-        self.block = block;
+        self.block = Some(block);
         r
     }
 
@@ -365,7 +367,7 @@ impl<'a> Rewriter<'a> {
 
         // --- G10 / G92 / G52: new offsets (the line is copied) --------------------------------
         if let Some(c) = offset_change {
-            self.st.apply_offsets(c);
+            self.st.apply_offsets(*c);
             self.st.after_block(b);
             return Ok(true);
         }
