@@ -964,6 +964,12 @@ fn a_stop_on_a_block_written_on_several_lines_names_the_line_rs274_stopped_at() 
             ":2:3:",
             "started at another position",
         ),
+        // a tape mark after a comment line is a bad block; the closing one is never read
+        (
+            "(job)\n%\nG21 G90\nG1 X10 F100\nM2\n%\n",
+            ":2:1:",
+            "Bad character '%'",
+        ),
         // N words are replaced (here one repeated), a block delete slash stays
         (
             "G21 G90\nN10 G1 X10 F100\nN20 G1 X20\n/N30 F0\nN20 G1 X20\nM2\n",

@@ -344,3 +344,29 @@ fn g80_in_a_block_with_another_motion_code_is_ignored_as_linuxcnc_does() {
     let d = refuse("G0 X0 Y0 Z5\nG80\nX2\n", &model, &opts);
     assert_eq!((d.line, d.column), (3, 1), "{d:?}");
 }
+
+#[test]
+fn a_tape_mark_after_the_first_line_is_refused_as_linuxcnc_refuses_it() {
+    // rs274: "Bad character '%' used" unless % is the program's first line (blank lines before
+    // it allowed) or comes after M2/M30, where LinuxCNC reads no further
+    let zero = ZeroModel;
+    let opts = RewriteOptions::default();
+    for (program, line) in [("(job)\n%\nG0 X1\nM2\n%\n", 2), ("G0 X1\n  %\nG0 X2\n", 2)] {
+        let d = refuse(program, &zero, &opts);
+        assert_eq!((d.line, d.kind), (line, ProblemKind::Syntax), "{program}");
+        assert!(
+            d.message.contains("Bad character '%' used"),
+            "{}",
+            d.message
+        );
+        assert_eq!(d.column, if program.contains("  %") { 3 } else { 1 });
+    }
+    for program in [
+        "\n \n%\nG0 X1\n%\nG0 X2\n",
+        "G0 X1\nM30\n%\n",
+        "G0 X1\nm2\n%\n(after)\n",
+    ] {
+        let (out, _) = run(program, &zero, &opts);
+        assert_eq!(out, program);
+    }
+}

@@ -348,6 +348,17 @@ fn rs274_error_at(program: &[u8], stderr: &str) -> Option<(usize, usize)> {
     let mut found = text.lines().enumerate().filter(|(_, l)| l.trim() == last);
     let (i, line) = found.next()?;
     if found.next().is_some() {
+        // a tape mark is a block only where the first one is not the first line: rs274 reads
+        // the program from its top, so the first `%` that is not the first line is where it
+        // stopped
+        if last == "%" {
+            let first = text.lines().position(|l| !l.trim().is_empty())?;
+            let (i, line) = text
+                .lines()
+                .enumerate()
+                .find(|&(k, l)| k != first && l.trim() == "%")?;
+            return Some((i + 1, error_column(line, stderr)));
+        }
         return None;
     }
     Some((i + 1, error_column(line, stderr)))

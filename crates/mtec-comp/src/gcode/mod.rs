@@ -52,6 +52,8 @@
 //!   reference point (a controller parameter) is copied with a warning; an intermediate point
 //!   that moves is unsupported. A G80 beside G0–G3 in one block is ignored, as LinuxCNC does.
 //! - Lines after a closing `%` tape mark are copied untouched (the controller never reads them).
+//!   A `%` that is neither the first line (blank lines before it allowed) nor after M2/M30 is
+//!   refused as LinuxCNC refuses it ("Bad character '%' used").
 //! - **Units and start**: before the first G20/G21 the units are `default_units` (mm unless
 //!   told); the machine position at program start is unknown unless `start_position_mm` is
 //!   given (a lathe program never states Y: give the fixed Y there).

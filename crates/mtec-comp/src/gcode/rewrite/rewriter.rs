@@ -27,6 +27,8 @@ pub(super) struct Rewriter<'a> {
     pub(super) out_buf: Vec<u8>,
     pub(super) tape_started: bool,
     pub(super) tape_ended: bool,
+    /// An M2 or M30 has been read: LinuxCNC reads no further line (a `%` after it is fine).
+    pub(super) program_ended: bool,
     pub(super) seen_content: bool,
     /// The current line writes its letters in lower case (new words follow it).
     pub(super) lower: bool,
@@ -70,6 +72,7 @@ impl<'a> Rewriter<'a> {
             out_buf: Vec::new(),
             tape_started: false,
             tape_ended: false,
+            program_ended: false,
             seen_content: false,
             lower: false,
             emitted: false,
@@ -291,6 +294,19 @@ impl<'a> Rewriter<'a> {
                 self.tape_started = true;
             } else if self.tape_started {
                 self.tape_ended = true;
+            } else if !self.program_ended {
+                // LinuxCNC takes `%` as a tape mark only on the program's first line (then the
+                // next one ends it); anywhere else it stops with "Bad character '%' used"
+                let at = self
+                    .tokens
+                    .iter()
+                    .position(|t| matches!(t.kind, TokenKind::Percent));
+                let col = self.column_of(at);
+                return Err(GcodeError::At(self.diag(
+                    col,
+                    ProblemKind::Syntax,
+                    "a % tape mark after the program's first line: LinuxCNC reads % only as the first line (then the next % ends the program) and stops here with \"Bad character '%' used\"; a Fanuc control skips everything before it. Remove the lines before it, or this %".into(),
+                )));
             }
             self.seen_content = true;
             return self.write_verbatim(body, ending, output);
@@ -298,6 +314,7 @@ impl<'a> Rewriter<'a> {
         if !self.tokens.is_empty() {
             self.seen_content = true;
         }
+        self.program_ended |= block.has_m(2).is_some() || block.has_m(30).is_some();
         self.edits.clear();
         self.extra_lines.clear();
         let handled = self.block(block, body)?;
