@@ -12,7 +12,9 @@
 //! Every training (one per forward fold, then the final fit) reports its epochs to the observer
 //! and stops after the current epoch when the observer asks (Ctrl-C).
 
-use super::{load_table, located, metrics_line, write_candidates, FitOptions};
+use super::{
+    load_table, located, metrics_line, write_candidates, CvOptions, CvOutcome, FitOptions,
+};
 use crate::observer::Relay;
 use crate::{Error, Observer, Result};
 use mtec_io::{InputError, OutputGuard, Table};
@@ -354,6 +356,7 @@ pub fn fit_table(
     let fitter = NeuralFit {
         options: nn.clone(),
         sensors: opts.fit.sensors.clone(),
+        inputs: Vec::new(),
     };
     let mut relay = Relay(obs);
     // forward validation on the blocks of the training rows, as for the regression models;
@@ -437,6 +440,7 @@ pub fn fit_auto_table(
                 fit: NeuralFit {
                     options: nn.clone(),
                     sensors: opts.fit.sensors.clone(),
+                    inputs: Vec::new(),
                 },
                 max_sensors: auto.max_sensors,
                 last: Rc::clone(last),
@@ -520,4 +524,36 @@ pub fn predict_log(
     }
     let pred = model.predict(&data).map_err(|e| located(&data, path, e))?;
     Ok((data, pred))
+}
+
+/// `thermal cv --model bpnn|cnn-lstm`: a network of one target and its sensors (`nn`, its kind
+/// `opts.model`'s) validated over the whole log by the regression models' own code
+/// ([`super::cv`]: the same forward folds or left-out blocks, the same [`Metrics`]); every
+/// training reports its epochs to the observer and stops when it asks. Slow: one training per
+/// fold. A regression model goes to [`super::cv`].
+pub fn cv(opts: &CvOptions, nn: &NnFitOptions, obs: &mut dyn Observer) -> Result<CvOutcome> {
+    let Some(kind) = NnKind::from_name(&opts.model) else {
+        return super::cv(opts, obs);
+    };
+    let nn = &NnFitOptions { kind, ..nn.clone() };
+    if !takes(&opts.target, nn) {
+        return Err(Error::usage("thermal cv validates a network of one target and its sensors (no --sequence-by, --features, --angle-harmonics or --changes; those split by --train/--test experiments in thermal fit)"));
+    }
+    refuse_regression_options(&opts.fit)?;
+    let table = Table::read(&opts.data)?;
+    let cnn_lstm = nn.kind == NnKind::CnnLstm;
+    let (data, _) = prepared(&table, &opts.target, &opts.fit, &SplitBy::All, cnn_lstm)?;
+    let fitter = NeuralFit {
+        options: nn.clone(),
+        sensors: opts.fit.sensors.clone(),
+        inputs: Vec::new(),
+    };
+    let outcome = {
+        let mut relay = Relay(obs);
+        super::validate_cv(&Monitored::new(&fitter, &mut relay), &data, opts)?
+    };
+    if let CvOutcome::Forward(o) = &outcome {
+        super::warn_all(obs, &o.warnings);
+    }
+    Ok(outcome)
 }
