@@ -570,15 +570,16 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
             "not a neural model file (`format` is not mtec.cnn-lstm/1 or mtec.bpnn/1)",
         ))
     })?;
+    // a file of `neural_log` (a log of one target, split as the regression models split it)
+    let of_log = match &network {
+        Network::Bpnn(n) => n.provenance.get("split").is_some(),
+        Network::CnnLstm(n) => n.provenance.get("split").is_some(),
+    };
     let (model, trained_interval) = NeuralThermalModel::from_network(network.clone())
         .unwrap_or_else(|| (plain_model(network), None));
     let cnn_lstm = matches!(model.network, Network::CnnLstm(_));
     // a network of one target on its sensors: predicted on the log as the regression models
-    if model.inputs.is_empty()
-        && model.more_targets.is_empty()
-        && model.sequence_by.is_none()
-        && !model.changes
-    {
+    if of_log && model.inputs.is_empty() && model.more_targets.is_empty() {
         if opts.readings.is_some() {
             return Err(Error::Input(InputError::file(
                 &opts.model,
