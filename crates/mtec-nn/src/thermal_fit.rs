@@ -251,6 +251,18 @@ pub fn fit_sequences(
     rows: &[usize],
     history: usize,
 ) -> Vec<Sequence> {
+    let runs = fit_runs(data, inputs, targets, rows, history);
+    runs.into_iter().map(|(_, seq)| seq).collect()
+}
+
+/// [`fit_sequences`], each with the first row of its run (whose experiment it is).
+fn fit_runs(
+    data: &ThermalData,
+    inputs: &[Vec<f64>],
+    targets: &[Vec<f64>],
+    rows: &[usize],
+    history: usize,
+) -> Vec<(usize, Sequence)> {
     let start_of = segment_starts(data);
     let mut out = Vec::new();
     let mut k = 0;
@@ -266,11 +278,12 @@ pub fn fit_sequences(
         }
         k += 1;
         let from = first.saturating_sub(history).max(start_of[first]);
-        out.push(Sequence {
+        let seq = Sequence {
             features: inputs[from..=last].to_vec(),
             targets: targets[from..=last].to_vec(),
             warmup: first - from,
-        });
+        };
+        out.push((first, seq));
     }
     out
 }
@@ -341,19 +354,8 @@ impl NeuralFit {
         let targets = target_rows(data, o.changes)?;
         let (names, inputs) = model_inputs(data, &self.sensors, &self.inputs, o.rises)?;
         let n_sensors = names.len() - self.inputs.len();
-        let sequences = fit_sequences(data, &inputs, &targets, rows, self.history());
-        // the experiment of each sequence: the row after its history
-        let labelled: Vec<(usize, Sequence)> = {
-            let starts = segment_starts(data);
-            let mut firsts = Vec::new();
-            for (k, &r) in rows.iter().enumerate() {
-                if k == 0 || rows[k - 1] + 1 != r || starts[rows[k - 1]] != starts[r] {
-                    firsts.push(r);
-                }
-            }
-            firsts.into_iter().zip(sequences).collect()
-        };
-        let train = training_set(data, names.clone(), target_names.clone(), labelled);
+        let runs = fit_runs(data, &inputs, &targets, rows, self.history());
+        let train = training_set(data, names.clone(), target_names.clone(), runs);
         let (network, training) = match o.kind {
             NnKind::Bpnn => {
                 let (net, report) =
