@@ -1,9 +1,10 @@
-//! `thermal fit --model bpnn|cnn-lstm` on a thermal log of one target, and `--model auto
-//! --with-networks`: the networks through mtec-thermal's `Fit`/`Predict`
-//! ([`mtec_nn::thermal_fit`]), so they are split, validated forward in time and scored by the
-//! regression models' own code (`--train-until`, `--train/--test`, `--block-min`, the duty-cycle
-//! blocks of `--input`, [`Metrics`]). The rotary logs (several targets, `--sequence-by`,
-//! `--features`, `--angle-harmonics`, `--changes`) stay on [`super::neural`]'s route.
+//! `thermal fit --model bpnn|cnn-lstm` on a thermal log of one target, `--model auto
+//! --with-networks` and `thermal cv --model bpnn|cnn-lstm` ([`cv`]): the networks through
+//! mtec-thermal's `Fit`/`Predict` ([`mtec_nn::thermal_fit`]), so they are split, validated
+//! forward in time and scored by the regression models' own code (`--train-until`,
+//! `--train/--test`, `--block-min`, the duty-cycle blocks of `--input`, [`Metrics`]). The
+//! rotary logs (several targets, `--sequence-by`, `--features`, `--angle-harmonics`,
+//! `--changes`) take [`super::neural`]'s route, on the same types, split by experiments.
 //!
 //! The model file is the network's own format (`mtec.bpnn/1`, `mtec.cnn-lstm/1`); its
 //! `provenance` holds `thermal_data: true`, the data file, the split, the training and test
