@@ -92,7 +92,7 @@ fn cnn_lstm_and_bpnn_fit_and_predict_rotary_motions() {
     let p: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(p["n"], 4 * 13 * 72);
     assert_eq!(p["predictions"][0].as_array().unwrap().len(), 5);
-    let rmse = p["metrics"][0]["rmse"].as_f64().unwrap();
+    let rmse = p["metrics"][0]["rmse_um"].as_f64().unwrap();
     assert!(rmse.is_finite() && rmse > 0.0);
 
     // the window is rows of the interval the model was trained on (every 20 min here): a log
@@ -212,7 +212,9 @@ fn cnn_lstm_and_bpnn_fit_and_predict_rotary_motions() {
         .map(|l| l.split(',').nth(res).unwrap().parse().unwrap())
         .collect();
     let rmse = (r.iter().map(|v| v * v).sum::<f64>() / r.len() as f64).sqrt();
-    let fit_rmse = b["provenance"]["test_metrics"][0]["rmse"].as_f64().unwrap();
+    let fit_rmse = b["provenance"]["test_metrics"][0]["rmse_um"]
+        .as_f64()
+        .unwrap();
     assert!(
         (rmse - fit_rmse).abs() < 1e-3 * fit_rmse.max(1e-3),
         "{rmse} vs {fit_rmse}"
@@ -291,7 +293,9 @@ fn bpnn_on_changes_predicts_motions_from_the_first_measurement() {
         .sum::<f64>()
         / rows.len() as f64)
         .sqrt();
-    let fit_rmse = b["provenance"]["test_metrics"][0]["rmse"].as_f64().unwrap();
+    let fit_rmse = b["provenance"]["test_metrics"][0]["rmse_um"]
+        .as_f64()
+        .unwrap();
     assert!(
         (rmse - fit_rmse).abs() < 1e-3 * fit_rmse,
         "{rmse} vs {fit_rmse}"
@@ -419,11 +423,26 @@ fn bad_neural_fits_exit_2_with_the_reason() {
         ],
         &["_deg"],
     );
-    // thermal cv does not run the neural models
+    // thermal cv validates a network of one target and its sensors (the rotary options split
+    // by experiments in thermal fit)
     let o = mtec(&[
-        "thermal", "cv", "--data", d, "--target", "EXC_um", "--model", "bpnn",
+        "thermal",
+        "cv",
+        "--data",
+        d,
+        "--target",
+        "EXC_um",
+        "--model",
+        "bpnn",
+        "--sequence-by",
+        "angle_deg",
     ]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("one target and its sensors"),
+        "{}",
+        text(&o)
+    );
     assert!(!out.exists());
 
     // a damaged model file: right format, a weight missing

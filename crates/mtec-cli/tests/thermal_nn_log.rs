@@ -125,6 +125,7 @@ fn bpnn_with_train_until_is_validated_forward_by_the_regression_models_code() {
     let fitter = NeuralFit {
         options: bpnn(),
         sensors: vec![],
+        inputs: vec![],
     };
     let cv = forward_cv(&fitter, &data, &folds).unwrap();
     let v = &p["validation"];
@@ -152,6 +153,35 @@ fn bpnn_with_train_until_is_validated_forward_by_the_regression_models_code() {
         "forward RMSE {}",
         cv.pooled_rmse_um
     );
+    // `thermal cv` of the network: the regression models' folds over the whole log, the
+    // library's numbers fold by fold
+    let mut args = vec![
+        "thermal", "cv", "--model", "bpnn", "--data", l, "--target", "ez_um", "--json",
+    ];
+    args.extend(BPNN);
+    let o = mtec(&args);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let all: Vec<usize> = (0..data.len()).collect();
+    let whole = forward_cv(
+        &fitter,
+        &data,
+        &forward_folds(&duty_cycle_blocks(&data, &all, &spec)),
+    );
+    let whole = whole.unwrap();
+    assert_eq!(v["protocol"], "forward");
+    assert_eq!(v["folds"].as_array().unwrap().len(), whole.folds.len());
+    assert!(whole.folds.len() >= 2, "{} folds", whole.folds.len());
+    for (f, c) in v["folds"].as_array().unwrap().iter().zip(&whole.folds) {
+        assert!(same(
+            f["metrics"]["rmse_um"].as_f64().unwrap(),
+            c.metrics.rmse_um
+        ));
+    }
+    assert!(same(
+        v["pooled_rmse_um"].as_f64().unwrap(),
+        whole.pooled_rmse_um
+    ));
 }
 
 #[test]
@@ -211,6 +241,7 @@ fn the_cli_and_rust_write_the_same_file_and_predict_gives_the_librarys_numbers()
     let fitted: NeuralThermalModel = NeuralFit {
         options: bpnn(),
         sensors: vec![],
+        inputs: vec![],
     }
     .fit_rows(&data, &train)
     .unwrap();
@@ -308,6 +339,7 @@ fn auto_with_networks_scores_them_on_the_same_forward_folds() {
         &NeuralFit {
             options: bpnn(),
             sensors: vec![],
+            inputs: vec![],
         },
         &data,
         &folds,
@@ -500,5 +532,5 @@ fn auto_that_chooses_a_network_writes_the_networks_file() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["n"], 300);
     // every row, the test rows after 460 min too, within 1 um of a drift spanning ~50 um
-    assert!(v["metrics"][0]["rmse"].as_f64().unwrap() < 1.0, "{v}");
+    assert!(v["metrics"][0]["rmse_um"].as_f64().unwrap() < 1.0, "{v}");
 }

@@ -11,14 +11,17 @@
 //! - [`cnn_lstm`]: a CNN-LSTM (1-D convolution over the feature vector of each time step,
 //!   max pooling, LSTM over a window of time steps, dense output) that predicts any set of error
 //!   channels from temperatures (+ angle / position), trained with candle on the CPU; saved as
-//!   `mtec.cnn-lstm/1` JSON with its weights. [`dataset`] holds the plain data structure
-//!   (experiments × sequences × time × features) and the split by experiment; [`metrics`] the
-//!   RMSE / MAE / residual-ratio report shared with the BPNN baseline.
+//!   `mtec.cnn-lstm/1` JSON with its weights. [`dataset`] holds the training representation
+//!   (experiments × sequences × time × features, the tensors' source), which [`thermal_fit`]
+//!   builds from mtec-thermal's `ThermalData`; its split and [`metrics`] (RMSE / MAE /
+//!   residual ratio over the range) serve the crate's examples and the `dbb-rotary` tests.
 //!
-//! - [`thermal_log`]: a thermal log (CSV) as a sequence dataset, which of its columns are
-//!   features and targets, and the training configuration of a `thermal fit` on it.
-//! - [`thermal_fit`]: the networks as thermal model kinds on a thermal log: mtec-thermal's
-//!   `Fit`/`Predict`, so they are validated forward in time by the regression models' own code.
+//! - [`thermal_log`]: a rotary thermal log (CSV) read into mtec-thermal's `ThermalData` (several
+//!   targets, a sequence column, angle harmonics), which of its columns are features and
+//!   targets, and the training configuration of a `thermal fit` on it.
+//! - [`thermal_fit`]: the networks as thermal model kinds on `ThermalData`: mtec-thermal's
+//!   `Fit`/`Predict`, so they are split, validated and scored (`Metrics`) by the regression
+//!   models' own code.
 //! - [`progress`]: the [`Monitor`] a caller passes to a training to follow its epochs and stop it,
 //!   and the typed [`StopReason`].
 //!

@@ -1,6 +1,9 @@
-//! Thermal logs (CSV) as sequence datasets for the neural models, which columns are features
-//! and targets, and how `thermal fit --model cnn-lstm|bpnn` options become a training
-//! configuration.
+//! Thermal logs (CSV) read for the neural models of several targets (the rotary route of
+//! `thermal fit`) as mtec-thermal's [`ThermalData`], the one data set of every thermal and
+//! neural model ([`load`]: several targets, the sequence column, angle harmonics as inputs),
+//! which columns are features and targets, and how `thermal fit --model cnn-lstm|bpnn` options
+//! become a training configuration. The networks fit and predict on it through
+//! [`crate::thermal_fit::NeuralFit`] (mtec-thermal's `Fit`/`Predict`).
 //!
 //! Decisions where the spec is silent:
 //! - Features: the sensors (default every `_c` column but `ambient_c`, as for the regression
@@ -8,8 +11,9 @@
 //!   column may enter as its harmonics `cos_k(col)`, `sin_k(col)` (`angle_harmonics`, or named
 //!   one by one); the model file stores those names and prediction computes them again from the
 //!   angle column.
-//! - Rises: the sensor features as rises over each sequence's first row; the model file records
-//!   how many leading features are rises (`provenance.rises`) and prediction does the same.
+//! - Rises: the sensor features as rises over each sequence's first row (done by the fit, on
+//!   the segments of the data); the model file records how many leading features are rises
+//!   (`provenance.rises`) and prediction does the same.
 //! - Changes: the targets as their change since each sequence's first row
 //!   (`provenance.changes`); prediction adds the first row's measured targets back.
 //! - Rows of one sequence are time steps in `time_min` order (sorted here, a repeated time is an
@@ -18,10 +22,11 @@
 use crate::bpnn::Activation;
 use crate::bpnn_train::{BpnnTrainConfig, Optimizer};
 use crate::cnn_lstm::{Architecture, CnnLstmConfig};
-use crate::dataset::{Experiment, Sequence, ThermalDataset};
 use crate::error::{NnError, Result};
 use crate::rotary::{harmonic_feature_names, HarmonicFeature};
 use mtec_io::{InputError, Table};
+use mtec_thermal::ThermalData;
+use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -65,9 +70,8 @@ pub struct NnFitOptions {
     pub angle_harmonics: Option<u8>,
     /// The sensors as rises over the first row of each sequence.
     pub rises: bool,
-    /// The targets as their change since each sequence's first row
-    /// ([`crate::dataset::ThermalDataset::target_changes`]); prediction adds the data's first
-    /// row back, so the data to predict must hold it.
+    /// The targets as their change since each sequence's first row; prediction adds the
+    /// data's first row back, so the data to predict must hold it.
     pub changes: bool,
     /// Largest number of epochs (bpnn: Levenberg–Marquardt iterations; default 200).
     pub epochs: Option<usize>,
@@ -277,21 +281,16 @@ pub fn resolve_columns(
     })
 }
 
-/// Where a scored row came from.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RowLabel {
-    pub experiment: u32,
-    pub time_min: f64,
-    /// The value of the sequence column, when the log is split by one.
-    pub sequence: Option<f64>,
-}
-
-/// A thermal log as sequences, plus where each row came from.
+/// A thermal log as mtec-thermal's [`ThermalData`] (the one data set of every thermal and
+/// neural model), read for a network: its `sensor_names`/`temps_c` are the features (sensors
+/// first, then the extra inputs such as `angle_deg` or its harmonics), its `target` and
+/// `more_targets` the targets, its `sequence` the sequence column; the rows are ordered by
+/// experiment (numerically), sequence value and time, so that every sequence is one contiguous
+/// [`ThermalData::segments`] run.
 #[derive(Debug, Clone)]
 pub struct LogData {
-    pub data: ThermalDataset,
-    /// Per row, in model order.
-    pub labels: Vec<RowLabel>,
+    pub data: ThermalData,
+    /// The data hold every target (prediction without them: `target` is `None`).
     pub has_targets: bool,
     /// The sampling interval of the sequences (median time step, min), when any has two rows.
     pub interval_min: Option<f64>,
@@ -305,7 +304,7 @@ const INTERVAL_TOLERANCE: f64 = 0.01;
 #[derive(Debug, Clone, Default)]
 pub struct LoadSpec<'a> {
     pub features: &'a [String],
-    /// Empty, or absent columns with `need_targets = false`: zero targets (prediction only).
+    /// Empty, or absent columns with `need_targets = false`: no targets (prediction only).
     pub targets: &'a [String],
     pub sequence_by: Option<&'a str>,
     pub need_targets: bool,
@@ -316,8 +315,9 @@ pub struct LoadSpec<'a> {
     pub trained_interval_min: Option<f64>,
 }
 
-/// Reads the log `path` into sequences (one per experiment, or per value of the sequence
-/// column within it). Errors on the file's content are located ([`NnError::Input`]).
+/// Reads the log `path` into [`ThermalData`] whose segments are the sequences (one per
+/// experiment, or per value of the sequence column within it). Errors on the file's content
+/// are located ([`NnError::Input`]).
 pub fn load(path: &Path, s: &LoadSpec) -> Result<LogData> {
     let t = Table::read(path)?;
     t.require(&["time_min"])?;
@@ -369,7 +369,6 @@ pub fn load(path: &Path, s: &LoadSpec) -> Result<LogData> {
     } else {
         Vec::new()
     };
-    let n_targets = targets.len().max(1);
     // experiment → sequence key → [(time, row)]
     let mut groups: BTreeMap<u32, BTreeMap<i64, Vec<(f64, usize)>>> = BTreeMap::new();
     for (i, row) in t.rows.iter().enumerate() {
@@ -384,12 +383,11 @@ pub fn load(path: &Path, s: &LoadSpec) -> Result<LogData> {
             .or_default()
             .push((time[i], i));
     }
-    let mut experiments = Vec::new();
-    let mut labels = Vec::new();
+    // the file's rows in data order, and the experiment of each
+    let mut order: Vec<(u32, usize)> = Vec::with_capacity(t.rows.len());
     // (time step, row of its later sample) of every sequence
     let mut steps: Vec<(f64, usize)> = Vec::new();
     for (e, seqs) in groups {
-        let mut sequences = Vec::new();
         for (_, mut rows) in seqs {
             rows.sort_by(|a, b| a.0.total_cmp(&b.0));
             steps.extend(rows.windows(2).map(|w| (w[1].0 - w[0].0, w[1].1)));
@@ -408,40 +406,50 @@ pub fn load(path: &Path, s: &LoadSpec) -> Result<LogData> {
                     )));
                 }
             }
-            let mut features = Vec::with_capacity(rows.len());
-            let mut tg = Vec::with_capacity(rows.len());
-            for &(tm, i) in &rows {
-                features.push(feats.iter().map(|c| c[i]).collect::<Vec<f64>>());
-                tg.push(if has_targets {
-                    targ.iter().map(|c| c[i]).collect()
-                } else {
-                    vec![0.0; n_targets]
-                });
-                labels.push(RowLabel {
-                    experiment: e,
-                    time_min: tm,
-                    sequence: seq_col.as_ref().map(|c| c[i]),
-                });
-            }
-            sequences.push(Sequence {
-                features,
-                targets: tg,
-                warmup: 0,
-            });
+            order.extend(rows.iter().map(|&(_, i)| (e, i)));
         }
-        experiments.push(Experiment { id: e, sequences });
     }
-    let data = ThermalDataset {
-        feature_names: s.features.to_vec(),
-        target_names: if targets.is_empty() {
-            vec!["none".into()]
-        } else {
-            targets.to_vec()
-        },
-        experiments,
+    if order.is_empty() {
+        return Err(NnError::Input(InputError::file(
+            path,
+            "the log has no rows",
+        )));
+    }
+    let pick = |c: &Vec<f64>| order.iter().map(|&(_, i)| c[i]).collect::<Vec<f64>>();
+    let named = |names: &[String], cols: &[Vec<f64>]| -> Vec<(String, Vec<f64>)> {
+        names.iter().cloned().zip(cols.iter().map(pick)).collect()
     };
-    data.validate()
-        .map_err(|e| NnError::Input(InputError::file(path, e.to_string())))?;
+    let mut all_targets = named(targets, &targ).into_iter();
+    // a value a network cannot take (the reader takes `nan` and `inf` as numbers)
+    for (c, name) in feats
+        .iter()
+        .chain(&targ)
+        .zip(s.features.iter().chain(targets))
+    {
+        if let Some(&(_, i)) = order.iter().find(|&&(_, i)| !c[i].is_finite()) {
+            return Err(NnError::Input(t.error_at(
+                &t.rows[i],
+                &HarmonicFeature::parse(name).map_or(name.clone(), |h| h.column),
+                "a non-finite value",
+            )));
+        }
+    }
+    let data = ThermalData {
+        experiment: order.iter().map(|(e, _)| e.to_string()).collect(),
+        time_min: pick(&time),
+        sensor_names: s.features.to_vec(),
+        temps_c: DMatrix::from_fn(order.len(), feats.len(), |r, j| feats[j][order[r].1]),
+        ambient_c: None,
+        position_mm: None,
+        target: all_targets.next(),
+        more_targets: all_targets.collect(),
+        sequence: s
+            .sequence_by
+            .zip(seq_col.as_ref())
+            .map(|(n, c)| (n.to_string(), pick(c))),
+        source: Some((path.to_path_buf(), t.header_line)),
+        lines: order.iter().map(|&(_, i)| t.rows[i].line).collect(),
+    };
     let interval_min = median_step(&steps);
     if s.strict_time {
         if let Some(expected) = s.trained_interval_min.or(interval_min) {
@@ -469,7 +477,6 @@ pub fn load(path: &Path, s: &LoadSpec) -> Result<LogData> {
     }
     Ok(LogData {
         data,
-        labels,
         has_targets,
         interval_min,
     })
@@ -483,30 +490,4 @@ fn median_step(steps: &[(f64, usize)]) -> Option<f64> {
     }
     v.sort_by(f64::total_cmp);
     Some(v[v.len() / 2])
-}
-
-/// The training and test sets of `data` by experiment: `train` empty trains on everything;
-/// `test` empty tests on every experiment not trained on (none when that leaves none).
-pub fn split_by_experiment(
-    data: &ThermalDataset,
-    train: &[u32],
-    test: &[u32],
-) -> Result<(ThermalDataset, Option<ThermalDataset>)> {
-    let mut test = test.to_vec();
-    if !train.is_empty() && test.is_empty() {
-        test = data
-            .experiments
-            .iter()
-            .map(|e| e.id)
-            .filter(|e| !train.contains(e))
-            .collect();
-    }
-    Ok(if train.is_empty() {
-        (data.clone(), None)
-    } else if test.is_empty() {
-        (data.select(train)?, None)
-    } else {
-        let (a, b) = data.split(train, &test)?;
-        (a, Some(b))
-    })
 }

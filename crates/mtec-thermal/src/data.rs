@@ -27,6 +27,13 @@ pub struct ThermalData {
     pub position_mm: Option<Vec<f64>>,
     /// Target column name (with `_um`) and values, when the file holds it.
     pub target: Option<(String, Vec<f64>)>,
+    /// Further targets after `target`, for a model of several outputs (a network of the five
+    /// rotary error motions); empty for the regression models, which fit `target` alone.
+    pub more_targets: Vec<(String, Vec<f64>)>,
+    /// The column that splits each experiment into sequences and its value on every row (e.g.
+    /// `angle_deg`: one time series per table angle); [`ThermalData::segments`] then also break
+    /// where it changes. `None` for a plain log (one sequence per experiment).
+    pub sequence: Option<(String, Vec<f64>)>,
     /// File and header line it came from (for messages), and the line of each row.
     pub source: Option<(PathBuf, usize)>,
     pub lines: Vec<usize>,
@@ -124,6 +131,8 @@ impl ThermalData {
             ambient_c,
             position_mm,
             target,
+            more_targets: Vec::new(),
+            sequence: None,
             source: Some((table.path.clone(), table.header_line)),
             lines: table.rows.iter().map(|r| r.line).collect(),
         })
@@ -150,6 +159,15 @@ impl ThermalData {
     /// Target column name.
     pub fn target_name(&self) -> Option<&str> {
         self.target.as_ref().map(|(n, _)| n.as_str())
+    }
+
+    /// Every target (`target`, then `more_targets`) by name; empty when the data hold none.
+    pub fn targets(&self) -> Vec<(&str, &[f64])> {
+        self.target
+            .iter()
+            .chain(&self.more_targets)
+            .map(|(n, v)| (n.as_str(), v.as_slice()))
+            .collect()
     }
 
     /// Index of a sensor column (accepts `name` or `name_c`).
@@ -181,12 +199,17 @@ impl ThermalData {
         out
     }
 
-    /// Start and end (exclusive) row of each contiguous experiment segment.
+    /// Start and end (exclusive) row of each contiguous experiment segment (of each sequence,
+    /// when the data have a sequence column).
     pub fn segments(&self) -> Vec<(usize, usize)> {
         let mut out = Vec::new();
         let mut start = 0;
+        let seq = self.sequence.as_ref().map(|(_, v)| v);
         for i in 1..=self.len() {
-            if i == self.len() || self.experiment[i] != self.experiment[start] {
+            if i == self.len()
+                || self.experiment[i] != self.experiment[start]
+                || seq.is_some_and(|v| v[i] != v[start])
+            {
                 out.push((start, i));
                 start = i;
             }
@@ -205,6 +228,10 @@ impl ThermalData {
             ambient_c: self.ambient_c.as_ref().map(pick),
             position_mm: self.position_mm.as_ref().map(pick),
             target: self.target.as_ref().map(|(n, v)| (n.clone(), pick(v))),
+            more_targets: (self.more_targets.iter())
+                .map(|(n, v)| (n.clone(), pick(v)))
+                .collect(),
+            sequence: self.sequence.as_ref().map(|(n, v)| (n.clone(), pick(v))),
             source: self.source.clone(),
             lines: idx.iter().map(|&i| self.lines[i]).collect(),
         }
@@ -268,6 +295,8 @@ impl ThermalData {
             ambient_c: cat(&self.ambient_c, &next.ambient_c),
             position_mm: cat(&self.position_mm, &next.position_mm),
             target: None,
+            more_targets: Vec::new(),
+            sequence: None,
             source: next.source.clone(),
             lines: self.lines.iter().chain(&next.lines).copied().collect(),
         })

@@ -57,7 +57,7 @@ pub use fit::{Fit, Predict};
 pub use heat_input::{HeatInput, HeatInputModel};
 pub use lag_select::LagSelect;
 pub use linear_model::{LinearModel, Mlr, Ridge, RidgeSelect};
-pub use metrics::Metrics;
+pub use metrics::{Metrics, TargetMetrics};
 pub use model::ThermalModel;
 pub use model_file::{ModelFile, Split, MODEL_FORMAT};
 pub use options::FitOptions;

@@ -82,6 +82,39 @@ impl Metrics {
     }
 }
 
+/// The metrics of one target of a model of several (a network of the five rotary error
+/// motions): the same [`Metrics`], named.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TargetMetrics {
+    pub target: String,
+    #[serde(flatten)]
+    pub metrics: Metrics,
+}
+
+impl TargetMetrics {
+    /// Metrics of every target on the rows `rows`: `targets` the measured columns by name,
+    /// `pred` one row of predictions (in `targets` order) per row of the data.
+    pub fn on_rows(
+        targets: &[(&str, &[f64])],
+        pred: &[Vec<f64>],
+        rows: &[usize],
+        predictors: usize,
+    ) -> Vec<TargetMetrics> {
+        targets
+            .iter()
+            .enumerate()
+            .map(|(c, (name, y))| {
+                let yt: Vec<f64> = rows.iter().map(|&i| y[i]).collect();
+                let pt: Vec<f64> = rows.iter().map(|&i| pred[i][c]).collect();
+                TargetMetrics {
+                    target: name.to_string(),
+                    metrics: Metrics::new(&yt, &pt, predictors),
+                }
+            })
+            .collect()
+    }
+}
+
 /// Root mean square of a slice.
 pub fn rms(v: &[f64]) -> f64 {
     (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()

@@ -34,6 +34,8 @@ fn machine(speeds: &[f64], step_min: f64) -> ThermalData {
         ambient_c: None,
         position_mm: None,
         target: None,
+        more_targets: Vec::new(),
+        sequence: None,
         source: None,
         lines: (2..n + 2).collect(),
     };
@@ -53,6 +55,8 @@ fn machine(speeds: &[f64], step_min: f64) -> ThermalData {
         sensor_names: vec!["a_c".into(), "b_c".into(), "room_c".into()],
         temps_c: DMatrix::from_fn(n, 3, |i, j| [a[i], b[i], room[i]][j]),
         target: Some(("drift_um".into(), y)),
+        more_targets: Vec::new(),
+        sequence: None,
         ..d0
     };
     with_input(&d, "spindle_rpm", &rpm).unwrap()

@@ -20,6 +20,8 @@ fn data(time_min: Vec<f64>, sensors: Vec<(&str, Vec<f64>)>, target: Vec<f64>) ->
         ambient_c: None,
         position_mm: None,
         target: Some(("drift_um".into(), target)),
+        more_targets: Vec::new(),
+        sequence: None,
         source: None,
         lines: (2..n + 2).collect(),
     }

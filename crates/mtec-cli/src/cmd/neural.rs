@@ -1,7 +1,6 @@
-//! The neural models' command-line options. The models (`mtec-nn`, candle: more than half of a
-//! cold release build, docs/building.md) are the cargo feature `neural`, off by default; the
-//! options are parsed either way, and a build without them refuses such a command with exit 2
-//! saying how to get them (`mtec_workflow::neural_unavailable`).
+//! The neural models' command-line options. The models (`mtec-nn`, candle: over half of a cold
+//! release build, docs/building.md) are the cargo feature `neural`, off by default; the options
+//! are parsed either way, a build without them refuses with exit 2 saying how to get them.
 
 /// Options of the neural models (ignored by the regression models).
 #[derive(clap::Args, Debug, Clone)]
@@ -66,11 +65,12 @@ pub struct NnArgs {
 
 #[cfg(feature = "neural")]
 impl NnArgs {
-    /// The network and its training as `mtec_nn` takes them, for a model of `kind`.
-    pub fn fit_options(
-        &self,
-        kind: mtec_nn::thermal_log::NnKind,
-    ) -> mtec_nn::thermal_log::NnFitOptions {
+    /// The network and its training as `mtec_nn` takes them, for `--model` `model` (auto's
+    /// networks: bpnn's options); candle then runs on one thread.
+    pub fn fit_options(&self, model: &str) -> mtec_nn::thermal_log::NnFitOptions {
+        use mtec_nn::thermal_log::NnKind;
+        single_candle_thread();
+        let kind = NnKind::from_name(model).unwrap_or(NnKind::Bpnn);
         mtec_nn::thermal_log::NnFitOptions {
             sequence_by: self.sequence_by.clone(),
             features: self.features.clone(),
@@ -89,5 +89,14 @@ impl NnArgs {
             seed: self.seed,
             ..mtec_nn::thermal_log::NnFitOptions::new(kind)
         }
+    }
+}
+
+/// candle sizes its thread pool once, from the environment: one thread is ~8x faster for these
+/// nets (`mtec_nn::threads`); set before the first candle op, while there is no other thread.
+#[cfg(feature = "neural")]
+pub(crate) fn single_candle_thread() {
+    if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
+        std::env::set_var(var, value);
     }
 }

@@ -29,7 +29,7 @@ pub struct Args {
 pub fn run(args: Args) -> Result<(), CliError> {
     // the neural models' thread setting, while this process has no other thread
     #[cfg(feature = "neural")]
-    super::thermal::single_candle_thread();
+    super::neural::single_candle_thread();
     let opts = project::RunOptions {
         project: args.project,
         out: args.out,

@@ -1,6 +1,5 @@
-//! What a long command shows on the terminal while a library job runs: warnings on stderr,
-//! training progress as one redrawn line, Ctrl-C as the request to stop (the neural trainings,
-//! the only long jobs that report epochs).
+//! What a long command shows while a library job runs: warnings on stderr, training progress as
+//! one redrawn line, Ctrl-C as the request to stop (neural trainings: the only epoch reporters).
 
 use mtec_workflow::Observer;
 use std::io::IsTerminal;

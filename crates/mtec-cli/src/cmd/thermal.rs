@@ -1,8 +1,6 @@
-//! `mtec thermal select|fit|predict|cv`: thermal error models from temperature logs.
-//!
-//! The jobs are `mtec_workflow::ops::thermal` (`select`, `fit`, `predict`, `cv`, and the neural
-//! `neural::fit`); the model kinds and their `--model` values come from
-//! `mtec_thermal::registry`. This module parses the arguments and prints.
+//! `mtec thermal select|fit|predict|cv`: thermal error models from temperature logs. The jobs
+//! are `mtec_workflow::ops::thermal`'s (the networks': its `neural`, `neural_log`); the kinds and
+//! their `--model` values come from `mtec_thermal::registry`. This module parses and prints.
 
 #[cfg(feature = "neural")]
 use super::terminal::{ctrl_c, Terminal};
@@ -33,7 +31,7 @@ enum Sub {
     #[command(about = text!("thermal.predict_about"))]
     Predict(PredictArgs),
     #[command(about = text!("thermal.cv_about"))]
-    Cv(CvArgs),
+    Cv(Box<CvArgs>),
 }
 
 #[derive(clap::Args)]
@@ -174,15 +172,8 @@ struct CvArgs {
     /// Leave-one-block-out instead of forward folds (optimistic: trains on the block's future).
     #[arg(long)]
     loo: bool,
-}
-
-/// candle sizes its thread pool once, from the environment: one thread is ~8x faster for these
-/// nets (`mtec_nn::threads`); set before the first candle op, while there is no other thread.
-#[cfg(feature = "neural")]
-pub(crate) fn single_candle_thread() {
-    if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
-        std::env::set_var(var, value);
-    }
+    #[command(flatten)]
+    nn: super::neural::NnArgs,
 }
 
 /// Where a report goes: stdout, or stderr when the output itself streams to stdout (`-o -`).
@@ -230,7 +221,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
         Sub::Fit(a) => fit(*a),
         Sub::Predict(a) => predict(a),
-        Sub::Cv(a) => cv(a),
+        Sub::Cv(a) => cv(*a),
     }
 }
 
@@ -241,7 +232,6 @@ fn select(a: SelectArgs) -> Result<(), CliError> {
         sensors: a.sensors,
         out: a.out,
     };
-    // the warnings follow the report, as they always did
     let mut obs = mtec_workflow::Collect::default();
     let outcome = op::select(&opts, &mut obs)?;
     super::report(&outcome, a.json, mtec_workflow::pretty_json)?;
@@ -280,10 +270,7 @@ fn fit_neural(a: FitArgs) -> Result<(), CliError> {
 /// `--model cnn-lstm|bpnn`, or `auto --with-networks` (the networks' options as bpnn's).
 #[cfg(feature = "neural")]
 fn fit_neural(a: FitArgs) -> Result<(), CliError> {
-    use mtec_nn::thermal_log::NnKind;
-    let kind = NnKind::from_name(&a.common.model).unwrap_or(NnKind::Bpnn);
-    let (opts, nn) = (a.options(), a.nn.fit_options(kind));
-    single_candle_thread();
+    let (opts, nn) = (a.options(), a.nn.fit_options(&a.common.model));
     let mut term = Terminal::new(a.nn.quiet);
     let with = &a.nn.with_networks;
     let outcome = ctrl_c::during(|| op::neural::fit_thermal(&opts, &nn, with, &mut term));
@@ -294,7 +281,7 @@ fn fit_neural(a: FitArgs) -> Result<(), CliError> {
 
 fn predict(a: PredictArgs) -> Result<(), CliError> {
     #[cfg(feature = "neural")]
-    single_candle_thread();
+    super::neural::single_candle_thread();
     let opts = op::PredictOptions {
         model: a.model,
         data: a.data,
@@ -336,8 +323,10 @@ fn cv(a: CvArgs) -> Result<(), CliError> {
         fit: a.common.fit_options(),
         loo: a.loo,
     };
-    // the warnings follow the report, as they always did
     let mut obs = mtec_workflow::Collect::default();
+    #[cfg(feature = "neural")]
+    let outcome = op::neural_log::cv(&opts, &a.nn.fit_options(&opts.model), &mut obs)?;
+    #[cfg(not(feature = "neural"))]
     let outcome = op::cv(&opts, &mut obs)?;
     if let op::CvOutcome::LeaveOneBlockOut(o) = &outcome {
         eprintln!("note: {}", o.note);

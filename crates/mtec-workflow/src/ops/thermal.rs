@@ -18,7 +18,7 @@ use mtec_thermal::validate::{
     block_cv, duty_cycle_blocks, forward_cv, forward_folds, rows_of_experiments, time_blocks,
     BlockCv, ForwardCv,
 };
-use mtec_thermal::{Metrics, ModelFile, Predict, ThermalData, ThermalError, ThermalModel};
+use mtec_thermal::{Fit, Metrics, ModelFile, Predict, ThermalData, ThermalError, ThermalModel};
 use serde::Serialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -901,27 +901,46 @@ pub enum CvOutcome {
 }
 
 /// Forward (rolling-origin) validation of a registered kind over the whole log, or
-/// leave-one-block-out with `loo`.
+/// leave-one-block-out with `loo`. A network (`bpnn`, `cnn-lstm`, cargo feature `neural`) is
+/// validated the same way with its default options ([`neural_log::cv`] takes others).
 pub fn cv(opts: &CvOptions, obs: &mut dyn Observer) -> Result<CvOutcome> {
     if is_neural(&opts.model) {
-        return Err(Error::usage(
-            "thermal cv runs the regression models; for cnn-lstm and bpnn use thermal fit --train ... --test ...",
-        ));
+        #[cfg(feature = "neural")]
+        {
+            let kind = mtec_nn::thermal_log::NnKind::from_name(&opts.model).expect("a network");
+            let nn = mtec_nn::thermal_log::NnFitOptions::new(kind);
+            return neural_log::cv(opts, &nn, obs);
+        }
+        #[cfg(not(feature = "neural"))]
+        return Err(crate::neural_unavailable(&format!(
+            "`thermal cv --model {}`",
+            opts.model
+        )));
     }
     let kind = checked_kind(&opts.model, &opts.fit)?;
     let input = Some((opts.fit.input.as_str(), kind.requires_input));
     let data = load(&opts.data, Some(&opts.target), true, input)?;
-    let err = |e| located(&data, &opts.data, e);
-    let spec = ModelSpec::from_options(kind.name, &opts.fit, &data).map_err(err)?;
+    let spec = ModelSpec::from_options(kind.name, &opts.fit, &data)
+        .map_err(|e| located(&data, &opts.data, e))?;
+    let outcome = validate_cv(&spec, &data, opts)?;
+    if let CvOutcome::Forward(o) = &outcome {
+        warn_all(obs, &o.warnings);
+    }
+    Ok(outcome)
+}
+
+/// [`cv`] of the fitter `fitter` (a registered kind's spec, or a network) on `data`: the
+/// forward folds or, with `opts.loo`, the blocks left out one by one.
+fn validate_cv<F: Fit>(fitter: &F, data: &ThermalData, opts: &CvOptions) -> Result<CvOutcome> {
+    let err = |e| located(data, &opts.data, e);
     let all: Vec<usize> = (0..data.len()).collect();
     if !opts.loo {
-        let folds = forward_folds(&duty_cycle_blocks(&data, &all, &opts.fit.blocks()));
+        let folds = forward_folds(&duty_cycle_blocks(data, &all, &opts.fit.blocks()));
         if folds.is_empty() {
             return Err(Error::usage("forward validation needs at least two blocks (experiments, steps of the --input column, or --block-min shorter than the record)"));
         }
-        let res = forward_cv(&spec, &data, &folds).map_err(err)?;
+        let res = forward_cv(fitter, data, &folds).map_err(err)?;
         let warnings: Vec<String> = worse_warning(&res).into_iter().collect();
-        warn_all(obs, &warnings);
         return Ok(CvOutcome::Forward(ForwardOutcome {
             format: "mtec.thermal-cv/2".into(),
             protocol: "forward".into(),
@@ -931,19 +950,19 @@ pub fn cv(opts: &CvOptions, obs: &mut dyn Observer) -> Result<CvOutcome> {
         }));
     }
     let blocks: Vec<Vec<usize>> = match opts.fit.block_min {
-        Some(b) if b > 0.0 => time_blocks(&data, b),
+        Some(b) if b > 0.0 => time_blocks(data, b),
         Some(_) => return Err(Error::usage("--block-min must be > 0")),
         None => data
             .experiments()
             .iter()
-            .map(|e| rows_of_experiments(&data, std::slice::from_ref(e)))
+            .map(|e| rows_of_experiments(data, std::slice::from_ref(e)))
             .collect::<std::result::Result<_, _>>()
             .map_err(err)?,
     };
     if blocks.len() < 2 {
         return Err(Error::usage("leave-one-block-out needs at least two blocks (experiments, or --block-min shorter than the record)"));
     }
-    let res = block_cv(&spec, &data, &blocks).map_err(err)?;
+    let res = block_cv(fitter, data, &blocks).map_err(err)?;
     Ok(CvOutcome::LeaveOneBlockOut(BlockOutcome {
         format: "mtec.thermal-cv/1".into(),
         protocol: "leave-one-block-out (optimistic)".into(),

@@ -1,36 +1,34 @@
 //! `thermal fit|predict` with the neural models of `mtec-nn` (cargo feature `neural`):
 //! `cnn-lstm` and `bpnn`. [`fit_thermal`] sends a log of one target and its sensors to
-//! [`super::neural_log`] (the networks through mtec-thermal's `Fit`/`Predict`: split by time or
-//! experiments, validated forward like the regression models), and `--model auto
-//! --with-networks` there too; the rotary logs (several targets, `--sequence-by`, `--features`,
-//! `--angle-harmonics`, `--changes`) stay on this module's route ([`fit`]), split by whole
-//! experiments.
+//! [`super::neural_log`] (split by time or experiments, validated forward like the regression
+//! models), and `--model auto --with-networks` there too; the rotary logs (several targets,
+//! `--sequence-by`, `--features`, `--angle-harmonics`, `--changes`) take this module's route
+//! ([`fit`]), split by whole experiments. Both routes are the same types: the log as
+//! mtec-thermal's `ThermalData` (here read by [`mtec_nn::thermal_log::load`]), the network
+//! fitted through [`NeuralFit`] (mtec-thermal's `Fit`), predicted through
+//! [`NeuralThermalModel`] and scored with mtec-thermal's `Metrics` per target.
 //!
-//! On this route the log format, feature resolution and training configuration are
-//! [`mtec_nn::thermal_log`]'s. The model file is the network's own versioned format
-//! (`mtec.cnn-lstm/1`, `mtec.bpnn/1`); this job adds under `provenance` the data file,
-//! `sequence_by`, the split, the metrics and the sampling interval, and [`predict`] reads
-//! `sequence_by`, `rises` and the interval back from there (a file of [`super::neural_log`],
-//! `provenance.thermal_data`, is predicted there). The training reports its epochs to
-//! the observer ([`Observer::progress`]) and stops after the current epoch, keeping the best
-//! epoch's weights, when [`Observer::stop_requested`] turns true (the file is still written).
-//! candle's thread count is the calling program's to set ([`mtec_nn::threads`]).
+//! The model file is the network's own versioned format (`mtec.cnn-lstm/1`, `mtec.bpnn/1`),
+//! written by [`NeuralThermalModel::to_json`]; this job adds under `provenance` the data file,
+//! the split and the metrics, and [`predict`] reads it back through
+//! [`NeuralThermalModel::from_network`]. The training reports its epochs to the observer
+//! ([`Observer::progress`]) and stops after the current epoch, keeping the best epoch's
+//! weights, when [`Observer::stop_requested`] turns true (the file is still written). candle's
+//! thread count is the calling program's to set ([`mtec_nn::threads`]).
 
 use super::neural_log::{self, AutoOutcome, LogFitOutcome};
 use super::PredictOptions;
 use crate::{Error, Observer, Result};
 use mtec_identify::ballbar::{Measurements, Setup};
 use mtec_io::{CsvWriter, InputError, OutputGuard, Table};
-use mtec_nn::metrics::{channel_metrics, ChannelMetrics};
 use mtec_nn::rotary::{
     reading_metrics, reading_rows, MotionRow, ReadingComparison, ReadingRow, TARGET_NAMES,
 };
-use mtec_nn::thermal_fit::{Network, NeuralThermalModel};
+use mtec_nn::thermal_fit::{Network, NeuralFit, NeuralThermalModel};
 use mtec_nn::thermal_log::{self, LoadSpec, NnFitOptions, NnKind};
-use mtec_nn::{
-    train_bpnn_baseline_monitored, train_cnn_lstm_monitored, Bpnn, CnnLstm, NnError, ThermalDataset,
-};
-use mtec_thermal::model_file::SplitBy;
+use mtec_nn::{Bpnn, CnnLstm, NnError};
+use mtec_thermal::model_file::{split_rows, SplitBy};
+use mtec_thermal::{Predict, TargetMetrics, ThermalData};
 use serde::Serialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -146,24 +144,34 @@ pub struct FitOutcome {
     /// One line: the network, its size and how the training ended.
     pub summary: String,
     pub training: Training,
-    pub train_metrics: Vec<ChannelMetrics>,
-    pub test_metrics: Option<Vec<ChannelMetrics>>,
+    /// mtec-thermal's [`mtec_thermal::Metrics`] of every target.
+    pub train_metrics: Vec<TargetMetrics>,
+    pub test_metrics: Option<Vec<TargetMetrics>>,
     /// The model file written (JSON).
     #[serde(skip)]
     pub model_json: String,
     pub warnings: Vec<String>,
 }
 
-/// Metrics per channel as a small table (ratio = max|res| / range of the measured values).
-pub fn metrics_table(what: &str, m: &[ChannelMetrics]) -> String {
+/// Metrics per target as a small table (R², RMSE, MAE, max |residual|, and the residual ratio
+/// max |residual| / max |measured| of [`mtec_thermal::Metrics`]).
+pub fn metrics_table(what: &str, m: &[TargetMetrics]) -> String {
     let mut s = format!(
-        "{what}\n  {:<14} {:>6} {:>10} {:>10} {:>10} {:>10} {:>8}\n",
-        "channel", "n", "RMSE", "MAE", "max|res|", "range", "ratio"
+        "{what}\n  {:<14} {:>6} {:>8} {:>10} {:>10} {:>10} {:>8}\n",
+        "target", "n", "R2", "RMSE", "MAE", "max|res|", "ratio"
     );
-    for c in m {
+    let opt = |v: Option<f64>, p: usize| v.map_or("-".to_string(), |v| format!("{v:.p$}"));
+    for t in m {
+        let c = &t.metrics;
         s.push_str(&format!(
-            "  {:<14} {:>6} {:>10.4} {:>10.4} {:>10.4} {:>10.4} {:>8.3}\n",
-            c.channel, c.n, c.rmse, c.mae, c.max_abs_residual, c.range, c.residual_ratio
+            "  {:<14} {:>6} {:>8} {:>10.4} {:>10.4} {:>10.4} {:>8}\n",
+            t.target,
+            c.n,
+            opt(c.r2, 4),
+            c.rmse_um,
+            c.mae_um,
+            c.max_abs_residual_um,
+            opt(c.residual_ratio, 3)
         ));
     }
     s
@@ -204,8 +212,15 @@ fn parse_ids(list: &[String], what: &str) -> Result<Vec<u32>> {
         .collect()
 }
 
-/// Trains a CNN-LSTM or a BPNN on the log's training experiments, scores it on both sets and
-/// writes the model file.
+/// A data-set error about the file `path` (mtec-thermal's messages).
+fn data_error(data: &ThermalData, path: &Path, e: mtec_thermal::ThermalError) -> Error {
+    super::located(data, path, e)
+}
+
+/// Trains a CNN-LSTM or a BPNN on the log's training experiments through
+/// [`NeuralFit`] (mtec-thermal's `Fit` on the [`ThermalData`] that [`thermal_log::load`] reads:
+/// several targets, the sequence column, the extra inputs), scores it on both sets of rows
+/// with mtec-thermal's metrics per target and writes the model file.
 pub fn fit(opts: &FitOptions, obs: &mut dyn Observer) -> Result<FitOutcome> {
     // where the model goes is settled before any work (an input, a directory: exit 2)
     let dest = OutputGuard::new(&[&opts.data]).check(&opts.output)?;
@@ -214,7 +229,7 @@ pub fn fit(opts: &FitOptions, obs: &mut dyn Observer) -> Result<FitOutcome> {
     let cols = thermal_log::resolve_columns(&table, &opts.target, &opts.sensors, nn)
         .map_err(|e| nn_error(&opts.data, e))?;
     drop(table);
-    let mut loaded = thermal_log::load(
+    let loaded = thermal_log::load(
         &opts.data,
         &LoadSpec {
             features: &cols.features,
@@ -226,84 +241,93 @@ pub fn fit(opts: &FitOptions, obs: &mut dyn Observer) -> Result<FitOutcome> {
         },
     )
     .map_err(|e| nn_error(&opts.data, e))?;
-    // the leading sensor features as rises (0: absolute temperatures)
-    let rises = if nn.rises { cols.n_sensors } else { 0 };
-    loaded.data = loaded.data.rises(rises);
-    if nn.changes {
-        loaded.data = loaded.data.target_changes();
-    }
+    let data = &loaded.data;
     let train_ids = parse_ids(&opts.train, "train")?;
     let test_ids = parse_ids(&opts.test, "test")?;
     if !test_ids.is_empty() && train_ids.is_empty() {
         return Err(Error::usage("--test needs --train"));
     }
-    let (train, test) = thermal_log::split_by_experiment(&loaded.data, &train_ids, &test_ids)
-        .map_err(|e| nn_error(&opts.data, e))?;
-    let train_exps: Vec<u32> = train.experiments.iter().map(|e| e.id).collect();
-    let test_exps: Option<Vec<u32>> = test
-        .as_ref()
-        .map(|t| t.experiments.iter().map(|e| e.id).collect());
-    let interval = loaded.interval_min;
-    let provenance = |training: serde_json::Value,
-                      train_m: &[ChannelMetrics],
-                      test_m: Option<&Vec<ChannelMetrics>>| {
-        serde_json::json!({
-            "data": opts.data.display().to_string(),
-            "sequence_by": cols.sequence_by,
-            "rises": rises,
-            "changes": nn.changes,
-            "train_experiments": train_exps,
-            "test_experiments": test_exps,
-            "train_metrics": train_m,
-            "test_metrics": test_m,
-            "training": training,
-            "sample_interval_min": interval,
-        })
+    if let Some(id) = train_ids.iter().find(|id| test_ids.contains(id)) {
+        return Err(Error::usage(format!(
+            "experiment {id} is both in the training and the test set"
+        )));
+    }
+    let held = data.experiments();
+    if let Some(id) = (train_ids.iter().chain(&test_ids)).find(|id| !held.contains(&id.to_string()))
+    {
+        return Err(Error::Input(InputError::file(
+            &opts.data,
+            format!("no experiment {id} (the data holds {})", held.join(", ")),
+        )));
+    }
+    let names = |ids: &[u32]| ids.iter().map(u32::to_string).collect::<Vec<_>>();
+    let split = match train_ids.is_empty() {
+        true => SplitBy::All,
+        false => SplitBy::Experiments {
+            train: names(&train_ids),
+            test: names(&test_ids),
+        },
     };
-    let err = |e| nn_error(&opts.data, e);
+    let rows = split_rows(data, &split).map_err(|e| data_error(data, &opts.data, e))?;
+    let ids = |rows: &[usize]| {
+        let mut v: Vec<u32> = rows
+            .iter()
+            .filter_map(|&i| data.experiment[i].parse().ok())
+            .collect();
+        v.dedup();
+        v
+    };
+    let train_exps = ids(&rows.train);
+    let test_exps = (!rows.test.is_empty()).then(|| ids(&rows.test));
+    // the sensors lead the features (rises are theirs), the other inputs follow
+    let mut options = nn.clone();
+    let n_sensors = match cols.n_sensors {
+        0 => {
+            options.rises = false;
+            cols.features.len()
+        }
+        n => n,
+    };
+    let fitter = NeuralFit {
+        options,
+        sensors: cols.features[..n_sensors].to_vec(),
+        inputs: cols.features[n_sensors..].to_vec(),
+    };
     let mut monitor = crate::observer::Relay(obs);
-    let (format, summary, training, train_m, test_m, text) = match nn.kind {
-        NnKind::CnnLstm => {
-            let (mut model, report) =
-                train_cnn_lstm_monitored(&train, &nn.cnn_lstm_config(), &mut monitor)
-                    .map_err(err)?;
-            let summary = format!(
+    let (model, training) = fitter
+        .fit_rows_monitored(data, &rows.train, &mut monitor)
+        .map_err(|e| data_error(data, &opts.data, e))?;
+    let pred = model
+        .predict_targets(data)
+        .map_err(|e| data_error(data, &opts.data, e))?;
+    let p = model.predictors();
+    let train_m = TargetMetrics::on_rows(&data.targets(), &pred, &rows.train, p);
+    let test_m = test_exps
+        .as_ref()
+        .map(|_| TargetMetrics::on_rows(&data.targets(), &pred, &rows.test, p));
+    let interval = loaded.interval_min;
+    let (format, summary) = match (&model.network, &training) {
+        (Network::CnnLstm(m), Training::CnnLstm(report)) => (
+            m.format.clone(),
+            format!(
                 "CNN-LSTM ({} parameters, window {} rows = {}, {} filters, LSTM {}) on experiments {:?}: {} epochs, best {}, {:.1} s; {}",
                 report.parameters,
-                model.architecture.window,
+                m.architecture.window,
                 interval
-                    .map(|i| format!("{} min", i * model.architecture.window as f64))
+                    .map(|i| format!("{} min", i * m.architecture.window as f64))
                     .unwrap_or_else(|| "? min".into()),
-                model.architecture.conv_channels,
-                model.architecture.lstm_hidden,
+                m.architecture.conv_channels,
+                m.architecture.lstm_hidden,
                 train_exps,
                 report.epochs,
                 report.best_epoch,
                 report.seconds,
                 report.stop_reason
-            );
-            let train_m = model.evaluate(&train).map_err(err)?;
-            let test_m = match &test {
-                Some(t) => Some(model.evaluate(t).map_err(err)?),
-                None => None,
-            };
-            let training = serde_json::json!({"model": model.provenance, "report": report});
-            model.provenance = provenance(training, &train_m, test_m.as_ref());
-            let text = model.to_json();
-            (
-                model.format.clone(),
-                summary,
-                Training::CnnLstm(report),
-                train_m,
-                test_m,
-                text,
-            )
-        }
-        NnKind::Bpnn => {
-            let (mut net, report) =
-                train_bpnn_baseline_monitored(&train, &nn.bpnn_config(), &mut monitor)
-                    .map_err(err)?;
-            let summary = format!(
+            ),
+        ),
+        (Network::Bpnn(net), Training::Bpnn(report)) => (
+            mtec_comp::bpnn::FORMAT.to_string(),
+            format!(
                 "BPNN {}-{}-{} ({} parameters) on experiments {:?}: {} Levenberg-Marquardt iterations, best {}; {}",
                 net.n_in(),
                 net.n_hidden(),
@@ -313,33 +337,28 @@ pub fn fit(opts: &FitOptions, obs: &mut dyn Observer) -> Result<FitOutcome> {
                 report.epochs,
                 report.best_epoch,
                 report.stop_reason
-            );
-            let eval = |d: &ThermalDataset| mtec_nn::evaluate_bpnn(&net, d).map_err(err);
-            let train_m = eval(&train)?;
-            let test_m = match &test {
-                Some(t) => Some(eval(t)?),
-                None => None,
-            };
-            let training = serde_json::json!({"model": net.provenance, "report": report});
-            net.provenance = provenance(training, &train_m, test_m.as_ref());
-            let text = net.to_json();
-            (
-                mtec_comp::bpnn::FORMAT.to_string(),
-                summary,
-                Training::Bpnn(report),
-                train_m,
-                test_m,
-                text,
-            )
-        }
+            ),
+        ),
+        _ => unreachable!("the training report is the network's"),
     };
+    let text = model.to_json(
+        data,
+        serde_json::json!({
+            "data": opts.data.display().to_string(),
+            "train_experiments": train_exps,
+            "test_experiments": test_exps,
+            "train_metrics": train_m,
+            "test_metrics": test_m,
+            "training": {"report": training},
+        }),
+    );
     dest.write(text.as_bytes())?;
     Ok(FitOutcome {
         output: opts.output.clone(),
         kind: nn.kind,
         format,
-        train_experiments: train_exps.clone(),
-        test_experiments: test_exps.clone(),
+        train_experiments: train_exps,
+        test_experiments: test_exps,
         summary,
         training,
         train_metrics: train_m,
@@ -371,8 +390,8 @@ pub struct Prediction {
     pub n: usize,
     /// Per row, one value per target.
     pub predictions: Vec<Vec<f64>>,
-    /// Per target, when the data hold the targets.
-    pub metrics: Option<Vec<ChannelMetrics>>,
+    /// Per target, when the data hold the targets (mtec-thermal's [`mtec_thermal::Metrics`]).
+    pub metrics: Option<Vec<TargetMetrics>>,
     /// `experiment,time_min[,<sequence_by>],pred_<t>...[,<t>,res_<t>...]`
     #[serde(skip)]
     pub csv: String,
@@ -431,7 +450,7 @@ fn rotary_readings(
     model: &Path,
     targets: &[String],
     seq_by: Option<&str>,
-    labels: &[thermal_log::RowLabel],
+    data: &ThermalData,
     pred: &[Vec<f64>],
 ) -> Result<RotaryReadings> {
     if targets.iter().map(String::as_str).ne(TARGET_NAMES) || seq_by != Some("angle_deg") {
@@ -448,13 +467,14 @@ fn rotary_readings(
     }
     let setup = Setup::read(&r.setup)?;
     let measured = Measurements::from_table(&Table::read(&r.dbb)?, &setup)?;
-    let rows: Vec<MotionRow> = labels
+    let angle = data.sequence.as_ref().map(|(_, v)| v);
+    let rows: Vec<MotionRow> = pred
         .iter()
-        .zip(pred)
-        .map(|(l, p)| MotionRow {
-            experiment: l.experiment,
-            time_min: l.time_min,
-            angle_deg: l.sequence.unwrap_or(f64::NAN),
+        .enumerate()
+        .map(|(i, p)| MotionRow {
+            experiment: data.experiment[i].parse().unwrap_or(u32::MAX),
+            time_min: data.time_min[i],
+            angle_deg: angle.map_or(f64::NAN, |a| a[i]),
             motions: [p[0], p[1], p[2], p[3], p[4]],
         })
         .collect();
@@ -544,103 +564,78 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
         }
         None => None,
     };
-    let model = read_model(&opts.model)?.ok_or_else(|| {
+    let network = read_model(&opts.model)?.ok_or_else(|| {
         Error::Input(InputError::file(
             &opts.model,
             "not a neural model file (`format` is not mtec.cnn-lstm/1 or mtec.bpnn/1)",
         ))
     })?;
-    // a network fitted on a log of one target (`neural_log`): predicted as the library does
-    if let Some((m, interval)) = NeuralThermalModel::from_network(model.clone()) {
+    // a file of `neural_log` (a log of one target, split as the regression models split it)
+    let of_log = match &network {
+        Network::Bpnn(n) => n.provenance.get("split").is_some(),
+        Network::CnnLstm(n) => n.provenance.get("split").is_some(),
+    };
+    let (model, trained_interval) = NeuralThermalModel::from_network(network.clone())
+        .unwrap_or_else(|| (plain_model(network), None));
+    let cnn_lstm = matches!(model.network, Network::CnnLstm(_));
+    // a network of one target on its sensors: predicted on the log as the regression models
+    if of_log && model.inputs.is_empty() && model.more_targets.is_empty() {
         if opts.readings.is_some() {
             return Err(Error::Input(InputError::file(
                 &opts.model,
                 "predicted ballbar readings need a rotary model of the five error motions fitted with --sequence-by angle_deg (this one predicts one target from the sensors)",
             )));
         }
-        let p = predict_log(&opts.data, &m, interval)?;
+        let p = predict_log(&opts.data, &model, trained_interval)?;
         if let Some(d) = &dest {
             d.write(p.csv.as_bytes())?;
         }
         return Ok(p);
     }
-    let (features, targets, provenance) = match &model {
-        Network::CnnLstm(m) => (&m.feature_names, &m.target_names, &m.provenance),
-        Network::Bpnn(m) => (&m.input_names, &m.output_names, &m.provenance),
-    };
-    // the sequences of the fit (a BPNN takes rows one by one; its sequences only matter for
-    // where the rises start)
-    let seq_by = provenance
-        .get("sequence_by")
-        .and_then(|v| v.as_str())
-        .map(str::to_string);
+    let (features, targets) = (model.input_names(), model.targets());
+    let seq_by = model.sequence_by.clone();
+    let path = &opts.data;
     // the CNN-LSTM's window is rows of the interval it was trained on
-    let trained_interval = provenance
-        .get("sample_interval_min")
-        .and_then(|v| v.as_f64());
-    let data = &opts.data;
-    let mut loaded = thermal_log::load(
-        data,
+    let loaded = thermal_log::load(
+        path,
         &LoadSpec {
-            features,
-            targets,
+            features: &features,
+            targets: &targets,
             sequence_by: seq_by.as_deref(),
             need_targets: false,
-            strict_time: matches!(model, Network::CnnLstm(_)),
+            strict_time: cnn_lstm,
             trained_interval_min: trained_interval,
         },
     )
-    .map_err(|e| nn_error(data, e))?;
-    // trained on rises of the first k features (`thermal fit --rises`): the same here
-    let rises = provenance
-        .get("rises")
-        .and_then(|v| v.as_u64())
-        .unwrap_or(0) as usize;
-    loaded.data = loaded.data.rises(rises.min(features.len()));
-    let mut pred: Vec<Vec<f64>> = match &model {
-        Network::CnnLstm(m) => m.predict(&loaded.data).map_err(|e| nn_error(data, e))?,
-        Network::Bpnn(m) => loaded
-            .data
-            .rows()
-            .0
-            .iter()
-            .map(|r| m.predict(r))
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|e| nn_error(data, e.into()))?,
-    };
-    // trained on the targets' change since each sequence's first row (`thermal fit
-    // --changes`): the prediction is that first measurement plus the predicted change
-    if provenance.get("changes").and_then(|v| v.as_bool()) == Some(true) {
-        if !loaded.has_targets {
-            return Err(Error::Input(InputError::file(
-                data,
-                "the model predicts changes since each sequence's first row (fit --changes): the data must hold the targets, at least of that first row",
-            )));
-        }
-        for (p, y0) in pred.iter_mut().zip(loaded.data.first_targets()) {
-            p.iter_mut().zip(&y0).for_each(|(p, y0)| *p += y0);
-        }
-    }
-    let meas = loaded.has_targets.then(|| loaded.data.rows().1);
-    let metrics = meas.as_ref().map(|y| channel_metrics(targets, &pred, y));
+    .map_err(|e| nn_error(path, e))?;
+    let data = &loaded.data;
+    // rises of the sensors and a model of changes: [`NeuralThermalModel::predict_targets`]
+    let pred = model
+        .predict_targets(data)
+        .map_err(|e| data_error(data, path, e))?;
+    let all: Vec<usize> = (0..data.len()).collect();
+    let metrics = loaded
+        .has_targets
+        .then(|| TargetMetrics::on_rows(&data.targets(), &pred, &all, model.predictors()));
     let mut header = vec!["experiment".to_string(), "time_min".to_string()];
     header.extend(seq_by.iter().cloned());
     header.extend(targets.iter().map(|t| format!("pred_{t}")));
-    if meas.is_some() {
+    if loaded.has_targets {
         header.extend(
             targets
                 .iter()
                 .flat_map(|t| [t.to_string(), format!("res_{t}")]),
         );
     }
+    let measured = data.targets();
     let mut csv = CsvWriter::new(header);
-    for (i, l) in loaded.labels.iter().enumerate() {
-        let mut row = vec![l.experiment.to_string(), l.time_min.to_string()];
-        row.extend(l.sequence.iter().map(|s| s.to_string()));
-        row.extend(pred[i].iter().map(|p| format!("{p:.4}")));
-        if let Some(y) = &meas {
-            for (p, v) in pred[i].iter().zip(&y[i]) {
-                row.extend([format!("{v:.4}"), format!("{:.4}", v - p)]);
+    for (i, p) in pred.iter().enumerate() {
+        let mut row = vec![data.experiment[i].clone(), data.time_min[i].to_string()];
+        row.extend(data.sequence.iter().map(|(_, s)| s[i].to_string()));
+        row.extend(p.iter().map(|p| format!("{p:.4}")));
+        if loaded.has_targets {
+            for (p, (_, y)) in p.iter().zip(&measured) {
+                row.extend([format!("{:.4}", y[i]), format!("{:.4}", y[i] - p)]);
             }
         }
         csv.row(row);
@@ -650,9 +645,9 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
         Some(r) => Some(rotary_readings(
             r,
             &opts.model,
-            targets,
+            &targets,
             seq_by.as_deref(),
-            &loaded.labels,
+            data,
             &pred,
         )?),
         None => None,
@@ -665,13 +660,32 @@ pub fn predict(opts: &PredictOptions, _obs: &mut dyn Observer) -> Result<Predict
     }
     Ok(Prediction {
         format: "mtec.thermal-prediction/1".into(),
-        targets: targets.clone(),
+        targets,
         n: pred.len(),
         predictions: pred,
         metrics,
         csv,
         readings,
     })
+}
+
+/// A network file without the provenance of a thermal fit: its inputs taken as they are (no
+/// rises, no sequence column), its outputs as the targets.
+fn plain_model(network: Network) -> NeuralThermalModel {
+    let (inputs, targets) = match &network {
+        Network::Bpnn(n) => (n.input_names.clone(), n.output_names.clone()),
+        Network::CnnLstm(n) => (n.feature_names.clone(), n.target_names.clone()),
+    };
+    NeuralThermalModel {
+        network,
+        sensors: inputs,
+        inputs: Vec::new(),
+        rises: false,
+        target: targets.first().cloned().unwrap_or_default(),
+        more_targets: targets.iter().skip(1).cloned().collect(),
+        changes: false,
+        sequence_by: None,
+    }
 }
 
 /// The predictions of a network fitted on a log of one target ([`neural_log::predict_log`]):
@@ -706,9 +720,9 @@ fn predict_log(
     }
     let targets = vec![t.clone()];
     let predictions: Vec<Vec<f64>> = pred.iter().map(|&p| vec![p]).collect();
+    let all: Vec<usize> = (0..data.len()).collect();
     let metrics = measured.map(|y| {
-        let y: Vec<Vec<f64>> = y.iter().map(|&v| vec![v]).collect();
-        channel_metrics(&targets, &predictions, &y)
+        TargetMetrics::on_rows(&[(t.as_str(), y)], &predictions, &all, model.predictors())
     });
     Ok(Prediction {
         format: "mtec.thermal-prediction/1".into(),

@@ -1,9 +1,10 @@
-//! `thermal fit --model bpnn|cnn-lstm` on a thermal log of one target, and `--model auto
-//! --with-networks`: the networks through mtec-thermal's `Fit`/`Predict`
-//! ([`mtec_nn::thermal_fit`]), so they are split, validated forward in time and scored by the
-//! regression models' own code (`--train-until`, `--train/--test`, `--block-min`, the duty-cycle
-//! blocks of `--input`, [`Metrics`]). The rotary logs (several targets, `--sequence-by`,
-//! `--features`, `--angle-harmonics`, `--changes`) stay on [`super::neural`]'s route.
+//! `thermal fit --model bpnn|cnn-lstm` on a thermal log of one target, `--model auto
+//! --with-networks` and `thermal cv --model bpnn|cnn-lstm` ([`cv`]): the networks through
+//! mtec-thermal's `Fit`/`Predict` ([`mtec_nn::thermal_fit`]), so they are split, validated
+//! forward in time and scored by the regression models' own code (`--train-until`,
+//! `--train/--test`, `--block-min`, the duty-cycle blocks of `--input`, [`Metrics`]). The
+//! rotary logs (several targets, `--sequence-by`, `--features`, `--angle-harmonics`,
+//! `--changes`) take [`super::neural`]'s route, on the same types, split by experiments.
 //!
 //! The model file is the network's own format (`mtec.bpnn/1`, `mtec.cnn-lstm/1`); its
 //! `provenance` holds `thermal_data: true`, the data file, the split, the training and test
@@ -12,7 +13,9 @@
 //! Every training (one per forward fold, then the final fit) reports its epochs to the observer
 //! and stops after the current epoch when the observer asks (Ctrl-C).
 
-use super::{load_table, located, metrics_line, write_candidates, FitOptions};
+use super::{
+    load_table, located, metrics_line, write_candidates, CvOptions, CvOutcome, FitOptions,
+};
 use crate::observer::Relay;
 use crate::{Error, Observer, Result};
 use mtec_io::{InputError, OutputGuard, Table};
@@ -354,6 +357,7 @@ pub fn fit_table(
     let fitter = NeuralFit {
         options: nn.clone(),
         sensors: opts.fit.sensors.clone(),
+        inputs: Vec::new(),
     };
     let mut relay = Relay(obs);
     // forward validation on the blocks of the training rows, as for the regression models;
@@ -437,6 +441,7 @@ pub fn fit_auto_table(
                 fit: NeuralFit {
                     options: nn.clone(),
                     sensors: opts.fit.sensors.clone(),
+                    inputs: Vec::new(),
                 },
                 max_sensors: auto.max_sensors,
                 last: Rc::clone(last),
@@ -520,4 +525,36 @@ pub fn predict_log(
     }
     let pred = model.predict(&data).map_err(|e| located(&data, path, e))?;
     Ok((data, pred))
+}
+
+/// `thermal cv --model bpnn|cnn-lstm`: a network of one target and its sensors (`nn`, its kind
+/// `opts.model`'s) validated over the whole log by the regression models' own code
+/// ([`super::cv`]: the same forward folds or left-out blocks, the same [`Metrics`]); every
+/// training reports its epochs to the observer and stops when it asks. Slow: one training per
+/// fold. A regression model goes to [`super::cv`].
+pub fn cv(opts: &CvOptions, nn: &NnFitOptions, obs: &mut dyn Observer) -> Result<CvOutcome> {
+    let Some(kind) = NnKind::from_name(&opts.model) else {
+        return super::cv(opts, obs);
+    };
+    let nn = &NnFitOptions { kind, ..nn.clone() };
+    if !takes(&opts.target, nn) {
+        return Err(Error::usage("thermal cv validates a network of one target and its sensors (no --sequence-by, --features, --angle-harmonics or --changes; those split by --train/--test experiments in thermal fit)"));
+    }
+    refuse_regression_options(&opts.fit)?;
+    let table = Table::read(&opts.data)?;
+    let cnn_lstm = nn.kind == NnKind::CnnLstm;
+    let (data, _) = prepared(&table, &opts.target, &opts.fit, &SplitBy::All, cnn_lstm)?;
+    let fitter = NeuralFit {
+        options: nn.clone(),
+        sensors: opts.fit.sensors.clone(),
+        inputs: Vec::new(),
+    };
+    let outcome = {
+        let mut relay = Relay(obs);
+        super::validate_cv(&Monitored::new(&fitter, &mut relay), &data, opts)?
+    };
+    if let CvOutcome::Forward(o) = &outcome {
+        super::warn_all(obs, &o.warnings);
+    }
+    Ok(outcome)
 }
