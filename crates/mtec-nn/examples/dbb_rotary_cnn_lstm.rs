@@ -7,7 +7,7 @@
 //!         --seed S --export DIR --harmonics N --rises --bpnn-hidden H --lr L --batch B]
 //!
 //! `--rises` gives both models the temperatures as rises over each experiment's first
-//! measurement (`ThermalDataset::rises`);
+//! measurement (`NnFitOptions::rises`, per sequence: the first row of each angle's series);
 //! `--harmonics N` gives both models the angle as its first N harmonics cos/sin(k·C)
 //! (`AngleEncoding::Harmonics`) instead of degrees (N = 1: plain cos/sin);
 //! `--fixed` trains exactly N epochs (no early stopping) for timing against PyTorch;
@@ -17,14 +17,18 @@ mod support;
 
 use mtec_identify::ballbar::{identify, Measurements, Setup};
 use mtec_io::Table;
-use mtec_nn::metrics::channel_metrics;
 use mtec_nn::rotary::{
-    compare_readings, observable_motions, truth_motions, AngleEncoding, RotaryDataset,
+    compare_readings, motion_rows, observable_motions, rotary_data, truth_motions, AngleEncoding,
     TemperatureLog,
 };
-use mtec_nn::{compare_on_split, BpnnTrainConfig, CnnLstmConfig, SplitComparison};
+use mtec_nn::thermal_fit::target_metrics;
+use mtec_nn::thermal_log::{NnFitOptions, NnKind};
+use mtec_nn::NeuralFit;
+use mtec_thermal::ThermalData;
 use std::path::Path;
-use support::{export, print_bench_lines, print_comparison, ExampleArgs};
+use support::{
+    compare, export, overall_rmse, print_bench_lines, print_comparison, targets, ExampleArgs,
+};
 
 /// Cosine decay of the step size to 5 % over the epochs: on this campaign (seed 2, harmonics
 /// 3) test RMSE 0.396 against 0.440 with a constant step size.
@@ -45,46 +49,36 @@ fn main() {
     let id = identify(&setup, &measurements).expect("identification");
     let temps = Table::parse(Path::new("temps.csv"), file("temps.csv")).expect("temps.csv");
     let temps = TemperatureLog::from_table(&temps).expect("temperatures");
-    let rotary = RotaryDataset::build(
-        &temps,
-        &id.rows,
-        if let Some(n) = arg("--harmonics") {
-            AngleEncoding::Harmonics(n.parse().expect("--harmonics N"))
-        } else {
-            AngleEncoding::Degrees
-        },
-    )
-    .expect("dataset");
-    let mut rotary = rotary;
-    if args.flag("--rises") {
-        rotary.data = rotary.data.rises(temps.sensor_names.len());
-    }
-    if let Some(dir) = arg("--export") {
-        export(&rotary.data, &dir);
-    }
-    let mut cfg = CnnLstmConfig {
-        final_learning_rate_fraction: LR_FINAL_FRACTION,
-        ..CnnLstmConfig::default()
+    let encoding = match arg("--harmonics") {
+        Some(n) => AngleEncoding::Harmonics(n.parse().expect("--harmonics N")),
+        None => AngleEncoding::Degrees,
     };
-    if let Some(n) = arg("--epochs") {
-        cfg.max_epochs = n.parse().expect("--epochs N");
-    }
-    if let Some(v) = arg("--lr") {
-        cfg.learning_rate = v.parse().expect("--lr");
-    }
-    if let Some(v) = arg("--batch") {
-        cfg.batch_size = v.parse().expect("--batch");
-    }
+    let data: ThermalData = rotary_data(&temps, &id.rows, encoding).expect("dataset");
+    let rises = args.flag("--rises");
+    let fit = |mut options: NnFitOptions| {
+        options.rises = rises;
+        NeuralFit {
+            options,
+            sensors: temps.sensor_names.clone(),
+            inputs: encoding.feature_names(),
+        }
+    };
+    let mut cnn = NnFitOptions::new(NnKind::CnnLstm);
+    cnn.final_lr_fraction = Some(LR_FINAL_FRACTION);
+    cnn.epochs = arg("--epochs").map(|n| n.parse().expect("--epochs N"));
+    cnn.learning_rate = arg("--lr").map(|v| v.parse().expect("--lr"));
+    cnn.batch_size = arg("--batch").map(|v| v.parse().expect("--batch"));
     if args.flag("--fixed") {
-        cfg.patience = usize::MAX / 2;
+        cnn.patience = Some(usize::MAX / 2);
     }
-    let bpnn_cfg = BpnnTrainConfig {
-        hidden: arg("--bpnn-hidden").map_or(10, |s| s.parse().expect("--bpnn-hidden H")),
-        max_epochs: 200,
-        ..BpnnTrainConfig::default()
-    };
-    let (cnn, bpnn, cmp) =
-        compare_on_split(&rotary.data, &[1, 2, 4], &[3], &cfg, &bpnn_cfg).expect("training");
+    let mut bpnn = NnFitOptions::new(NnKind::Bpnn);
+    bpnn.hidden = Some(arg("--bpnn-hidden").map_or(10, |s| s.parse().expect("--bpnn-hidden H")));
+    bpnn.epochs = Some(200);
+    let (cnn, bpnn) = (fit(cnn), fit(bpnn));
+    if let Some(dir) = arg("--export") {
+        export(&data, &cnn, &dir);
+    }
+    let cmp = compare(&data, &[1, 2, 4], &[3], &cnn, &bpnn);
     let r = &cmp.cnn_lstm_training;
     println!(
         "CNN-LSTM: {} parameters, {} train windows, {} epochs (best {}), {:.2} s, {:.4} s/epoch; {}",
@@ -97,36 +91,29 @@ fn main() {
         r.stop_reason
     );
     print_comparison(&cmp);
-    let (_, test) = rotary.data.split(&[1, 2, 4], &[3]).expect("split");
-    let pc = rotary
-        .label(&test, &cnn.predict(&test).expect("predict"))
-        .expect("labels");
+    let test = &cmp.test;
+    let pc = (cmp.cnn_lstm.predict_targets(test)).expect("predict");
+    let pc = motion_rows(test, &pc).expect("labels");
     // the floor no model can beat: the identified motions' own error against the truth
     let truth = observable_motions(&setup, &truth_motions(&out.truth, 3).expect("truth"))
         .expect("observable truth");
     let key = |e: u32, t: f64, a: f64| (e, (t * 1e6).round() as i64, (a * 1e6).round() as i64);
     let tmap: std::collections::BTreeMap<_, _> = truth
         .iter()
-        .map(|r| {
-            (
-                key(r.experiment, r.time_min, r.angle_deg),
-                r.motions.to_vec(),
-            )
-        })
+        .map(|r| (key(r.experiment, r.time_min, r.angle_deg), r.motions))
         .collect();
-    let (xb, yb) = test.rows();
-    let identified = rotary.label(&test, &yb).expect("labels");
+    let identified = motion_rows(test, &targets(test)).expect("labels");
     let t: Vec<Vec<f64>> = identified
         .iter()
-        .map(|r| tmap[&key(r.experiment, r.time_min, r.angle_deg)].clone())
+        .map(|r| tmap[&key(r.experiment, r.time_min, r.angle_deg)].to_vec())
         .collect();
-    let floor = channel_metrics(&rotary.data.target_names, &yb, &t);
+    let floor = target_metrics(test, &t, 0).expect("metrics");
     println!(
         "identification noise floor (identified vs true motions, overall RMSE): {:.4}",
-        SplitComparison::overall_rmse(&floor)
+        overall_rmse(&floor)
     );
-    let pb: Vec<Vec<f64>> = xb.iter().map(|x| bpnn.predict(x).expect("bpnn")).collect();
-    let pb = rotary.label(&test, &pb).expect("labels");
+    let pb = (cmp.bpnn.predict_targets(test)).expect("bpnn");
+    let pb = motion_rows(test, &pb).expect("labels");
     for (name, p) in [("CNN-LSTM", &pc), ("BPNN", &pb)] {
         let c = compare_readings(&setup, &measurements, 3, p).expect("readings");
         println!(

@@ -13,18 +13,19 @@
 //! score the left-out one.
 //!
 //! Features: the 16 temperatures (and `spindle_rpm` with `--rpm`), every N-th row (`--step`,
-//! default 8: 15 s → 2 min); targets ch1..ch5 (µm). The CNN-LSTM's window covers 30 min; a
-//! left-out fold's windows see the features of the 30 min before it (`warmup`), never a
-//! displacement of the fold.
+//! default 8: 15 s → 2 min); targets ch1..ch5 (µm). Both networks are `NeuralFit`s on the
+//! record as mtec-thermal's `ThermalData`, fitted on the rows of the other folds
+//! (`Fit::fit_rows`) and scored with `Metrics`. The CNN-LSTM's window covers 30 min; the
+//! training windows after a left-out fold see its features as history, never its displacement,
+//! and its own windows see the 30 min before it.
 
 mod support;
 
 use mtec_io::Table;
-use mtec_nn::cnn_lstm::Architecture;
-use mtec_nn::{
-    evaluate_bpnn, train_bpnn_baseline, train_cnn_lstm, BpnnTrainConfig, CnnLstmConfig, Experiment,
-    Sequence, ThermalDataset,
-};
+use mtec_nn::thermal_fit::{target_metrics, Training};
+use mtec_nn::thermal_log::{NnFitOptions, NnKind};
+use mtec_nn::{NeuralFit, Quiet};
+use mtec_thermal::{Fit, ThermalData};
 use nalgebra::{DMatrix, DVector};
 use std::path::Path;
 use support::ExampleArgs;
@@ -58,8 +59,6 @@ fn main() {
     let rows: Vec<usize> = (0..rpm.len()).step_by(step.max(1)).collect();
     let dt = time[rows[1]] - time[rows[0]];
     let window = ((WINDOW_MIN / dt).round() as usize).max(2);
-    let feat = |r: usize| icols.iter().map(|c| c[r]).collect::<Vec<f64>>();
-    let targ = |r: usize| ccols.iter().map(|c| c[r]).collect::<Vec<f64>>();
     // fold starts (indices into `rows`)
     let mut starts = vec![0usize];
     match block_min {
@@ -92,66 +91,75 @@ fn main() {
         &starts[..starts.len() - 1]
     );
     let n_cycles = starts.len() - 1;
-    let cycle = |c: usize| -> Experiment {
-        let (a, b) = (starts[c], starts[c + 1]);
-        let w0 = a.saturating_sub(window - 1);
-        let idx: Vec<usize> = (w0..b).map(|k| rows[k]).collect();
-        Experiment {
-            id: c as u32 + 1,
-            sequences: vec![Sequence {
-                features: idx.iter().map(|&r| feat(r)).collect(),
-                targets: idx.iter().map(|&r| targ(r)).collect(),
-                warmup: a - w0,
-            }],
-        }
+    let n = rows.len();
+    let mut targets = chans.iter().zip(&ccols).map(|(name, c)| {
+        let y: Vec<f64> = rows.iter().map(|&r| c[r]).collect();
+        (name.clone(), y)
+    });
+    let data = ThermalData {
+        experiment: vec!["1".into(); n],
+        time_min: rows.iter().map(|&r| time[r]).collect(),
+        sensor_names: inputs.clone(),
+        temps_c: DMatrix::from_fn(n, inputs.len(), |i, j| icols[j][rows[i]]),
+        ambient_c: None,
+        position_mm: None,
+        target: targets.next(),
+        more_targets: targets.collect(),
+        sequence: None,
+        source: None,
+        lines: rows.iter().map(|&r| r + 2).collect(),
     };
-    let data = ThermalDataset {
-        feature_names: inputs.clone(),
-        target_names: chans.clone(),
-        experiments: (0..n_cycles).map(cycle).collect(),
+    let fit = |options| NeuralFit {
+        options,
+        sensors: inputs.clone(),
+        inputs: vec![],
     };
-    let cfg = CnnLstmConfig {
-        architecture: Architecture {
-            window,
-            conv_channels: 8,
-            kernel: 3,
-            lstm_hidden: 24,
-        },
-        max_epochs: 25,
-        batch_size: 64,
-        learning_rate: 3e-3,
-        patience: 6,
-        ..CnnLstmConfig::default()
-    };
-    let bpnn_cfg = BpnnTrainConfig {
-        hidden: 10,
-        max_epochs: 30,
-        ..BpnnTrainConfig::default()
-    };
+    let mut cnn = NnFitOptions::new(NnKind::CnnLstm);
+    (cnn.window, cnn.conv_channels, cnn.lstm_hidden) = (Some(window), Some(8), Some(24));
+    (cnn.epochs, cnn.batch_size, cnn.learning_rate) = (Some(25), Some(64), Some(3e-3));
+    cnn.patience = Some(6);
+    let mut bpnn = NnFitOptions::new(NnKind::Bpnn);
+    (bpnn.hidden, bpnn.epochs) = (Some(10), Some(30));
+    let (cnn, bpnn) = (fit(cnn), fit(bpnn));
     let mut sq = [[0.0f64; 5]; 3];
     let mut n_total = 0usize;
-    for c in 1..=n_cycles as u32 {
-        let train_ids: Vec<u32> = (1..=n_cycles as u32).filter(|&k| k != c).collect();
-        let (train, test) = data.split(&train_ids, &[c]).expect("split");
-        let (cnn, rep) = train_cnn_lstm(&train, &cfg).expect("cnn-lstm");
-        let m_cnn = cnn.evaluate(&test).expect("eval");
-        let (bp, _) = train_bpnn_baseline(&train, &bpnn_cfg).expect("bpnn");
-        let m_bp = evaluate_bpnn(&bp, &test).expect("eval");
-        let m_mlr = mlr(&train, &test);
-        let n = m_cnn[0].n;
-        n_total += n;
+    for c in 0..n_cycles {
+        let span = starts[c]..starts[c + 1];
+        let fold: Vec<usize> = span.clone().collect();
+        let train: Vec<usize> = (0..n).filter(|k| !span.contains(k)).collect();
+        let test = data.rows(&fold);
+        let (m, training) = cnn
+            .fit_rows_monitored(&data, &train, &mut Quiet)
+            .expect("cnn-lstm");
+        let Training::CnnLstm(rep) = training else {
+            panic!("a CNN-LSTM")
+        };
+        // the fold's windows see the rows before it: predict the whole record, score the fold
+        let score = |pred: Vec<Vec<f64>>| {
+            let p: Vec<Vec<f64>> = fold.iter().map(|&k| pred[k].clone()).collect();
+            target_metrics(&test, &p, inputs.len()).expect("metrics")
+        };
+        let m_cnn = score(m.predict_targets(&data).expect("cnn-lstm"));
+        let bp = bpnn.fit_rows(&data, &train).expect("bpnn");
+        let m_bp = score(bp.predict_targets(&data).expect("bpnn"));
+        let m_mlr = mlr(&data, &train, &fold);
+        let nf = fold.len();
+        n_total += nf;
         println!(
-            "left out fold {c} ({n} rows; CNN-LSTM {} epochs, {:.1} s):",
-            rep.epochs, rep.seconds
+            "left out fold {} ({nf} rows; CNN-LSTM {} epochs, {:.1} s):",
+            c + 1,
+            rep.epochs,
+            rep.seconds
         );
         for ch in 0..5 {
+            let (a, b) = (m_cnn[ch].1.rmse_um, m_bp[ch].1.rmse_um);
             println!(
-                "  {}  CNN-LSTM {:6.3}  BPNN {:6.3}  MLR {:6.3} µm RMSE",
-                chans[ch], m_cnn[ch].rmse, m_bp[ch].rmse, m_mlr[ch]
+                "  {}  CNN-LSTM {a:6.3}  BPNN {b:6.3}  MLR {:6.3} µm RMSE",
+                chans[ch], m_mlr[ch]
             );
-            sq[0][ch] += m_cnn[ch].rmse.powi(2) * n as f64;
-            sq[1][ch] += m_bp[ch].rmse.powi(2) * n as f64;
-            sq[2][ch] += m_mlr[ch].powi(2) * n as f64;
+            sq[0][ch] += a.powi(2) * nf as f64;
+            sq[1][ch] += b.powi(2) * nf as f64;
+            sq[2][ch] += m_mlr[ch].powi(2) * nf as f64;
         }
     }
     println!("pooled over the {n_cycles} left-out folds (RMSE µm):");
@@ -162,34 +170,29 @@ fn main() {
     }
 }
 
-/// Multiple linear regression with intercept on every feature (least squares by SVD), RMSE per
-/// channel.
-fn mlr(train: &ThermalDataset, test: &ThermalDataset) -> Vec<f64> {
-    let (x, y) = train.rows();
-    let (xt, yt) = test.rows();
-    let design = |x: &[Vec<f64>]| {
-        DMatrix::from_fn(x.len(), x[0].len() + 1, |i, j| {
+/// Multiple linear regression with intercept on every column of `data` (least squares by SVD),
+/// fitted on the rows `train`: RMSE per target on the rows `test`.
+fn mlr(data: &ThermalData, train: &[usize], test: &[usize]) -> Vec<f64> {
+    let design = |rows: &[usize]| {
+        DMatrix::from_fn(rows.len(), data.temps_c.ncols() + 1, |i, j| {
             if j == 0 {
                 1.0
             } else {
-                x[i][j - 1]
+                data.temps_c[(rows[i], j - 1)]
             }
         })
     };
-    let a = design(&x);
-    let at = design(&xt);
-    let svd = a.svd(true, true);
-    (0..y[0].len())
-        .map(|ch| {
-            let b = DVector::from_iterator(y.len(), y.iter().map(|r| r[ch]));
+    let svd = design(train).svd(true, true);
+    let at = design(test);
+    (data.targets().iter())
+        .map(|(_, y)| {
+            let b = DVector::from_iterator(train.len(), train.iter().map(|&r| y[r]));
             let coef = svd.solve(&b, 1e-12).expect("svd solve");
             let pred = &at * coef;
-            let se: f64 = yt
-                .iter()
-                .enumerate()
-                .map(|(i, r)| (pred[i] - r[ch]).powi(2))
+            let se: f64 = (test.iter().enumerate())
+                .map(|(i, &r)| (pred[i] - y[r]).powi(2))
                 .sum();
-            (se / yt.len() as f64).sqrt()
+            (se / test.len() as f64).sqrt()
         })
         .collect()
 }

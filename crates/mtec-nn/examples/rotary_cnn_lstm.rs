@@ -10,8 +10,9 @@
 mod support;
 
 use mtec_nn::synthetic::{rotary_thermal, RotaryThermalSpec};
-use mtec_nn::{compare_on_split, BpnnTrainConfig, CnnLstmConfig};
-use support::{export, print_bench_lines, print_comparison, ExampleArgs};
+use mtec_nn::thermal_log::{NnFitOptions, NnKind};
+use mtec_nn::NeuralFit;
+use support::{compare, export, print_bench_lines, print_comparison, ExampleArgs};
 
 fn main() {
     if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
@@ -19,30 +20,29 @@ fn main() {
     }
     let args = ExampleArgs::from_env();
     let arg = |name: &str| args.value(name);
-    let fixed = args.flag("--fixed");
     let spec = RotaryThermalSpec {
         angles: 24,
         ..RotaryThermalSpec::default()
     };
     let data = rotary_thermal(&spec);
+    // T1..T9 (every `_c` column) and the angle as cos and sin; the source-sized CNN-LSTM
+    let fit = |options| NeuralFit {
+        options,
+        sensors: vec![],
+        inputs: vec!["cos_angle".into(), "sin_angle".into()],
+    };
+    let mut cnn = NnFitOptions::new(NnKind::CnnLstm);
+    cnn.epochs = arg("--epochs").map(|n| n.parse().expect("--epochs N"));
+    if args.flag("--fixed") {
+        cnn.patience = Some(usize::MAX / 2);
+    }
+    let mut bpnn = NnFitOptions::new(NnKind::Bpnn);
+    (bpnn.hidden, bpnn.epochs) = (Some(10), Some(200));
+    let (cnn, bpnn) = (fit(cnn), fit(bpnn));
     if let Some(dir) = arg("--export") {
-        export(&data, &dir);
+        export(&data, &cnn, &dir);
     }
-    let mut cfg = CnnLstmConfig {
-        ..CnnLstmConfig::default()
-    };
-    if let Some(n) = arg("--epochs") {
-        cfg.max_epochs = n.parse().expect("--epochs N");
-    }
-    if fixed {
-        cfg.patience = usize::MAX / 2;
-    }
-    let bpnn_cfg = BpnnTrainConfig {
-        hidden: 10,
-        max_epochs: 200,
-        ..BpnnTrainConfig::default()
-    };
-    let (_, _, cmp) = compare_on_split(&data, &[1, 2, 4], &[3], &cfg, &bpnn_cfg).expect("training");
+    let cmp = compare(&data, &[1, 2, 4], &[3], &cnn, &bpnn);
     let r = &cmp.cnn_lstm_training;
     println!(
         "CNN-LSTM: {} parameters, {} train windows, {} epochs (best {}), {:.2} s, {:.4} s/epoch",

@@ -1,32 +1,30 @@
-//! The BPNN baseline on a sequence dataset and the side-by-side comparison with the CNN-LSTM on
-//! the same split by experiment: what `mtec thermal fit --model cnn-lstm|bpnn` needs.
+//! The BPNN on the training representation of [`crate::thermal_fit::NeuralFit`] (which is how
+//! a caller trains one): `mtec thermal fit --model bpnn`.
 //!
 //! The BPNN sees only the features of the current row (no history), as in the source's
-//! comparison (give it history with [`ThermalDataset::lagged`]). Its early-stopping rows are,
+//! comparison. Its early-stopping rows are,
 //! like the CNN-LSTM's, the tail of every training sequence or one whole training experiment
 //! (block-wise, never random rows).
 
 use crate::bpnn::Bpnn;
 use crate::bpnn_train::{train_bpnn_with_validation_monitored, BpnnTrainConfig, TrainReport};
-use crate::cnn_lstm::{train_cnn_lstm, CnnLstm, CnnLstmConfig, CnnLstmReport};
 use crate::dataset::ThermalDataset;
 use crate::error::{NnError, Result};
-use crate::metrics::{channel_metrics, ChannelMetrics};
-use crate::progress::{Monitor, Quiet};
-use serde::Serialize;
+use crate::progress::Monitor;
 
 /// Trains the BPNN baseline on the scored rows of `train` (current features → targets), holding
 /// out the last `config.validation_fraction` of each sequence for early stopping, or the whole
 /// experiment `config.validation_experiment`.
-pub fn train_bpnn_baseline(
+#[cfg(test)]
+pub(crate) fn train_bpnn_baseline(
     train: &ThermalDataset,
     config: &BpnnTrainConfig,
 ) -> Result<(Bpnn, TrainReport)> {
-    train_bpnn_baseline_monitored(train, config, &mut Quiet)
+    train_bpnn_baseline_monitored(train, config, &mut crate::progress::Quiet)
 }
 
 /// [`train_bpnn_baseline`] reporting every epoch to `monitor`, which may stop it.
-pub fn train_bpnn_baseline_monitored(
+pub(crate) fn train_bpnn_baseline_monitored(
     train: &ThermalDataset,
     config: &BpnnTrainConfig,
     monitor: &mut dyn Monitor,
@@ -67,67 +65,10 @@ pub fn train_bpnn_baseline_monitored(
     Ok((net, report))
 }
 
-/// RMSE, MAE and residual ratio per channel of the BPNN on the scored rows of `data`.
-pub fn evaluate_bpnn(net: &Bpnn, data: &ThermalDataset) -> Result<Vec<ChannelMetrics>> {
-    data.validate()?;
-    let (x, y) = data.rows();
-    let pred = x
-        .iter()
-        .map(|r| net.predict(r).map_err(NnError::from))
-        .collect::<Result<Vec<_>>>()?;
-    Ok(channel_metrics(&data.target_names, &pred, &y))
-}
-
-/// Both models trained on the same experiments and scored on the same held-out ones.
-#[derive(Debug, Clone, Serialize)]
-pub struct SplitComparison {
-    pub train_experiments: Vec<u32>,
-    pub test_experiments: Vec<u32>,
-    pub cnn_lstm: Vec<ChannelMetrics>,
-    pub bpnn: Vec<ChannelMetrics>,
-    pub cnn_lstm_training: CnnLstmReport,
-    pub bpnn_training: TrainReport,
-}
-
-impl SplitComparison {
-    /// RMSE over all channels together (√ of the mean of the squared per-channel RMSEs).
-    pub fn overall_rmse(metrics: &[ChannelMetrics]) -> f64 {
-        (metrics.iter().map(|m| m.rmse * m.rmse).sum::<f64>() / metrics.len().max(1) as f64).sqrt()
-    }
-}
-
-/// Splits `data` by experiment, trains the CNN-LSTM and the BPNN baseline on `train_ids` and
-/// scores both on `test_ids`.
-pub fn compare_on_split(
-    data: &ThermalDataset,
-    train_ids: &[u32],
-    test_ids: &[u32],
-    cnn_config: &CnnLstmConfig,
-    bpnn_config: &BpnnTrainConfig,
-) -> Result<(CnnLstm, Bpnn, SplitComparison)> {
-    let (train, test) = data.split(train_ids, test_ids)?;
-    let (cnn, cnn_report) = train_cnn_lstm(&train, cnn_config)?;
-    let (bpnn, bpnn_report) = train_bpnn_baseline(&train, bpnn_config)?;
-    let cmp = SplitComparison {
-        train_experiments: train_ids.to_vec(),
-        test_experiments: test_ids.to_vec(),
-        cnn_lstm: cnn.evaluate(&test)?,
-        bpnn: evaluate_bpnn(&bpnn, &test)?,
-        cnn_lstm_training: cnn_report,
-        bpnn_training: bpnn_report,
-    };
-    Ok((cnn, bpnn, cmp))
-}
-
-/// Per-channel metrics of any predictions against the scored rows of `data`.
-pub fn metrics_of(data: &ThermalDataset, pred: &[Vec<f64>]) -> Vec<ChannelMetrics> {
-    let (_, y) = data.rows();
-    channel_metrics(&data.target_names, pred, &y)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cnn_lstm::{train_cnn_lstm, CnnLstmConfig};
     use crate::dataset::{Experiment, Sequence};
 
     /// Three experiments of two sequences × 10 rows, 3 features, 1 target.

@@ -28,8 +28,7 @@
 use crate::bpnn::Affine;
 use crate::dataset::{Sequence, ThermalDataset};
 use crate::error::{NnError, Result};
-use crate::metrics::{channel_metrics, ChannelMetrics};
-use crate::progress::{Epoch, Monitor, Quiet, StopReason};
+use crate::progress::{Epoch, Monitor, StopReason};
 use crate::rng;
 use candle_core::{DType, Device, Tensor, Var};
 use candle_nn::optim::{AdamW, Optimizer as _, ParamsAdamW};
@@ -291,18 +290,19 @@ pub(crate) fn check_validation_experiment(train: &ThermalDataset, v: Option<u32>
     Ok(())
 }
 
-/// Trains a CNN-LSTM on every experiment of `train` (split the dataset first with
-/// [`ThermalDataset::split`]).
-pub fn train_cnn_lstm(
+/// Trains a CNN-LSTM on every experiment of `train` (the training representation of
+/// [`crate::thermal_fit::NeuralFit`], which is how a caller trains one).
+#[cfg(test)]
+pub(crate) fn train_cnn_lstm(
     train: &ThermalDataset,
     config: &CnnLstmConfig,
 ) -> Result<(CnnLstm, CnnLstmReport)> {
-    train_cnn_lstm_monitored(train, config, &mut Quiet)
+    train_cnn_lstm_monitored(train, config, &mut crate::progress::Quiet)
 }
 
 /// [`train_cnn_lstm`] reporting every epoch to `monitor`, which may stop it (after the current
 /// epoch, keeping the best epoch's weights).
-pub fn train_cnn_lstm_monitored(
+pub(crate) fn train_cnn_lstm_monitored(
     train: &ThermalDataset,
     config: &CnnLstmConfig,
     monitor: &mut dyn Monitor,
@@ -541,7 +541,7 @@ impl CnnLstm {
 
     /// Predictions for the scored rows of every sequence, in dataset order (experiment,
     /// sequence, row): one vector of channels per row, physical units.
-    pub fn predict(&self, data: &ThermalDataset) -> Result<Vec<Vec<f64>>> {
+    pub(crate) fn predict(&self, data: &ThermalDataset) -> Result<Vec<Vec<f64>>> {
         data.validate()?;
         if data.feature_names != self.feature_names {
             return Err(NnError::Data(format!(
@@ -590,13 +590,6 @@ impl CnnLstm {
             }
         }
         Ok(out)
-    }
-
-    /// RMSE, MAE and residual ratio per channel on `data` (which must hold the targets).
-    pub fn evaluate(&self, data: &ThermalDataset) -> Result<Vec<ChannelMetrics>> {
-        let pred = self.predict(data)?;
-        let (_, meas) = data.rows();
-        Ok(channel_metrics(&self.target_names, &pred, &meas))
     }
 
     pub fn to_json(&self) -> String {
@@ -654,6 +647,17 @@ impl CnnLstm {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An even kernel has no "same" padding: refused, as is a zero width.
+    #[test]
+    fn an_even_kernel_is_refused() {
+        let a = CnnLstmConfig::default().architecture;
+        check_architecture(&a, 11).unwrap();
+        let even = Architecture { kernel: 4, ..a };
+        let e = check_architecture(&even, 11).unwrap_err();
+        assert!(e.to_string().contains("odd"), "{e}");
+        assert!(check_architecture(&Architecture { window: 0, ..a }, 11).is_err());
+    }
 
     /// Cosine annealing worked by hand: lr at the first epoch, the midpoint of lr and lr·f half
     /// way, lr·f + (lr − lr·f)·(1 + cos(π·9/10))/2 at the last of ten epochs.

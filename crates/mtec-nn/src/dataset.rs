@@ -9,6 +9,8 @@
 //! long record still sees the temperatures that preceded it.
 
 use crate::error::{NnError, Result};
+use mtec_thermal::ThermalData;
+use nalgebra::DMatrix;
 
 /// One time series: `features[t]` and `targets[t]` for t = 0..len.
 #[derive(Debug, Clone, PartialEq)]
@@ -22,9 +24,6 @@ pub struct Sequence {
 impl Sequence {
     pub fn len(&self) -> usize {
         self.features.len()
-    }
-    pub fn is_empty(&self) -> bool {
-        self.features.is_empty()
     }
     /// Rows whose targets count: `warmup..len`.
     pub fn scored_rows(&self) -> std::ops::Range<usize> {
@@ -100,6 +99,7 @@ impl ThermalDataset {
             .sum()
     }
 
+    #[cfg(test)]
     /// The experiments with the given ids, in the order given; an unknown id is an error.
     pub fn select(&self, ids: &[u32]) -> Result<ThermalDataset> {
         let mut experiments = Vec::new();
@@ -125,26 +125,12 @@ impl ThermalDataset {
         })
     }
 
-    /// Train/test split by whole experiments; the two id sets must not overlap.
-    pub fn split(&self, train: &[u32], test: &[u32]) -> Result<(ThermalDataset, ThermalDataset)> {
-        if let Some(id) = train.iter().find(|id| test.contains(id)) {
-            return Err(NnError::Config(format!(
-                "experiment {id} is both in the training and the test set"
-            )));
-        }
-        if train.is_empty() || test.is_empty() {
-            return Err(NnError::Config(
-                "both the training and the test set need an experiment".into(),
-            ));
-        }
-        Ok((self.select(train)?, self.select(test)?))
-    }
-
     /// The same data with the first `n` features (the temperatures) as rises over each
     /// sequence's first row. Thermal errors are defined against the state of the static
     /// (t = 0) measurement, so a rise is what they depend on; absolute temperatures also carry
     /// the room's level, which differs from one experiment to the next (an experiment that
     /// starts colder than every training one lies outside their range).
+    #[cfg(test)]
     pub fn rises(&self, n: usize) -> ThermalDataset {
         let mut out = self.clone();
         for seq in out.experiments.iter_mut().flat_map(|e| &mut e.sequences) {
@@ -163,6 +149,7 @@ impl ThermalDataset {
     /// The same data with every target as its change since the sequence's first row (the
     /// static measurement that starts an experiment): a model trained on it predicts the
     /// thermal change, and the motion is that first measurement plus the prediction.
+    #[cfg(test)]
     pub fn target_changes(&self) -> ThermalDataset {
         let mut out = self.clone();
         for seq in out.experiments.iter_mut().flat_map(|e| &mut e.sequences) {
@@ -174,52 +161,6 @@ impl ThermalDataset {
                     *v -= v0;
                 }
             }
-        }
-        out
-    }
-
-    /// Each scored row's first-row targets, in the order of [`ThermalDataset::rows`]: what
-    /// turns predictions on [`ThermalDataset::target_changes`] back into targets.
-    pub fn first_targets(&self) -> Vec<Vec<f64>> {
-        let mut out = Vec::new();
-        for seq in self.experiments.iter().flat_map(|e| &e.sequences) {
-            for _ in seq.scored_rows() {
-                out.push(seq.targets[0].clone());
-            }
-        }
-        out
-    }
-
-    /// The same data with the first `n` features (the sensors) also `1..=lags` rows earlier:
-    /// row t becomes [x₁…xₙ(t), x₁…xₙ(t − 1), …, x₁…xₙ(t − lags), the other features(t)],
-    /// named `<sensor>_lag<l>`. Rows before a sequence's start take its first row, as the
-    /// CNN-LSTM's windows do (the campaigns start after hours switched off). This is how a
-    /// static network (the BPNN) sees history: the lagged linear model's φ(t) as inputs.
-    pub fn lagged(&self, n: usize, lags: usize) -> ThermalDataset {
-        let n = n.min(self.feature_names.len());
-        let mut names: Vec<String> = self.feature_names[..n].to_vec();
-        for l in 1..=lags {
-            names.extend(
-                self.feature_names[..n]
-                    .iter()
-                    .map(|s| format!("{s}_lag{l}")),
-            );
-        }
-        names.extend_from_slice(&self.feature_names[n..]);
-        let mut out = self.clone();
-        out.feature_names = names;
-        for seq in out.experiments.iter_mut().flat_map(|e| &mut e.sequences) {
-            let x = std::mem::take(&mut seq.features);
-            seq.features = (0..x.len())
-                .map(|t| {
-                    let mut row: Vec<f64> = Vec::with_capacity(x[t].len() + n * lags);
-                    for l in 0..=lags {
-                        row.extend_from_slice(&x[t.saturating_sub(l)][..n]);
-                    }
-                    row.extend_from_slice(&x[t][n..]);
-                    row
-                })
-                .collect();
         }
         out
     }
@@ -239,6 +180,47 @@ impl ThermalDataset {
             Some(v) if v == experiment => rows.start,
             Some(_) => rows.end,
             None => rows.end - ((rows.len() as f64) * fraction).round() as usize,
+        }
+    }
+
+    /// Every row as mtec-thermal's `ThermalData`, in experiment, sequence, row order: the
+    /// features as its columns (`sensor_names`), the targets as `target` and `more_targets`,
+    /// the experiment id as its label, and `at(experiment, sequence, row)` giving each row's
+    /// time (min) and its value of the sequence column `sequence` (e.g. the angle).
+    pub(crate) fn to_thermal_data(
+        &self,
+        sequence: &str,
+        at: &dyn Fn(u32, usize, usize) -> (f64, f64),
+    ) -> ThermalData {
+        let (mut experiment, mut time_min, mut seq_value) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut x, mut y): (Vec<&[f64]>, Vec<&[f64]>) = (Vec::new(), Vec::new());
+        for e in &self.experiments {
+            for (k, seq) in e.sequences.iter().enumerate() {
+                for t in 0..seq.len() {
+                    let (time, value) = at(e.id, k, t);
+                    experiment.push(e.id.to_string());
+                    time_min.push(time);
+                    seq_value.push(value);
+                    x.push(&seq.features[t]);
+                    y.push(&seq.targets[t]);
+                }
+            }
+        }
+        let n = x.len();
+        let mut targets = (self.target_names.iter().enumerate())
+            .map(|(c, name)| (name.clone(), y.iter().map(|r| r[c]).collect::<Vec<_>>()));
+        ThermalData {
+            experiment,
+            time_min,
+            sensor_names: self.feature_names.clone(),
+            temps_c: DMatrix::from_fn(n, self.feature_names.len(), |i, j| x[i][j]),
+            ambient_c: None,
+            position_mm: None,
+            target: targets.next(),
+            more_targets: targets.collect(),
+            sequence: Some((sequence.to_string(), seq_value)),
+            source: None,
+            lines: (2..n + 2).collect(),
         }
     }
 
@@ -300,22 +282,6 @@ mod tests {
     }
 
     #[test]
-    fn split_by_experiment() {
-        let d = ds();
-        d.validate().unwrap();
-        let (tr, te) = d.split(&[1, 2, 4], &[3]).unwrap();
-        assert_eq!(
-            tr.experiments.iter().map(|e| e.id).collect::<Vec<_>>(),
-            vec![1, 2, 4]
-        );
-        assert_eq!(te.experiments[0].id, 3);
-        assert_eq!(tr.scored_rows(), 6);
-        assert_eq!(te.rows().0, vec![vec![3.0, 2.0], vec![3.0, 3.0]]);
-        assert!(d.split(&[1, 3], &[3]).is_err());
-        assert!(d.split(&[1, 9], &[3]).is_err());
-    }
-
-    #[test]
     fn rises_over_each_sequence_start() {
         let mut d = ds();
         d.experiments[0].sequences[0].features = vec![vec![20.5, 1.0], vec![21.0, 2.0]];
@@ -337,46 +303,6 @@ mod tests {
     }
 
     #[test]
-    fn lagged_sensors_by_hand() {
-        // one sequence: sensors (a, b), then an angle column
-        let mut d = ds();
-        d.feature_names = vec!["a".into(), "b".into(), "angle".into()];
-        for seq in d.experiments.iter_mut().flat_map(|e| &mut e.sequences) {
-            seq.features = vec![
-                vec![1.0, 10.0, 0.5],
-                vec![2.0, 20.0, 0.6],
-                vec![4.0, 40.0, 0.7],
-            ];
-        }
-        let l = d.lagged(2, 2);
-        assert_eq!(
-            l.feature_names,
-            ["a", "b", "a_lag1", "b_lag1", "a_lag2", "b_lag2", "angle"]
-        );
-        // rows before the start repeat row 0; the angle stays the current row's
-        assert_eq!(
-            l.experiments[0].sequences[0].features,
-            vec![
-                vec![1.0, 10.0, 1.0, 10.0, 1.0, 10.0, 0.5],
-                vec![2.0, 20.0, 1.0, 10.0, 1.0, 10.0, 0.6],
-                vec![4.0, 40.0, 2.0, 20.0, 1.0, 10.0, 0.7],
-            ]
-        );
-        assert_eq!(
-            l.experiments[0].sequences[0].targets,
-            d.experiments[0].sequences[0].targets
-        );
-        l.validate().unwrap();
-        // lags 0 is the data itself; rises of every lagged sensor are over the first row
-        assert_eq!(d.lagged(2, 0), d);
-        let r = l.rises(6);
-        assert_eq!(
-            r.experiments[0].sequences[0].features[2],
-            vec![3.0, 30.0, 1.0, 10.0, 0.0, 0.0, 0.7]
-        );
-    }
-
-    #[test]
     fn target_changes_by_hand() {
         let d = ds(); // targets 0, 1, 2 in every sequence, warmup 1
         let mut d2 = d.clone();
@@ -390,12 +316,6 @@ mod tests {
             c.experiments[0].sequences[0].features,
             d2.experiments[0].sequences[0].features
         );
-        // the first targets of the scored rows (1 and 2) undo it
-        let first = d2.select(&[1]).unwrap().first_targets();
-        assert_eq!(first, vec![vec![5.0], vec![5.0]]);
-        let (_, y) = c.select(&[1]).unwrap().rows();
-        let back: Vec<f64> = y.iter().zip(&first).map(|(a, b)| a[0] + b[0]).collect();
-        assert_eq!(back, vec![7.0, 4.0]);
     }
 
     #[test]

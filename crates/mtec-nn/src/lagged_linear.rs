@@ -17,15 +17,23 @@
 //! 1. per experiment and time, the targets over the angles → their coefficients on ψ;
 //! 2. per coefficient, its course over the times → β on φ.
 //!
-//! Every sequence of an experiment is one angle over the same times (the rotary dataset).
+//! Every sequence of an experiment is one angle over the same times (the rotary data of
+//! [`crate::rotary::rotary_data`]). Fitted on rows of mtec-thermal's `ThermalData`
+//! ([`LaggedLinear::fit_rows`]), it predicts every row of such data
+//! ([`LaggedLinear::predict_targets`]).
 
 use crate::dataset::ThermalDataset;
 use crate::error::{NnError, Result};
+use crate::thermal_fit::{model_inputs, training_data};
+use mtec_thermal::ThermalData;
 use nalgebra::{DMatrix, DVector};
 
 /// A fitted lagged linear model.
 #[derive(Debug, Clone)]
 pub struct LaggedLinear {
+    /// The sensor columns, then the angle's harmonic columns (the model's inputs).
+    pub sensors: Vec<String>,
+    pub inputs: Vec<String>,
     /// Leading features that are temperatures (the rest are angle harmonics).
     pub n_sensors: usize,
     /// How many earlier rows enter (1: T(t) and T(t − 1), …).
@@ -57,10 +65,54 @@ fn lstsq(a: DMatrix<f64>, y: &DMatrix<f64>) -> Result<DMatrix<f64>> {
         .map_err(|e| NnError::Model(format!("least squares: {e}")))
 }
 
+fn thermal(e: mtec_thermal::ThermalError) -> NnError {
+    NnError::Data(e.to_string())
+}
+
 impl LaggedLinear {
+    /// Fits on `rows` of `data` (every target of it), the inputs the `sensors` columns (the
+    /// temperatures) and the angle's harmonic columns `harmonics`.
+    pub fn fit_rows(
+        data: &ThermalData,
+        rows: &[usize],
+        sensors: &[String],
+        harmonics: &[String],
+        lags: usize,
+    ) -> Result<LaggedLinear> {
+        let train =
+            training_data(data, (sensors, harmonics), (false, false), rows, 0).map_err(thermal)?;
+        let mut m = LaggedLinear::fit(&train, sensors.len(), lags)?;
+        (m.sensors, m.inputs) = (sensors.to_vec(), harmonics.to_vec());
+        Ok(m)
+    }
+
+    /// Predicted targets (rows × targets) of every row of `data`, each segment (experiment and
+    /// angle) a time series from its first row.
+    pub fn predict_targets(&self, data: &ThermalData) -> Result<Vec<Vec<f64>>> {
+        let (_, x) = model_inputs(data, &self.sensors, &self.inputs, false).map_err(thermal)?;
+        let mut out = Vec::with_capacity(x.len());
+        for (a, b) in data.segments() {
+            for t in 0..b - a {
+                let d = DVector::from_vec(design_row(
+                    &x[a..b],
+                    t,
+                    self.n_sensors,
+                    self.lags,
+                    &self.mean,
+                ));
+                out.push(self.coef.iter().map(|c| c.dot(&d)).collect());
+            }
+        }
+        Ok(out)
+    }
+
     /// Fits on every scored row of `data` (features: `n_sensors` temperatures, then the angle
     /// harmonics; module docs for the two stages).
-    pub fn fit(data: &ThermalDataset, n_sensors: usize, lags: usize) -> Result<LaggedLinear> {
+    pub(crate) fn fit(
+        data: &ThermalDataset,
+        n_sensors: usize,
+        lags: usize,
+    ) -> Result<LaggedLinear> {
         let nf = data.feature_names.len();
         if n_sensors == 0 || n_sensors > nf {
             return Err(NnError::Config(format!(
@@ -124,6 +176,8 @@ impl LaggedLinear {
             .map(|k| DVector::from_fn(np * nh, |c, _| beta[(c / nh, k * nh + c % nh)]))
             .collect();
         Ok(LaggedLinear {
+            sensors: data.feature_names[..n_sensors].to_vec(),
+            inputs: data.feature_names[n_sensors..].to_vec(),
             n_sensors,
             lags,
             mean,
@@ -132,7 +186,8 @@ impl LaggedLinear {
     }
 
     /// Predictions for every scored row of `data`, in [`ThermalDataset::rows`] order.
-    pub fn predict(&self, data: &ThermalDataset) -> Vec<Vec<f64>> {
+    #[cfg(test)]
+    fn predict(&self, data: &ThermalDataset) -> Vec<Vec<f64>> {
         let mut out = Vec::new();
         for e in &data.experiments {
             for s in &e.sequences {

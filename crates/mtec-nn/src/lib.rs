@@ -11,10 +11,14 @@
 //! - [`cnn_lstm`]: a CNN-LSTM (1-D convolution over the feature vector of each time step,
 //!   max pooling, LSTM over a window of time steps, dense output) that predicts any set of error
 //!   channels from temperatures (+ angle / position), trained with candle on the CPU; saved as
-//!   `mtec.cnn-lstm/1` JSON with its weights. [`dataset`] holds the training representation
-//!   (experiments × sequences × time × features, the tensors' source), which [`thermal_fit`]
-//!   builds from mtec-thermal's `ThermalData`; its split and [`metrics`] (RMSE / MAE /
-//!   residual ratio over the range) serve the crate's examples and the `dbb-rotary` tests.
+//!   `mtec.cnn-lstm/1` JSON with its weights. Both networks are trained through
+//!   [`thermal_fit`] on mtec-thermal's `ThermalData` (the one public time-series data set) and
+//!   scored with its `Metrics`; the crate-private `dataset` is their training representation
+//!   (experiments × sequences × time × features, the tensors' source).
+//! - [`rotary`]: ballbar-identified error motions and a temperature log joined into
+//!   `ThermalData` (one sequence per experiment and angle), and predicted motions mapped back
+//!   to ballbar readings; [`lagged_linear`], the non-neural reference on the same data;
+//!   [`synthetic`], an analytic rotary thermal model of the same shape.
 //!
 //! - [`thermal_log`]: a rotary thermal log (CSV) read into mtec-thermal's `ThermalData` (several
 //!   targets, a sequence column, angle harmonics), which of its columns are features and
@@ -29,7 +33,7 @@
 //! This is the only crate of the workspace that depends on the neural-network library (candle,
 //! see `NN_CHOICE.md`); everything it exports is plain Rust data.
 
-pub mod baseline;
+mod baseline;
 /// The network as plain data lives in `mtec-comp` (a compensable model, evaluated without
 /// candle); re-exported here, where it is trained.
 pub mod bpnn {
@@ -37,12 +41,11 @@ pub mod bpnn {
 }
 pub mod bpnn_train;
 pub mod cnn_lstm;
-pub mod dataset;
+mod dataset;
 pub mod error;
 pub mod grid_fit;
 pub mod lagged_linear;
 pub mod lm;
-pub mod metrics;
 pub mod progress;
 mod rng;
 pub mod rotary;
@@ -51,18 +54,10 @@ pub mod thermal_fit;
 pub mod thermal_log;
 pub mod threads;
 
-pub use baseline::{
-    compare_on_split, evaluate_bpnn, train_bpnn_baseline, train_bpnn_baseline_monitored,
-    SplitComparison,
-};
 pub use bpnn::{Activation, Bpnn};
 pub use bpnn_train::{train_bpnn, train_bpnn_monitored, BpnnTrainConfig, Optimizer, TrainReport};
-pub use cnn_lstm::{
-    train_cnn_lstm, train_cnn_lstm_monitored, CnnLstm, CnnLstmConfig, CnnLstmReport,
-};
-pub use dataset::{Experiment, Sequence, ThermalDataset};
+pub use cnn_lstm::{CnnLstm, CnnLstmConfig, CnnLstmReport};
 pub use error::NnError;
 pub use grid_fit::{fit_grid, fit_grid_monitored, GridFitConfig, GridFitReport};
-pub use metrics::ChannelMetrics;
 pub use progress::{Epoch, Monitor, Quiet, StopReason};
 pub use thermal_fit::{NeuralFit, NeuralThermalModel};

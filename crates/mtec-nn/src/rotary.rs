@@ -3,10 +3,11 @@
 //!
 //! 1. [`TemperatureLog`]: the temperatures at each measurement (`experiment,time_min,<s>_c...`,
 //!    e.g. `dbb-rotary`'s `temps.csv`).
-//! 2. [`RotaryDataset::build`]: joins the per-experiment, per-time, per-angle error motions that
-//!    `mtec_identify::ballbar::identify` recovered with those temperatures into a
-//!    [`ThermalDataset`]: one sequence per (experiment, angle), its rows the measurement times;
-//!    features the temperatures and the angle; targets `EXC_um EYC_um EZC_um EAC_urad EBC_urad`.
+//! 2. [`rotary_data`]: joins the per-experiment, per-time, per-angle error motions that
+//!    `mtec_identify::ballbar::identify` recovered with those temperatures into mtec-thermal's
+//!    `ThermalData`: one sequence per (experiment, angle) (sequence column `angle_deg`), its rows
+//!    the measurement times; columns the temperatures and the angle; targets `EXC_um EYC_um
+//!    EZC_um EAC_urad EBC_urad`. [`motion_rows`] labels predictions on its rows.
 //! 3. [`observable_motions`]: any motions (a model's predictions, a simulation's truth) pushed
 //!    through the ballbar method's own path — first-order bar-length model
 //!    (`predicted_dl_um`), mean and first harmonic removed per mode, per-angle solve — i.e. the
@@ -48,6 +49,7 @@ use mtec_identify::ballbar::{
     predicted_dl_um, remove_mean_and_first_harmonic, ErrorMotions, IdentifiedRow, Measurements,
     Setup,
 };
+use mtec_thermal::ThermalData;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -165,12 +167,13 @@ fn key(v: f64) -> i64 {
     (v * 1e6).round() as i64
 }
 
-/// A rotary dataset and, for every sequence, the angle and measurement times it stands for.
+/// A rotary dataset in the training representation and, for every sequence, the angle and
+/// measurement times it stands for.
 #[derive(Debug, Clone, PartialEq)]
-pub struct RotaryDataset {
-    pub data: ThermalDataset,
+pub(crate) struct RotaryDataset {
+    pub(crate) data: ThermalDataset,
     /// experiment id → per sequence (angle in deg, times in min).
-    pub labels: BTreeMap<u32, Vec<(f64, Vec<f64>)>>,
+    pub(crate) labels: BTreeMap<u32, Vec<(f64, Vec<f64>)>>,
 }
 
 /// One predicted or measured row: where it is and the five motions.
@@ -187,7 +190,7 @@ impl RotaryDataset {
     /// Joins identified motions with the temperatures (see the module docs). Every
     /// (experiment, time) of `rows` needs a temperature row; every experiment the same angles is
     /// not required, but each (experiment, angle) sequence is ordered by time.
-    pub fn build(
+    pub(crate) fn build(
         temps: &TemperatureLog,
         rows: &[IdentifiedRow],
         angle_encoding: AngleEncoding,
@@ -252,43 +255,60 @@ impl RotaryDataset {
         data.validate()?;
         Ok(RotaryDataset { data, labels })
     }
+}
 
-    /// Attaches (experiment, time, angle) to predictions made on `subset` (a selection of this
-    /// dataset's experiments, e.g. the test part of a split), in the order models predict:
-    /// experiment, sequence, scored row.
-    pub fn label(&self, subset: &ThermalDataset, pred: &[Vec<f64>]) -> Result<Vec<MotionRow>> {
-        let mut out = Vec::with_capacity(pred.len());
-        let mut it = pred.iter();
-        for e in &subset.experiments {
-            let lab = self.labels.get(&e.id).ok_or_else(|| {
-                NnError::Data(format!("experiment {} is not in this dataset", e.id))
-            })?;
-            for (s, seq) in e.sequences.iter().enumerate() {
-                let (angle, times) = &lab[s];
-                for t in seq.scored_rows() {
-                    let p = it.next().ok_or_else(|| {
-                        NnError::Data("fewer predictions than scored rows".into())
-                    })?;
-                    if p.len() != 5 {
-                        return Err(NnError::Data(format!(
-                            "a prediction has {} channels, expected the five motions",
-                            p.len()
-                        )));
-                    }
-                    out.push(MotionRow {
-                        experiment: e.id,
-                        time_min: times[t],
-                        angle_deg: *angle,
-                        motions: [p[0], p[1], p[2], p[3], p[4]],
-                    });
-                }
-            }
-        }
-        if it.next().is_some() {
-            return Err(NnError::Data("more predictions than scored rows".into()));
-        }
-        Ok(out)
+/// Joins identified motions with the temperatures into thermal data (see the module docs): one
+/// sequence per (experiment, angle) ordered by time (sequence column [`ANGLE_FEATURE`]), in
+/// experiment and angle order; the columns the temperatures then the angle's features of
+/// `angle_encoding`; targets [`TARGET_NAMES`] (`EXC_um` first). Every (experiment, time) of
+/// `rows` needs a temperature row; every experiment the same angles is not required.
+pub fn rotary_data(
+    temps: &TemperatureLog,
+    rows: &[IdentifiedRow],
+    angle_encoding: AngleEncoding,
+) -> Result<ThermalData> {
+    let d = RotaryDataset::build(temps, rows, angle_encoding)?;
+    Ok(d.data.to_thermal_data(ANGLE_FEATURE, &|e, k, t| {
+        let (angle, times) = &d.labels[&e][k];
+        (times[t], *angle)
+    }))
+}
+
+/// Attaches (experiment, time, angle) to the predicted motions `pred` of every row of `data`
+/// (thermal data of [`rotary_data`], or some of its rows: `ThermalData::rows`).
+pub fn motion_rows(data: &ThermalData, pred: &[Vec<f64>]) -> Result<Vec<MotionRow>> {
+    if pred.len() != data.len() {
+        return Err(NnError::Data(format!(
+            "{} predictions for {} rows",
+            pred.len(),
+            data.len()
+        )));
     }
+    let Some((_, angles)) = &data.sequence else {
+        return Err(NnError::Data(
+            "rotary data need the angle as their sequence column".into(),
+        ));
+    };
+    (0..data.len())
+        .map(|i| {
+            let p = &pred[i];
+            if p.len() != 5 {
+                return Err(NnError::Data(format!(
+                    "a prediction has {} channels, expected the five motions",
+                    p.len()
+                )));
+            }
+            let experiment = data.experiment[i].parse().map_err(|_| {
+                NnError::Data(format!("experiment {} is not a number", data.experiment[i]))
+            })?;
+            Ok(MotionRow {
+                experiment,
+                time_min: data.time_min[i],
+                angle_deg: angles[i],
+                motions: [p[0], p[1], p[2], p[3], p[4]],
+            })
+        })
+        .collect()
 }
 
 fn ballbar(e: mtec_identify::ballbar::BallbarError) -> NnError {

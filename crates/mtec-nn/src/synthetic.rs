@@ -11,6 +11,7 @@
 //! e_k(t, θ) = Σ_i A_ki · lag_{τ_s}(T_i − T_amb)(t) · (1 + 0.3 cos θ) + B_k cos θ + C_k sin 2θ + noise.
 
 use crate::dataset::{Experiment, Sequence, ThermalDataset};
+use mtec_thermal::ThermalData;
 use rand::Rng;
 use rand_distr::{Distribution, Normal};
 
@@ -62,8 +63,17 @@ fn duty(experiment: u32, t_min: f64) -> f64 {
     }
 }
 
-/// Experiments 1..=4 of the synthetic rotary thermal model.
-pub fn rotary_thermal(spec: &RotaryThermalSpec) -> ThermalDataset {
+/// Experiments 1..=4 of the synthetic rotary thermal model as thermal data: one sequence per
+/// (experiment, angle) in that order (sequence column `angle_deg`, the angle in degrees), the
+/// rows of each every `dt_min` from 0; columns `t1_c`..`t9_c`, `cos_angle`, `sin_angle`;
+/// targets `exc_um` (first), `eyc_um`, `ezc_um`, `eac_urad`, `ebc_urad`.
+pub fn rotary_thermal(spec: &RotaryThermalSpec) -> ThermalData {
+    let angle = |k: usize| 360.0 * k as f64 / spec.angles as f64;
+    rotary_dataset(spec).to_thermal_data("angle_deg", &|_, k, t| (t as f64 * spec.dt_min, angle(k)))
+}
+
+/// [`rotary_thermal`] as the training representation.
+pub(crate) fn rotary_dataset(spec: &RotaryThermalSpec) -> ThermalDataset {
     let mut rng = crate::rng::seeded(spec.seed);
     let gains_c = [4.0, 3.0, 6.0, 2.5, 5.0, 1.5, 3.5, 2.0, 4.5];
     // fast sensors, slow structure: the current temperatures do not tell how far the drift is

@@ -45,7 +45,7 @@ use crate::dataset::{Experiment, Sequence, ThermalDataset};
 use crate::error::NnError;
 use crate::progress::{Monitor, Quiet, StopReason};
 use crate::thermal_log::{NnFitOptions, NnKind};
-use mtec_thermal::{Fit, Predict, ThermalData, ThermalError};
+use mtec_thermal::{Fit, Metrics, Predict, ThermalData, ThermalError};
 use serde::Serialize;
 use std::cell::RefCell;
 
@@ -244,7 +244,8 @@ fn target_rows(data: &ThermalData, changes: bool) -> Result<Vec<Vec<f64>>, Therm
 /// The sequences of a fit on `rows` (see the module docs): one per run of consecutive rows of
 /// one segment (experiment, or sequence of it), after up to `history` earlier rows of that
 /// segment as warmup; `targets` per row (rows × targets).
-pub fn fit_sequences(
+#[cfg(test)]
+fn fit_sequences(
     data: &ThermalData,
     inputs: &[Vec<f64>],
     targets: &[Vec<f64>],
@@ -322,6 +323,25 @@ fn training_set(
     }
 }
 
+/// The training representation of `rows` of `data` with the model inputs `sensors` and
+/// `inputs` (as rises of the sensors when `rises`), every target (as changes when `changes`),
+/// `history` earlier rows of each run as warmup (module docs).
+pub(crate) fn training_data(
+    data: &ThermalData,
+    (sensors, inputs): (&[String], &[String]),
+    (rises, changes): (bool, bool),
+    rows: &[usize],
+    history: usize,
+) -> Result<ThermalDataset, ThermalError> {
+    let target_names: Vec<String> = (data.targets().iter())
+        .map(|(n, _)| n.to_string())
+        .collect();
+    let targets = target_rows(data, changes)?;
+    let (names, x) = model_inputs(data, sensors, inputs, rises)?;
+    let runs = fit_runs(data, &x, &targets, rows, history);
+    Ok(training_set(data, names, target_names, runs))
+}
+
 impl NeuralFit {
     fn history(&self) -> usize {
         match self.options.kind {
@@ -330,6 +350,38 @@ impl NeuralFit {
             }
             NnKind::Bpnn => 0,
         }
+    }
+
+    /// The training representation of `rows` of `data` (module docs): the inputs and targets
+    /// as this fit builds them, one sequence per run of rows with its history.
+    pub(crate) fn training_data(
+        &self,
+        data: &ThermalData,
+        rows: &[usize],
+    ) -> Result<ThermalDataset, ThermalError> {
+        training_data(
+            data,
+            (&self.sensors, &self.inputs),
+            (self.options.rises, self.options.changes),
+            rows,
+            self.history(),
+        )
+    }
+
+    /// Every row of `data` as CSV `experiment,sequence,step,<inputs>,<targets>` (experiments
+    /// numbered as in training, sequence and step counted from 0 within each), the inputs and
+    /// targets as this fit trains on them (rises, changes): the exchange format of
+    /// `bench/cnn_lstm.sh` with its PyTorch peer.
+    pub fn exchange_csv(&self, data: &ThermalData) -> Result<String, ThermalError> {
+        let all: Vec<usize> = (0..data.len()).collect();
+        Ok(training_data(
+            data,
+            (&self.sensors, &self.inputs),
+            (self.options.rises, self.options.changes),
+            &all,
+            0,
+        )?
+        .to_csv())
     }
 
     /// [`Fit::fit_rows`] that reports the epochs to `monitor` and stops when it asks (keeping
@@ -348,14 +400,9 @@ impl NeuralFit {
                 "a network with a sequence column, extra features or angle harmonics needs the data loaded with them (mtec_nn::thermal_log::load); a thermal log gives its sensors only".into(),
             ));
         }
-        let target_names: Vec<String> = (data.targets().iter())
-            .map(|(n, _)| n.to_string())
-            .collect();
-        let targets = target_rows(data, o.changes)?;
-        let (names, inputs) = model_inputs(data, &self.sensors, &self.inputs, o.rises)?;
+        let train = self.training_data(data, rows)?;
+        let (names, target_names) = (train.feature_names.clone(), train.target_names.clone());
         let n_sensors = names.len() - self.inputs.len();
-        let runs = fit_runs(data, &inputs, &targets, rows, self.history());
-        let train = training_set(data, names.clone(), target_names.clone(), runs);
         let (network, training) = match o.kind {
             NnKind::Bpnn => {
                 let (net, report) =
@@ -563,6 +610,34 @@ impl NeuralThermalModel {
         }
         Ok(pred)
     }
+}
+
+/// mtec-thermal's [`Metrics`] of predictions `pred` (rows × targets) of every target of
+/// `measured` (the same rows), per target in the data's order, for a model of `predictors`
+/// inputs: the one metrics set of every model, applied to each output of a network.
+pub fn target_metrics(
+    measured: &ThermalData,
+    pred: &[Vec<f64>],
+    predictors: usize,
+) -> Result<Vec<(String, Metrics)>, ThermalError> {
+    let targets = measured.targets();
+    if targets.is_empty() {
+        measured.target_um()?;
+    }
+    if pred.len() != measured.len() || pred.iter().any(|p| p.len() != targets.len()) {
+        return Err(ThermalError::Invalid(format!(
+            "{} predictions of {} targets for {} rows",
+            pred.len(),
+            targets.len(),
+            measured.len()
+        )));
+    }
+    Ok((targets.iter().enumerate())
+        .map(|(c, (name, y))| {
+            let p: Vec<f64> = pred.iter().map(|r| r[c]).collect();
+            (name.to_string(), Metrics::new(y, &p, predictors))
+        })
+        .collect())
 }
 
 impl Predict for NeuralThermalModel {

@@ -6,21 +6,25 @@
 
 use mtec_identify::ballbar::{identify, Measurements, Setup};
 use mtec_io::Table;
-use mtec_nn::metrics::{channel_metrics, ChannelMetrics};
 use mtec_nn::rotary::{
-    compare_readings, observable_motions, truth_motions, AngleEncoding, MotionRow,
-    ReadingComparison, RotaryDataset, TemperatureLog, TARGET_NAMES,
+    compare_readings, motion_rows, observable_motions, rotary_data, truth_motions, AngleEncoding,
+    MotionRow, ReadingComparison, TemperatureLog, TARGET_NAMES,
 };
-use mtec_nn::{
-    evaluate_bpnn, train_bpnn_baseline, train_cnn_lstm, BpnnTrainConfig, CnnLstmConfig,
-    SplitComparison,
-};
+use mtec_nn::thermal_fit::Training;
+use mtec_nn::thermal_log::{NnFitOptions, NnKind};
+use mtec_nn::{NeuralFit, Quiet};
+use mtec_thermal::validate::rows_of_experiments;
+use mtec_thermal::{Metrics, ThermalData};
 use std::path::Path;
 
 struct Scenario {
     setup: Setup,
     measurements: Measurements,
-    data: RotaryDataset,
+    /// One sequence per experiment and angle (`mtec_nn::rotary::rotary_data`).
+    data: ThermalData,
+    /// The temperature columns and the angle's harmonic columns: the models' inputs.
+    sensors: Vec<String>,
+    inputs: Vec<String>,
     truth: serde_json::Value,
 }
 
@@ -40,13 +44,30 @@ fn scenario_of(name: &str, seed: u64, harmonics: u8) -> Scenario {
         &Table::parse(Path::new("temps.csv"), file("temps.csv")).unwrap(),
     )
     .unwrap();
-    let data = RotaryDataset::build(&temps, &id.rows, AngleEncoding::Harmonics(harmonics)).unwrap();
+    let encoding = AngleEncoding::Harmonics(harmonics);
+    let data = rotary_data(&temps, &id.rows, encoding).unwrap();
     Scenario {
         setup,
         measurements,
         data,
+        sensors: temps.sensor_names.clone(),
+        inputs: encoding.feature_names(),
         truth: out.truth,
     }
+}
+
+/// The rows of the experiments `ids`.
+fn rows(d: &ThermalData, ids: &[&str]) -> Vec<usize> {
+    let ids: Vec<String> = ids.iter().map(|s| s.to_string()).collect();
+    rows_of_experiments(d, &ids).unwrap()
+}
+
+/// Every target of every row of `d` (rows × targets).
+fn targets(d: &ThermalData) -> Vec<Vec<f64>> {
+    let t = d.targets();
+    (0..d.len())
+        .map(|i| t.iter().map(|(_, y)| y[i]).collect())
+        .collect()
 }
 
 /// The true motions of one experiment, as the ballbar method would see them.
@@ -54,15 +75,21 @@ fn observable_truth(s: &Scenario, experiment: u32) -> Vec<MotionRow> {
     observable_motions(&s.setup, &truth_motions(&s.truth, experiment).unwrap()).unwrap()
 }
 
+/// A network on the scenario's inputs.
+fn network(s: &Scenario, options: NnFitOptions) -> NeuralFit {
+    NeuralFit {
+        options,
+        sensors: s.sensors.clone(),
+        inputs: s.inputs.clone(),
+    }
+}
+
 /// The source-sized network (Conv1d 16×3, LSTM 32, window 16; 14 821 parameters) with early
 /// stopping on the last 15 % of every training sequence, at most 40 epochs.
-fn cnn_config() -> CnnLstmConfig {
-    CnnLstmConfig {
-        max_epochs: 40,
-        patience: 15,
-        final_learning_rate_fraction: 0.05,
-        ..CnnLstmConfig::default()
-    }
+fn cnn_options() -> NnFitOptions {
+    let mut o = NnFitOptions::new(NnKind::CnnLstm);
+    (o.epochs, o.patience, o.final_lr_fraction) = (Some(40), Some(15), Some(0.05));
+    o
 }
 
 fn key_of(r: &MotionRow) -> (u32, i64, i64) {
@@ -73,14 +100,49 @@ fn key_of(r: &MotionRow) -> (u32, i64, i64) {
     )
 }
 
+/// mtec-thermal's metrics of one channel and the range (max − min) of its measured values.
+struct Channel {
+    channel: String,
+    metrics: Metrics,
+    range: f64,
+}
+
+impl Channel {
+    fn rmse(&self) -> f64 {
+        self.metrics.rmse_um
+    }
+}
+
+/// Per channel of the five motions: predictions `pred` against `meas` (rows × channels).
+fn channels(pred: &[Vec<f64>], meas: &[Vec<f64>]) -> Vec<Channel> {
+    (0..TARGET_NAMES.len())
+        .map(|c| {
+            let (p, m): (Vec<f64>, Vec<f64>) =
+                pred.iter().zip(meas).map(|(p, m)| (p[c], m[c])).unzip();
+            let hi = m.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let lo = m.iter().copied().fold(f64::INFINITY, f64::min);
+            Channel {
+                channel: TARGET_NAMES[c].to_string(),
+                metrics: Metrics::new(&m, &p, 0),
+                range: hi - lo,
+            }
+        })
+        .collect()
+}
+
+/// RMSE over all channels together (√ of the mean of the squared per-channel RMSEs).
+fn overall_rmse(m: &[Channel]) -> f64 {
+    (m.iter().map(|m| m.rmse().powi(2)).sum::<f64>() / m.len() as f64).sqrt()
+}
+
 /// Both models trained on experiments 1, 2, 4 and evaluated on 3: metrics against the identified
 /// motions, against the true motions (observable part), and the readings comparison.
 struct Outcome {
-    cnn_vs_identified: Vec<ChannelMetrics>,
-    bpnn_vs_identified: Vec<ChannelMetrics>,
-    cnn_vs_truth: Vec<ChannelMetrics>,
-    bpnn_vs_truth: Vec<ChannelMetrics>,
-    identified_vs_truth: Vec<ChannelMetrics>,
+    cnn_vs_identified: Vec<Channel>,
+    bpnn_vs_identified: Vec<Channel>,
+    cnn_vs_truth: Vec<Channel>,
+    bpnn_vs_truth: Vec<Channel>,
+    identified_vs_truth: Vec<Channel>,
     cnn_readings: ReadingComparison,
     bpnn_readings: ReadingComparison,
 }
@@ -89,9 +151,15 @@ fn run(s: &Scenario, bpnn_iterations: usize) -> Outcome {
     if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
         std::env::set_var(var, value);
     }
-    let (train, test) = s.data.data.split(&[1, 2, 4], &[3]).unwrap();
+    let d = &s.data;
+    let (train, test) = (rows(d, &["1", "2", "4"]), d.rows(&rows(d, &["3"])));
     let t0 = std::time::Instant::now();
-    let (cnn, report) = train_cnn_lstm(&train, &cnn_config()).unwrap();
+    let (cnn, report) = network(s, cnn_options())
+        .fit_rows_monitored(d, &train, &mut Quiet)
+        .unwrap();
+    let Training::CnnLstm(report) = report else {
+        panic!("a CNN-LSTM report")
+    };
     eprintln!(
         "CNN-LSTM: {} parameters, {} epochs (best {}), {:.1} s, {} windows; {}",
         report.parameters,
@@ -101,37 +169,41 @@ fn run(s: &Scenario, bpnn_iterations: usize) -> Outcome {
         report.train_windows,
         report.stop_reason
     );
-    let bpnn_cfg = BpnnTrainConfig {
-        hidden: 10,
-        max_epochs: bpnn_iterations,
-        seed: 3,
-        ..BpnnTrainConfig::default()
-    };
+    let mut bpnn_options = NnFitOptions::new(NnKind::Bpnn);
+    (bpnn_options.hidden, bpnn_options.epochs, bpnn_options.seed) =
+        (Some(10), Some(bpnn_iterations), 3);
     let t0 = std::time::Instant::now();
-    let (bpnn, br) = train_bpnn_baseline(&train, &bpnn_cfg).unwrap();
+    let (bpnn, br) = network(s, bpnn_options)
+        .fit_rows_monitored(d, &train, &mut Quiet)
+        .unwrap();
+    let Training::Bpnn(br) = br else {
+        panic!("a BPNN report")
+    };
     eprintln!(
         "BPNN 10-10-5: {} LM iterations (best {}), {:.1} s",
         br.epochs,
         br.best_epoch,
         t0.elapsed().as_secs_f64()
     );
-    let names: Vec<String> = TARGET_NAMES.iter().map(|s| s.to_string()).collect();
     let truth = observable_truth(s, 3);
     let tmap: std::collections::BTreeMap<_, _> =
         truth.iter().map(|r| (key_of(r), r.motions)).collect();
     let vs_truth = |rows: &[MotionRow]| {
         let p: Vec<Vec<f64>> = rows.iter().map(|r| r.motions.to_vec()).collect();
         let t: Vec<Vec<f64>> = rows.iter().map(|r| tmap[&key_of(r)].to_vec()).collect();
-        channel_metrics(&names, &p, &t)
+        channels(&p, &t)
     };
-    let cnn_rows = s.data.label(&test, &cnn.predict(&test).unwrap()).unwrap();
-    let (x, y) = test.rows();
-    let bp: Vec<Vec<f64>> = x.iter().map(|r| bpnn.predict(r).unwrap()).collect();
-    let bpnn_rows = s.data.label(&test, &bp).unwrap();
-    let identified_rows = s.data.label(&test, &y).unwrap();
+    let y = targets(&test);
+    let (cp, bp) = (
+        cnn.predict_targets(&test).unwrap(),
+        bpnn.predict_targets(&test).unwrap(),
+    );
+    let cnn_rows = motion_rows(&test, &cp).unwrap();
+    let bpnn_rows = motion_rows(&test, &bp).unwrap();
+    let identified_rows = motion_rows(&test, &y).unwrap();
     Outcome {
-        cnn_vs_identified: cnn.evaluate(&test).unwrap(),
-        bpnn_vs_identified: evaluate_bpnn(&bpnn, &test).unwrap(),
+        cnn_vs_identified: channels(&cp, &y),
+        bpnn_vs_identified: channels(&bp, &y),
         cnn_vs_truth: vs_truth(&cnn_rows),
         bpnn_vs_truth: vs_truth(&bpnn_rows),
         identified_vs_truth: vs_truth(&identified_rows),
@@ -146,18 +218,18 @@ fn report(o: &Outcome) {
         eprintln!(
             "{:9} RMSE vs identified: CNN-LSTM {:.3}, BPNN {:.3} | vs truth: CNN-LSTM {:.3}, BPNN {:.3}, identification {:.3} | range {:.2}",
             c.channel,
-            c.rmse,
-            b.rmse,
-            o.cnn_vs_truth[k].rmse,
-            o.bpnn_vs_truth[k].rmse,
-            o.identified_vs_truth[k].rmse,
+            c.rmse(),
+            b.rmse(),
+            o.cnn_vs_truth[k].rmse(),
+            o.bpnn_vs_truth[k].rmse(),
+            o.identified_vs_truth[k].rmse(),
             c.range
         );
     }
     eprintln!(
         "overall RMSE vs identified: CNN-LSTM {:.3}, BPNN {:.3}",
-        SplitComparison::overall_rmse(&o.cnn_vs_identified),
-        SplitComparison::overall_rmse(&o.bpnn_vs_identified)
+        overall_rmse(&o.cnn_vs_identified),
+        overall_rmse(&o.bpnn_vs_identified)
     );
     for (name, r) in [("CNN-LSTM", &o.cnn_readings), ("BPNN", &o.bpnn_readings)] {
         eprintln!(
@@ -190,27 +262,28 @@ fn report(o: &Outcome) {
 #[test]
 fn dbb_rotary_pipeline_against_truth_and_readings() {
     let s = scenario(2);
-    assert_eq!(s.data.data.experiments.len(), 4);
-    assert_eq!(s.data.data.scored_rows(), 4 * 13 * 72);
+    assert_eq!(s.data.experiments().len(), 4);
+    assert_eq!(s.data.len(), 4 * 13 * 72);
+    assert_eq!(s.data.segments().len(), 4 * 72);
     let o = run(&s, 60);
     report(&o);
     for m in &o.identified_vs_truth {
         let bound = if m.channel.ends_with("_um") { 0.3 } else { 1.0 };
         assert!(
-            m.rmse < bound,
+            m.rmse() < bound,
             "{}: identification RMSE {}",
             m.channel,
-            m.rmse
+            m.rmse()
         );
     }
     assert!(o.bpnn_readings.change_max_abs_measured_um > 2.0);
     // with the angle as harmonics the BPNN comes close to the floor no model can beat, the
     // identification's own error (overall RMSE vs identified ≤ 1.5 × that of the identified
     // motions vs the truth; 0.355 against 0.276), and the CNN-LSTM within 1.75 × (0.416)
-    let floor = SplitComparison::overall_rmse(&o.identified_vs_truth);
+    let floor = overall_rmse(&o.identified_vs_truth);
     let (c, b) = (
-        SplitComparison::overall_rmse(&o.cnn_vs_identified),
-        SplitComparison::overall_rmse(&o.bpnn_vs_identified),
+        overall_rmse(&o.cnn_vs_identified),
+        overall_rmse(&o.bpnn_vs_identified),
     );
     assert!(b < 1.5 * floor, "BPNN {b} vs floor {floor}");
     assert!(c < 1.75 * floor, "CNN-LSTM {c} vs floor {floor}");
@@ -231,11 +304,11 @@ fn dbb_rotary_pipeline_against_truth_and_readings() {
     for (t, i) in o.bpnn_vs_truth.iter().zip(&o.bpnn_vs_identified) {
         let tol = if t.channel.ends_with("_um") { 0.1 } else { 1.0 };
         assert!(
-            (t.rmse - i.rmse).abs() < tol,
+            (t.rmse() - i.rmse()).abs() < tol,
             "{}: {} vs {}",
             t.channel,
-            t.rmse,
-            i.rmse
+            t.rmse(),
+            i.rmse()
         );
     }
     // the CNN-LSTM: predicted readings within the source's criterion, RMSE well below each
@@ -252,24 +325,24 @@ fn dbb_rotary_pipeline_against_truth_and_readings() {
         .zip(&o.bpnn_vs_identified)
     {
         assert!(
-            c.rmse < 0.1 * c.range,
+            c.rmse() < 0.1 * c.range,
             "{}: CNN-LSTM RMSE {} of range {}",
             c.channel,
-            c.rmse,
+            c.rmse(),
             c.range
         );
         let tol = if c.channel.ends_with("_um") { 0.1 } else { 1.0 };
         assert!(
-            (t.rmse - c.rmse).abs() < tol,
+            (t.rmse() - c.rmse()).abs() < tol,
             "{}: {} vs {}",
             c.channel,
-            t.rmse,
-            c.rmse
+            t.rmse(),
+            c.rmse()
         );
         eprintln!(
             "{}: CNN-LSTM/BPNN RMSE ratio {:.2}",
             c.channel,
-            c.rmse / b.rmse
+            c.rmse() / b.rmse()
         );
     }
 }
@@ -291,8 +364,8 @@ fn acceptance_cnn_lstm_beats_bpnn_on_dbb_rotary() {
     let o = run(&s, 200);
     report(&o);
     let (c, b) = (
-        SplitComparison::overall_rmse(&o.cnn_vs_identified),
-        SplitComparison::overall_rmse(&o.bpnn_vs_identified),
+        overall_rmse(&o.cnn_vs_identified),
+        overall_rmse(&o.bpnn_vs_identified),
     );
     assert!(c < b, "CNN-LSTM RMSE {c} must be below the BPNN's {b}");
     assert!(
@@ -313,10 +386,11 @@ fn acceptance_cnn_lstm_beats_bpnn_on_dbb_rotary() {
 fn realistic_campaign_lagged_linear_meets_the_readings_criterion() {
     use mtec_nn::lagged_linear::LaggedLinear;
     let s = scenario_of("dbb-rotary-realistic", 1, 6);
-    let (train, test) = s.data.data.split(&[1, 2, 4], &[3]).unwrap();
+    let d = &s.data;
+    let (train, test) = (rows(d, &["1", "2", "4"]), d.rows(&rows(d, &["3"])));
+    let fit = |lags: usize| LaggedLinear::fit_rows(d, &train, &s.sensors, &s.inputs, lags).unwrap();
     let ratio = |lags: usize| {
-        let m = LaggedLinear::fit(&train, 9, lags).unwrap();
-        let rows = s.data.label(&test, &m.predict(&test)).unwrap();
+        let rows = motion_rows(&test, &fit(lags).predict_targets(&test).unwrap()).unwrap();
         compare_readings(&s.setup, &s.measurements, 3, &rows).unwrap()
     };
     let (lagged, now) = (ratio(2), ratio(0));
@@ -335,12 +409,11 @@ fn realistic_campaign_lagged_linear_meets_the_readings_criterion() {
     );
     // and against the truth: the predictions of the change are as close to the true motions
     // (as the ballbar method sees them) as to the identified ones
-    let m = LaggedLinear::fit(&train, 9, 2).unwrap();
-    let pred = s.data.label(&test, &m.predict(&test)).unwrap();
+    let pred = motion_rows(&test, &fit(2).predict_targets(&test).unwrap()).unwrap();
     let truth = observable_truth(&s, 3);
     let key = |r: &MotionRow| (r.time_min.to_bits(), r.angle_deg.to_bits());
     let t: std::collections::HashMap<_, _> = truth.iter().map(|r| (key(r), r.motions)).collect();
-    let (_, y) = test.rows();
+    let y = targets(&test);
     let (mut to_truth, mut to_id) = (0.0, 0.0);
     for (p, y) in pred.iter().zip(&y) {
         let tr = t[&key(p)];
