@@ -809,6 +809,31 @@ mod tests {
         for (got, want) in f.iter().zip([0.0, 1.0, -1.0, 0.0]) {
             assert!((got - want).abs() < 1e-12, "{f:?}");
         }
+        // as thermal data: one sequence per angle, rows in time order; labels from its rows
+        let data = rotary_data(&temps, &rows, AngleEncoding::Degrees).unwrap();
+        assert_eq!(data.time_min, vec![0.0, 20.0, 0.0, 20.0]);
+        assert_eq!(
+            data.sequence.as_ref().unwrap().1,
+            vec![0.0, 0.0, 90.0, 90.0]
+        );
+        assert_eq!(data.segments(), vec![(0, 2), (2, 4)]);
+        assert_eq!(data.sensor_names, ["T1_c", "T2_c", "angle_deg"]);
+        assert_eq!((data.temps_c[(3, 0)], data.temps_c[(3, 2)]), (21.0, 90.0));
+        assert_eq!(data.targets().len(), 5);
+        let y: Vec<Vec<f64>> = (0..4)
+            .map(|i| data.targets().iter().map(|(_, v)| v[i]).collect())
+            .collect();
+        let labelled = motion_rows(&data, &y).unwrap();
+        assert_eq!(
+            labelled[3],
+            MotionRow {
+                experiment: 1,
+                time_min: 20.0,
+                angle_deg: 90.0,
+                motions: motions(90.0, 0.0).observable(),
+            }
+        );
+        assert!(motion_rows(&data, &y[..3]).is_err());
         let mut missing = rows.clone();
         missing.push(row(40.0, 0.0));
         let e = RotaryDataset::build(&temps, &missing, AngleEncoding::Degrees).unwrap_err();
