@@ -7,19 +7,10 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use mtec_comp::gcode::{rewrite, RewriteOptions};
+use mtec_comp::hand::ZeroModel;
 use mtec_comp::ErrorModel;
 use mtec_comp::{GridMap, Outside};
 use std::hint::black_box;
-
-struct Zero;
-impl ErrorModel for Zero {
-    fn error_um(&self, _p: [f64; 3]) -> [f64; 3] {
-        [0.0; 3]
-    }
-    fn describe(&self) -> String {
-        "zero".into()
-    }
-}
 
 /// The analytic test model (linear + quadratic), as in the tests.
 struct Poly;
@@ -61,10 +52,11 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("gcode");
     g.throughput(Throughput::Elements(lines));
     g.sample_size(10);
+    let zero = ZeroModel::new("zero");
     g.bench_function("pass_through_zero_model", |b| {
         b.iter(|| {
             out.clear();
-            rewrite(black_box(&input[..]), &mut out, &Zero, &opts).unwrap();
+            rewrite(black_box(&input[..]), &mut out, &zero, &opts).unwrap();
         })
     });
     g.bench_function("compensate_poly_model", |b| {

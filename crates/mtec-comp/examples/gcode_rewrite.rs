@@ -10,22 +10,8 @@ use mtec_comp::gcode::{rewrite, RewriteOptions};
 use mtec_comp::ErrorModel;
 use std::time::Instant;
 
-struct Zero;
-impl ErrorModel for Zero {
-    fn error_um(&self, _p: [f64; 3]) -> [f64; 3] {
-        [0.0; 3]
-    }
-    fn describe(&self) -> String {
-        "zero".into()
-    }
-}
-
-fn thread_cpu_ns() -> u64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse().ok())
-        .unwrap_or(0)
-}
+mod support;
+use support::thread_cpu_ns;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -34,7 +20,7 @@ fn main() {
         std::process::exit(2);
     }
     let model: Box<dyn ErrorModel> = if args[1] == "zero" {
-        Box::new(Zero)
+        Box::new(mtec_comp::hand::ZeroModel::new("zero"))
     } else {
         mtec_comp::load_error_model(std::path::Path::new(&args[1]))
             .unwrap_or_else(|e| panic!("{e}"))

@@ -9,12 +9,8 @@
 
 use std::time::Instant;
 
-fn thread_cpu_ns() -> u64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse().ok())
-        .unwrap_or(0)
-}
+mod support;
+use support::thread_cpu_ns;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
