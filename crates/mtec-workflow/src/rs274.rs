@@ -364,6 +364,14 @@ fn rs274_error_at(program: &[u8], stderr: &str) -> Option<(usize, usize)> {
     Some((i + 1, error_column(line, stderr)))
 }
 
+/// The error at `at` (line, column) of `input`, or of the file when it is not known.
+fn located(input: &Path, at: Option<(usize, usize)>, message: impl Into<String>) -> InputError {
+    match at {
+        Some((line, column)) => InputError::at(input, line, column, message),
+        None => InputError::file(input, message),
+    }
+}
+
 /// The last line of rs274's standard error that is not blank, trimmed.
 fn last_line(stderr: &str) -> Option<&str> {
     stderr.lines().rev().map(str::trim).find(|l| !l.is_empty())
@@ -550,6 +558,13 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         }
         Ok(flags)
     };
+    // rs274 on a variant of the program (a probe, a numbered copy): `{name}.ngc` with the
+    // program's flags and its own copies of the tables
+    let run_variant = |name: &str, text: &[u8]| -> Result<Run, CliError> {
+        let file = tmp.0.join(format!("{name}.ngc"));
+        std::fs::write(&file, text)?;
+        run_rs274(&bin, &tmp.0, &program_flags(name)?, &file, timeout)
+    };
     let flags = program_flags("program")?;
     let run = run_rs274(&bin, &tmp.0, &flags, &abs_input, timeout)?;
     if run.status != Some(0) {
@@ -563,16 +578,10 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         }
         let at = rs274_error_at(&program, &run.stderr).or_else(|| {
             numbered_error_at(&program, &run.stderr, |numbered| {
-                let file = tmp.0.join("numbered.ngc");
-                std::fs::write(&file, numbered)?;
-                run_rs274(&bin, &tmp.0, &program_flags("numbered")?, &file, timeout)
+                run_variant("numbered", numbered)
             })
         });
-        return Err(match at {
-            Some((line, column)) => InputError::at(input, line, column, message),
-            None => InputError::file(input, message),
-        }
-        .into());
+        return Err(located(input, at, message).into());
     }
     // G41/G42 take the cutter radius from the tool table (D); a table mtec made from
     // --offsets lengths (or an empty one) has none, and rs274 then offsets the path by 0
@@ -581,19 +590,12 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         let at = words.iter().find(|w| w.code == 410 || w.code == 420);
         if at.is_some() || !words.iter().any(|w| w.code == 411 || w.code == 421) {
             let message = "G41/G42 take the cutter radius from the controller's tool table, which was not given (without it rs274 offsets the path by a radius of 0): give it with --tool-table, or write G41.1/G42.1 D<diameter>";
-            return Err(match at {
-                Some(w) => InputError::at(input, w.line, w.column, message),
-                None => InputError::file(input, message),
-            }
-            .into());
+            return Err(located(input, at.map(|w| (w.line, w.column)), message).into());
         }
     }
     // 3. the same program started elsewhere: which axes each move leaves where the machine
     // stood, and whether anything else depends on it (mtec_comp::gcode::start_probe)
-    let probe_file = tmp.0.join("start-probe.ngc");
-    std::fs::write(&probe_file, probe_program(&program))?;
-    let probe_flags = program_flags("start-probe")?;
-    let probe_run = run_rs274(&bin, &tmp.0, &probe_flags, &probe_file, timeout)?;
+    let probe_run = run_variant("start-probe", &probe_program(&program))?;
     if probe_run.status != Some(0) {
         let message = format!(
             "cannot flatten: rs274 stopped when the program was started at another position ({}), so whether its path depends on the start position cannot be checked",
@@ -601,33 +603,20 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         );
         let at = rs274_error_at(&program, &probe_run.stderr).or_else(|| {
             numbered_error_at(&program, &probe_run.stderr, |numbered| {
-                let file = tmp.0.join("numbered-start-probe.ngc");
-                std::fs::write(&file, probe_program(numbered))?;
-                run_rs274(&bin, &tmp.0, &program_flags("start-probe")?, &file, timeout)
+                run_variant("numbered-start-probe", &probe_program(numbered))
             })
         });
-        return Err(match at {
-            Some((line, column)) => InputError::at(input, line, column, message),
-            None => InputError::file(input, message),
-        }
-        .into());
+        return Err(located(input, at, message).into());
     }
     // 4. the same program started with another tool in the spindle: a G43 without H (or an M6
     // without T) before the first tool change takes the tool the machine happens to hold, which
     // stand-alone rs274 takes for tool 0 (length 0)
     let offsets = tool_length_offsets(&run.stdout);
     if !offsets.is_empty() {
-        let tool_file = tmp.0.join("spindle-tool-probe.ngc");
-        std::fs::write(&tool_file, spindle_tool_probe_program(&program))?;
-        let flags = program_flags(SPINDLE_TOOL_PROBE)?;
-        let tool_run = run_rs274(&bin, &tmp.0, &flags, &tool_file, timeout)?;
+        let tool_run = run_variant(SPINDLE_TOOL_PROBE, &spindle_tool_probe_program(&program))?;
         if tool_run.status != Some(0) || tool_length_offsets(&tool_run.stdout) != offsets {
             let message = "a tool length offset depends on the tool in the spindle when the program starts (a G43 without H, or an M6 without T, before the first T… M6), which mtec does not know and stand-alone rs274 takes for tool 0: write G43 Hn, or a T… M6 before it";
-            return Err(match bare_g43(&program) {
-                Some((line, column)) => InputError::at(input, line, column, message),
-                None => InputError::file(input, message),
-            }
-            .into());
+            return Err(located(input, bare_g43(&program), message).into());
         }
     }
     let held = held_axes(&run.stdout, &probe_run.stdout);
@@ -668,12 +657,7 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     let cannot = |e: mtec_comp::gcode::flatten::FlattenError| {
         let message = format!("cannot flatten: {e}");
         let line = mtec_comp::gcode::line_numbers::numbered_program(&program)
-            .and_then(|numbered| {
-                let file = tmp.0.join("numbered.ngc");
-                std::fs::write(&file, numbered).ok()?;
-                let flags = program_flags("numbered").ok()?;
-                run_rs274(&bin, &tmp.0, &flags, &file, timeout).ok()
-            })
+            .and_then(|numbered| run_variant("numbered", &numbered).ok())
             .and_then(|n| {
                 mtec_comp::gcode::line_numbers::canonical_source_line(
                     &run.stdout,
@@ -682,12 +666,9 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
                 )
             });
         let text = String::from_utf8_lossy(&program);
-        match line.and_then(|l| Some((l, text.lines().nth(l.checked_sub(1)?)?))) {
-            Some((l, at)) => {
-                InputError::at(input, l, at.len() - at.trim_start().len() + 1, message)
-            }
-            None => InputError::file(input, message),
-        }
+        let at =
+            line.and_then(|l| Some((l, error_column(text.lines().nth(l.checked_sub(1)?)?, ""))));
+        located(input, at, message)
     };
     let (text, report) = match held {
         Ok(h) => flatten(
@@ -712,10 +693,14 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     }
     if unstated && report.table_change_folded {
         let message = "the program changes a work offset (G10 L2/L20) and the flattened program folds the change into its coordinates, relative to the work-offset table at start, which was not given: give --offsets (the setup's work offsets) or --var-file (the controller's parameter file)";
-        return Err(match g_words(&program).iter().find(|w| w.code == 100) {
-            Some(w) => InputError::at(input, w.line, w.column, message),
-            None => InputError::file(input, message),
-        }
+        return Err(located(
+            input,
+            g_words(&program)
+                .iter()
+                .find(|w| w.code == 100)
+                .map(|w| (w.line, w.column)),
+            message,
+        )
         .into());
     }
     Ok(Flattened {
