@@ -528,6 +528,26 @@ fn what_the_machine_decides_at_run_time_is_kept_or_refused() {
             "G21 G90\n#<ct> = 0\no100 while [[#<ct> lt 5] and [#<_task> ne 0]]\n#<ct> = [#<ct> + 1]\nG0 X#<ct>\no100 endwhile\nM2\n",
             "task.ngc:3:31: #<_task> reads the machine's state",
         ),
+        // work offsets live in the controller's parameter file in machine units, which
+        // stand-alone rs274 reads as inches (and mtec makes up without --var-file): `#5221`
+        // read 0 here where the machine reads its G54 X (found 2026-11-28, hand-written)
+        (
+            "offset-read.ngc",
+            "G21 G90\nG0 X0 Y0 Z0\nG1 X[#5221 + 10] F500\nM2\n",
+            "offset-read.ngc:3:6: #5221 reads or sets a work offset",
+        ),
+        // `#5242 = 3` is G55's Y in mm on a metric machine and 76.2 mm in rs274
+        (
+            "offset-write.ngc",
+            "G21 G90\n#5242 = 3\nG55\nG0 X0 Y0 Z0\nM2\n",
+            "offset-write.ngc:2:1: #5242 reads or sets",
+        ),
+        // an indirect reference may address them: the probe macros' active-system offset
+        (
+            "offset-indirect.ngc",
+            "G21 G90\n#<x> = #[5201 + [20 * #5220]]\nG0 X#<x> Y0 Z0\nM2\n",
+            "offset-indirect.ngc:2:8: #[5201 + [20 * #5220]] reads or sets",
+        ),
     ] {
         let p = write(name, body);
         check(&bin, &p, None, None, &[], &Expect::Refused(words));
@@ -735,6 +755,45 @@ fn model_is_evaluated_at_machine_positions_with_the_var_files_work_offsets() {
     // machine X 0: no correction; machine X 76.2: p + 0.001 p = 76.2, p = 76.1239
     assert!(first_x[0].abs() < 1e-9, "{first_x:?}");
     assert!((first_x[1] - 76.2 / 1.001).abs() < 2e-4, "{first_x:?}");
+}
+
+/// A program that reads a work offset flattens only with an inch machine's own parameter
+/// file, the one case where stand-alone rs274 reads the value the machine reads.
+#[test]
+fn a_work_offset_read_flattens_only_from_an_inch_machines_own_parameter_file() {
+    let Some(_) = rs274() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("zero.json");
+    std::fs::write(&model, ZERO_MODEL).unwrap();
+    let prog = dir.path().join("p.ngc");
+    std::fs::write(&prog, "G21 G90 G54\nG0 X[#5221] Y0 Z5\nM2\n").unwrap();
+    let var = data_dir().join("offsets.var");
+    for (units, code) in [("mm", 2), ("inch", 0)] {
+        let o = mtec()
+            .args(["compensate", "gcode", "--model"])
+            .arg(&model)
+            .args([
+                "--flatten-with",
+                "rs274",
+                "--machine-units",
+                units,
+                "--var-file",
+            ])
+            .arg(&var)
+            .arg(&prog)
+            .arg("-o")
+            .arg(dir.path().join(format!("o-{units}.ngc")))
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(code), "{units}: {}", text(&o));
+        if code == 2 {
+            assert!(
+                text(&o).contains("p.ngc:2:6: #5221 reads or sets"),
+                "{}",
+                text(&o)
+            );
+        }
+    }
 }
 
 /// Stand-alone rs274 given no tool table uses a built-in one (T1 = 0.511 in): flattening baked

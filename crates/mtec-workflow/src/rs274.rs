@@ -12,7 +12,9 @@ use mtec_comp::gcode::flatten::{
     WORK_OFFSET_PROBE,
 };
 use mtec_comp::gcode::offsets::Offsets;
-use mtec_comp::gcode::runtime_params::machine_state_parameter;
+use mtec_comp::gcode::runtime_params::{
+    machine_state_parameter, machine_units_parameter_reference,
+};
 use mtec_comp::gcode::start_probe::{
     held_axes, probe_program, spindle_tool_probe_program, tool_length_offsets, PROBE_TOOL_LINE,
 };
@@ -469,6 +471,22 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
             line,
             column,
             format!("{name} reads the machine's state, which stand-alone rs274 does not have (it gives its own value, e.g. #<_task> = 0): the flattened path could differ from what the machine runs. Replace it with the value the machine will have, or compensate without flattening"),
+        )
+        .into());
+    }
+    // the work offsets, homes and G92 offset live in the controller's parameter file in
+    // machine units; stand-alone rs274 reads that file as inches and, without --var-file,
+    // mtec makes one up from --offsets: only an inch machine's own file gives the values
+    // the machine reads (runtime_params::machine_units_parameter_reference)
+    let own_file = args.machine_units == MachineUnits::Inch && args.rs274.var_file.is_some();
+    if let Some((line, column, name)) =
+        machine_units_parameter_reference(&program).filter(|_| !own_file)
+    {
+        return Err(InputError::at(
+            input,
+            line,
+            column,
+            format!("{name} reads or sets a work offset, home, G92 offset or machine position (#5021-#5029, #5081-#5089, #5161-#5189, #5210-#5390; an indirect #[...] or ## may address them), which the controller keeps in machine units and stand-alone rs274 reads as inches{}: the flattened path could differ from what the machine runs. Write the value itself, set offsets with G10 L2/L20, or for an inch machine give its parameter file (--machine-units inch --var-file)", if args.rs274.var_file.is_some() { " (this machine's are mm)" } else { ", from a parameter file mtec has to make up without --var-file" }),
         )
         .into());
     }

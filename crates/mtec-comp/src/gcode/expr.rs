@@ -478,7 +478,7 @@ impl Params {
                 pos,
                 format!(
                     "#{n} holds {what}, which depends on the machine's state or parameter file \
-                     and is not known to mtec; set it in the program before reading it"
+                     and is not known to mtec; write the value itself"
                 ),
             )),
         }

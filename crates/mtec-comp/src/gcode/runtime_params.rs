@@ -84,6 +84,120 @@ pub fn machine_state_parameter(program: &[u8]) -> Option<(usize, usize, String)>
     None
 }
 
+/// Numbered parameters LinuxCNC keeps in the machine's length units (its parameter file):
+/// the machine position (#5021–#5029), the tool length offset in effect (#5081–#5089), the
+/// G28 and G30 homes (#5161–#5169, #5181–#5189), the G52/G92 offset (#5210–#5219) and the
+/// G54–G59.3 work offsets and rotations (#5221–#5390). Stand-alone rs274 reads its parameter
+/// file as inches: on a metric machine a program that reads or writes one of them (`X[#5221 +
+/// 10]`, `#5242 = 3`) would be flattened with a value 25.4 times off, or with the zeros of a
+/// made-up file, and the path would differ from the machine's without any check seeing it
+/// (rs274 is the checker's reference too). Found 2026-11-28 with hand-written programs.
+fn machine_units_parameter(n: u32) -> bool {
+    matches!(n, 5021..=5029 | 5081..=5089 | 5161..=5169 | 5181..=5189 | 5210..=5219 | 5221..=5390)
+}
+
+/// The first reference to a parameter of [`machine_units_parameter`], read or written, with
+/// its 1-based line and column and its text: a literal number (`#5221`), or an indirect one
+/// (`#[5200 + 21]` evaluated when its index is literal). An indirect reference whose index
+/// reads a parameter (`#[5201 + 20 * #5220]`, `##1`) may address any of them, so it is
+/// reported too. Comments are skipped.
+pub fn machine_units_parameter_reference(program: &[u8]) -> Option<(usize, usize, String)> {
+    let mut line = 1;
+    let mut line_start = 0;
+    let mut depth = 0usize;
+    let mut i = 0;
+    while i < program.len() {
+        match program[i] {
+            b'\n' => {
+                line += 1;
+                line_start = i + 1;
+                depth = 0;
+            }
+            b'(' => depth += 1,
+            b')' => depth = depth.saturating_sub(1),
+            b';' if depth == 0 => {
+                while i < program.len() && program[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'#' if depth == 0 => {
+                let column = String::from_utf8_lossy(&program[line_start..i])
+                    .chars()
+                    .count()
+                    + 1;
+                let line_end = program[i..]
+                    .iter()
+                    .position(|&b| b == b'\n')
+                    .map_or(program.len(), |k| i + k);
+                if let Some(end) = indirect_reference(&program[..line_end], i) {
+                    return Some((
+                        line,
+                        column,
+                        String::from_utf8_lossy(&program[i..end]).into_owned(),
+                    ));
+                }
+                if let Some((name, end)) = parameter_at(program, i) {
+                    let hit = name.parse::<f64>().is_ok_and(|n| {
+                        n.fract() == 0.0
+                            && (0.0..1e6).contains(&n)
+                            && machine_units_parameter(n as u32)
+                    });
+                    if hit {
+                        return Some((
+                            line,
+                            column,
+                            String::from_utf8_lossy(&program[i..end]).into_owned(),
+                        ));
+                    }
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    None
+}
+
+/// An indirect reference at the `#` at `i` (`#[…]` or `##…`) that can address a parameter of
+/// [`machine_units_parameter`]: the end of its text. A literal index is evaluated; an index
+/// that reads a parameter counts as able to.
+fn indirect_reference(line: &[u8], i: usize) -> Option<usize> {
+    let mut j = i + 1;
+    while j < line.len() && (line[j] == b' ' || line[j] == b'\t') {
+        j += 1;
+    }
+    match line.get(j)? {
+        b'#' => Some(j + 1),
+        b'[' => {
+            let mut level = 0usize;
+            let mut k = j;
+            while k < line.len() {
+                match line[k] {
+                    b'[' => level += 1,
+                    b']' => {
+                        level -= 1;
+                        if level == 0 {
+                            break;
+                        }
+                    }
+                    _ => {}
+                }
+                k += 1;
+            }
+            let end = (k + 1).min(line.len());
+            let index = &line[j..end];
+            if index.contains(&b'#') {
+                return Some(end);
+            }
+            let n = super::expr::eval_value(line, j..end, &super::expr::Params::new()).ok()?;
+            let n = n.round();
+            ((0.0..1e6).contains(&n) && machine_units_parameter(n as u32)).then_some(end)
+        }
+        _ => None,
+    }
+}
+
 /// The parameter that starts at the `#` at `i`: its name (lower case, blanks removed; digits
 /// for a numbered one) and the end of its text.
 fn parameter_at(p: &[u8], i: usize) -> Option<(String, usize)> {
@@ -149,5 +263,36 @@ mod tests {
         let p = b"#<_feedrate> = 100 ; #<_task>\n#5401 = 2 (#5400)\nG1 X#1 F#<_feedrate>\n#<_tasks> = 1\n";
         assert_eq!(machine_state_parameter(p), None);
         assert_eq!(machine_state_parameter(b"#54000 = 1\nG0 X#5220\n"), None);
+    }
+
+    #[test]
+    fn offsets_homes_and_machine_position_are_found_read_or_written() {
+        assert_eq!(
+            machine_units_parameter_reference(b"G0 X0\nG1 X[#5221 + 10] F5\n"),
+            Some((2, 6, "#5221".to_string()))
+        );
+        assert_eq!(
+            machine_units_parameter_reference(b"#5242 = 3\n").map(|r| r.1),
+            Some(1)
+        );
+        assert!(machine_units_parameter_reference(b"G1 X#5161\n").is_some());
+        assert!(machine_units_parameter_reference(b"G1 X#5390\n").is_some());
+        assert!(machine_units_parameter_reference(b"#1 = #5081\n").is_some());
+        assert_eq!(
+            machine_units_parameter_reference(b"#<y> = #[5202 + [20 * #5220]]\n"),
+            Some((1, 8, "#[5202 + [20 * #5220]]".to_string()))
+        );
+        assert!(machine_units_parameter_reference(b"#1 = 5221\nG1 X##1\n").is_some());
+        assert!(machine_units_parameter_reference(b"G1 X#[5200 + 21]\n").is_some());
+    }
+
+    #[test]
+    fn other_parameters_and_comments_are_not_offsets() {
+        let p = b"G1 X#5220 Y#5420 Z#5400\n#[100 + 2] = 1\n(#5221) ; #5221\n#52210 = 1\nG1 X#[2 * 50]\n";
+        assert_eq!(machine_units_parameter_reference(p), None);
+        assert_eq!(
+            machine_units_parameter_reference(b"#5220 = 1\n#5391 = 2\n"),
+            None
+        );
     }
 }
