@@ -548,6 +548,12 @@ fn what_the_machine_decides_at_run_time_is_kept_or_refused() {
             "G21 G90\n#<x> = #[5201 + [20 * #5220]]\nG0 X#<x> Y0 Z0\nM2\n",
             "offset-indirect.ngc:2:8: #[5201 + [20 * #5220]] reads or sets",
         ),
+        // the tool table too: rs274 gives a G21 program a 1-inch tool's #5403 as 1
+        (
+            "tool-read.ngc",
+            "G21 G90\nT1 M6\nG0 X#5403 Y0 Z0\nM2\n",
+            "tool-read.ngc:3:5: #5403 reads or sets the loaded tool's offsets",
+        ),
     ] {
         let p = write(name, body);
         check(&bin, &p, None, None, &[], &Expect::Refused(words));

@@ -13,7 +13,7 @@ use mtec_comp::gcode::flatten::{
 };
 use mtec_comp::gcode::offsets::Offsets;
 use mtec_comp::gcode::runtime_params::{
-    machine_state_parameter, machine_units_parameter_reference,
+    machine_state_parameter, machine_units_parameter_reference, UnitsSource,
 };
 use mtec_comp::gcode::start_probe::{
     held_axes, probe_program, spindle_tool_probe_program, tool_length_offsets, PROBE_TOOL_LINE,
@@ -474,21 +474,33 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         )
         .into());
     }
-    // the work offsets, homes and G92 offset live in the controller's parameter file in
-    // machine units; stand-alone rs274 reads that file as inches and, without --var-file,
-    // mtec makes one up from --offsets: only an inch machine's own file gives the values
-    // the machine reads (runtime_params::machine_units_parameter_reference)
-    let own_file = args.machine_units == MachineUnits::Inch && args.rs274.var_file.is_some();
-    if let Some((line, column, name)) =
-        machine_units_parameter_reference(&program).filter(|_| !own_file)
-    {
-        return Err(InputError::at(
-            input,
-            line,
-            column,
-            format!("{name} reads or sets a work offset, home, G92 offset or machine position (#5021-#5029, #5081-#5089, #5161-#5189, #5210-#5390; an indirect #[...] or ## may address them), which the controller keeps in machine units and stand-alone rs274 reads as inches{}: the flattened path could differ from what the machine runs. Write the value itself, set offsets with G10 L2/L20, or for an inch machine give its parameter file (--machine-units inch --var-file)", if args.rs274.var_file.is_some() { " (this machine's are mm)" } else { ", from a parameter file mtec has to make up without --var-file" }),
-        )
-        .into());
+    // the work offsets, homes and G92 offset live in the controller's parameter file, the
+    // tool geometry in its tool table, both in machine units; stand-alone rs274 reads those
+    // files as inches and, without them, mtec makes them up: only an inch machine's own file
+    // gives the values the machine reads (runtime_params::machine_units_parameter_reference)
+    let inch = args.machine_units == MachineUnits::Inch;
+    let var_own = inch && args.rs274.var_file.is_some();
+    let table_own = inch && args.tool_table.is_some();
+    if let Some((line, column, name, source)) = machine_units_parameter_reference(&program) {
+        let (own, what, file) = match source {
+            UnitsSource::ParameterFile => (var_own, "a work offset, home, G92 offset or machine position (#5021-#5029, #5081-#5089, #5161-#5189, #5210-#5390)", "parameter file (--var-file)"),
+            UnitsSource::ToolTable => (table_own, "the loaded tool's offsets or geometry (#5401-#5413)", "tool table (--tool-table)"),
+            UnitsSource::Either => (var_own && table_own, "a parameter chosen at run time, which may be a work offset, home, G92 offset, machine position or tool geometry (#5021-#5413)", "parameter file and tool table (--var-file, --tool-table)"),
+        };
+        if !own {
+            let given = if inch {
+                "mtec has to make up without the file"
+            } else {
+                "(this machine's are mm)"
+            };
+            return Err(InputError::at(
+                input,
+                line,
+                column,
+                format!("{name} reads or sets {what}, which the controller keeps in machine units and stand-alone rs274 reads as inches {given}: the flattened path could differ from what the machine runs. Write the value itself, set offsets with G10 L2/L20, or for an inch machine give its {file} with --machine-units inch"),
+            )
+            .into());
+        }
     }
     let abs_input = std::path::absolute(input)?;
     let tmp = TempDir::new()?;

@@ -84,16 +84,41 @@ pub fn machine_state_parameter(program: &[u8]) -> Option<(usize, usize, String)>
     None
 }
 
-/// Numbered parameters LinuxCNC keeps in the machine's length units (its parameter file):
-/// the machine position (#5021–#5029), the tool length offset in effect (#5081–#5089), the
-/// G28 and G30 homes (#5161–#5169, #5181–#5189), the G52/G92 offset (#5210–#5219) and the
-/// G54–G59.3 work offsets and rotations (#5221–#5390). Stand-alone rs274 reads its parameter
-/// file as inches: on a metric machine a program that reads or writes one of them (`X[#5221 +
-/// 10]`, `#5242 = 3`) would be flattened with a value 25.4 times off, or with the zeros of a
-/// made-up file, and the path would differ from the machine's without any check seeing it
-/// (rs274 is the checker's reference too). Found 2026-11-28 with hand-written programs.
-fn machine_units_parameter(n: u32) -> bool {
-    matches!(n, 5021..=5029 | 5081..=5089 | 5161..=5169 | 5181..=5189 | 5210..=5219 | 5221..=5390)
+/// Numbered parameters LinuxCNC keeps in the machine's length units, and the file they come
+/// from: the parameter file's machine position (#5021–#5029), tool length offset in effect
+/// (#5081–#5089), G28 and G30 homes (#5161–#5169, #5181–#5189), G52/G92 offset
+/// (#5210–#5219) and G54–G59.3 work offsets and rotations (#5221–#5390); the tool table's
+/// offsets and geometry of the loaded tool (#5401–#5413). Stand-alone rs274 reads both files
+/// as inches and gives a program the raw value (a G21 program reading a 1-inch tool's #5403
+/// gets 1, checked with rs274): on a metric machine a program that reads or writes one of them
+/// (`X[#5221 + 10]`, `#5242 = 3`) would be flattened with a value 25.4 times off, or with the
+/// zeros of a file mtec makes up, and the path would differ from the machine's without any
+/// check seeing it (rs274 is the checker's reference too). Found 2026-11-28 with
+/// hand-written programs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum UnitsSource {
+    ParameterFile,
+    ToolTable,
+    /// An indirect reference whose index reads a parameter: it may address either.
+    Either,
+}
+
+fn machine_units_parameter(n: u32) -> Option<UnitsSource> {
+    match n {
+        5021..=5029 | 5081..=5089 | 5161..=5169 | 5181..=5189 | 5210..=5219 | 5221..=5390 => {
+            Some(UnitsSource::ParameterFile)
+        }
+        5401..=5413 => Some(UnitsSource::ToolTable),
+        _ => None,
+    }
+}
+
+fn numbered_machine_units(n: f64) -> Option<UnitsSource> {
+    if n.fract() == 0.0 && (0.0..1e6).contains(&n) {
+        machine_units_parameter(n as u32)
+    } else {
+        None
+    }
 }
 
 /// The first reference to a parameter of [`machine_units_parameter`], read or written, with
@@ -101,7 +126,9 @@ fn machine_units_parameter(n: u32) -> bool {
 /// (`#[5200 + 21]` evaluated when its index is literal). An indirect reference whose index
 /// reads a parameter (`#[5201 + 20 * #5220]`, `##1`) may address any of them, so it is
 /// reported too. Comments are skipped.
-pub fn machine_units_parameter_reference(program: &[u8]) -> Option<(usize, usize, String)> {
+pub fn machine_units_parameter_reference(
+    program: &[u8],
+) -> Option<(usize, usize, String, UnitsSource)> {
     let mut line = 1;
     let mut line_start = 0;
     let mut depth = 0usize;
@@ -130,25 +157,14 @@ pub fn machine_units_parameter_reference(program: &[u8]) -> Option<(usize, usize
                     .iter()
                     .position(|&b| b == b'\n')
                     .map_or(program.len(), |k| i + k);
-                if let Some(end) = indirect_reference(&program[..line_end], i) {
-                    return Some((
-                        line,
-                        column,
-                        String::from_utf8_lossy(&program[i..end]).into_owned(),
-                    ));
+                let text = |end: usize| String::from_utf8_lossy(&program[i..end]).into_owned();
+                if let Some((end, source)) = indirect_reference(&program[..line_end], i) {
+                    return Some((line, column, text(end), source));
                 }
                 if let Some((name, end)) = parameter_at(program, i) {
-                    let hit = name.parse::<f64>().is_ok_and(|n| {
-                        n.fract() == 0.0
-                            && (0.0..1e6).contains(&n)
-                            && machine_units_parameter(n as u32)
-                    });
-                    if hit {
-                        return Some((
-                            line,
-                            column,
-                            String::from_utf8_lossy(&program[i..end]).into_owned(),
-                        ));
+                    if let Some(source) = name.parse::<f64>().ok().and_then(numbered_machine_units)
+                    {
+                        return Some((line, column, text(end), source));
                     }
                 }
             }
@@ -162,13 +178,13 @@ pub fn machine_units_parameter_reference(program: &[u8]) -> Option<(usize, usize
 /// An indirect reference at the `#` at `i` (`#[…]` or `##…`) that can address a parameter of
 /// [`machine_units_parameter`]: the end of its text. A literal index is evaluated; an index
 /// that reads a parameter counts as able to.
-fn indirect_reference(line: &[u8], i: usize) -> Option<usize> {
+fn indirect_reference(line: &[u8], i: usize) -> Option<(usize, UnitsSource)> {
     let mut j = i + 1;
     while j < line.len() && (line[j] == b' ' || line[j] == b'\t') {
         j += 1;
     }
     match line.get(j)? {
-        b'#' => Some(j + 1),
+        b'#' => Some((j + 1, UnitsSource::Either)),
         b'[' => {
             let mut level = 0usize;
             let mut k = j;
@@ -188,11 +204,10 @@ fn indirect_reference(line: &[u8], i: usize) -> Option<usize> {
             let end = (k + 1).min(line.len());
             let index = &line[j..end];
             if index.contains(&b'#') {
-                return Some(end);
+                return Some((end, UnitsSource::Either));
             }
             let n = super::expr::eval_value(line, j..end, &super::expr::Params::new()).ok()?;
-            let n = n.round();
-            ((0.0..1e6).contains(&n) && machine_units_parameter(n as u32)).then_some(end)
+            numbered_machine_units(n.round()).map(|source| (end, source))
         }
         _ => None,
     }
@@ -269,7 +284,7 @@ mod tests {
     fn offsets_homes_and_machine_position_are_found_read_or_written() {
         assert_eq!(
             machine_units_parameter_reference(b"G0 X0\nG1 X[#5221 + 10] F5\n"),
-            Some((2, 6, "#5221".to_string()))
+            Some((2, 6, "#5221".to_string(), UnitsSource::ParameterFile))
         );
         assert_eq!(
             machine_units_parameter_reference(b"#5242 = 3\n").map(|r| r.1),
@@ -280,15 +295,24 @@ mod tests {
         assert!(machine_units_parameter_reference(b"#1 = #5081\n").is_some());
         assert_eq!(
             machine_units_parameter_reference(b"#<y> = #[5202 + [20 * #5220]]\n"),
-            Some((1, 8, "#[5202 + [20 * #5220]]".to_string()))
+            Some((
+                1,
+                8,
+                "#[5202 + [20 * #5220]]".to_string(),
+                UnitsSource::Either
+            ))
         );
         assert!(machine_units_parameter_reference(b"#1 = 5221\nG1 X##1\n").is_some());
         assert!(machine_units_parameter_reference(b"G1 X#[5200 + 21]\n").is_some());
+        assert_eq!(
+            machine_units_parameter_reference(b"G1 X#5403 Y#5410\n").map(|r| r.3),
+            Some(UnitsSource::ToolTable)
+        );
     }
 
     #[test]
     fn other_parameters_and_comments_are_not_offsets() {
-        let p = b"G1 X#5220 Y#5420 Z#5400\n#[100 + 2] = 1\n(#5221) ; #5221\n#52210 = 1\nG1 X#[2 * 50]\n";
+        let p = b"G1 X#5220 Y#5420 Z#5400 A#5414\n#[100 + 2] = 1\n(#5221) ; #5221\n#52210 = 1\nG1 X#[2 * 50]\n";
         assert_eq!(machine_units_parameter_reference(p), None);
         assert_eq!(
             machine_units_parameter_reference(b"#5220 = 1\n#5391 = 2\n"),
