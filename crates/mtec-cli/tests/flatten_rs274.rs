@@ -554,6 +554,12 @@ fn what_the_machine_decides_at_run_time_is_kept_or_refused() {
             "G21 G90\nT1 M6\nG0 X#5403 Y0 Z0\nM2\n",
             "tool-read.ngc:3:5: #5403 reads or sets the loaded tool's offsets",
         ),
+        // machine coordinates add the work offsets, which none were given for
+        (
+            "abs.ngc",
+            "G21 G90\nG0 X1 Y0 Z0\nG1 X#<_abs_x> F100\nM2\n",
+            "abs.ngc:3:5: #<_abs_x> reads the position in machine coordinates",
+        ),
     ] {
         let p = write(name, body);
         check(&bin, &p, None, None, &[], &Expect::Refused(words));
@@ -763,41 +769,46 @@ fn model_is_evaluated_at_machine_positions_with_the_var_files_work_offsets() {
     assert!((first_x[1] - 76.2 / 1.001).abs() < 2e-4, "{first_x:?}");
 }
 
-/// A program that reads a work offset flattens only with an inch machine's own parameter
-/// file, the one case where stand-alone rs274 reads the value the machine reads.
+/// A program that reads a work offset, or asks whether the machine is metric, flattens only
+/// on an inch machine (with its own parameter file for the offset): the one case where
+/// stand-alone rs274 reads the value the machine reads.
 #[test]
-fn a_work_offset_read_flattens_only_from_an_inch_machines_own_parameter_file() {
+fn a_work_offset_or_the_machine_s_units_flatten_only_as_an_inch_machine_reads_them() {
     let Some(_) = rs274() else { return };
     let dir = tempfile::tempdir().unwrap();
     let model = dir.path().join("zero.json");
     std::fs::write(&model, ZERO_MODEL).unwrap();
-    let prog = dir.path().join("p.ngc");
-    std::fs::write(&prog, "G21 G90 G54\nG0 X[#5221] Y0 Z5\nM2\n").unwrap();
     let var = data_dir().join("offsets.var");
-    for (units, code) in [("mm", 2), ("inch", 0)] {
-        let o = mtec()
-            .args(["compensate", "gcode", "--model"])
-            .arg(&model)
-            .args([
-                "--flatten-with",
-                "rs274",
-                "--machine-units",
-                units,
-                "--var-file",
-            ])
-            .arg(&var)
-            .arg(&prog)
-            .arg("-o")
-            .arg(dir.path().join(format!("o-{units}.ngc")))
-            .output()
-            .unwrap();
-        assert_eq!(o.status.code(), Some(code), "{units}: {}", text(&o));
-        if code == 2 {
-            assert!(
-                text(&o).contains("p.ngc:2:6: #5221 reads or sets"),
-                "{}",
-                text(&o)
-            );
+    for (name, body, refusal) in [
+        (
+            "offset.ngc",
+            "G21 G90 G54\nG0 X[#5221] Y0 Z5\nM2\n",
+            "offset.ngc:2:6: #5221 reads or sets",
+        ),
+        // 0 in rs274, 1 on a metric machine: the inch branch would be flattened
+        (
+            "metric.ngc",
+            "G21 G90\no1 if [#<_metric_machine>]\nG0 X1 Y0 Z0\no1 else\nG0 X25.4 Y0 Z0\no1 endif\nM2\n",
+            "metric.ngc:2:8: #<_metric_machine> is 1 on this metric machine",
+        ),
+    ] {
+        let prog = dir.path().join(name);
+        std::fs::write(&prog, body).unwrap();
+        for (units, code) in [("mm", 2), ("inch", 0)] {
+            let o = mtec()
+                .args(["compensate", "gcode", "--model"])
+                .arg(&model)
+                .args(["--flatten-with", "rs274", "--machine-units", units, "--var-file"])
+                .arg(&var)
+                .arg(&prog)
+                .arg("-o")
+                .arg(dir.path().join(format!("o-{units}.ngc")))
+                .output()
+                .unwrap();
+            assert_eq!(o.status.code(), Some(code), "{name} {units}: {}", text(&o));
+            if code == 2 {
+                assert!(text(&o).contains(refusal), "{}", text(&o));
+            }
         }
     }
 }

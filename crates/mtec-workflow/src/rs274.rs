@@ -13,7 +13,8 @@ use mtec_comp::gcode::flatten::{
 };
 use mtec_comp::gcode::offsets::Offsets;
 use mtec_comp::gcode::runtime_params::{
-    machine_state_parameter, machine_units_parameter_reference, UnitsSource,
+    machine_position_parameter, machine_state_parameter, machine_units_parameter_reference,
+    metric_machine_parameter, UnitsSource,
 };
 use mtec_comp::gcode::start_probe::{
     held_axes, probe_program, spindle_tool_probe_program, tool_length_offsets, PROBE_TOOL_LINE,
@@ -479,6 +480,15 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     // files as inches and, without them, mtec makes them up: only an inch machine's own file
     // gives the values the machine reads (runtime_params::machine_units_parameter_reference)
     let inch = args.machine_units == MachineUnits::Inch;
+    if let Some((line, column, name)) = metric_machine_parameter(&program).filter(|_| !inch) {
+        return Err(InputError::at(input, line, column, format!("{name} is 1 on this metric machine and 0 in stand-alone rs274 (an inch machine): the flattened path would follow the inch branch. Write the branch the machine takes, or compensate without flattening")).into());
+    }
+    let offsets_unstated = args.rs274.var_file.is_none() && args.start_offsets.is_none();
+    if let Some((line, column, name)) =
+        machine_position_parameter(&program).filter(|_| offsets_unstated)
+    {
+        return Err(InputError::at(input, line, column, format!("{name} reads the position in machine coordinates, which adds the work offsets, and none were given (stand-alone rs274 would take them as 0): give them with --offsets or --var-file")).into());
+    }
     let var_own = inch && args.rs274.var_file.is_some();
     let table_own = inch && args.tool_table.is_some();
     if let Some((line, column, name, source)) = machine_units_parameter_reference(&program) {

@@ -45,13 +45,49 @@ fn numbered(n: u32) -> bool {
 /// A parameter of the list above that the program reads: its 1-based line and column and its
 /// name as written (`#<_task>`, `#5400`). Comments are skipped.
 pub fn machine_state_parameter(program: &[u8]) -> Option<(usize, usize, String)> {
+    first_named_or_numbered(program, is_machine_state)
+}
+
+/// A reference to a named parameter that reads the position in machine coordinates
+/// (`#<_abs_x>` … `#<_abs_w>`): program position plus every offset in effect, so it takes the
+/// work offsets mtec hands rs274 (all zero when none were given; checked with rs274, a G54 X of
+/// 50.8 mm gives `_abs_x` = 51.8 after `G0 X1`).
+pub fn machine_position_parameter(program: &[u8]) -> Option<(usize, usize, String)> {
+    first_named_or_numbered(program, |name| name.starts_with("_abs_"))
+}
+
+/// A reference to `#<_metric_machine>`: 1 on a metric machine, 0 in stand-alone rs274 (an inch
+/// machine), so a program that branches on it would be flattened along the inch branch.
+pub fn metric_machine_parameter(program: &[u8]) -> Option<(usize, usize, String)> {
+    first_named_or_numbered(program, |name| name == "_metric_machine")
+}
+
+/// The first parameter reference (`#<name>` or `#n`, outside comments) whose name (lower
+/// case, blanks removed; the digits of a numbered one) passes `wanted`.
+fn first_named_or_numbered(
+    program: &[u8],
+    wanted: impl Fn(&str) -> bool,
+) -> Option<(usize, usize, String)> {
+    first_reference(program, |at, _| {
+        let (name, end) = parameter_at(program, at)?;
+        wanted(&name).then_some((end, ()))
+    })
+    .map(|(line, column, text, ())| (line, column, text))
+}
+
+/// Walks the program's `#` outside comments (parenthesised, or after `;`) and returns the first
+/// for which `found(position of the #, end of its line)` gives the end of the reference's text
+/// and a value: its 1-based line and column, its text and the value.
+fn first_reference<T>(
+    program: &[u8],
+    mut found: impl FnMut(usize, usize) -> Option<(usize, T)>,
+) -> Option<(usize, usize, String, T)> {
     let mut line = 1;
     let mut line_start = 0;
     let mut depth = 0usize;
     let mut i = 0;
     while i < program.len() {
-        let c = program[i];
-        match c {
+        match program[i] {
             b'\n' => {
                 line += 1;
                 line_start = i + 1;
@@ -66,15 +102,17 @@ pub fn machine_state_parameter(program: &[u8]) -> Option<(usize, usize, String)>
                 continue;
             }
             b'#' if depth == 0 => {
-                if let Some((name, end)) = parameter_at(program, i) {
+                let line_end = program[i..]
+                    .iter()
+                    .position(|&b| b == b'\n')
+                    .map_or(program.len(), |k| i + k);
+                if let Some((end, value)) = found(i, line_end) {
                     let column = String::from_utf8_lossy(&program[line_start..i])
                         .chars()
                         .count()
                         + 1;
                     let text = String::from_utf8_lossy(&program[i..end]).into_owned();
-                    if is_machine_state(&name) {
-                        return Some((line, column, text));
-                    }
+                    return Some((line, column, text, value));
                 }
             }
             _ => {}
@@ -129,50 +167,13 @@ fn numbered_machine_units(n: f64) -> Option<UnitsSource> {
 pub fn machine_units_parameter_reference(
     program: &[u8],
 ) -> Option<(usize, usize, String, UnitsSource)> {
-    let mut line = 1;
-    let mut line_start = 0;
-    let mut depth = 0usize;
-    let mut i = 0;
-    while i < program.len() {
-        match program[i] {
-            b'\n' => {
-                line += 1;
-                line_start = i + 1;
-                depth = 0;
-            }
-            b'(' => depth += 1,
-            b')' => depth = depth.saturating_sub(1),
-            b';' if depth == 0 => {
-                while i < program.len() && program[i] != b'\n' {
-                    i += 1;
-                }
-                continue;
-            }
-            b'#' if depth == 0 => {
-                let column = String::from_utf8_lossy(&program[line_start..i])
-                    .chars()
-                    .count()
-                    + 1;
-                let line_end = program[i..]
-                    .iter()
-                    .position(|&b| b == b'\n')
-                    .map_or(program.len(), |k| i + k);
-                let text = |end: usize| String::from_utf8_lossy(&program[i..end]).into_owned();
-                if let Some((end, source)) = indirect_reference(&program[..line_end], i) {
-                    return Some((line, column, text(end), source));
-                }
-                if let Some((name, end)) = parameter_at(program, i) {
-                    if let Some(source) = name.parse::<f64>().ok().and_then(numbered_machine_units)
-                    {
-                        return Some((line, column, text(end), source));
-                    }
-                }
-            }
-            _ => {}
-        }
-        i += 1;
-    }
-    None
+    first_reference(program, |at, line_end| {
+        indirect_reference(&program[..line_end], at).or_else(|| {
+            let (name, end) = parameter_at(program, at)?;
+            let source = name.parse::<f64>().ok().and_then(numbered_machine_units)?;
+            Some((end, source))
+        })
+    })
 }
 
 /// An indirect reference at the `#` at `i` (`#[…]` or `##…`) that can address a parameter of
@@ -271,6 +272,20 @@ mod tests {
             Some(6)
         );
         assert!(machine_state_parameter(b"F#<_feed>\n").is_some());
+    }
+
+    #[test]
+    fn machine_positions_and_the_machine_s_units_are_found() {
+        assert_eq!(
+            machine_position_parameter(b"G0 X1\nG1 X#<_abs_x> F1\n"),
+            Some((2, 5, "#<_abs_x>".to_string()))
+        );
+        assert_eq!(machine_position_parameter(b"G1 X#<_x> (#<_abs_y>)\n"), None);
+        assert_eq!(
+            metric_machine_parameter(b"o1 if [#<_metric_machine>]\n").map(|r| r.1),
+            Some(8)
+        );
+        assert_eq!(metric_machine_parameter(b"G1 X#<_metric>\n"), None);
     }
 
     #[test]
