@@ -370,3 +370,54 @@ fn a_tape_mark_after_the_first_line_is_refused_as_linuxcnc_refuses_it() {
         assert_eq!(out, program);
     }
 }
+
+/// LinuxCNC's naive-CAM detector (emccanon.cc `linkable`) runs consecutive straight feeds
+/// within its tolerance of one line as that line, so in G64 with Q > 0 (or P without Q, which
+/// rs274 prints as `SET_NAIVECAM_TOLERANCE(P)`) the pieces of a split move can be merged: the
+/// rewriter warns once, at the first split move, naming the G64; Q0, G61 and a move written in
+/// one piece give no warning.
+#[test]
+fn split_moves_under_a_naive_cam_tolerance_are_warned_about_once() {
+    struct Bend;
+    impl ErrorModel for Bend {
+        fn error_um(&self, p: [f64; 3]) -> [f64; 3] {
+            [0.0, 1e-3 * p[0] * p[0], 0.0]
+        }
+        fn describe(&self) -> String {
+            "bend".into()
+        }
+    }
+    let opts = RewriteOptions {
+        start_position_mm: Some([0.0; 3]),
+        ..RewriteOptions::default()
+    };
+    let warned = |program: &str| -> Vec<(usize, usize, String)> {
+        let (_, rep) = run(program, &Bend, &opts);
+        rep.warnings
+            .iter()
+            .filter(|d| d.kind == ProblemKind::Controller)
+            .map(|d| (d.line, d.column, d.message.clone()))
+            .collect()
+    };
+    let w = warned("G21 G90\nG64 P0.01\nG0 X0 Y0 Z0\nG1 X100 F500\nG1 X200\nM2\n");
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert_eq!((w[0].0, w[0].1), (4, 1));
+    assert!(
+        w[0].2.contains("G64 of line 2") && w[0].2.contains("0.0100 mm"),
+        "{}",
+        w[0].2
+    );
+    // inch: P0.0005 in = 0.0127 mm; the move is the first split one (after a one-piece move)
+    let w = warned("G20 G90\nG64 P0.001 Q0.0005\nG0 X0 Y0 Z0\nG1 Y1 F20\nG1 X4\nM2\n");
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert_eq!(w[0].0, 5);
+    assert!(w[0].2.contains("0.0127 mm"), "{}", w[0].2);
+    for quiet in [
+        "G21 G90\nG64 P0.01 Q0\nG0 X0 Y0 Z0\nG1 X100 F500\nM2\n",
+        "G21 G90\nG64 P0.01\nG61\nG0 X0 Y0 Z0\nG1 X100 F500\nM2\n",
+        "G21 G90\nG64\nG0 X0 Y0 Z0\nG1 X100 F500\nM2\n",
+        "G21 G90\nG64 P0.01\nG0 X0 Y0 Z0\nG1 Y100 F500\nM2\n",
+    ] {
+        assert_eq!(warned(quiet), vec![], "{quiet}");
+    }
+}

@@ -7,7 +7,9 @@ use mtec_comp::gcode::flatten::FlattenReport;
 use mtec_comp::gcode::offsets::WORK_SYSTEMS;
 use mtec_comp::gcode::tooltable::{load_tool_table, MachineUnits};
 use mtec_comp::gcode::RewriteReport;
-use mtec_comp::gcode::{rewrite, BlockDelete, GcodeError, OffsetsFile, RewriteOptions};
+use mtec_comp::gcode::{
+    rewrite, BlockDelete, GcodeError, OffsetsFile, ProblemKind, RewriteOptions,
+};
 use mtec_io::{InputError, OutputGuard};
 use serde::Serialize;
 use std::fmt;
@@ -225,10 +227,15 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
     })?;
     writer.into_inner().map_err(|e| e.into_error())?.commit()?;
     for w in &report.warnings {
+        let copied = if w.kind == ProblemKind::Controller {
+            ""
+        } else {
+            " (line copied unchanged)"
+        };
         warn(
             obs,
             format!(
-                "{}:{}:{}: {} (line copied unchanged)",
+                "{}:{}:{}: {}{copied}",
                 source.display(),
                 w.line,
                 w.column,

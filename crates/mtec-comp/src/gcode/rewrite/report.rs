@@ -11,6 +11,8 @@ pub enum ProblemKind {
     Unsupported,
     /// The correction could not be computed (non-convergence, too large, non-finite).
     Correction,
+    /// The line is compensated, but the controller may not run it as written (a warning only).
+    Controller,
 }
 
 /// A located problem: line and column are 1-based.

@@ -57,6 +57,11 @@ pub(super) struct Rewriter<'a> {
     /// A line's parameters could not be evaluated (pass-through mode): from then on parameter
     /// values are not known and computed words are unsupported.
     pub(super) params_lost: bool,
+    /// LinuxCNC's naive-CAM tolerance in effect, mm, and the line of the G64 that set it
+    /// (`G64 P p Q q`: q, else p; 0 after G61/G61.1 or `G64` alone).
+    pub(super) naive_cam: Option<(f64, usize)>,
+    /// The naive-CAM warning was given (once per program).
+    pub(super) naive_cam_warned: bool,
 }
 
 impl<'a> Rewriter<'a> {
@@ -83,6 +88,8 @@ impl<'a> Rewriter<'a> {
             ends: Vec::new(),
             line_values: LineValues::default(),
             params_lost: false,
+            naive_cam: None,
+            naive_cam_warned: false,
             block: None,
             planner: Planner::new(model, opt),
             pieces: Vec::new(),
@@ -150,6 +157,44 @@ impl<'a> Rewriter<'a> {
         if self.report.warnings.len() < MAX_WARNINGS_KEPT {
             self.report.warnings.push(d);
         }
+    }
+
+    /// G64 P… Q…, G61, G61.1: LinuxCNC's naive-CAM tolerance (emccanon.cc `linkable`): in G64
+    /// with a tolerance above 0, consecutive straight feeds whose points all lie within it of
+    /// the line from the first start to the last end are sent as that one line. `G64 P p`
+    /// without Q sets it to p (rs274 prints `SET_NAIVECAM_TOLERANCE(p)`).
+    fn follow_path_control(&mut self, b: &Block) {
+        if b.has_g(GCode::G61).or(b.has_g(GCode::G61_1)).is_some() {
+            self.naive_cam = None;
+        }
+        if b.has_g(GCode::G64).is_some() {
+            let number = |l: u8| match b.word(l).map(|w| w.value) {
+                Some(Value::Number(v)) if v.is_finite() => Some(v),
+                _ => None,
+            };
+            let mm = self.st.units.map_or(1.0, |u| u.mm_per_unit());
+            let q = number(b'Q').or(number(b'P')).unwrap_or(0.0) * mm;
+            self.naive_cam = (q > 0.0).then_some((q, self.line_no));
+        }
+    }
+
+    /// Warns (once) that the pieces just written may be merged back into one line by the
+    /// naive-CAM detector: the path between them is then within its tolerance, not within
+    /// `--tolerance-um`.
+    fn warn_naive_cam(&mut self, token: Option<usize>) {
+        let Some((q, g64_line)) = self.naive_cam.filter(|_| !self.naive_cam_warned) else {
+            return;
+        };
+        self.naive_cam_warned = true;
+        let d = self.diag(
+            self.column_of(token),
+            ProblemKind::Controller,
+            format!(
+                "this move is written as several straight pieces to follow the model within {} um, but the G64 of line {g64_line} sets LinuxCNC's naive-CAM tolerance to {:.4} mm (Q, or P without Q), and LinuxCNC runs consecutive straight feeds that lie within it of one line as that line: the pieces can be merged, leaving the path between their ends off by up to the model's departure from a straight line. Add Q0 to that G64 (G64 P… Q0) or use G61 to keep them (the same holds for a G64 P/Q in the controller's start-up code)",
+                self.opt.tolerance_um, q
+            ),
+        );
+        self.warn(d);
     }
 
     /// The planner and where the current block is, for one planning step at column `col`.
@@ -405,10 +450,16 @@ impl<'a> Rewriter<'a> {
             return Ok(true);
         }
 
+        self.follow_path_control(b);
         if let Some(m) = motion {
             self.emitted = false;
             let motion_tok = motion_word.map(|(_, t)| t);
+            let linearised = self.report.arcs_linearised;
             self.motion_block(b, body, m, motion_tok, g53)?;
+            let straight_pieces = m == Motion::Linear || self.report.arcs_linearised > linearised;
+            if straight_pieces && !self.extra_lines.is_empty() {
+                self.warn_naive_cam(motion_tok.or(b.first_word));
+            }
             if !self.emitted {
                 // copied without compensation: it must still move in the program's mode
                 self.restore_motion_word(b, m, motion_tok.is_none());
