@@ -421,3 +421,48 @@ fn split_moves_under_a_naive_cam_tolerance_are_warned_about_once() {
         assert_eq!(warned(quiet), vec![], "{quiet}");
     }
 }
+
+/// Blocks LinuxCNC refuses must be refused here too, at the word, not rewritten into blocks it
+/// refuses as well (found 2026-11-28 with hand-written programs: `G1 X40 P5` was split and
+/// compensated; rs274 stops at both with "P word with no G2 G3 G4 … to use it"). Each refusal
+/// below was checked with rs274; the accepted blocks are ones rs274 runs.
+#[test]
+fn words_linuxcnc_refuses_in_a_move_are_refused_at_the_word() {
+    let opts = RewriteOptions {
+        start_position_mm: Some([0.0; 3]),
+        ..RewriteOptions::default()
+    };
+    let model = ConstModel([3.0, -2.0, 1.0]);
+    for (line, column, what) in [
+        ("G1 X40 P5", 8, "P word"),
+        ("G1 X40 Q1", 8, "Q word"),
+        ("G1 X40 R5", 8, "R word"),
+        ("G0 X40 K1", 8, "K word"),
+        ("G1 X40 E1 F200", 8, "E word"),
+        ("G1 X40 G49 H1", 12, "H word"),
+        ("G2 X40 I17.5 J0 L1", 17, "L word"),
+        ("G3 X40 I17.5 J0 D1", 17, "D word"),
+        ("G1 X40 N5", 8, "N word after other words"),
+        ("G1 X40 O100", 8, "O-word after other words"),
+    ] {
+        let program = format!("G21 G90 G17\nG0 X0 Y0 Z0\nG1 X5 F300\n{line}\nM2\n");
+        let d = refuse(&program, &model, &opts);
+        assert_eq!((d.line, d.column), (4, column), "{line}: {}", d.message);
+        assert!(d.message.contains(what), "{line}: {}", d.message);
+    }
+    for line in [
+        "G2 X40 I17.5 J0 P1",
+        "G4 P1 X40",
+        "G1 X40 M62 P1",
+        "G1 X40 M66 P0 L0 Q1",
+        "N5 G1 X40",
+        "G1 X40 S100 T2",
+    ] {
+        let program = format!("G21 G90 G17\nG0 X0 Y0 Z0\nG1 X5 F300\n{line}\nM2\n");
+        let mut out = Vec::new();
+        assert!(
+            rewrite(program.as_bytes(), &mut out, &model, &opts).is_ok(),
+            "{line}"
+        );
+    }
+}

@@ -86,7 +86,13 @@ impl Block {
                 TokenKind::Percent => b.percent = true,
                 TokenKind::Comment => {}
                 TokenKind::OWord { keyword } => {
-                    if keyword {
+                    if b.first_word.is_some() {
+                        b.issue(
+                            i,
+                            "O-word after other words: LinuxCNC reads an O-word only at the start of a line (\"Bad character 'o' used\")",
+                            true,
+                        );
+                    } else if keyword {
                         b.issue(
                             i,
                             "O-word control flow or subroutine (sub/call/if/while/…): the path depends on run-time values",
@@ -133,6 +139,11 @@ impl Block {
                                 b.m.push((tenths / 10, i));
                             }
                         }
+                        b'N' if b.first_word.is_some() => b.issue(
+                            i,
+                            "N word after other words: LinuxCNC reads a line number only at the start of a line (\"Bad character 'n' used\")",
+                            true,
+                        ),
                         b'N' => {}
                         b'@' | b'^' => {
                             if b.polar.is_none() {

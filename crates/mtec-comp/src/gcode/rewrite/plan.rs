@@ -15,6 +15,7 @@
 
 use super::super::arc::Arc;
 use super::super::block::{Block, Issue};
+use super::super::code::GCode;
 use super::super::lexer::Value;
 use super::interp::{Motion, OUT, PROG};
 use super::piece::{dist, Piece, RotaryMove};
@@ -99,6 +100,16 @@ impl Rewriter<'_> {
             issues.push(Issue {
                 token: why_tok.or(tok),
                 message: w,
+                poisons_all: false,
+            });
+        }
+        if let Some((letter, token)) = unused_word(b, m) {
+            issues.push(Issue {
+                token: Some(token),
+                message: format!(
+                    "{letter} word in a {} block with no code that uses it: LinuxCNC refuses the block (\"{letter} word with no ... to use it\"); remove it",
+                    if matches!(m, Motion::Cw | Motion::Ccw) { "G2/G3" } else { "G0/G1" }
+                ),
                 poisons_all: false,
             });
         }
@@ -598,4 +609,70 @@ impl Rewriter<'_> {
 fn arc_length(arc: &Arc) -> f64 {
     let n = arc.plane.normal;
     (arc.r_start * arc.sweep.abs()).hypot(arc.end[n] - arc.start[n])
+}
+
+/// A D, E, H, I, J, K, L, P, Q or R word in a straight move (G0, G1), or a D, E, H, L or Q word
+/// in an arc (G2, G3), whose block has no other
+/// G code that takes words and no M code: LinuxCNC refuses such a block (interp_check.cc, e.g.
+/// "P word with no G2 G3 G4 G10 G64 … to use it"; each letter checked with rs274 on `G1 X40
+/// P5` and the like, 2026-11-28). Blocks with any other G code (G4, G10, G43, G64, G96, cycles …)
+/// or an M code (user M codes take P and Q) are left to the controller's own check.
+fn unused_word(b: &Block, m: Motion) -> Option<(char, usize)> {
+    use super::super::code::GCode::*;
+    // an arc takes I, J, K, R and P (turns); a straight move none of them
+    let letters: &[u8] = match m {
+        Motion::Rapid | Motion::Linear => b"DEHIJKLPQR",
+        Motion::Cw | Motion::Ccw => b"DEHLQ",
+        _ => return None,
+    };
+    if !b.m.is_empty() {
+        return None;
+    }
+    let takes_no_words = |c: &GCode| {
+        matches!(
+            c,
+            G0 | G1
+                | G2
+                | G3
+                | G7
+                | G8
+                | G17
+                | G18
+                | G19
+                | G20
+                | G21
+                | G40
+                | G49
+                | G53
+                | G54
+                | G55
+                | G56
+                | G57
+                | G58
+                | G59
+                | G59_1
+                | G59_2
+                | G59_3
+                | G61
+                | G61_1
+                | G80
+                | G90
+                | G90_1
+                | G91
+                | G91_1
+                | G93
+                | G94
+                | G95
+                | G97
+                | G98
+                | G99
+        )
+    };
+    if !b.g.iter().all(|(c, _)| takes_no_words(c)) {
+        return None;
+    }
+    letters
+        .iter()
+        .filter_map(|&l| b.word(l).map(|w| (l as char, w.token)))
+        .min_by_key(|&(_, t)| t)
 }
