@@ -466,3 +466,36 @@ fn words_linuxcnc_refuses_in_a_move_are_refused_at_the_word() {
         );
     }
 }
+
+/// M70-M73 save and restore the modal state (units, distance modes, plane, feed …): `M70`,
+/// `G91`, `M72`, `G1 X20` ran on LinuxCNC as an absolute move, and the rewriter, not following
+/// the restore, wrote it as incremental pieces (10 mm off). They are refused at the M word.
+#[test]
+fn modal_state_save_and_restore_is_refused_at_the_m_word() {
+    let opts = RewriteOptions {
+        start_position_mm: Some([0.0; 3]),
+        ..RewriteOptions::default()
+    };
+    for (program, line, column) in [
+        (
+            "G21 G90\nG0 X0 Y0 Z0\nG1 F100\nM70\nG91\nG1 X5\nM72\nG1 X20\n",
+            4,
+            1,
+        ),
+        ("G21 G90\nG0 X0 Y0 Z0\nG1 F100 M73\n", 3, 9),
+        ("G21 G90\nM71\n", 2, 1),
+    ] {
+        let d = refuse(program, &PolyModel, &opts);
+        assert_eq!(
+            (d.line, d.column),
+            (line, column),
+            "{program}: {}",
+            d.message
+        );
+        assert!(
+            d.message.contains("modal state save/restore"),
+            "{}",
+            d.message
+        );
+    }
+}

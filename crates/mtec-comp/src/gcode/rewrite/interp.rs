@@ -298,6 +298,17 @@ impl State {
                     poisons_all: true,
                 });
             }
+            // M70 saves the modal state, M72 restores it (units, distance modes, plane, feed
+            // mode, F, S …), M73 restores it when a subroutine returns, M71 invalidates it: the
+            // modes after them are not followed here (found 2026-11-28: `M70`, `G91`, `M72`,
+            // `G1 X20` was compensated as an incremental move, 10 mm off on LinuxCNC)
+            if (70..=73).contains(&code) {
+                issues.push(Issue {
+                    token: Some(tok),
+                    message: format!("M{code}: modal state save/restore (M70-M73) is not followed; flatten the program with --flatten-with rs274"),
+                    poisons_all: true,
+                });
+            }
         }
 
         // a G2/G3 block with centre words and no axis words is a full circle (LinuxCNC

@@ -4,7 +4,7 @@
 //! three are `impl Rewriter` blocks. It holds the per-line buffers they share. The types every part names (options, report, pieces, rotary moves, word text) live in
 //! leaf modules below all of them, so no module of the rewriter uses another in a cycle.
 
-use super::super::block::Block;
+use super::super::block::{Block, Issue};
 use super::super::code::GCode;
 use super::super::expr::{for_each_system_parameter_range, LineValues, Params};
 use super::super::format::Edit;
@@ -386,6 +386,15 @@ impl<'a> Rewriter<'a> {
         } = self.st.interpret(b, self.opt.block_delete, kinematic);
         if let Some(m) = motion.filter(|_| axis_words_followed) {
             self.check_compensable(b, m, &mut issues);
+        } else if motion.is_none() && !has_axis {
+            // a block that moves nothing: a stray word LinuxCNC refuses
+            if let Some((letter, token)) = super::plan::unused_word(b, self.st.motion, false) {
+                issues.push(Issue {
+                    token: Some(token),
+                    message: format!("{letter} word with no code in the block that uses it: LinuxCNC refuses the block (\"{letter} word with no ... to use it\"); remove it"),
+                    poisons_all: false,
+                });
+            }
         }
 
         // --- unsupported: refuse, or warn and pass through ----------------------------------
