@@ -499,3 +499,26 @@ fn modal_state_save_and_restore_is_refused_at_the_m_word() {
         );
     }
 }
+
+/// With `--start-position-mm` the machine stands there uncorrected: a feed as the first move
+/// starts off the path by the error there. It was refused ("a piece shorter than 1 nm"); now,
+/// when that error is over the tolerance, it is corrected at its end point only, as from an
+/// unknown start (found 2026-11-28 on a jscut program that starts with `G1 Z2`). A first rapid,
+/// or a start where the error is within the tolerance, is unchanged.
+#[test]
+fn a_first_feed_from_an_uncorrected_start_is_corrected_at_its_end() {
+    let opts = RewriteOptions {
+        start_position_mm: Some([0.0; 3]),
+        ..RewriteOptions::default()
+    };
+    let model = ConstModel([27.0, -10.0, 5.0]);
+    let (out, rep) = run("G21 G90\nG1 X50 F1000\nG1 X100\nM2\n", &model, &opts);
+    let lines: Vec<&str> = out.lines().filter(|l| !l.starts_with("(mtec")).collect();
+    assert_eq!(lines[1], "G1 X49.973 Y0.01 Z-0.005 F1000", "{out}");
+    assert_eq!(lines[2], "G1 X59.973", "{out}");
+    assert_eq!(rep.moves_end_point_only, 1);
+    // within the tolerance at the start: the path is followed from there as before
+    let small = ConstModel([0.3, 0.0, 0.0]);
+    let (_, rep) = run("G21 G90\nG1 X50 F1000\nM2\n", &small, &opts);
+    assert_eq!(rep.moves_end_point_only, 0);
+}

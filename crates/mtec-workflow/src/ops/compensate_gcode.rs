@@ -105,7 +105,7 @@ impl fmt::Display for Outcome {
         if r.rapids_not_compensated > 0 || r.moves_end_point_only > 0 {
             writeln!(
                 f,
-                "  {} rapids before all axes were known copied uncorrected; {} feed moves from an unknown start corrected at their end point only",
+                "  {} rapids before all axes were known copied uncorrected; {} feed moves from an unknown or uncorrected start corrected at their end point only",
                 r.rapids_not_compensated, r.moves_end_point_only
             )?;
         }

@@ -93,6 +93,9 @@ pub(super) struct State {
     pub(super) plane: Option<Plane>,
     pub(super) work: Option<usize>,
     pub(super) tool_length_mm: Option<f64>,
+    /// The machine stands at `--start-position-mm` as commanded, uncorrected (nothing has been
+    /// written yet that corrects it): a feed from there starts off the path by the error there.
+    pub(super) start_uncorrected: bool,
     /// G20/G21 changed the units since the tool length offset was applied (G43/G49): LinuxCNC's
     /// interpreter then puts a G53 move elsewhere (it subtracts the offset unconverted).
     pub(super) units_changed_since_tool_length: bool,
@@ -162,6 +165,7 @@ impl State {
             work: Some(opt.offsets.active),
             tool_length_mm: Some(0.0),
             units_changed_since_tool_length: false,
+            start_uncorrected: opt.start_position_mm.is_some(),
             selected_tool: None,
             current_tool: None,
             motion: Motion::Cancelled,

@@ -357,11 +357,24 @@ impl Rewriter<'_> {
         self.st.rot = rot_target.map(Some);
         let target = target.map(|t| t.unwrap_or(0.0));
         let c_end = self.correct(target, col)?;
-        let c_start = if start_known {
+        let mut c_start = if start_known {
             Some([0, 1, 2].map(|a| self.st.out[a].unwrap_or(0.0) - self.st.prog[a].unwrap_or(0.0)))
         } else {
             None
         };
+        // the first move from an uncorrected --start-position-mm: if the error there is over
+        // the tolerance, no path from it can stay within it, so the move is corrected at its
+        // end point only, as from an unknown start (before, a G1 first was refused as "a
+        // piece shorter than 1 nm", found 2026-11-28 on a jscut program)
+        if let (true, Some(c0)) = (self.st.start_uncorrected, c_start) {
+            let start_p = start.map(|s| s.unwrap_or(0.0));
+            let needed = self.correct(start_p, col)?;
+            let off_um = dist(needed, c0) * 1000.0;
+            if off_um > self.opt.tolerance_um {
+                c_start = None;
+            }
+        }
+        self.st.start_uncorrected = false;
         let start_p = start.map(|s| s.unwrap_or(0.0));
         if rot_moves {
             let mv = RotaryMove {
