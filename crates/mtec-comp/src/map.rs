@@ -126,13 +126,19 @@ pub struct MapShapeError(pub String);
 const AXIS_NAMES: [&str; 3] = ["x_mm", "y_mm", "z_mm"];
 const VALUE_NAMES: [&str; 3] = ["ex_um", "ey_um", "ez_um"];
 
+/// One node's [ex, ey, ez, 0] µm, aligned to 32 bytes: a node never straddles two cache lines
+/// (the allocator gives 16-byte alignment: every other node was a split load; issue 22).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C, align(32))]
+struct Node([f64; 4]);
+
 /// A volumetric error map on a rectilinear grid, evaluated by trilinear interpolation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GridMap {
     axes_mm: [Vec<f64>; 3],
     /// [ex, ey, ez, 0] µm of node (i, j, k) at (i·ny + j)·nz + k: padded to four so that a
     /// corner is one aligned 32-byte load and its three components one vector operation.
-    values_um: Vec<[f64; 4]>,
+    values_um: Vec<Node>,
     outside: Outside,
     source: String,
     /// 1 / step of each equally spaced axis (0 when unequal): cell lookup without a search.
@@ -208,7 +214,10 @@ impl GridMap {
         }
         let mut map = GridMap {
             axes_mm,
-            values_um: values_um.iter().map(|&[x, y, z]| [x, y, z, 0.0]).collect(),
+            values_um: values_um
+                .iter()
+                .map(|&[x, y, z]| Node([x, y, z, 0.0]))
+                .collect(),
             outside,
             source: source.into(),
             inv_step: [0.0; 3],
@@ -396,7 +405,7 @@ impl GridMap {
 
     /// The map as its JSON document.
     pub fn to_file(&self) -> MapFile {
-        let col = |c: usize| self.values_um.iter().map(|v| v[c]).collect::<Vec<f64>>();
+        let col = |c: usize| self.values_um.iter().map(|v| v.0[c]).collect::<Vec<f64>>();
         MapFile {
             format: MAP_FORMAT.to_string(),
             model: "trilinear".to_string(),
@@ -479,7 +488,7 @@ impl GridMap {
     /// Error [ex, ey, ez] µm stored at node (i, j, k).
     pub fn node_um(&self, i: usize, j: usize, k: usize) -> [f64; 3] {
         let n = [self.axes_mm[1].len(), self.axes_mm[2].len()];
-        let [x, y, z, _] = self.values_um[(i * n[0] + j) * n[1] + k];
+        let [x, y, z, _] = self.values_um[(i * n[0] + j) * n[1] + k].0;
         [x, y, z]
     }
 
@@ -509,7 +518,7 @@ impl GridMap {
     #[inline]
     pub fn try_error_um(&self, p_mm: [f64; 3]) -> Result<[f64; 3], OutsideGrid> {
         let lookup = self.lookup();
-        match lookup.eval(&self.values_um, p_mm) {
+        match lookup.eval(self.nodes(), p_mm) {
             Some([x, y, z, _]) => Ok([x, y, z]),
             None => Err(self.outside_error(p_mm)),
         }
@@ -535,7 +544,7 @@ impl GridMap {
             "eval_batch: as many outputs as points"
         );
         let lookup = self.lookup();
-        let v = self.values_um.as_slice();
+        let v = self.nodes();
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2 (checked just above), all the function needs.
@@ -563,6 +572,14 @@ impl GridMap {
             min_mm: ax[0],
             max_mm: ax[ax.len() - 1],
         }
+    }
+
+    /// The nodes as [ex, ey, ez, 0] µm.
+    #[inline]
+    fn nodes(&self) -> &[[f64; 4]] {
+        // SAFETY: `Node` is `repr(C)` around one [f64; 4]: the same size and layout, with a
+        // stricter alignment, so the slice reinterprets the same memory
+        unsafe { std::slice::from_raw_parts(self.values_um.as_ptr().cast(), self.values_um.len()) }
     }
 
     /// The per-map constants of a lookup.
@@ -985,7 +1002,7 @@ mod tests {
                 ErrorModel::eval_batch(&m, &points, &mut through_trait);
                 // the kernel as compiled without AVX2 (the other path on machines with it)
                 let mut generic = vec![[0.0; 3]; points.len()];
-                eval_batch_blocks::<false>(&m.lookup(), &m.values_um, &points, &mut generic);
+                eval_batch_blocks::<false>(&m.lookup(), m.nodes(), &points, &mut generic);
                 let mut refused = 0;
                 for (((p, b), t), g) in points.iter().zip(&batch).zip(&through_trait).zip(&generic)
                 {
