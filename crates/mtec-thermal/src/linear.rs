@@ -232,18 +232,18 @@ pub fn vif(x: &DMatrix<f64>, names: &[String]) -> Result<Vec<f64>, ThermalError>
     }
     // X_c = X − x̄ is formed block by block inside the QR (`tall_qr`), never as a whole copy
     let nf = n as f64;
-    let mut mean = Vec::with_capacity(p);
-    let mut ss = Vec::with_capacity(p);
     let cols: Vec<&[f64]> = x.as_slice().chunks_exact(n).collect();
-    for (j, col) in cols.iter().enumerate() {
-        let (m, s2) = crate::tall_qr::mean_and_ss(col);
-        if s2.sqrt() <= 1e-12 * m.abs().max(1.0) * nf.sqrt() {
+    let mean: Vec<f64> = cols.iter().map(|col| crate::tall_qr::mean(col)).collect();
+    let rq = crate::tall_qr::tall_r(&cols, &mean, &vec![1.0; p], p);
+    // Σ(x_j − x̄_j)² = ‖X_c e_j‖² = ‖R e_j‖² (Q is orthogonal): no second pass over the data
+    let ss: Vec<f64> = (0..p)
+        .map(|j| (0..=j).map(|i| rq[i * p + j].powi(2)).sum())
+        .collect();
+    for j in 0..p {
+        if ss[j].sqrt() <= 1e-12 * mean[j].abs().max(1.0) * nf.sqrt() {
             return Err(ThermalError::ConstantColumn(names[j].clone()));
         }
-        mean.push(m);
-        ss.push(s2);
     }
-    let rq = crate::tall_qr::tall_r(&cols, &mean, &vec![1.0; p], p);
     let r = DMatrix::from_fn(p, p, |i, j| rq[i * p + j]);
     let rmax = (0..p).map(|i| r[(i, i)].abs()).fold(0.0, f64::max);
     if (0..p).all(|i| r[(i, i)].abs() > RANK_TOL * rmax * 1e3) {
