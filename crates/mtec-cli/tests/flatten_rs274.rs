@@ -835,11 +835,12 @@ fn tool_lengths_come_from_the_user_only() {
         "drill.ngc",
         "G21 G90\nT1 M6\nG43 H1\nG0 X1 Y1 Z8\nG1 Z-2 F100\nM2\n",
     );
-    // no table, no lengths: refused at the tool change, saying what to give
+    // no table, no lengths: refused at the G43 that uses the unknown length, saying what to
+    // give (rs274 gets tools 1-999 with an absurd length, so that a tool change alone passes)
     let (code, msg, out) = run(&drill, &[], "");
     assert_eq!(code, Some(2), "{msg}");
     assert!(
-        msg.contains("drill.ngc:2:1:") && msg.contains("Requested tool 1 not found"),
+        msg.contains("drill.ngc:3:1:") && msg.contains("a tool whose length is not known"),
         "{msg}"
     );
     assert!(
@@ -847,6 +848,15 @@ fn tool_lengths_come_from_the_user_only() {
         "{msg}"
     );
     assert!(out.is_none());
+    // a tool change without G43 needs no length: flattened (found 2026-11-28 on public
+    // programs, refused before with "Requested tool 1 not found")
+    let plain = write(
+        "plain-t1.ngc",
+        "G21 G90\nT1 M6\nS5000 M3\nG0 X1 Y1 Z5\nG1 Z0 F100\nM2\n",
+    );
+    let (code, msg, out) = run(&plain, &[], "");
+    assert_eq!(code, Some(0), "{msg}");
+    assert!(out.is_some_and(|o| o.contains("T1") && !o.contains("G43")));
     // the lengths of --offsets reach rs274: Z8 with an 85.25 mm tool is Z93.25 without G43
     let offsets = write(
         "offsets.toml",

@@ -333,13 +333,38 @@ fn without_comments(line: &str) -> String {
     out
 }
 
+/// The length (inches) a tool not in `--offsets` gets in the table mtec makes without
+/// `--tool-table`: `T5 M6` then needs the tool in the table (rs274 stops at "Requested tool 5
+/// not found" otherwise), while a length offset that uses it must not pass unnoticed, so it is
+/// absurd (254 m) and any offset of 5000 program units or more is refused
+/// ([`unknown_tool_length_used`]). Found 2026-11-28: public programs with a plain `T1` and no
+/// G43 were refused by flattening only.
+const UNKNOWN_TOOL_LENGTH_IN: f64 = 9999.125;
+
 /// A LinuxCNC tool table of `lengths` (tool → length in mm), in inches as stand-alone rs274
-/// reads it; each tool in the pocket of its number.
+/// reads it; each tool in the pocket of its number; tools 1–999 that `lengths` lacks get
+/// [`UNKNOWN_TOOL_LENGTH_IN`].
 fn tool_table_in_inches(lengths: &std::collections::BTreeMap<u32, f64>) -> String {
-    lengths
-        .iter()
-        .map(|(t, mm)| format!("T{t} P{t} Z{} ;\n", mm / 25.4))
+    (1..1000u32)
+        .chain(lengths.keys().copied().filter(|&t| t >= 1000))
+        .map(|t| match lengths.get(&t) {
+            Some(mm) => format!("T{t} P{t} Z{} ;\n", mm / 25.4),
+            None => format!("T{t} P{t} Z{UNKNOWN_TOOL_LENGTH_IN} ;\n"),
+        })
         .collect()
+}
+
+/// The canonical line (rs274's sequence number) of the first tool length offset that uses a
+/// length of [`UNKNOWN_TOOL_LENGTH_IN`] (5000 program units or more on any axis).
+fn unknown_tool_length_used(canon: &str) -> Option<usize> {
+    canon.lines().find_map(|l| {
+        let (head, args) = l.split_once("USE_TOOL_LENGTH_OFFSET(")?;
+        let huge = args
+            .split(|c: char| c == ',' || c == ' ' || c == ')')
+            .filter_map(|v| v.parse::<f64>().ok())
+            .any(|v| v.abs() >= 5000.0);
+        huge.then(|| head.split_whitespace().next()?.parse().ok())?
+    })
 }
 
 /// Where in `program` rs274 stopped: rs274 prints the offending line last on stderr; when
@@ -651,6 +676,18 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     // 4. the same program started with another tool in the spindle: a G43 without H (or an M6
     // without T) before the first tool change takes the tool the machine happens to hold, which
     // stand-alone rs274 takes for tool 0 (length 0)
+    if let Some(k) = unknown_tool_length_used(&run.stdout).filter(|_| args.tool_table.is_none()) {
+        let line = mtec_comp::gcode::line_numbers::numbered_program(&program)
+            .and_then(|numbered| run_variant("numbered", &numbered).ok())
+            .and_then(|n| {
+                mtec_comp::gcode::line_numbers::canonical_source_line(&run.stdout, &n.stdout, k)
+            });
+        let text = String::from_utf8_lossy(&program);
+        let at =
+            line.and_then(|l| Some((l, error_column(text.lines().nth(l.checked_sub(1)?)?, ""))));
+        let message = "a tool length offset (G43, G43.2) uses a tool whose length is not known: give the controller's tool table with --tool-table, or the tool's length under [tool_lengths_mm] in --offsets";
+        return Err(located(input, at, message).into());
+    }
     let offsets = tool_length_offsets(&run.stdout);
     if !offsets.is_empty() {
         let tool_run = run_variant(SPINDLE_TOOL_PROBE, &spindle_tool_probe_program(&program))?;
@@ -787,9 +824,19 @@ mod tests {
             .map(|w| w.code)
             .collect();
         assert_eq!(codes, [411, 420, 410]);
-        assert_eq!(
-            tool_table_in_inches(&[(1, 25.4), (12, 50.8)].into()),
-            "T1 P1 Z1 ;\nT12 P12 Z2 ;\n"
-        );
+        let table = tool_table_in_inches(&[(1, 25.4), (12, 50.8), (1200, 101.6)].into());
+        let lines: Vec<&str> = table.lines().collect();
+        assert_eq!(lines.len(), 1000);
+        assert_eq!(lines[0], "T1 P1 Z1 ;");
+        assert_eq!(lines[1], "T2 P2 Z9999.125 ;");
+        assert_eq!(lines[11], "T12 P12 Z2 ;");
+        assert_eq!(lines[999], "T1200 P1200 Z4 ;");
+        // a length offset of a made-up tool, in mm or inch, alone or added by G43.2
+        let canon = "   11 N..... CHANGE_TOOL(2)\n   12 N..... USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 253977.7750, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)\n";
+        assert_eq!(unknown_tool_length_used(canon), Some(12));
+        let canon = "    9 N..... USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 1.0000, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)\n   10 N..... USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 10000.1250, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)\n";
+        assert_eq!(unknown_tool_length_used(canon), Some(10));
+        let canon = "    9 N..... USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 4999.0000, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)\n";
+        assert_eq!(unknown_tool_length_used(canon), None);
     }
 }

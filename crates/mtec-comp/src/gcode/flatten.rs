@@ -651,6 +651,14 @@ impl Flattener {
                     self.line("M9");
                     return Ok(());
                 }
+                // M30's reset prints the coolant off, then PALLET_SHUTTLE, then PROGRAM_END:
+                // the off stays pending until the end (found 2026-11-28: `M8` … `M30` without
+                // M9 was refused, the same program with M2 was not)
+                (_, "PALLET_SHUTTLE") => {
+                    self.pallet = true;
+                    self.pending_off = Some((mist, e));
+                    return Ok(());
+                }
                 // the program end's own reset switches off what is on: M2/M30 does it again
                 (_, "PROGRAM_END") | (false, "MIST_OFF") => {
                     if mist {
@@ -1338,6 +1346,30 @@ mod tests {
             ["G21", "G54", "G17", "M8", "M5", "M2"],
             "{t}"
         );
+        // M30's reset: the off, then the pallet shuttle, then the end: M30 does it again
+        let t = flat(&canon(&[
+            "FLOOD_ON()",
+            "STOP_SPINDLE_TURNING(0)",
+            "SET_SPINDLE_MODE(0 0.0000)",
+            "FLOOD_OFF()",
+            "PALLET_SHUTTLE()",
+            "PROGRAM_END()",
+        ]))
+        .unwrap();
+        assert_eq!(
+            t.lines().skip(1).collect::<Vec<_>>(),
+            ["G21", "G54", "G17", "M8", "M5", "M30"],
+            "{t}"
+        );
+        // but a lone off before an M60 (pallet shuttle and stop) has no code
+        let e = flat(&canon(&[
+            "FLOOD_ON()",
+            "FLOOD_OFF()",
+            "PALLET_SHUTTLE()",
+            "PROGRAM_STOP()",
+        ]))
+        .unwrap_err();
+        assert!(e.message.contains("single coolant"), "{e}");
         // a single coolant off anywhere else has no code
         let e = flat(&canon(&["FLOOD_ON()", "MIST_OFF()", "DWELL(1.0000)"])).unwrap_err();
         assert!(e.message.contains("single coolant"), "{e}");
