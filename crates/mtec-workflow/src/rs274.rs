@@ -360,7 +360,7 @@ fn unknown_tool_length_used(canon: &str) -> Option<usize> {
     canon.lines().find_map(|l| {
         let (head, args) = l.split_once("USE_TOOL_LENGTH_OFFSET(")?;
         let huge = args
-            .split(|c: char| c == ',' || c == ' ' || c == ')')
+            .split([',', ' ', ')'])
             .filter_map(|v| v.parse::<f64>().ok())
             .any(|v| v.abs() >= 5000.0);
         huge.then(|| head.split_whitespace().next()?.parse().ok())?
