@@ -41,6 +41,7 @@ pub mod bpnn {
 }
 pub mod bpnn_train;
 pub mod cnn_lstm;
+pub mod cnn_lstm_kernel;
 mod dataset;
 pub mod error;
 pub mod grid_fit;
