@@ -269,3 +269,19 @@ fn adam_step_equals_candle_adamw() {
         assert!(e < 1e-5, "{e}");
     }
 }
+
+/// The branch-free f32 exp against the library's, over the whole range the gates see, and
+/// its saturation (sigmoid at ±100 is 1 and below 1e-37, tanh exactly ±1).
+#[test]
+fn fast_exp_is_accurate() {
+    let mut worst = 0.0f64;
+    for i in -87_000..=88_000 {
+        let x = i as f32 * 1e-3;
+        let (fast, exact) = (exp_f32(x) as f64, (x as f64).exp());
+        worst = worst.max((fast - exact).abs() / exact);
+    }
+    eprintln!("exp_f32 worst relative error {worst:.2e}");
+    assert!(worst < 3e-7, "{worst}");
+    assert!(sigmoid(100.0f32) == 1.0 && (0.0..1e-37).contains(&sigmoid(-100.0f32)));
+    assert_eq!((tanh(100.0f32), tanh(-100.0f32)), (1.0, -1.0));
+}
