@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# CNN-LSTM: mtec (candle, CPU) against PyTorch on the same architecture, data, split and
-# hyper-parameters. Prints the time-per-epoch ratio and both test RMSEs.
+# CNN-LSTM: mtec (its own forward/backward kernel, mtec_nn::cnn_lstm_kernel, one thread) against
+# PyTorch on the same architecture, data, split and hyper-parameters. Prints the time per epoch
+# of every run, the median ratios and both test RMSEs.
 #
 # Data (DATA=dbb-rotary, the default): the virtual machine's `dbb-rotary` campaign (seed 2),
 # error motions identified by the ballbar method, one sequence per experiment and angle (72 angles
@@ -11,10 +12,18 @@
 # experiments 1, 2, 4, test on 3. Both sides train a fixed number of epochs (no early stopping)
 # and keep the weights of the best validation epoch.
 #
+# Issue 22, build item 1: ROUNDS interleaved rounds (default 3), each running mtec (one thread:
+# the kernel is single-threaded, which is also its best), PyTorch with one thread and PyTorch
+# with 2 threads (this machine's cores); the load is printed before every round. Reported: the
+# median over rounds of mtec / PyTorch-1-thread ("one thread each") and of mtec / the better of
+# PyTorch's two runs in that round ("each at its best"). Times are wall clock per epoch as each
+# side measures its training loop (validation pass included on both sides).
+#
 # Not run by CI. Needs network access to PyPI for torch (the PyPI wheel; it runs on the CPU).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 EPOCHS="${EPOCHS:-40}"
+ROUNDS="${ROUNDS:-3}"
 DATA="${DATA:-dbb-rotary}"
 HARMONICS="${HARMONICS:-3}"
 EXTRA=()
@@ -36,18 +45,28 @@ if [ ! -x "$VENV/bin/python" ]; then
 fi
 
 cargo build --release -p mtec-nn --example "$EXAMPLE"
-echo "load before training: $(uptime)"
-./target/release/examples/"$EXAMPLE" --epochs "$EPOCHS" --fixed --export "$WORK" "${EXTRA[@]}" | tee "$WORK/mtec.txt"
-"$VENV/bin/python" bench/cnn_lstm_torch.py "$WORK/rotary.csv" "$EPOCHS" "$LR_FINAL" | tee "$WORK/torch.txt"
-echo "load after training: $(uptime)"
-
-mtec_spe=$(grep '^MTEC_SECONDS_PER_EPOCH=' "$WORK/mtec.txt" | cut -d= -f2)
-mtec_rmse=$(grep '^MTEC_TEST_RMSE=' "$WORK/mtec.txt" | cut -d= -f2)
-torch_spe=$(grep '^TORCH_SECONDS_PER_EPOCH=' "$WORK/torch.txt" | cut -d= -f2)
-torch_rmse=$(grep '^TORCH_TEST_RMSE=' "$WORK/torch.txt" | cut -d= -f2)
-python3 - "$mtec_spe" "$torch_spe" "$mtec_rmse" "$torch_rmse" <<'PY'
-import sys
-m, t, mr, tr = map(float, sys.argv[1:])
-print(f"time per epoch: mtec {m:.4f} s, PyTorch {t:.4f} s, ratio mtec/PyTorch = {m/t:.2f}")
-print(f"test RMSE (exp 3, all channels): mtec {mr:.4f}, PyTorch {tr:.4f}")
+BIN="${CARGO_TARGET_DIR:-target}/release/examples/$EXAMPLE"
+val() { grep "^$1=" "$2" | cut -d= -f2; }
+: > "$WORK/rows"
+for r in $(seq 1 "$ROUNDS"); do
+  echo "round $r, load: $(uptime)"
+  "$BIN" --epochs "$EPOCHS" --fixed --export "$WORK" "${EXTRA[@]}" > "$WORK/mtec.txt"
+  grep '^CNN-LSTM:' "$WORK/mtec.txt" || true
+  "$VENV/bin/python" bench/cnn_lstm_torch.py "$WORK/rotary.csv" "$EPOCHS" "$LR_FINAL" 1 > "$WORK/t1.txt"
+  "$VENV/bin/python" bench/cnn_lstm_torch.py "$WORK/rotary.csv" "$EPOCHS" "$LR_FINAL" 2 > "$WORK/t2.txt"
+  head -n 1 "$WORK/t1.txt"; head -n 1 "$WORK/t2.txt"
+  echo "$(val MTEC_SECONDS_PER_EPOCH "$WORK/mtec.txt") $(val TORCH_SECONDS_PER_EPOCH "$WORK/t1.txt") $(val TORCH_SECONDS_PER_EPOCH "$WORK/t2.txt") $(val MTEC_TEST_RMSE "$WORK/mtec.txt") $(val TORCH_TEST_RMSE "$WORK/t1.txt") $(val TORCH_TEST_RMSE "$WORK/t2.txt")" >> "$WORK/rows"
+done
+echo "load after: $(uptime)"
+python3 - "$WORK/rows" <<'PY'
+import sys, statistics as st
+rows = [list(map(float, l.split())) for l in open(sys.argv[1]) if l.strip()]
+for i, (m, t1, t2, *_ ) in enumerate(rows, 1):
+    print(f"round {i}: s/epoch mtec {m:.4f}, PyTorch 1 thread {t1:.4f}, 2 threads {t2:.4f}")
+one = st.median(m / t1 for m, t1, t2, *_ in rows)
+best = st.median(m / min(t1, t2) for m, t1, t2, *_ in rows)
+med = lambda k: st.median(r[k] for r in rows)
+print(f"time per epoch, medians: mtec {med(0):.4f} s, PyTorch 1 thread {med(1):.4f} s, 2 threads {med(2):.4f} s")
+print(f"ratio mtec/PyTorch, median over rounds: one thread each {one:.2f}, each at its best {best:.2f} (goal <= 0.5)")
+print(f"test RMSE (exp 3, all channels), medians: mtec {med(3):.4f}, PyTorch 1 thread {med(4):.4f}, 2 threads {med(5):.4f}")
 PY

@@ -1,6 +1,7 @@
 """The CNN-LSTM of mtec_nn::cnn_lstm rebuilt in PyTorch (same layer names, shapes, gate order,
 initialisation bounds, windowing, normalisation, validation split and optimiser), for
-bench/cnn_lstm.sh. Usage: python cnn_lstm_torch.py rotary.csv EPOCHS [LR_FINAL_FRACTION]"""
+bench/cnn_lstm.sh. Usage: python cnn_lstm_torch.py rotary.csv EPOCHS [LR_FINAL_FRACTION [THREADS]]
+(THREADS: torch.set_num_threads; default PyTorch's own choice)"""
 import sys, time, csv
 import numpy as np
 import torch
@@ -14,6 +15,8 @@ TRAIN, TEST = [1, 2, 4], [3]
 
 path, epochs = sys.argv[1], int(sys.argv[2])
 LR_FINAL_FRACTION = float(sys.argv[3]) if len(sys.argv) > 3 else 1.0
+if len(sys.argv) > 4:
+    torch.set_num_threads(int(sys.argv[4]))
 torch.manual_seed(42)
 rows = list(csv.reader(open(path)))
 header, body = rows[0], np.array(rows[1:], dtype=float)

@@ -35,7 +35,7 @@ use support::{
 const LR_FINAL_FRACTION: f64 = 0.05;
 
 fn main() {
-    if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
+    for (var, value) in mtec_nn::threads::single_thread_settings() {
         std::env::set_var(var, value);
     }
     let args = ExampleArgs::from_env();

@@ -69,7 +69,7 @@ fn options(model: &str, seed: u64, s: &Settings) -> NnFitOptions {
 }
 
 fn main() {
-    if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
+    for (var, value) in mtec_nn::threads::single_thread_settings() {
         std::env::set_var(var, value);
     }
     let args = ExampleArgs::from_env();

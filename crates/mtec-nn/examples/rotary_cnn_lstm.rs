@@ -15,7 +15,7 @@ use mtec_nn::NeuralFit;
 use support::{compare, export, print_bench_lines, print_comparison, ExampleArgs};
 
 fn main() {
-    if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
+    for (var, value) in mtec_nn::threads::single_thread_settings() {
         std::env::set_var(var, value);
     }
     let args = ExampleArgs::from_env();

@@ -1,4 +1,4 @@
-//! CNN-LSTM sequence model (candle, CPU): for each time step a 1-D convolution over the feature
+//! CNN-LSTM sequence model (CPU): for each time step a 1-D convolution over the feature
 //! vector (temperatures, angle/position), ReLU and max pooling extract local features; an LSTM
 //! runs over a window of `window` time steps; a dense layer maps its last hidden state to the
 //! error channels.
@@ -7,7 +7,10 @@
 //! MaxPool(2) (as `max_pool2d((1,2))` on [B·W, C, 1, F]: candle has no `max_pool1d`) →
 //! [B, W, C·⌊F/2⌋] → LSTM(H) → h_W [B, H] → Linear(H → O). Parameter names and layouts are
 //! PyTorch's (`conv.weight`, `lstm.weight_ih_l0`, gate order i, f, g, o, `fc.weight`), so the
-//! same network can be rebuilt in PyTorch (`bench/cnn_lstm.sh`).
+//! same network can be rebuilt in PyTorch (`bench/cnn_lstm.sh`). Training and prediction run
+//! on the hand-written forward/backward kernel of [`crate::cnn_lstm_kernel`] (with its Adam,
+//! the algorithm candle-nn's `AdamW` computes); the candle version of the forward pass is kept
+//! for the tests, as the reference the kernel is checked against.
 //!
 //! Decisions where the source is silent:
 //! - Features and targets are z-scored with the training rows' mean/std; the loss is the MSE in
@@ -26,12 +29,13 @@
 //! `target_offset/scale`, `weights` (name → `{shape, data}` row-major f32), `provenance`.
 
 use crate::bpnn::Affine;
+use crate::cnn_lstm_kernel::{Adam, Dims, Params, Workspace};
 use crate::dataset::{Sequence, ThermalDataset};
 use crate::error::{NnError, Result};
 use crate::progress::{Epoch, Monitor, StopReason};
 use crate::rng;
-use candle_core::{DType, Device, Tensor, Var};
-use candle_nn::optim::{AdamW, Optimizer as _, ParamsAdamW};
+#[cfg(test)]
+use candle_core::Tensor;
 use rand::seq::SliceRandom;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -180,18 +184,24 @@ fn check_architecture(a: &Architecture, n_features: usize) -> Result<()> {
     Ok(())
 }
 
-/// The network's tensors (Vars while training, plain tensors when predicting).
-struct Net {
+/// The network in candle (the reference of the kernel's tests): its tensors by name.
+#[cfg(test)]
+pub(crate) struct Net {
     arch: Architecture,
     p: BTreeMap<String, Tensor>,
 }
 
+#[cfg(test)]
 impl Net {
+    pub(crate) fn new(arch: Architecture, p: BTreeMap<String, Tensor>) -> Self {
+        Net { arch, p }
+    }
+
     /// Forward pass of windows x [B, W, F] (normalised) → [B, O].
-    fn forward(&self, x: &Tensor) -> candle_core::Result<Tensor> {
+    pub(crate) fn forward(&self, x: &Tensor) -> candle_core::Result<Tensor> {
         let (b, w, f) = x.dims3()?;
         let a = &self.arch;
-        let (c, h) = (a.conv_channels, a.lstm_hidden);
+        let c = a.conv_channels;
         let p = |n: &str| &self.p[n];
         // 1-D convolution over the feature vector of each time step
         let z = x
@@ -202,8 +212,19 @@ impl Net {
             .relu()?;
         // max pooling by 2 along the features: [B·W, C, 1, F] → [B·W, C, 1, ⌊F/2⌋]
         let z = z.reshape((b * w, c, 1, f))?.max_pool2d((1, 2))?;
-        let d = c * (f / 2);
-        let seq = z.reshape((b * w, d))?;
+        let seq = z.reshape((b * w, c * (f / 2)))?;
+        self.lstm_head(&seq, b, w)
+    }
+
+    /// The LSTM and dense layers on the pooled features [B·W, D] (rows window-major).
+    pub(crate) fn lstm_head(
+        &self,
+        seq: &Tensor,
+        b: usize,
+        w: usize,
+    ) -> candle_core::Result<Tensor> {
+        let h = self.arch.lstm_hidden;
+        let p = |n: &str| &self.p[n];
         // LSTM (Hochreiter & Schmidhuber 1997; PyTorch's gate order i, f, g, o):
         // the input projection of all steps at once, then the recurrence step by step.
         let xp = seq
@@ -212,8 +233,8 @@ impl Net {
             .broadcast_add(p("lstm.bias_hh_l0"))?
             .reshape((b, w, 4 * h))?;
         let w_hh_t = p("lstm.weight_hh_l0").t()?;
-        let mut hs = Tensor::zeros((b, h), x.dtype(), x.device())?;
-        let mut cs = Tensor::zeros((b, h), x.dtype(), x.device())?;
+        let mut hs = Tensor::zeros((b, h), seq.dtype(), seq.device())?;
+        let mut cs = Tensor::zeros((b, h), seq.dtype(), seq.device())?;
         for t in 0..w {
             let gates = (xp.narrow(1, t, 1)?.squeeze(1)? + hs.matmul(&w_hh_t)?)?;
             let i = candle_nn::ops::sigmoid(&gates.narrow(1, 0, h)?)?;
@@ -253,19 +274,35 @@ impl Windows {
             .extend(tnorm.forward(&seq.targets[t]).iter().map(|v| *v as f32));
         self.n += 1;
     }
-    fn tensors(
-        &self,
-        window: usize,
-        nf: usize,
-        no: usize,
-        dev: &Device,
-    ) -> Result<(Tensor, Tensor)> {
-        Ok((
-            Tensor::from_slice(&self.x, (self.n, window, nf), dev)?,
-            Tensor::from_slice(&self.y, (self.n, no), dev)?,
-        ))
+    /// The mean squared error of the network on these windows, in chunks of the workspace.
+    fn mse(&self, ws: &mut Workspace<f32>, p: &Params<f32>) -> f64 {
+        let (wf, no) = (self.x.len() / self.n.max(1), p.dims.outputs);
+        let mut sum = 0.0;
+        for start in (0..self.n).step_by(ws.capacity()) {
+            let end = (start + ws.capacity()).min(self.n);
+            let y = ws.forward(p, &self.x[start * wf..end * wf]);
+            for (a, b) in y.iter().zip(&self.y[start * no..end * no]) {
+                sum += ((a - b) as f64).powi(2);
+            }
+        }
+        sum / (self.n * no).max(1) as f64
     }
 }
+
+/// The kernel's dimensions of an architecture for F features and O outputs.
+fn dims_of(a: &Architecture, n_features: usize, n_out: usize) -> Dims {
+    Dims {
+        window: a.window,
+        features: n_features,
+        channels: a.conv_channels,
+        kernel: a.kernel,
+        hidden: a.lstm_hidden,
+        outputs: n_out,
+    }
+}
+
+/// Windows per forward call when evaluating (validation loss, prediction).
+const EVAL_CHUNK: usize = 512;
 
 fn all_rows(d: &ThermalDataset, targets: bool) -> Vec<Vec<f64>> {
     d.experiments
@@ -351,69 +388,56 @@ pub(crate) fn train_cnn_lstm_monitored(
             "no training windows left after the validation split".into(),
         ));
     }
-    let dev = Device::Cpu;
-    let (xt, yt) = tr.tensors(arch.window, nf, no, &dev)?;
-    let val = if va.n > 0 {
-        Some(va.tensors(arch.window, nf, no, &dev)?)
-    } else {
-        None
-    };
+    let val = (va.n > 0).then_some(&va);
+    let dims = dims_of(&arch, nf, no);
 
     // seeded PyTorch-style initialisation
     let mut r = rng::seeded(config.seed);
-    let mut vars = BTreeMap::new();
+    let mut init = BTreeMap::new();
     for (name, shape, bound) in param_shapes(&arch, nf, no) {
         let n: usize = shape.iter().product();
         let data: Vec<f32> = rng::uniform(&mut r, n, bound)
             .into_iter()
             .map(|v| v as f32)
             .collect();
-        vars.insert(
-            name.to_string(),
-            Var::from_tensor(&Tensor::from_vec(data, shape, &dev)?)?,
-        );
+        init.insert(name, data);
     }
-    let net_of = |vars: &BTreeMap<String, Var>| Net {
-        arch,
-        p: vars
-            .iter()
-            .map(|(k, v)| (k.clone(), v.as_tensor().clone()))
-            .collect(),
-    };
-    let params = ParamsAdamW {
-        lr: config.learning_rate,
-        weight_decay: 0.0,
-        ..ParamsAdamW::default()
-    };
-    let mut adam = AdamW::new(vars.values().cloned().collect(), params)?;
+    let mut params = Params::<f32>::from_named(dims, |k| init.get(k).map(|v| v.as_slice()))
+        .expect("param_shapes and the kernel agree");
+    // Adam as candle-nn's AdamW with weight decay 0 (default β₁, β₂, ε)
+    let mut adam = Adam::<f32>::new(params.values.len(), 0.0);
+    // every buffer allocated here, once: no allocation per batch
+    let batch = config.batch_size.min(tr.n);
+    let mut ws = Workspace::<f32>::new(dims, batch);
+    let mut eval = Workspace::<f32>::new(dims, EVAL_CHUNK.min(tr.n.max(va.n)));
+    let (wf, mut xb, mut yb) = (arch.window * nf, Vec::new(), Vec::new());
+    xb.reserve(batch * arch.window * nf);
+    yb.reserve(batch * no);
     let mut order: Vec<u32> = (0..tr.n as u32).collect();
     let mut shuffle = rng::seeded(config.seed.wrapping_add(0x9e37_79b9));
-    let mut best = (f64::INFINITY, 0usize, snapshot(&vars)?);
+    let mut best = (f64::INFINITY, 0usize, snapshot(&params, &arch));
     let mut history = Vec::new();
     let mut stop_reason = StopReason::MaxEpochs(config.max_epochs);
     let mut epochs = 0;
     for epoch in 1..=config.max_epochs {
         epochs = epoch;
-        adam.set_learning_rate(cosine_step_size(config, epoch));
+        let lr = cosine_step_size(config, epoch);
         order.shuffle(&mut shuffle);
         let mut loss_sum = 0.0;
         for chunk in order.chunks(config.batch_size) {
-            let ids = Tensor::from_slice(chunk, chunk.len(), &dev)?;
-            let (xb, yb) = (xt.index_select(&ids, 0)?, yt.index_select(&ids, 0)?);
-            let loss = (net_of(&vars).forward(&xb)? - yb)?.sqr()?.mean_all()?;
-            adam.backward_step(&loss)?;
-            loss_sum += loss.to_scalar::<f32>()? as f64 * chunk.len() as f64;
+            xb.clear();
+            yb.clear();
+            for &i in chunk {
+                let i = i as usize;
+                xb.extend_from_slice(&tr.x[i * wf..(i + 1) * wf]);
+                yb.extend_from_slice(&tr.y[i * no..(i + 1) * no]);
+            }
+            let loss = ws.loss_and_grad(&params, &xb, &yb);
+            adam.step(&mut params.values, &ws.grad, lr);
+            loss_sum += loss * chunk.len() as f64;
         }
         let train_loss = loss_sum / tr.n as f64;
-        let val_loss = match &val {
-            Some((xv, yv)) => Some(
-                (net_of(&vars).forward(xv)? - yv)?
-                    .sqr()?
-                    .mean_all()?
-                    .to_scalar::<f32>()? as f64,
-            ),
-            None => None,
-        };
+        let val_loss = val.map(|v| v.mse(&mut eval, &params));
         history.push((train_loss, val_loss));
         monitor.epoch(&Epoch {
             model: "CNN-LSTM",
@@ -428,7 +452,7 @@ pub(crate) fn train_cnn_lstm_monitored(
         }
         let watch = val_loss.unwrap_or(train_loss);
         if watch < best.0 {
-            best = (watch, epoch, snapshot(&vars)?);
+            best = (watch, epoch, snapshot(&params, &arch));
         }
         if monitor.stop_requested() {
             stop_reason = StopReason::User {
@@ -460,22 +484,11 @@ pub(crate) fn train_cnn_lstm_monitored(
         weights,
         provenance: serde_json::Value::Null,
     };
-    let net = model.net(&dev)?;
-    let train_loss = (net.forward(&xt)? - &yt)?
-        .sqr()?
-        .mean_all()?
-        .to_scalar::<f32>()? as f64;
-    let validation_loss = match &val {
-        Some((xv, yv)) => Some(
-            (net.forward(xv)? - yv)?
-                .sqr()?
-                .mean_all()?
-                .to_scalar::<f32>()? as f64,
-        ),
-        None => None,
-    };
+    let net = model.params()?;
+    let train_loss = tr.mse(&mut eval, &net);
+    let validation_loss = val.map(|v| v.mse(&mut eval, &net));
     model.provenance = serde_json::json!({
-        "trainer": "adam (candle)",
+        "trainer": "adam (mtec cnn_lstm_kernel)",
         "seed": config.seed,
         "epochs": epochs,
         "best_epoch": best_epoch,
@@ -505,34 +518,29 @@ fn cosine_step_size(config: &CnnLstmConfig, epoch: usize) -> f64 {
     lr * (f + (1.0 - f) * 0.5 * (1.0 + (std::f64::consts::PI * progress).cos()))
 }
 
-fn snapshot(vars: &BTreeMap<String, Var>) -> Result<BTreeMap<String, StoredTensor>> {
-    let mut out = BTreeMap::new();
-    for (k, v) in vars {
-        let t = v.as_tensor();
-        out.insert(
-            k.clone(),
-            StoredTensor {
-                shape: t.dims().to_vec(),
-                data: t.flatten_all()?.to_vec1::<f32>()?,
-            },
-        );
-    }
-    Ok(out)
+/// The parameters as the model file stores them: name → shape and row-major data.
+fn snapshot(p: &Params<f32>, arch: &Architecture) -> BTreeMap<String, StoredTensor> {
+    let shapes = param_shapes(arch, p.dims.features, p.dims.outputs);
+    let parts = crate::cnn_lstm_kernel::named_parts(p, &p.values);
+    (shapes.into_iter().zip(parts))
+        .map(|((name, shape, _), (kernel_name, data))| {
+            debug_assert_eq!(name, kernel_name);
+            let data = data.to_vec();
+            (name.to_string(), StoredTensor { shape, data })
+        })
+        .collect()
 }
 
 impl CnnLstm {
-    fn net(&self, dev: &Device) -> Result<Net> {
-        let mut p = BTreeMap::new();
-        for (k, t) in &self.weights {
-            p.insert(
-                k.clone(),
-                Tensor::from_slice(&t.data, t.shape.as_slice(), dev)?,
-            );
-        }
-        Ok(Net {
-            arch: self.architecture,
-            p,
-        })
+    /// The stored weights as the kernel's parameters.
+    fn params(&self) -> Result<Params<f32>> {
+        let dims = dims_of(
+            &self.architecture,
+            self.feature_names.len(),
+            self.target_names.len(),
+        );
+        Params::from_named(dims, |k| self.weights.get(k).map(|t| t.data.as_slice()))
+            .ok_or_else(|| NnError::Model("the weights do not fit the architecture".into()))
     }
 
     pub fn param_count(&self) -> usize {
@@ -559,10 +567,9 @@ impl CnnLstm {
             offset: vec![0.0; no],
             scale: vec![1.0; no],
         };
-        let dev = Device::Cpu;
-        let net = self.net(&dev)?;
+        let net = self.params()?;
         let w = self.architecture.window;
-        let nf = self.feature_names.len();
+        let mut ws = Workspace::<f32>::new(net.dims, EVAL_CHUNK);
         let mut out = Vec::new();
         for seq in data.experiments.iter().flat_map(|e| &e.sequences) {
             // targets are not used for prediction; a zero row keeps the window code simple
@@ -572,18 +579,16 @@ impl CnnLstm {
                 warmup: seq.warmup,
             };
             let rows: Vec<usize> = seq.scored_rows().collect();
-            for chunk in rows.chunks(1024) {
+            for chunk in rows.chunks(EVAL_CHUNK) {
                 let mut win = Windows::new();
                 for &t in chunk {
                     win.push(&blind, t, w, &fnorm, &tnorm);
                 }
-                let (x, _) = win.tensors(w, nf, no, &dev)?;
-                let yn = net.forward(&x)?.to_dtype(DType::F64)?.to_vec2::<f64>()?;
-                for r in yn {
+                for r in ws.forward(&net, &win.x).chunks_exact(no) {
                     out.push(
                         r.iter()
                             .enumerate()
-                            .map(|(c, v)| self.target_offset[c] + self.target_scale[c] * v)
+                            .map(|(c, v)| self.target_offset[c] + self.target_scale[c] * *v as f64)
                             .collect(),
                     );
                 }

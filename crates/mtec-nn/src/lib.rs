@@ -10,7 +10,8 @@
 //!   and reports fit-error statistics per axis and the parameter count against the grid size.
 //! - [`cnn_lstm`]: a CNN-LSTM (1-D convolution over the feature vector of each time step,
 //!   max pooling, LSTM over a window of time steps, dense output) that predicts any set of error
-//!   channels from temperatures (+ angle / position), trained with candle on the CPU; saved as
+//!   channels from temperatures (+ angle / position), trained on the CPU by its own forward and
+//!   backward kernel ([`cnn_lstm_kernel`], checked against candle); saved as
 //!   `mtec.cnn-lstm/1` JSON with its weights. Both networks are trained through
 //!   [`thermal_fit`] on mtec-thermal's `ThermalData` (the one public time-series data set) and
 //!   scored with its `Metrics`; the crate-private `dataset` is their training representation
@@ -41,6 +42,7 @@ pub mod bpnn {
 }
 pub mod bpnn_train;
 pub mod cnn_lstm;
+pub mod cnn_lstm_kernel;
 mod dataset;
 pub mod error;
 pub mod grid_fit;

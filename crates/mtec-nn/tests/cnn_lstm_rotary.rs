@@ -32,7 +32,7 @@ fn small(epochs: usize) -> NeuralFit {
 
 /// Every test starts here: one candle thread (`mtec_nn::threads`, set once before any training).
 fn data() -> ThermalData {
-    if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
+    for (var, value) in mtec_nn::threads::single_thread_settings() {
         std::env::set_var(var, value);
     }
     rotary_thermal(&RotaryThermalSpec {

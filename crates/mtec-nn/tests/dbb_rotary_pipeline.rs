@@ -148,7 +148,7 @@ struct Outcome {
 }
 
 fn run(s: &Scenario, bpnn_iterations: usize) -> Outcome {
-    if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
+    for (var, value) in mtec_nn::threads::single_thread_settings() {
         std::env::set_var(var, value);
     }
     let d = &s.data;

@@ -96,7 +96,7 @@ impl NnArgs {
 /// nets (`mtec_nn::threads`); set before the first candle op, while there is no other thread.
 #[cfg(feature = "neural")]
 pub(crate) fn single_candle_thread() {
-    if let Some((var, value)) = mtec_nn::threads::single_thread_setting() {
+    for (var, value) in mtec_nn::threads::single_thread_settings() {
         std::env::set_var(var, value);
     }
 }
