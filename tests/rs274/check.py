@@ -1140,13 +1140,18 @@ def strip_comments(path):
 def prepare_rs274_inputs(workdir, offsets=None, tool_table=None):
     """The var file and tool table rs274 needs to see the same offsets as mtec."""
     var_file = tbl = None
+    tools = {}
     if offsets:
         active, work, tools = read_offsets(offsets)
         var_file = os.path.join(workdir, "offsets.var")
         write_var_file(var_file, active, work)
-        if tools and not tool_table:
-            tbl = os.path.join(workdir, "tools.tbl")
-            write_tool_table(tbl, tools)
+    if not tool_table:
+        # the machine's table has the tools the program changes to; without a table from the
+        # user their lengths are 0 (mtec refuses a G43 that would use one; since 2026-11-28
+        # it flattens `T4 M6` alone, which rs274's built-in table of three tools stopped at)
+        tools = {**{t: 0.0 for t in range(1, 1000)}, **(tools or {})}
+        tbl = os.path.join(workdir, "tools.tbl")
+        write_tool_table(tbl, tools)
     if tool_table:
         tbl = os.path.join(workdir, "tools-inch.tbl")
         convert_tool_table_to_inch(tool_table, tbl)
