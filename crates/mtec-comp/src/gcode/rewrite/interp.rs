@@ -802,3 +802,78 @@ impl State {
         }
     }
 }
+
+/// A D, E, H, I, J, K, L, P, Q or R word in a straight move (G0, G1), or a D, E, H, L or Q word
+/// in an arc (G2, G3), whose block has no other
+/// G code that takes words and no M code: LinuxCNC refuses such a block (interp_check.cc, e.g.
+/// "P word with no G2 G3 G4 G10 G64 … to use it"; each letter checked with rs274 on `G1 X40
+/// P5` and the like, 2026-11-28). Blocks with any other G code (G4, G10, G43, G64, G96, cycles …)
+/// or an M code (user M codes take P and Q) are left to the controller's own check.
+///
+/// `moves` is false for a block without axis words (nothing moves; `m` is the modal motion):
+/// LinuxCNC then refuses P and R also after G2/G3, and I, J, K except after G2/G3 (rs274:
+/// `R5`, `P1` alone after a G2 are refused, `I5` is not; after G80 `R5` and `I5` are).
+pub(super) fn unused_word(b: &Block, m: Motion, moves: bool) -> Option<(char, usize)> {
+    use super::super::code::GCode::*;
+    // an arc takes I, J, K, R and P (turns); a straight move none of them
+    let letters: &[u8] = match (m, moves) {
+        (Motion::Rapid | Motion::Linear, true) => b"DEHIJKLPQR",
+        (Motion::Cw | Motion::Ccw, true) => b"DEHLQ",
+        (Motion::Cw | Motion::Ccw, false) => b"DEHLPQR",
+        (Motion::Rapid | Motion::Linear | Motion::Cancelled, false) => b"DEHIJKLPQR",
+        _ => return None,
+    };
+    // M codes that take none of these letters (M3/M4 take S and $, M6 T); any other M code
+    // (user M codes take P and Q, M19 R, M66 E L P Q, M50-M53 and M62-M65 P) ends the check
+    let m_takes_none = |m: &u32| matches!(m, 0..=9 | 30 | 48 | 49 | 60 | 70..=73);
+    if !b.m.iter().all(|(m, _)| m_takes_none(m)) {
+        return None;
+    }
+    let takes_no_words = |c: &GCode| {
+        matches!(
+            c,
+            G0 | G1
+                | G2
+                | G3
+                | G7
+                | G8
+                | G17
+                | G18
+                | G19
+                | G20
+                | G21
+                | G40
+                | G49
+                | G53
+                | G54
+                | G55
+                | G56
+                | G57
+                | G58
+                | G59
+                | G59_1
+                | G59_2
+                | G59_3
+                | G61
+                | G61_1
+                | G80
+                | G90
+                | G90_1
+                | G91
+                | G91_1
+                | G93
+                | G94
+                | G95
+                | G97
+                | G98
+                | G99
+        )
+    };
+    if !b.g.iter().all(|(c, _)| takes_no_words(c)) {
+        return None;
+    }
+    letters
+        .iter()
+        .filter_map(|&l| b.word(l).map(|w| (l as char, w.token)))
+        .min_by_key(|&(_, t)| t)
+}

@@ -388,7 +388,7 @@ impl<'a> Rewriter<'a> {
             self.check_compensable(b, m, &mut issues);
         } else if motion.is_none() && !has_axis {
             // a block that moves nothing: a stray word LinuxCNC refuses
-            if let Some((letter, token)) = super::plan::unused_word(b, self.st.motion, false) {
+            if let Some((letter, token)) = super::interp::unused_word(b, self.st.motion, false) {
                 issues.push(Issue {
                     token: Some(token),
                     message: format!("{letter} word with no code in the block that uses it: LinuxCNC refuses the block (\"{letter} word with no ... to use it\"); remove it"),
