@@ -676,15 +676,19 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     // 4. the same program started with another tool in the spindle: a G43 without H (or an M6
     // without T) before the first tool change takes the tool the machine happens to hold, which
     // stand-alone rs274 takes for tool 0 (length 0)
-    if let Some(k) = unknown_tool_length_used(&run.stdout).filter(|_| args.tool_table.is_none()) {
+    // the source line and column of canonical line `k` of the run: the numbered run prints the
+    // block's line in the call's N field
+    let source_of = |k: usize| {
         let line = mtec_comp::gcode::line_numbers::numbered_program(&program)
             .and_then(|numbered| run_variant("numbered", &numbered).ok())
             .and_then(|n| {
                 mtec_comp::gcode::line_numbers::canonical_source_line(&run.stdout, &n.stdout, k)
             });
         let text = String::from_utf8_lossy(&program);
-        let at =
-            line.and_then(|l| Some((l, error_column(text.lines().nth(l.checked_sub(1)?)?, ""))));
+        line.and_then(|l| Some((l, error_column(text.lines().nth(l.checked_sub(1)?)?, ""))))
+    };
+    if let Some(k) = unknown_tool_length_used(&run.stdout).filter(|_| args.tool_table.is_none()) {
+        let at = source_of(k);
         let message = "a tool length offset (G43, G43.2) uses a tool whose length is not known: give the controller's tool table with --tool-table, or the tool's length under [tool_lengths_mm] in --offsets";
         return Err(located(input, at, message).into());
     }
@@ -732,20 +736,7 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
     // a refused canonical call is traced to its block: the numbered run prints the block's
     // line in the call's N field
     let cannot = |e: mtec_comp::gcode::flatten::FlattenError| {
-        let message = format!("cannot flatten: {e}");
-        let line = mtec_comp::gcode::line_numbers::numbered_program(&program)
-            .and_then(|numbered| run_variant("numbered", &numbered).ok())
-            .and_then(|n| {
-                mtec_comp::gcode::line_numbers::canonical_source_line(
-                    &run.stdout,
-                    &n.stdout,
-                    e.line,
-                )
-            });
-        let text = String::from_utf8_lossy(&program);
-        let at =
-            line.and_then(|l| Some((l, error_column(text.lines().nth(l.checked_sub(1)?)?, ""))));
-        located(input, at, message)
+        located(input, source_of(e.line), format!("cannot flatten: {e}"))
     };
     let (text, report) = match held {
         Ok(h) => flatten(
