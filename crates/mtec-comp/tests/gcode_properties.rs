@@ -78,7 +78,7 @@ fn render(ops: &[Op], crlf: bool, lower: bool, compact: bool, final_newline: boo
     let mut pos = [0.0f64; 3];
     let mut absolute = true;
     let mut lines = vec![
-        format!("N1{sp}G21{sp}G90{sp}G17"),
+        format!("N1{sp}G21{sp}G90{sp}G17{sp}F500"),
         format!("N2{sp}G0{sp}X0{sp}Y0{sp}Z0"),
     ];
     for (i, op) in ops.iter().enumerate() {

@@ -244,14 +244,42 @@ fn unsupported_constructs_are_refused_with_line_and_column_or_passed_through() {
         ("G21 G0 X0 Y0 Z0\nG81 X1 Y1 Z-1 R1\n", 2, 1, "G81"),
         ("G21\nG41 D1\n", 2, 1, "G41"),
         (
-            "G21 G0 X0 Y0 Z0\nG1 X1 A30\n",
+            "G21 G0 X0 Y0 Z0\nG1 X1 A30 F100\n",
             2,
             7,
             "axis A moves but the error model has no rotary axes",
         ),
         ("G21\nM98 P100\n", 2, 1, "M98"),
         ("G21\nG1 X1 (open\n", 2, 7, "comment"),
-        ("G21 G0 X0 Y0 Z0\nG1 X1 X2\n", 2, 7, "two X words"),
+        ("G21 G0 X0 Y0 Z0 F9\nG1 X1 X2\n", 2, 7, "two X words"),
+        // LinuxCNC stops at a feed with F0 (or none yet) and at G95 with S0 (or none yet)
+        ("G21 G0 X0 Y0 Z0\nG1 X1\n", 2, 4, "feed rate of zero"),
+        (
+            "G21 G0 X0 Y0 Z0 F9\nF0\nG2 X2 R1\n",
+            3,
+            4,
+            "feed rate of zero",
+        ),
+        (
+            "G21 G0 X0 Y0 Z0\nG95 F0.1\nG1 X1\n",
+            3,
+            4,
+            "spindle speed of zero",
+        ),
+        (
+            "G21 G0 X0 Y0 Z0\nS900 G95 F0.1\nS0\nG3 Y2 R1\n",
+            4,
+            4,
+            "spindle speed of zero",
+        ),
+        ("G21 G0 X0 Y0 Z0\nG4\n", 2, 1, "dwell time"),
+        ("G21 G0 X0 Y0 Z0\nG4 P-1\n", 2, 1, "dwell time"),
+        (
+            "G21 G0 X0 Y0 Z0 F9\nG2\n",
+            2,
+            1,
+            "R i j k words all missing",
+        ),
         ("G21\nG1 X10 Y0 Z0 F10\n", 2, 4, "position of"),
         ("G21 G0 X0 Y0 Z0\n/G1 X3\n", 2, 1, "block delete"),
         // G10 L1/L2/L20 are followed (tests/gcode_offsets_state.rs); L10 sets the tool table
@@ -311,7 +339,7 @@ fn correction_failures_are_errors_at_the_line() {
 
 #[test]
 fn byte_order_mark_stays_first_when_the_first_line_changes() {
-    let input = "\u{feff}G21 G90 G0 X0 Y0 Z0\nG1 X1\n";
+    let input = "\u{feff}G21 G90 G0 X0 Y0 Z0\nG1 X1 F100\n";
     let (out, rep) = run(
         input,
         &ConstModel([1.0, 0.0, 0.0]),

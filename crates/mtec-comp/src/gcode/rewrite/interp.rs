@@ -108,8 +108,10 @@ pub(super) struct State {
     /// G95 (units per revolution) in effect.
     pub(super) feed_per_rev: bool,
     /// The last F value the program set (its units: per minute, per revolution or inverse
-    /// time, as the mode it was given in).
+    /// time, as the mode it was given in). LinuxCNC's interpreter starts at zero.
     pub(super) feed: Option<f64>,
+    /// The last S value the program set (rev/min, or surface speed under G96); zero at start.
+    pub(super) spindle_speed: Option<f64>,
     /// Machine angles (deg) of A, B, C where the program's commands put them (`None`: not
     /// known). The rewritten program puts them at the same angles at the end of every move.
     pub(super) rot: [Option<f64>; 3],
@@ -120,6 +122,23 @@ pub(super) struct State {
     pub(super) frames: [Frame; 2],
     /// The tool table's lengths, mm (from `--offsets` / `--tool-table`, then G10 L1).
     pub(super) tools: BTreeMap<u32, f64>,
+}
+
+/// Why LinuxCNC stops at a G1/G2/G3 move in G94 or G95 mode: a feed rate of zero (no F yet,
+/// or F0), or feed per revolution with a spindle speed of zero (rs274: "Cannot do g1 with zero
+/// feed rate", "Cannot feed with zero spindle speed in feed per rev mode"). A value the
+/// rewriter does not know (`None`, after a line it cannot follow) is not refused.
+fn zero_feed(m: Motion, feed: Option<f64>, per_rev: bool, speed: Option<f64>) -> Option<String> {
+    if !matches!(m, Motion::Linear | Motion::Cw | Motion::Ccw) {
+        return None;
+    }
+    if feed == Some(0.0) {
+        return Some("a feed move with a feed rate of zero (no F word yet, or F0): LinuxCNC stops here (\"zero feed rate\"); set F before the move".into());
+    }
+    if per_rev && speed == Some(0.0) {
+        return Some("feed per revolution (G95) with a spindle speed of zero (no S word yet, or S0): LinuxCNC stops here (\"Cannot feed with zero spindle speed in feed per rev mode\"); set S before the move".into());
+    }
+    None
 }
 
 /// What one block asks for, as [`State::interpret`] read it.
@@ -173,7 +192,8 @@ impl State {
             cutter_comp: false,
             inverse_time: false,
             feed_per_rev: false,
-            feed: None,
+            feed: Some(0.0),
+            spindle_speed: Some(0.0),
             rot: opt
                 .start_rotary_deg
                 .map(|r| r.map(Some))
@@ -255,6 +275,17 @@ impl State {
                 G80 => {
                     motion_word.get_or_insert((Motion::Cancelled, tok));
                 }
+                // rs274: "Dwell time missing with g4" (also for a negative P)
+                G4 if b
+                    .word(b'P')
+                    .is_none_or(|w| matches!(w.value, Value::Number(p) if p < 0.0)) =>
+                {
+                    issues.push(Issue {
+                        token: Some(tok),
+                        message: "G4 without a dwell time (a P word of zero or more): LinuxCNC stops here (\"Dwell time missing with g4\"); add P".into(),
+                        poisons_all: false,
+                    })
+                }
                 G4 | G17 | G18 | G19 | G20 | G21 | G40 | G43 | G49 | G54 | G55 | G56 | G57
                 | G58 | G59 | G59_1 | G59_2 | G59_3 | G61 | G61_1 | G64 | G8 | G90 | G91
                 | G90_1 | G91_1 | G94 | G95 | G96 | G97 | G98 | G99 | G28_1 | G30_1 => {}
@@ -324,6 +355,17 @@ impl State {
                 && axis_consumer.is_none()
                 && matches!(mode_now, Motion::Cw | Motion::Ccw));
 
+        // rs274: "R i j k words all missing for arc" (an R alone is refused by `unused_word`)
+        if let Some((Motion::Cw | Motion::Ccw, tok)) = motion_word {
+            if !has_axis && axis_consumer.is_none() && b.word(b'R').is_none() {
+                issues.push(Issue {
+                    token: Some(tok),
+                    message: "G2/G3 without an end point or a centre (no axis, I, J, K or R word): LinuxCNC stops here (\"R i j k words all missing for arc\")".into(),
+                    poisons_all: false,
+                });
+            }
+        }
+
         // --- modal state changes, in the controller's order of execution ------------------
         let st = &mut *self;
         if b.has_g(GCode::G93).is_some() {
@@ -336,6 +378,12 @@ impl State {
         }
         if let Some(f) = b.word(b'F') {
             st.feed = match f.value {
+                Value::Number(v) if v.is_finite() && v >= 0.0 => Some(v),
+                _ => None,
+            };
+        }
+        if let Some(s) = b.word(b'S') {
+            st.spindle_speed = match s.value {
                 Value::Number(v) if v.is_finite() && v >= 0.0 => Some(v),
                 _ => None,
             };
@@ -507,6 +555,9 @@ impl State {
             {
                 why = Some("inverse-time feed (G93) without an F word on this feed move (LinuxCNC requires one on every G1, G2, G3 block)".into());
             }
+            if why.is_none() && !st.inverse_time {
+                why = zero_feed(m, st.feed, st.feed_per_rev, st.spindle_speed);
+            }
             axis_words_followed = why.is_none();
             if let Some(w) = why {
                 issues.push(Issue {
@@ -548,6 +599,7 @@ impl State {
         st.out_motion = Motion::Unknown;
         st.rot = [None; 3];
         st.feed = None;
+        st.spindle_speed = None;
         // the line may have set offsets or the tool table (G10, G92, G52, a subprogram…)
         for f in st.frames.iter_mut() {
             f.work = [[None; 3]; 9];
