@@ -355,6 +355,34 @@ impl State {
                 && axis_consumer.is_none()
                 && matches!(mode_now, Motion::Cw | Motion::Ccw));
 
+        // rs274: "Negative f word used", "Negative spindle speed used", "Negative tool id"
+        for (letter, what) in [
+            (b'F', "feed rate"),
+            (b'S', "spindle speed"),
+            (b'T', "tool number"),
+        ] {
+            if let Some(w) = b
+                .word(letter)
+                .filter(|w| matches!(w.value, Value::Number(v) if v < 0.0))
+            {
+                issues.push(Issue {
+                    token: Some(w.token),
+                    message: format!(
+                        "negative {} ({} word): LinuxCNC stops here",
+                        what, letter as char
+                    ),
+                    poisons_all: false,
+                });
+            }
+        }
+        // rs274: "S word missing with G96"
+        if let Some(tok) = b.has_g(GCode::G96).filter(|_| b.word(b'S').is_none()) {
+            issues.push(Issue {
+                token: Some(tok),
+                message: "G96 (constant surface speed) without an S word: LinuxCNC stops here (\"S word missing with G96\")".into(),
+                poisons_all: false,
+            });
+        }
         // rs274: "R i j k words all missing for arc" (an R alone is refused by `unused_word`)
         if let Some((Motion::Cw | Motion::Ccw, tok)) = motion_word {
             if !has_axis && axis_consumer.is_none() && b.word(b'R').is_none() {
