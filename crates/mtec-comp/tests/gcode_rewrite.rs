@@ -272,6 +272,13 @@ fn unsupported_constructs_are_refused_with_line_and_column_or_passed_through() {
             4,
             "spindle speed of zero",
         ),
+        // every G93/G94/G95 sets the feed rate to zero in LinuxCNC, even without a mode change
+        (
+            "G21 G0 X0 Y0 Z0 F9\nG94\nG1 X1\n",
+            3,
+            4,
+            "feed rate of zero",
+        ),
         ("G21 G0 X0 Y0 Z0\nG4\n", 2, 1, "dwell time"),
         ("G21 G0 X0 Y0 Z0\nG4 P-1\n", 2, 1, "dwell time"),
         (
@@ -472,6 +479,23 @@ fn words_linuxcnc_refuses_in_a_move_are_refused_at_the_word() {
         ("G3 X40 I17.5 J0 D1", 17, "D word"),
         ("G1 X40 N5", 8, "N word after other words"),
         ("G1 X40 O100", 8, "O-word after other words"),
+        // words no code in the block uses, with codes that take other words (rs274, random
+        // blocks, 2026-11-28): M5/M51 take no E, G64 no E, G92.1 no D, G10 L2 no K or E
+        ("G1 X40 M51 E2", 12, "E word"),
+        ("G1 X40 G64 E1", 12, "E word"),
+        ("G1 X40 G92.1 D1", 14, "D word"),
+        ("M5 K2", 4, "K word"),
+        ("G10 L2 P1 X1 K2", 14, "K word"),
+        ("G10 L2 P1 X1 Q0 E1", 17, "E word"),
+        ("G92 X1 R0.5", 8, "R word"),
+        ("G10 L20 P2 J1", 12, "I or J word"),
+        ("M19 R400", 1, "within 0..360"),
+        ("M62", 1, "P word"),
+        ("M66", 1, "P or E word"),
+        ("M61", 1, "Q word"),
+        ("G53", 1, "G53 without an axis word"),
+        ("G2 R5", 1, "without an end point"),
+        ("G0 X40 L-1", 8, "negative loop or mode number"),
     ] {
         let program = format!("G21 G90 G17\nG0 X0 Y0 Z0\nG1 X5 F300\n{line}\nM2\n");
         let d = refuse(&program, &model, &opts);
@@ -485,6 +509,12 @@ fn words_linuxcnc_refuses_in_a_move_are_refused_at_the_word() {
         "G1 X40 M66 P0 L0 Q1",
         "N5 G1 X40",
         "G1 X40 S100 T2",
+        // LinuxCNC takes Q-1 for an absent Q (but refuses L-1); M19 with R and P; Q with G64
+        "G1 X40 Q-1",
+        "G64 P0.01 Q0",
+        "M19 R90 P1",
+        "M66 E0 L0",
+        "G53 G0 X0",
     ] {
         let program = format!("G21 G90 G17\nG0 X0 Y0 Z0\nG1 X5 F300\n{line}\nM2\n");
         let mut out = Vec::new();

@@ -133,7 +133,7 @@ fn zero_feed(m: Motion, feed: Option<f64>, per_rev: bool, speed: Option<f64>) ->
         return None;
     }
     if feed == Some(0.0) {
-        return Some("a feed move with a feed rate of zero (no F word yet, or F0): LinuxCNC stops here (\"zero feed rate\"); set F before the move".into());
+        return Some("a feed move with a feed rate of zero (no F word yet, F0, or no F since a G93/G94/G95, which sets it to zero): LinuxCNC stops here (\"zero feed rate\"); set F before the move".into());
     }
     if per_rev && speed == Some(0.0) {
         return Some("feed per revolution (G95) with a spindle speed of zero (no S word yet, or S0): LinuxCNC stops here (\"Cannot feed with zero spindle speed in feed per rev mode\"); set S before the move".into());
@@ -355,11 +355,13 @@ impl State {
                 && axis_consumer.is_none()
                 && matches!(mode_now, Motion::Cw | Motion::Ccw));
 
-        // rs274: "Negative f word used", "Negative spindle speed used", "Negative tool id"
+        // rs274: "Negative f word used", "Negative spindle speed used", "Negative tool id",
+        // "Negative l word used"
         for (letter, what) in [
             (b'F', "feed rate"),
             (b'S', "spindle speed"),
             (b'T', "tool number"),
+            (b'L', "loop or mode number"),
         ] {
             if let Some(w) = b
                 .word(letter)
@@ -383,15 +385,62 @@ impl State {
                 poisons_all: false,
             });
         }
-        // rs274: "R i j k words all missing for arc" (an R alone is refused by `unused_word`)
+        // rs274: "R i j k words all missing for arc", "X and y words missing for arc in xy plane"
         if let Some((Motion::Cw | Motion::Ccw, tok)) = motion_word {
-            if !has_axis && axis_consumer.is_none() && b.word(b'R').is_none() {
+            if !has_axis && axis_consumer.is_none() {
                 issues.push(Issue {
                     token: Some(tok),
-                    message: "G2/G3 without an end point or a centre (no axis, I, J, K or R word): LinuxCNC stops here (\"R i j k words all missing for arc\")".into(),
+                    message: "G2/G3 without an end point (no axis word) and without I, J or K: LinuxCNC stops here (\"R i j k words all missing for arc\" or \"X and y words missing for arc\")".into(),
                     poisons_all: false,
                 });
             }
+        }
+        // rs274: "Must use g0 or g1 with g53" for a G53 that moves nothing (a move is checked
+        // with its motion in plan.rs)
+        if let Some(tok) = b.has_g(GCode::G53).filter(|_| !has_axis) {
+            if !matches!(motion_word, Some((Motion::Rapid | Motion::Linear, _))) {
+                issues.push(Issue {
+                    token: Some(tok),
+                    message: "G53 without an axis word and without G0 or G1 in the block: LinuxCNC stops here (\"Must use g0 or g1 with g53\")".into(),
+                    poisons_all: false,
+                });
+            }
+        }
+        // M codes that need a word (rs274: "No valid P word with M62", "Need to have either a
+        // valid P or a valid E word with M66", "Need non-negative Q-word … with M61", "Invalid
+        // analog index with M67")
+        for &(code, tok) in &b.m {
+            let needs = match code {
+                61 if b
+                    .word(b'Q')
+                    .is_none_or(|w| matches!(w.value, Value::Number(q) if q < 0.0)) =>
+                {
+                    "a Q word of zero or more (the tool number)"
+                }
+                62..=65 if b.word(b'P').is_none() => "a P word (the output number)",
+                19 if b
+                    .word(b'R')
+                    .is_some_and(|w| matches!(w.value, Value::Number(r) if !(0.0..=360.0).contains(&r))) =>
+                {
+                    "an R word within 0..360 (the orientation angle)"
+                }
+                19 if b.word(b'P').is_some_and(
+                    |w| matches!(w.value, Value::Number(p) if ![0.0, 1.0, 2.0].contains(&p.round()) || (p - p.round()).abs() > 0.001),
+                ) =>
+                {
+                    "a P word of 0, 1 or 2 (the direction)"
+                }
+                66 if b.word(b'P').is_none() && b.word(b'E').is_none() => {
+                    "a P or E word (the input)"
+                }
+                67 | 68 if b.word(b'E').is_none() => "an E word (the analog output)",
+                _ => continue,
+            };
+            issues.push(Issue {
+                token: Some(tok),
+                message: format!("M{code} without {needs}: LinuxCNC stops here"),
+                poisons_all: false,
+            });
         }
 
         // --- modal state changes, in the controller's order of execution ------------------
@@ -403,6 +452,14 @@ impl State {
         if b.has_g(GCode::G94).is_some() || b.has_g(GCode::G95).is_some() {
             st.inverse_time = false;
             st.feed_per_rev = b.has_g(GCode::G95).is_some();
+        }
+        // LinuxCNC sets the feed rate to zero on every G93, G94 or G95, even one that does not
+        // change the mode (rs274: SET_FEED_MODE then SET_FEED_RATE(0)); an F in the block follows
+        if [GCode::G93, GCode::G94, GCode::G95]
+            .into_iter()
+            .any(|c| b.has_g(c).is_some())
+        {
+            st.feed = Some(0.0);
         }
         if let Some(f) = b.word(b'F') {
             st.feed = match f.value {
@@ -848,6 +905,10 @@ impl State {
                         if !(0..=9).contains(&p) {
                             return Err((Some(p_tok), format!("G10 L{l} P{p}: P must be 0 (the active system) to 9 (G59.3)")));
                         }
+                        // rs274: "I J words not allowed with G10 L2"
+                        if let Some(w) = b.word(b'I').or(b.word(b'J')) {
+                            return Err((Some(w.token), format!("G10 L{l} with an I or J word: LinuxCNC stops here (\"I J words not allowed with G10 L2\")")));
+                        }
                         if let Some((r, r_tok)) = num(b'R')? {
                             if r != 0.0 {
                                 return Err((Some(r_tok), format!("G10 L{l} R{r} rotates the coordinate system: rotation is not supported")));
@@ -883,77 +944,49 @@ impl State {
     }
 }
 
-/// A D, E, H, I, J, K, L, P, Q or R word in a straight move (G0, G1), or a D, E, H, L or Q word
-/// in an arc (G2, G3), whose block has no other
-/// G code that takes words and no M code: LinuxCNC refuses such a block (interp_check.cc, e.g.
-/// "P word with no G2 G3 G4 G10 G64 … to use it"; each letter checked with rs274 on `G1 X40
-/// P5` and the like, 2026-11-28). Blocks with any other G code (G4, G10, G43, G64, G96, cycles …)
-/// or an M code (user M codes take P and Q) are left to the controller's own check.
+/// The first D, E, H, I, J, K, L, P, Q or R word that no code in the block uses: LinuxCNC
+/// refuses such a block ("P word with no G2 G3 G4 G10 G64 … to use it"). The rules are those
+/// of LinuxCNC's `check_other_codes` (interp_check.cc), restricted to the codes the rewriter
+/// follows; each letter was checked with rs274 on random blocks (2026-11-28).
 ///
-/// `moves` is false for a block without axis words (nothing moves; `m` is the modal motion):
-/// LinuxCNC then refuses P and R also after G2/G3, and I, J, K except after G2/G3 (rs274:
-/// `R5`, `P1` alone after a G2 are refused, `I5` is not; after G80 `R5` and `I5` are).
-pub(super) fn unused_word(b: &Block, m: Motion, moves: bool) -> Option<(char, usize)> {
+/// `motion_to_be` is the motion the block runs, as LinuxCNC's `motion_to_be`: the modal or
+/// the block's motion when axis words move (I/J/K count for a full circle), only the block's
+/// own motion code when they do not (`R5` or `P1` alone after a G2 are refused) or when
+/// G10/G28/G30/G52/G92 take the axis words. A canned cycle or an unknown motion (refused or
+/// poisoned elsewhere) is not checked. User M codes (M100–M199) take P and Q.
+pub(super) fn unused_word(b: &Block, motion_to_be: Option<Motion>) -> Option<(char, usize)> {
     use super::super::code::GCode::*;
-    // an arc takes I, J, K, R and P (turns); a straight move none of them
-    let letters: &[u8] = match (m, moves) {
-        (Motion::Rapid | Motion::Linear, true) => b"DEHIJKLPQR",
-        (Motion::Cw | Motion::Ccw, true) => b"DEHLQ",
-        (Motion::Cw | Motion::Ccw, false) => b"DEHLPQR",
-        (Motion::Rapid | Motion::Linear | Motion::Cancelled, false) => b"DEHIJKLPQR",
-        _ => return None,
-    };
-    // M codes that take none of these letters (M3/M4 take S and $, M6 T); any other M code
-    // (user M codes take P and Q, M19 R, M66 E L P Q, M50-M53 and M62-M65 P) ends the check
-    let m_takes_none = |m: &u32| matches!(m, 0..=9 | 30 | 48 | 49 | 60 | 70..=73);
-    if !b.m.iter().all(|(m, _)| m_takes_none(m)) {
+    if matches!(motion_to_be, Some(Motion::Unknown)) {
         return None;
     }
-    let takes_no_words = |c: &GCode| {
-        matches!(
-            c,
-            G0 | G1
-                | G2
-                | G3
-                | G7
-                | G8
-                | G17
-                | G18
-                | G19
-                | G20
-                | G21
-                | G40
-                | G49
-                | G53
-                | G54
-                | G55
-                | G56
-                | G57
-                | G58
-                | G59
-                | G59_1
-                | G59_2
-                | G59_3
-                | G61
-                | G61_1
-                | G80
-                | G90
-                | G90_1
-                | G91
-                | G91_1
-                | G93
-                | G94
-                | G95
-                | G97
-                | G98
-                | G99
-        )
+    let arc = matches!(motion_to_be, Some(Motion::Cw | Motion::Ccw));
+    let g = |c: GCode| b.has_g(c).is_some();
+    let m = |k: u32| b.has_m(k).is_some();
+    let g10 = g(G10);
+    let comp = g(G41) || g(G42) || g(G41_1) || g(G42_1);
+    let user_m = b.m.iter().any(|(k, _)| (100..=199).contains(k));
+    let used = |l: u8| match l {
+        b'D' => comp || g(G96),
+        b'E' => m(66) || m(67) || m(68),
+        b'H' => g(G43) || g(G43_2),
+        b'I' | b'J' => arc || g10,
+        b'K' => arc,
+        b'L' => g10 || comp || m(66),
+        b'P' => {
+            arc || g10 || g(G4) || g(G64) || (50..=53).any(m) || (62..=66).any(m) || m(19) || user_m
+        }
+        b'Q' => g10 || g(G64) || (66..=68).any(m) || m(61) || m(19) || user_m,
+        b'R' => arc || g10 || g(G41_1) || g(G42_1) || m(19),
+        _ => true,
     };
-    if !b.g.iter().all(|(c, _)| takes_no_words(c)) {
-        return None;
-    }
-    letters
+    // LinuxCNC marks an absent Q word by the value -1, so `Q-1` passes its check (a negative L
+    // is refused when read: see `interpret`)
+    let sentinel = |l: u8| {
+        l == b'Q' && matches!(b.word(l).map(|w| w.value), Some(Value::Number(v)) if v == -1.0)
+    };
+    b"DEHIJKLPQR"
         .iter()
+        .filter(|&&l| !used(l) && !sentinel(l))
         .filter_map(|&l| b.word(l).map(|w| (l as char, w.token)))
         .min_by_key(|&(_, t)| t)
 }

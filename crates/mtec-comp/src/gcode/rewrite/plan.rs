@@ -102,7 +102,7 @@ impl Rewriter<'_> {
                 poisons_all: false,
             });
         }
-        if let Some((letter, token)) = unused_word(b, m, true) {
+        if let Some((letter, token)) = unused_word(b, Some(m)) {
             issues.push(Issue {
                 token: Some(token),
                 message: format!(

@@ -386,9 +386,11 @@ impl<'a> Rewriter<'a> {
         } = self.st.interpret(b, self.opt.block_delete, kinematic);
         if let Some(m) = motion.filter(|_| axis_words_followed) {
             self.check_compensable(b, m, &mut issues);
-        } else if motion.is_none() && !has_axis {
-            // a block that moves nothing: a stray word LinuxCNC refuses
-            if let Some((letter, token)) = super::interp::unused_word(b, self.st.motion, false) {
+        } else if motion.is_none() {
+            // a block that moves nothing (or whose axis words G10/G28/G30/G52/G92 take): a
+            // stray word LinuxCNC refuses
+            let motion_to_be = motion_word.map(|(m, _)| m);
+            if let Some((letter, token)) = super::interp::unused_word(b, motion_to_be) {
                 issues.push(Issue {
                     token: Some(token),
                     message: format!("{letter} word with no code in the block that uses it: LinuxCNC refuses the block (\"{letter} word with no ... to use it\"); remove it"),
