@@ -580,3 +580,26 @@ fn a_first_feed_from_an_uncorrected_start_is_corrected_at_its_end() {
     let (_, rep) = run("G21 G90\nG1 X50 F1000\nM2\n", &small, &opts);
     assert_eq!(rep.moves_end_point_only, 0);
 }
+
+/// A centre-format arc whose end radius differs from its start radius is run by LinuxCNC up to
+/// √2 · 0.02 mm (rs274 bisection, 2026-11-28). Written as an arc with a corrected end and
+/// centre, an arc close to that limit could pass it (rounding, the change of the correction):
+/// then it is cut into chords, so the compensated program runs wherever the original does.
+#[test]
+fn an_arc_near_linuxcnc_s_radius_limit_is_cut_into_chords() {
+    let model = ConstModel([3.0, -2.0, 1.0]);
+    let opts = RewriteOptions::default();
+    for (mismatch, linearised) in [(0.0275, 0), (0.0281, 1)] {
+        let input = format!("G21 G90 G17\nG0 X0 Y0 Z0\nF100\nG2 X[4 + {mismatch}] Y0 I2 J0\nM2\n");
+        let (out, rep) = run(&input, &model, &opts);
+        assert_eq!(rep.arcs_linearised, linearised, "{mismatch}: {out}");
+    }
+    // beyond the limit LinuxCNC stops, and so does mtec, at the arc's first word after G2
+    let d = refuse(
+        "G21 G90 G17\nG0 X0 Y0 Z0\nF100\nG2 X4.029 Y0 I2 J0\nM2\n",
+        &model,
+        &opts,
+    );
+    assert_eq!((d.line, d.column), (4, 4), "{}", d.message);
+    assert!(d.message.contains("not on the circle"), "{}", d.message);
+}

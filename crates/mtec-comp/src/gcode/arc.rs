@@ -51,10 +51,22 @@ pub struct Arc {
     pub sweep: f64,
 }
 
-/// An arc is refused when its start and end radii differ by more than both of these (mm, and
-/// relative to the radius) — LinuxCNC's rule, with its millimetre tolerance (0.02 mm, 0.1 %).
-const RADIUS_MISMATCH_MM: f64 = 0.02;
-const RADIUS_MISMATCH_REL: f64 = 0.001;
+/// The largest difference (mm) between the end and the start radius of a centre-format arc
+/// that LinuxCNC's interpreter runs (as a spiral): √2 · 0.02 mm in a G21 block, √2 · 0.002 in
+/// in a G20 block, or 0.1 % of the larger radius when that is more ("Radius to end of arc
+/// differs from radius to start"). Measured with rs274 (linuxcnc-uspace 2.9.0~pre1) by
+/// bisection at r = 2, 20, 200 mm and 0.05, 1, 10 in, 2026-11-28; until then mtec used 0.02 mm
+/// in both units, which refused inch arcs LinuxCNC runs.
+pub fn center_arc_limit_mm(r_start: f64, r_end: f64, inch: bool) -> f64 {
+    let abs = std::f64::consts::SQRT_2 * if inch { 0.002 * 25.4 } else { 0.02 };
+    abs.max(0.001 * r_start.max(r_end))
+}
+
+/// An R-format arc whose radius is short of half its chord by more than this (mm; 0.00005 in,
+/// in both units) is refused by LinuxCNC ("Arc radius too small to reach end point"); within
+/// it the arc is a half circle. Measured as above; until 2026-11-28 mtec allowed 0.02 mm and
+/// wrote a half circle where LinuxCNC stops.
+const R_ARC_SHORT_MM: f64 = 0.00005 * 25.4;
 
 /// LinuxCNC's motion runs an arc whose sweep (from the start to the end, in the arc's sense) is
 /// below this as a full circle (posemath `pmCircleInit`, `CIRCLE_FUZZ`, radians).
@@ -80,6 +92,20 @@ impl Arc {
         clockwise: bool,
         turns: u32,
     ) -> Result<Arc, String> {
+        Arc::from_center_in(start, end, center, plane, clockwise, turns, false)
+    }
+
+    /// [`Arc::from_center`] for a block in inch (`inch`) or mm: LinuxCNC's radius tolerance
+    /// depends on the block's units ([`center_arc_limit_mm`]).
+    pub fn from_center_in(
+        start: [f64; 3],
+        end: [f64; 3],
+        center: [f64; 2],
+        plane: Plane,
+        clockwise: bool,
+        turns: u32,
+        inch: bool,
+    ) -> Result<Arc, String> {
         let s = in_plane(&start, plane);
         let e = in_plane(&end, plane);
         let r_start = (s[0] - center[0]).hypot(s[1] - center[1]);
@@ -88,7 +114,7 @@ impl Arc {
             return Err("arc radius is zero (the centre is the start point)".into());
         }
         let mismatch = (r_end - r_start).abs();
-        if mismatch > RADIUS_MISMATCH_MM && mismatch > RADIUS_MISMATCH_REL * r_start {
+        if mismatch > center_arc_limit_mm(r_start, r_end, inch) {
             return Err(format!(
                 "arc end point is not on the circle: radius {r_start:.6} mm at the start, {r_end:.6} mm at the end"
             ));
@@ -153,9 +179,7 @@ impl Arc {
         let h2 = r * r - half * half;
         let h = if h2 >= 0.0 {
             h2.sqrt()
-        } else if half - r.abs() <= RADIUS_MISMATCH_MM
-            || half - r.abs() <= RADIUS_MISMATCH_REL * r.abs()
-        {
+        } else if half - r.abs() <= R_ARC_SHORT_MM {
             0.0
         } else {
             return Err(format!(
@@ -288,5 +312,29 @@ mod tests {
             Arc::from_center([1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0], XY, false, 1).is_err()
         );
         assert!(Arc::from_radius([0.0, 0.0, 0.0], [3.0, 0.0, 0.0], 1.0, XY, false).is_err());
+    }
+
+    /// LinuxCNC's limits as rs274 (2.9.0~pre1) showed them by bisection: a centre-format arc
+    /// runs up to √2 · 0.02 mm (G21) or √2 · 0.002 in (G20) of radius difference, or 0.1 % of
+    /// the larger radius; an R arc may be short of half its chord by 0.00005 in.
+    #[test]
+    fn radius_tolerances_are_linuxcnc_s() {
+        let ends = |r: f64, d: f64| ([0.0, 0.0, 0.0], [2.0 * r + d, 0.0, 0.0], [r, 0.0]);
+        let ok = |r: f64, d: f64, inch: bool| {
+            let (s, e, c) = ends(r, d);
+            Arc::from_center_in(s, e, c, XY, true, 1, inch).is_ok()
+        };
+        // mm: rs274 runs 0.028 and stops at 0.0283 (r = 2 and 20 mm)
+        assert!(ok(2.0, 0.028, false) && !ok(2.0, 0.0285, false));
+        assert!(ok(20.0, 0.028, false) && !ok(20.0, 0.0285, false));
+        // the relative part: r = 200 mm runs up to 0.2002 mm
+        assert!(ok(200.0, 0.2, false) && !ok(200.0, 0.201, false));
+        // inch: 0.0028 in runs, 0.003 in stops (r = 1 in = 25.4 mm)
+        assert!(ok(25.4, 0.0028 * 25.4, true) && !ok(25.4, 0.003 * 25.4, true));
+        assert!(!ok(25.4, 0.0028 * 25.4, false));
+        // R format: 0.00127 mm short of half the chord is a half circle, 0.0013 mm is refused
+        let half = Arc::from_radius([0.0; 3], [4.0025, 0.0, 0.0], 2.0, XY, true).unwrap();
+        assert!((half.sweep.abs() - PI).abs() < 1e-9);
+        assert!(Arc::from_radius([0.0; 3], [4.0027, 0.0, 0.0], 2.0, XY, true).is_err());
     }
 }

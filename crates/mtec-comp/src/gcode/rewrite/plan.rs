@@ -13,10 +13,11 @@
 // axis loops index several per-axis arrays at once (target, correction, offsets, words)
 #![allow(clippy::needless_range_loop)]
 
-use super::super::arc::Arc;
+use super::super::arc::{center_arc_limit_mm, Arc};
 use super::super::block::{Block, Issue};
 use super::super::lexer::Value;
 use super::interp::{unused_word, Motion, OUT, PROG};
+use super::options::{rounding_in_effect_um, Units};
 use super::piece::{dist, Piece, RotaryMove};
 use super::report::{GcodeError, ProblemKind};
 use super::rewriter::Rewriter;
@@ -470,8 +471,10 @@ impl Rewriter<'_> {
                 };
                 // kept as an arc when the bound of its path error allows it (NaN: linearised,
                 // where the pieces report the missing model value)
+                let tolerance_um = self.opt.tolerance_um;
+                let fits = self.arc_stays_within_linuxcnc_tolerance(&arc, c0, c_end);
                 let (planner, at) = self.at(col);
-                let keep = planner.arc_bound_um(&arc, c0, c_end, &at) <= self.opt.tolerance_um;
+                let keep = fits && planner.arc_bound_um(&arc, c0, c_end, &at) <= tolerance_um;
                 if keep {
                     let moved = c0 != [0.0; 3] || c_end != [0.0; 3];
                     if let Some(rw) = b.word(b'R').filter(|_| moved) {
@@ -560,6 +563,27 @@ impl Rewriter<'_> {
         Ok(())
     }
 
+    /// Whether the arc, written with its start (and centre) moved by `c0` and its end by
+    /// `c_end`, still has end and start radii that LinuxCNC accepts: the end radius changes by
+    /// up to |c_end − c0| and the written end point and centre are rounded. An arc near
+    /// LinuxCNC's limit is cut into chords instead, so that the compensated program runs
+    /// wherever the original does.
+    fn arc_stays_within_linuxcnc_tolerance(
+        &self,
+        arc: &Arc,
+        c0: [f64; 3],
+        c_end: [f64; 3],
+    ) -> bool {
+        let rounding_um = rounding_in_effect_um(self.opt, self.st.units);
+        let moved = (0..3)
+            .map(|i| (c_end[i] - c0[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let written = (arc.r_end - arc.r_start).abs() + moved + 4.0 * rounding_um * 1e-3;
+        let inch = self.st.units == Some(Units::Inch);
+        written <= center_arc_limit_mm(arc.r_start, arc.r_end, inch)
+    }
+
     #[allow(clippy::too_many_arguments)]
     fn arc_of(
         &self,
@@ -612,7 +636,8 @@ impl Rewriter<'_> {
                 start[s] + ijk[s].unwrap_or(0.0) * scale,
             ]
         };
-        Arc::from_center(start, end, center, plane, clockwise, turns)
+        let inch = self.st.units == Some(Units::Inch);
+        Arc::from_center_in(start, end, center, plane, clockwise, turns, inch)
     }
 }
 
