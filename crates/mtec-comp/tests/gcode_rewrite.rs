@@ -603,3 +603,31 @@ fn an_arc_near_linuxcnc_s_radius_limit_is_cut_into_chords() {
     assert_eq!((d.line, d.column), (4, 4), "{}", d.message);
     assert!(d.message.contains("not on the circle"), "{}", d.message);
 }
+
+/// Posts such as Mastercam's Haas post write `A0.` on 4-axis-ready lines of 3-axis programs.
+/// With a 3-axis model such a word is copied when it repeats the angle the axis stands at
+/// (`--start-rotary-deg`, or zero in G91); a word that turns the axis is refused at the word.
+#[test]
+fn a_rotary_word_that_keeps_the_axis_still_passes_a_three_axis_model() {
+    let still = RewriteOptions {
+        start_position_mm: Some([0.0; 3]),
+        start_rotary_deg: Some([0.0, 0.0, 0.0]),
+        ..RewriteOptions::default()
+    };
+    let program = "G21 G90\nG0 X0 Y0 Z10 A0\nG1 Z-1 F100\nG1 X10 A0.\nG91 G1 X5 A0\nG90 A0\nM2\n";
+    let (out, _) = run(program, &PolyModel, &still);
+    for kept in ["A0\n", "A0.\n", "A0\nG90 A0\n"] {
+        assert!(out.contains(kept), "{kept:?}: {out}");
+    }
+    for (program, column) in [
+        ("G21 G90\nG0 X0 Y0 Z10 A5\n", 14),
+        ("G21 G91\nG0 X0 Y0 Z10 A0.001\n", 14),
+    ] {
+        let d = refuse(program, &PolyModel, &still);
+        assert_eq!((d.line, d.column), (2, column), "{program}: {}", d.message);
+        assert!(d.message.contains("axis A moves"), "{}", d.message);
+    }
+    // without the start angle the first A0 may turn the axis: refused, naming the option
+    let d = refuse(program, &PolyModel, &RewriteOptions::default());
+    assert!(d.message.contains("--start-rotary-deg"), "{}", d.message);
+}

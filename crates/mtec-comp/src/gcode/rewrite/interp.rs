@@ -511,7 +511,7 @@ impl State {
                     st.units_changed_since_tool_length = false;
                     if st.tool_length_mm.is_none() {
                         let what = match tool {
-                            Some(t) => format!("tool {t} has no length in the offsets file (--offsets, [tool_lengths_mm])"),
+                            Some(t) => format!("tool {t} has no length: give the machine's tool table (--tool-table) or the length in the offsets file (--offsets, [tool_lengths_mm])"),
                             None => "the tool is not known (no H word and no T… M6 before)".into(),
                         };
                         issues.push(Issue {
@@ -846,7 +846,7 @@ impl State {
             (
                 b.word([b'X', b'Y', b'Z'][a]).map(|w| w.token),
                 format!(
-                    "{name} sets an offset from the current position, which is not known here for {} (program an absolute move first; the work offset, G92 offset and tool length in effect must be known too)",
+                    "{name} sets an offset from the current position, which is not known here for {} (program an absolute move first, or give where the machine stands with --start-position-mm; the work offset, G92 offset and tool length in effect must be known too)",
                     ["X", "Y", "Z"][a]
                 ),
             )

@@ -15,6 +15,7 @@
 
 use super::super::arc::{center_arc_limit_mm, Arc};
 use super::super::block::{Block, Issue};
+use super::super::code::GCode;
 use super::super::lexer::Value;
 use super::interp::{unused_word, Motion, OUT, PROG};
 use super::options::{rounding_in_effect_um, Units};
@@ -38,10 +39,12 @@ impl Rewriter<'_> {
         // the word a refusal points at, when it is not the first axis word
         let mut why_tok: Option<usize> = None;
         let rotary = self.planner.view.rotary_axes();
+        // a rotary word the model does not have is harmless when it repeats the angle the
+        // axis stands at (`A0.` in every block of some posts): then it is copied unchanged
         let moved_rotary = [b'A', b'B', b'C']
             .into_iter()
             .enumerate()
-            .find(|&(_, l)| b.word(l).is_some());
+            .find(|&(k, l)| b.word(l).is_some() && (rotary[k] || !self.rotary_stays(b, k)));
         if let Some(l) = [b'U', b'V', b'W']
             .into_iter()
             .find(|&l| b.word(l).is_some())
@@ -62,7 +65,7 @@ impl Rewriter<'_> {
                         l as char
                     ),
                     None => format!(
-                        "axis {} moves but the error model has no rotary axes (a kinematic model, `mtec.kinematic-model/1`, of a chain with {} compensates it)",
+                        "axis {} moves but the error model has no rotary axes (a kinematic model, `mtec.kinematic-model/1`, of a chain with {} compensates it; a word that only repeats the angle the axis stands at is copied, given that angle with --start-rotary-deg)",
                         l as char, l as char
                     ),
                 });
@@ -582,6 +585,32 @@ impl Rewriter<'_> {
         let written = (arc.r_end - arc.r_start).abs() + moved + 4.0 * rounding_um * 1e-3;
         let inch = self.st.units == Some(Units::Inch);
         written <= center_arc_limit_mm(arc.r_start, arc.r_end, inch)
+    }
+
+    /// Whether the block's word for rotary axis `k` (0 = A) leaves the axis where it stands:
+    /// zero in incremental mode, or the known angle (`--start-rotary-deg`, work offset
+    /// included) in absolute mode. Used for axes the model does not have, whose angle the
+    /// rewriter keeps from the start and never changes.
+    fn rotary_stays(&self, b: &Block, k: usize) -> bool {
+        let Some(Value::Number(v)) = b.word([b'A', b'B', b'C'][k]).map(|w| w.value) else {
+            return false;
+        };
+        let g53 = b.has_g(GCode::G53).is_some();
+        if !g53 && self.st.absolute == Some(false) {
+            return v == 0.0;
+        }
+        if !g53 && self.st.absolute != Some(true) {
+            return false;
+        }
+        let off = if g53 {
+            Some(0.0)
+        } else {
+            self.st.work.map(|w| self.opt.offsets.rotary_deg[w][k])
+        };
+        match (self.st.rot[k], off) {
+            (Some(at), Some(off)) => at == v + off,
+            _ => false,
+        }
     }
 
     #[allow(clippy::too_many_arguments)]

@@ -120,6 +120,16 @@ impl<'a> Rewriter<'a> {
             let (body, ending) = buf.split_at(body_end);
             self.line(body, ending, &mut output)?;
         }
+        if !self.program_ended && !self.tape_ended && self.report.lines_read > 0 {
+            // rs274: "File ended with no percent sign or program end"; every move has run by
+            // then, so the output is the same program, but the user should know
+            let d = self.diag(
+                1,
+                ProblemKind::Controller,
+                "the program has no end (M2, M30 or a closing %): LinuxCNC runs every line and then stops with an error (\"File ended with no percent sign or program end\"); add M2".into(),
+            );
+            self.warn(d);
+        }
         output.flush()?;
         Ok(())
     }
