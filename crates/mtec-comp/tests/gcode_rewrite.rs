@@ -631,3 +631,23 @@ fn a_rotary_word_that_keeps_the_axis_still_passes_a_three_axis_model() {
     let d = refuse(program, &PolyModel, &RewriteOptions::default());
     assert!(d.message.contains("--start-rotary-deg"), "{}", d.message);
 }
+
+/// LinuxCNC runs a program without M2, M30 or a closing % to its last line and then stops with
+/// an error; mtec compensates it and says so once, at the last line.
+#[test]
+fn a_program_without_an_end_is_warned_about_once() {
+    let model = ConstModel([3.0, -2.0, 1.0]);
+    let (_, rep) = run(
+        "G21 G90\nG0 X0 Y0 Z0\nG1 X5 F100\n",
+        &model,
+        &RewriteOptions::default(),
+    );
+    assert_eq!(rep.warnings_total, 1, "{:?}", rep.warnings);
+    assert_eq!(rep.warnings[0].line, 3);
+    assert!(rep.warnings[0].message.contains("no end (M2, M30"));
+    for ended in ["M2\n", "M30\n", "%\n"] {
+        let program = format!("%\nG21 G90\nG0 X0 Y0 Z0\nG1 X5 F100\n{ended}");
+        let (_, rep) = run(&program, &model, &RewriteOptions::default());
+        assert_eq!(rep.warnings_total, 0, "{ended:?}: {:?}", rep.warnings);
+    }
+}
