@@ -495,7 +495,7 @@ class Arc:
         ql = self.local(q)
         cands = self.minima_circle(ql) if self.planar_circle else self.minima_helix(ql)
         best = min(v for v, _ in cands)
-        phis = [p for v, p in cands if math.sqrt(v) <= math.sqrt(best) + 1e-3]
+        phis = [p for v, p in cands if math.sqrt(v) <= math.sqrt(best) + 1e-4]
         along = [self.length_of_phi(p) for p in phis]
         if hint is None:
             return math.sqrt(best), along[0]
