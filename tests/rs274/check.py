@@ -1184,6 +1184,16 @@ def actions_only(prog):
     prog.events = kept
 
 
+def same_stop(c_err, n_err):
+    """Whether rs274 stops both programs the same way: the same message and echoed line, or
+    both at the end of a file without M2/M30/% (rs274 echoes the last line, whose coordinates
+    the compensation changed; every line has run by then, and the paths are checked)."""
+    if c_err == n_err:
+        return True
+    end = "File ended with no percent sign or program end"
+    return bool(c_err and n_err and c_err.startswith(end) and n_err.startswith(end))
+
+
 def check(original, compensated, model_path, offsets=None, tool_table=None, limits=None,
           flattened=False):
     """Runs (a)-(d); returns a Result whose `violations` lists the first violation of each
@@ -1197,14 +1207,14 @@ def check(original, compensated, model_path, offsets=None, tool_table=None, limi
         var_file, tbl = prepare_rs274_inputs(work, offsets, tool_table)
         n_calls, n_err = run_rs274(original, work, var_file, tbl)
         c_calls, c_err = run_rs274(compensated, work, var_file, tbl)
-        if c_err != n_err:
+        if not same_stop(c_err, n_err):
             violations.append(f"{compensated}: rs274 does not read the compensated program as it "
                               f"reads the original: {c_err or 'no error'} (original: {n_err or 'no error'})")
             if long_lines(compensated, RS274_LINE_LIMIT):
                 # go on without the over-long comments to report the path as well
                 c_calls, c_err = run_rs274(without_long_comments(compensated, work), work, var_file, tbl)
         refs = None
-        if c_err == n_err and any(REFERENCE_RE.search(strip_comments(p)) for p in (original, compensated)):
+        if same_stop(c_err, n_err) and any(REFERENCE_RE.search(strip_comments(p)) for p in (original, compensated)):
             ref_var = os.path.join(work, "reference.var")
             write_reference_var_file(ref_var, var_file)
             refs = [interpret(p, *run_rs274(p, work, ref_var, tbl)) for p in (original, compensated)]
@@ -1216,7 +1226,7 @@ def check(original, compensated, model_path, offsets=None, tool_table=None, limi
     if flattened:
         actions_only(nominal)
         actions_only(comp)
-    if c_err != n_err:
+    if not same_stop(c_err, n_err):
         return Result(nominal, comp, None, violations)
     walker = Walker(nominal, comp, model, limits)
     walker.run()
