@@ -1184,14 +1184,23 @@ def actions_only(prog):
     prog.events = kept
 
 
+ECHO_COORDINATE_RE = re.compile(r"[XYZIJKR]\s*[-+]?[\d.]+", re.IGNORECASE)
+
+
 def same_stop(c_err, n_err):
-    """Whether rs274 stops both programs the same way: the same message and echoed line, or
-    both at the end of a file without M2/M30/% (rs274 echoes the last line, whose coordinates
-    the compensation changed; every line has run by then, and the paths are checked)."""
+    """Whether rs274 stops both programs the same way: the same message, and the same echoed
+    line once its coordinates (X Y Z I J K R words) are taken out. The compensation changes
+    the coordinates of the line rs274 stops at, e.g. at the end of a file without M2/M30/%
+    ("File ended with no percent sign or program end", echoing the last line) or at a move
+    that carries a user M code the machine has and stand-alone rs274 does not ("Unknown m code
+    used"). The moves run before the stop are then checked as for a whole program."""
     if c_err == n_err:
         return True
-    end = "File ended with no percent sign or program end"
-    return bool(c_err and n_err and c_err.startswith(end) and n_err.startswith(end))
+    if not (c_err and n_err):
+        return False
+    (c_msg, _, c_line), (n_msg, _, n_line) = c_err.partition(" | "), n_err.partition(" | ")
+    squeeze = lambda t: ECHO_COORDINATE_RE.sub("", t).replace(" ", "").upper()  # noqa: E731
+    return c_msg == n_msg and squeeze(c_line) == squeeze(n_line)
 
 
 def check(original, compensated, model_path, offsets=None, tool_table=None, limits=None,
