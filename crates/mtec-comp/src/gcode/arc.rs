@@ -84,20 +84,9 @@ fn in_plane(p: &[f64; 3], pl: Plane) -> [f64; 2] {
 impl Arc {
     /// The arc through its centre (`center` already absolute, in the plane), turning
     /// clockwise (G2) or not, `turns` ≥ 1 full turns counted as LinuxCNC's P word.
+    /// The block is in inch (`inch`) or mm: LinuxCNC's radius tolerance depends on its units
+    /// ([`center_arc_limit_mm`]).
     pub fn from_center(
-        start: [f64; 3],
-        end: [f64; 3],
-        center: [f64; 2],
-        plane: Plane,
-        clockwise: bool,
-        turns: u32,
-    ) -> Result<Arc, String> {
-        Arc::from_center_in(start, end, center, plane, clockwise, turns, false)
-    }
-
-    /// [`Arc::from_center`] for a block in inch (`inch`) or mm: LinuxCNC's radius tolerance
-    /// depends on the block's units ([`center_arc_limit_mm`]).
-    pub fn from_center_in(
         start: [f64; 3],
         end: [f64; 3],
         center: [f64; 2],
@@ -193,7 +182,7 @@ impl Arc {
         let side = if clockwise { -1.0 } else { 1.0 } * r.signum();
         let m = [(s[0] + e[0]) / 2.0, (s[1] + e[1]) / 2.0];
         let center = [m[0] + side * h * left[0], m[1] + side * h * left[1]];
-        Arc::from_center(start, end, center, plane, clockwise, 1)
+        Arc::from_center(start, end, center, plane, clockwise, 1, false)
     }
 
     /// The point at fraction `t` ∈ [0, 1] of the sweep; `t = 1` is exactly the end point.
@@ -254,16 +243,32 @@ mod tests {
 
     #[test]
     fn full_circle_helix_and_zx_plane() {
-        let a =
-            Arc::from_center([1.0, 0.0, 0.0], [1.0, 0.0, -2.0], [0.0, 0.0], XY, true, 2).unwrap();
+        let a = Arc::from_center(
+            [1.0, 0.0, 0.0],
+            [1.0, 0.0, -2.0],
+            [0.0, 0.0],
+            XY,
+            true,
+            2,
+            false,
+        )
+        .unwrap();
         assert!((a.sweep + 4.0 * PI).abs() < 1e-12);
         assert!(close(a.point(0.25), [-1.0, 0.0, -0.5]));
         assert!(close(a.point(0.5), [1.0, 0.0, -1.0]));
         assert_eq!(a.point(1.0), [1.0, 0.0, -2.0]);
         // G18 G3 from X1 Z0 about the origin: plane (Z, X); a quarter turn CCW moves to Z1? the
         // point (z, x) = (0, 1) at 90° goes to 180° = (-1, 0): Z-1, X0.
-        let b =
-            Arc::from_center([1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 0.0], ZX, false, 1).unwrap();
+        let b = Arc::from_center(
+            [1.0, 0.0, 0.0],
+            [0.0, 0.0, -1.0],
+            [0.0, 0.0],
+            ZX,
+            false,
+            1,
+            false,
+        )
+        .unwrap();
         assert!((b.sweep - PI / 2.0).abs() < 1e-12);
         let mid = b.point(0.5);
         let s = 0.5f64.sqrt();
@@ -274,15 +279,31 @@ mod tests {
     fn an_end_next_to_the_start_is_a_full_circle_only_on_the_start_and_refused_near_it() {
         // on the start (to 1e-9 mm): a full circle either way round
         for cw in [false, true] {
-            let a = Arc::from_center([10.0, 0.0, 0.0], [10.0, 1e-12, 0.0], [0.0, 0.0], XY, cw, 1)
-                .unwrap();
+            let a = Arc::from_center(
+                [10.0, 0.0, 0.0],
+                [10.0, 1e-12, 0.0],
+                [0.0, 0.0],
+                XY,
+                cw,
+                1,
+                false,
+            )
+            .unwrap();
             assert!((a.sweep.abs() - 2.0 * PI).abs() < 1e-9, "{}", a.sweep);
         }
         // 0.04 um ahead or behind (a position carried over a G20/G21 switch): LinuxCNC makes a
         // tiny arc or a full circle depending on the side; refused, naming the distance
         for y in [4e-5, -4e-5] {
-            let e = Arc::from_center([10.0, 0.0, 0.0], [10.0, y, 0.0], [0.0, 0.0], XY, false, 1)
-                .unwrap_err();
+            let e = Arc::from_center(
+                [10.0, 0.0, 0.0],
+                [10.0, y, 0.0],
+                [0.0, 0.0],
+                XY,
+                false,
+                1,
+                false,
+            )
+            .unwrap_err();
             assert!(e.contains("0.0400 um from its start"), "{e}");
         }
         // 1 um and more: the arc LinuxCNC runs, the short or the long way by the sense
@@ -293,24 +314,48 @@ mod tests {
             XY,
             false,
             1,
+            false,
         )
         .unwrap();
         assert!((short.sweep - 2e-4).abs() < 1e-9);
-        let long =
-            Arc::from_center([10.0, 0.0, 0.0], [10.0, 2e-3, 0.0], [0.0, 0.0], XY, true, 1).unwrap();
+        let long = Arc::from_center(
+            [10.0, 0.0, 0.0],
+            [10.0, 2e-3, 0.0],
+            [0.0, 0.0],
+            XY,
+            true,
+            1,
+            false,
+        )
+        .unwrap();
         assert!((long.sweep + 2.0 * PI - 2e-4).abs() < 1e-9);
     }
 
     #[test]
     fn chord_count_meets_sagitta() {
-        let a =
-            Arc::from_center([10.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 0.0], XY, false, 1).unwrap();
+        let a = Arc::from_center(
+            [10.0, 0.0, 0.0],
+            [10.0, 0.0, 0.0],
+            [0.0, 0.0],
+            XY,
+            false,
+            1,
+            false,
+        )
+        .unwrap();
         let n = a.chord_count(0.5e-3);
         let dtheta = a.sweep / n as f64;
         assert!(10.0 * (1.0 - (dtheta / 2.0).cos()) <= 0.5e-3 + 1e-15);
-        assert!(
-            Arc::from_center([1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0], XY, false, 1).is_err()
-        );
+        assert!(Arc::from_center(
+            [1.0, 0.0, 0.0],
+            [0.0, 2.0, 0.0],
+            [0.0, 0.0],
+            XY,
+            false,
+            1,
+            false
+        )
+        .is_err());
         assert!(Arc::from_radius([0.0, 0.0, 0.0], [3.0, 0.0, 0.0], 1.0, XY, false).is_err());
     }
 
@@ -322,7 +367,7 @@ mod tests {
         let ends = |r: f64, d: f64| ([0.0, 0.0, 0.0], [2.0 * r + d, 0.0, 0.0], [r, 0.0]);
         let ok = |r: f64, d: f64, inch: bool| {
             let (s, e, c) = ends(r, d);
-            Arc::from_center_in(s, e, c, XY, true, 1, inch).is_ok()
+            Arc::from_center(s, e, c, XY, true, 1, inch).is_ok()
         };
         // mm: rs274 runs 0.028 and stops at 0.0283 (r = 2 and 20 mm)
         assert!(ok(2.0, 0.028, false) && !ok(2.0, 0.0285, false));

@@ -666,7 +666,7 @@ impl Rewriter<'_> {
             ]
         };
         let inch = self.st.units == Some(Units::Inch);
-        Arc::from_center_in(start, end, center, plane, clockwise, turns, inch)
+        Arc::from_center(start, end, center, plane, clockwise, turns, inch)
     }
 }
 
