@@ -102,12 +102,15 @@ pub fn parse_line(raw: &str, text_line: usize) -> Result<Option<Call<'_>>, Flatt
         message: m.to_string(),
     };
     let digits = t.len() - t.trim_start_matches(|c: char| c.is_ascii_digit()).len();
-    let (line, rest) = if digits > 0 {
-        let n = t[..digits].parse::<usize>().unwrap_or(text_line);
-        (n, t[digits..].trim_start())
-    } else {
-        (text_line, t)
-    };
+    if digits == 0 {
+        // rs274 numbers every canonical call; a line without the number is text the program
+        // printed itself, a `(PRINT, …)` comment, which the machine's log gets, not motion
+        return Ok(None);
+    }
+    let (line, rest) = (
+        t[..digits].parse::<usize>().unwrap_or(text_line),
+        t[digits..].trim_start(),
+    );
     // the block's line number field: `N.....` or `N0080`
     let rest = match rest.strip_prefix('N') {
         Some(r) if !r.starts_with(|c: char| c.is_ascii_uppercase() || c == '_') => {
@@ -142,4 +145,26 @@ pub fn parse_line(raw: &str, text_line: usize) -> Result<Option<Call<'_>>, Flatt
         inner,
         args,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_line;
+
+    /// `(PRINT, hello)` makes rs274 write ` hello` between its numbered calls: not a call,
+    /// and not a reason to refuse (found on LinuxCNC's tests/interp/g52 programs); a numbered
+    /// line that is not a call is still refused.
+    #[test]
+    fn printed_text_is_skipped_and_numbered_garbage_refused() {
+        assert!(matches!(parse_line(" hello", 8), Ok(None)));
+        assert!(matches!(parse_line("hello (world)", 8), Ok(None)));
+        let call = parse_line(
+            "    8 N..... STRAIGHT_TRAVERSE(10.0000, 10.0000, 5.0000)",
+            9,
+        )
+        .unwrap()
+        .unwrap();
+        assert_eq!(call.name, "STRAIGHT_TRAVERSE");
+        assert!(parse_line("    9 N..... hello", 10).is_err());
+    }
 }

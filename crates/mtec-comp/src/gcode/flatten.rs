@@ -1297,7 +1297,7 @@ mod tests {
             ("STRAIGHT_FEED(1.0, 2.0)", "needs 6 arguments"),
             ("SET_SPINDLE_SPEED(1, 100.0000)", "spindle 1"),
             ("ORIENT_SPINDLE(0, 0.0000, 0)", "does not know"),
-            ("this is not a call", "not a canonical call"),
+            ("12 N..... this is not a call", "not a canonical call"),
         ];
         for (call, words) in cases {
             let e = flat(&canon(&[call])).unwrap_err();
