@@ -1071,3 +1071,29 @@ fn a_stop_on_a_block_written_on_several_lines_names_the_line_rs274_stopped_at() 
         assert!(msg.contains(words), "{msg}");
     }
 }
+
+/// A subroutine file run on its own ends without M2: rs274 stops at the end of the file, and
+/// the refusal names the last line (it had no location: 7 of LinuxCNC's 332 programs). A
+/// `(PRINT, …)` comment, whose text rs274 writes between its calls, is flattened (it refused).
+#[test]
+fn a_file_without_an_end_is_located_and_print_comments_flatten() {
+    let Some(bin) = rs274() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("zero.json");
+    std::fs::write(&model, ZERO_MODEL).unwrap();
+    let sub = dir.path().join("sub.ngc");
+    std::fs::write(&sub, "o<sub> sub\nG1 X1 F100\no<sub> endsub\n\n").unwrap();
+    let (code, msg, _) = flatten_zero(&bin, dir.path(), &model, &sub, &[]);
+    assert_eq!(code, Some(2), "{msg}");
+    assert!(msg.contains("sub.ngc:3:1:"), "{msg}");
+    assert!(msg.contains("add M2"), "{msg}");
+    let print = dir.path().join("print.ngc");
+    std::fs::write(
+        &print,
+        "G21 G90\n(PRINT, hello)\nG0 X10 Y10 Z5\nG1 Z-1 F100\nM2\n",
+    )
+    .unwrap();
+    let flat = flatten_text(&bin, &print);
+    assert!(flat.contains("G1 X10.0 Y10.0 Z-1.0 F100.0"), "{flat}");
+    assert!(!flat.contains("hello"), "{flat}");
+}

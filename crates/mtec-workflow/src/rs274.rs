@@ -392,6 +392,24 @@ fn rs274_error_at(program: &[u8], stderr: &str) -> Option<(usize, usize)> {
     Some((i + 1, error_column(line, stderr)))
 }
 
+/// rs274's message for a program that ends without M2, M30 or a closing `%`.
+const FILE_ENDED: &str = "File ended with no percent sign or program end";
+
+/// Where a program without an end stopped: after its last non-blank line (column 1).
+fn end_of_file_at(program: &[u8], stderr: &str) -> Option<(usize, usize)> {
+    if !stderr.contains(FILE_ENDED) {
+        return None;
+    }
+    let text = String::from_utf8_lossy(program);
+    let last = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .last()?
+        .0;
+    Some((last + 1, 1))
+}
+
 /// The error at `at` (line, column) of `input`, or of the file when it is not known.
 fn located(input: &Path, at: Option<(usize, usize)>, message: impl Into<String>) -> InputError {
     match at {
@@ -641,11 +659,16 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         if args.tool_table.is_none() && run.stderr.contains("not found in the tool table") {
             message.push_str(" (give the controller's tool table with --tool-table, or the tool's length under [tool_lengths_mm] in --offsets: without them mtec does not let rs274 use its built-in lengths)");
         }
-        let at = rs274_error_at(&program, &run.stderr).or_else(|| {
-            numbered_error_at(&program, &run.stderr, |numbered| {
-                run_variant("numbered", numbered)
+        let at = rs274_error_at(&program, &run.stderr)
+            .or_else(|| {
+                numbered_error_at(&program, &run.stderr, |numbered| {
+                    run_variant("numbered", numbered)
+                })
             })
-        });
+            .or_else(|| end_of_file_at(&program, &run.stderr));
+        if run.stderr.contains(FILE_ENDED) {
+            message.push_str(" (add M2 at the end; a subroutine file is run by a call from a program, not on its own)");
+        }
         return Err(located(input, at, message).into());
     }
     // G41/G42 take the cutter radius from the tool table (D); a table mtec made from
