@@ -1073,7 +1073,8 @@ fn a_stop_on_a_block_written_on_several_lines_names_the_line_rs274_stopped_at() 
 }
 
 /// A subroutine file run on its own ends without M2: rs274 stops at the end of the file, and
-/// the refusal names the last line (it had no location: 7 of LinuxCNC's 332 programs). A
+/// the refusal names the last line (it had no location: 7 of LinuxCNC's 332 programs); a
+/// missing O-word is refused at its call. A
 /// `(PRINT, …)` comment, whose text rs274 writes between its calls, is flattened (it refused).
 #[test]
 fn a_file_without_an_end_is_located_and_print_comments_flatten() {
@@ -1087,6 +1088,12 @@ fn a_file_without_an_end_is_located_and_print_comments_flatten() {
     assert_eq!(code, Some(2), "{msg}");
     assert!(msg.contains("sub.ngc:3:1:"), "{msg}");
     assert!(msg.contains("add M2"), "{msg}");
+    // a call of an O-word rs274 cannot find is refused at the call, not at the line it read last
+    let call = dir.path().join("call.ngc");
+    std::fs::write(&call, "G21\no<nothere> call\nM2\n").unwrap();
+    let (code, msg, _) = flatten_zero(&bin, dir.path(), &model, &call, &[]);
+    assert_eq!(code, Some(2), "{msg}");
+    assert!(msg.contains("call.ngc:2:1:"), "{msg}");
     let print = dir.path().join("print.ngc");
     std::fs::write(
         &print,

@@ -410,6 +410,30 @@ fn end_of_file_at(program: &[u8], stderr: &str) -> Option<(usize, usize)> {
     Some((last + 1, 1))
 }
 
+/// Where a call of an O-word that rs274 did not find was made: its message names the line
+/// ("EOF in file: … seeking o-word: o<name> from line: 2"); the column is the line's first
+/// non-blank character, when that line of the program calls that O-word.
+fn o_word_call_at(program: &[u8], stderr: &str) -> Option<(usize, usize)> {
+    let (_, after) = stderr.split_once("seeking o-word")?;
+    let (name, number) = after.split_once("from line:")?;
+    let name = name.trim_start_matches(':').trim().to_ascii_lowercase();
+    let line: usize = number
+        .trim_start()
+        .split(|c: char| !c.is_ascii_digit())
+        .next()?
+        .parse()
+        .ok()?;
+    let text = String::from_utf8_lossy(program);
+    let body = text.lines().nth(line.checked_sub(1)?)?;
+    // the line is the program's own only if it calls that O-word (a call from another file
+    // names that file's line)
+    let lower = body.to_ascii_lowercase().replace(' ', "");
+    if name.is_empty() || !lower.contains(&name.replace(' ', "")) || !lower.contains("call") {
+        return None;
+    }
+    Some((line, body.len() - body.trim_start().len() + 1))
+}
+
 /// The error at `at` (line, column) of `input`, or of the file when it is not known.
 fn located(input: &Path, at: Option<(usize, usize)>, message: impl Into<String>) -> InputError {
     match at {
@@ -659,7 +683,9 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         if args.tool_table.is_none() && run.stderr.contains("not found in the tool table") {
             message.push_str(" (give the controller's tool table with --tool-table, or the tool's length under [tool_lengths_mm] in --offsets: without them mtec does not let rs274 use its built-in lengths)");
         }
-        let at = rs274_error_at(&program, &run.stderr)
+        // a missing O-word names its call's line; rs274 echoes the line it read last
+        let at = o_word_call_at(&program, &run.stderr)
+            .or_else(|| rs274_error_at(&program, &run.stderr))
             .or_else(|| {
                 numbered_error_at(&program, &run.stderr, |numbered| {
                     run_variant("numbered", numbered)
