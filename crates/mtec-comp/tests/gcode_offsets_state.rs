@@ -178,6 +178,10 @@ fn g92_at_a_corrected_point_uses_the_rewritten_programs_offset() {
     for program in [
         "G21 G90\nG0 X100 Y50 Z10\nG92 X0 Y0\nG1 X10 Y5 F100\nG1 X20\nG10 L20 P1 X0\nG1 X5\n",
         "G20 G90\nG0 X4 Y2 Z1\nG92 X0 Y0 Z0\nG1 X0.5 Y0.2 F10\nG91\nG1 X0.1\nG90\nG90.1\nG2 X0.4 Y0.4 I0.5 J0.3\n",
+        // G92.3 restores the offset of the program's own G92 (kept by G92.2), in each program
+        // its own: the rewritten program's G92 ran at the corrected point
+        "G21 G90\nG0 X100 Y50 Z10\nG92 X0 Y0\nG1 X10 Y5 F100\nG92.2\nG1 X120 Y60\nG92.3\nG1 X20 Y10\n",
+        "G21 G90\nG0 X100 Y50 Z10\nG52 X7 Y-3\nG1 X10 Y5 F100\nG92.2\nG1 X120\nG92.3\nG1 X20\nG92.1\nG1 X30\nG92.3\nG1 X40\n",
     ] {
         let o = opts();
         let out = rewrite_str(program, &Steep, &o);
@@ -238,6 +242,12 @@ fn refused(input: &str, o: &RewriteOptions) -> (usize, usize, String) {
 fn offset_codes_that_cannot_be_followed_are_refused_with_line_and_column() {
     let cases: &[(&str, usize, usize, &str)] = &[
         ("G21 G0 X0 Y0 Z0\nG92.3\nG1 X1 F10\n", 2, 1, "G92.3"),
+        (
+            "G21 G0 X0 Y0 Z0\nG92 X1 A5\nG92.3\nG1 X1 F10\n",
+            3,
+            1,
+            "G92.3",
+        ),
         (
             "G21 G0 X0 Y0 Z0\nG10 L10 P1 Z3\nG1 X1 F10\n",
             2,

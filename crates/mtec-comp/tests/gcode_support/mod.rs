@@ -158,7 +158,7 @@ pub fn dist_to_move(q: [f64; 3], m: &Move) -> f64 {
 /// comments, N/F/S/T/M words; and the offset codes as LinuxCNC's `rs274` runs them (checked
 /// against its recorded output in tests/gcode_offsets_state.rs): G92 and G10 L20 make the
 /// current position read as the given values, G52 and G10 L2 set the offset, G92.1/G92.2 zero
-/// the G92 offset, G10 L1 sets a tool length (used at the next G43), all in the block's units
+/// the G92 offset (G92.1 also its parameters, which G92.3 restores), G10 L1 sets a tool length (used at the next G43), all in the block's units
 /// and absolute in G91; G53 ignores work and G92 offsets; M2/M30 select G54 and keep G92.
 /// Moves before X, Y and Z are all known are not returned (nor compensated by the rewriter).
 pub fn interpret(
@@ -180,6 +180,8 @@ pub fn interpret(
     let work = &mut work9;
     let mut tools = tools.clone();
     let mut g92 = [0.0f64; 3];
+    // parameters 5211-5213: G92/G52 set them, G92.1 zeroes them, G92.3 restores the offset
+    let mut g92_saved: Option<[f64; 3]> = None;
     let mut moves = Vec::new();
     let mut toks = Vec::new();
     for (ln, line) in text.lines().enumerate() {
@@ -213,7 +215,12 @@ pub fn interpret(
                 911 => arc_abs = false,
                 540 | 550 | 560 | 570 | 580 | 590 => wcs = ((g - 540) / 10) as usize,
                 591..=593 => wcs = (g - 591) as usize + 6,
-                921 | 922 => g92 = [0.0; 3],
+                921 => {
+                    g92 = [0.0; 3];
+                    g92_saved = Some([0.0; 3]);
+                }
+                922 => g92 = [0.0; 3],
+                923 => g92 = g92_saved.expect("reference interpreter: G92.3 before G92/G52/G92.1"),
                 430 => tool = tools[&(w[&b'H'] as u32)],
                 490 => tool = 0.0,
                 0 | 10 | 20 | 30 => mode = g / 10,
@@ -242,6 +249,7 @@ pub fn interpret(
                     };
                 }
             }
+            g92_saved = Some(g92);
             continue;
         }
         if gs.contains(&100) {

@@ -56,6 +56,10 @@ pub(super) struct Frame {
     /// The G92 offset (G92, G52 set it; G92.1, G92.2 zero it). It applies in every work system,
     /// in addition to the work offset; G53 moves ignore it (LinuxCNC's `rs274`).
     pub(super) g92: [Option<f64>; 3],
+    /// The G92 offset kept in parameters 5211-5213, which G92.3 restores: set by G92 and G52,
+    /// zeroed by G92.1, kept by G92.2 (rs274, 2026-11-28); not known at start (a parameter
+    /// file of earlier runs) nor after a G92/G52 that also sets a rotary axis.
+    pub(super) g92_saved: [Option<f64>; 3],
 }
 
 impl Frame {
@@ -203,6 +207,7 @@ impl State {
                     work: [[None; 3]; 9],
                     // the controller's persisted G92 offset is assumed zero at start
                     g92: [Some(0.0); 3],
+                    g92_saved: [None; 3],
                 };
                 for i in 0..9 {
                     if let Some(w) = opt.offsets.work(i) {
@@ -263,6 +268,8 @@ impl State {
         let mut g53 = false;
         let mut axis_consumer: Option<GCode> = None; // G10, G28, G30, G52, G92 take the axis words
         let mut g92_reset = false;
+        let mut g92_zero_saved = false;
+        let mut g92_restore = None;
         for &(code, tok) in &b.g {
             use GCode::*;
             match code {
@@ -300,13 +307,13 @@ impl State {
                 }),
                 G93 => {}
                 G10 | G92 | G52 => axis_consumer = Some(code),
-                // G92.1 and G92.2 zero the G92 offset (they differ only in parameters 5211-5219)
-                G92_1 | G92_2 => g92_reset = true,
-                G92_3 => issues.push(Issue {
-                    token: Some(tok),
-                    message: "G92.3 restores the G92 offset from parameters 5211-5219, whose values are not known here; use G52 or G92 with literal values".into(),
-                    poisons_all: true,
-                }),
+                // G92.1 and G92.2 zero the G92 offset; G92.1 also zeroes parameters 5211-5219
+                G92_1 => {
+                    g92_reset = true;
+                    g92_zero_saved = true;
+                }
+                G92_2 => g92_reset = true,
+                G92_3 => g92_restore = Some(tok),
                 G33 | G33_1 | G38_2 | G38_3 | G38_4 | G38_5 | G73 | G74 | G76 | G81 | G82 | G83
                 | G84 | G85 | G86 | G87 | G88 | G89 | G5 | G5_1 | G5_2 | G5_3 => {
                     motion_word = Some((Motion::Unknown, tok));
@@ -550,6 +557,26 @@ impl State {
         if g92_reset {
             for f in st.frames.iter_mut() {
                 f.g92 = [Some(0.0); 3];
+                if g92_zero_saved {
+                    f.g92_saved = [Some(0.0); 3];
+                }
+            }
+        }
+        if let Some(tok) = g92_restore {
+            if st
+                .frames
+                .iter()
+                .all(|f| f.g92_saved.iter().all(Option::is_some))
+            {
+                for f in st.frames.iter_mut() {
+                    f.g92 = f.g92_saved;
+                }
+            } else {
+                issues.push(Issue {
+                    token: Some(tok),
+                    message: "G92.3 restores the G92 offset from parameters 5211-5219, which this program has not set (no G92, G52 or G92.1 before it; the values of earlier runs are not known here); use G52 or G92 with literal values".into(),
+                    poisons_all: true,
+                });
             }
         }
 
@@ -689,6 +716,7 @@ impl State {
         for f in st.frames.iter_mut() {
             f.work = [[None; 3]; 9];
             f.g92 = [None; 3];
+            f.g92_saved = [None; 3];
         }
         st.tools.clear();
     }
@@ -868,6 +896,12 @@ impl State {
                             Some(from_position(f, a, v, true).ok_or_else(|| not_known(a))?)
                         };
                     }
+                }
+                // the offset goes to parameters 5211-5219 too (G92.3 restores it); a rotary
+                // part of it is not followed here
+                let rotary = [b'A', b'B', b'C'].iter().any(|&l| b.word(l).is_some());
+                for f in [PROG, OUT] {
+                    frames[f].g92_saved = if rotary { [None; 3] } else { frames[f].g92 };
                 }
                 Ok(OffsetChange { frames, tool: None })
             }
