@@ -26,8 +26,10 @@ use crate::ErrorModel;
 use rewriter::Rewriter;
 use std::io::{BufRead, Write};
 
+mod block_checks;
 mod emit;
 mod interp;
+mod motion;
 mod options;
 mod piece;
 mod plan;

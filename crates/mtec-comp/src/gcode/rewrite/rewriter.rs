@@ -400,7 +400,7 @@ impl<'a> Rewriter<'a> {
             // a block that moves nothing (or whose axis words G10/G28/G30/G52/G92 take): a
             // stray word LinuxCNC refuses
             let motion_to_be = motion_word.map(|(m, _)| m);
-            if let Some((letter, token)) = super::interp::unused_word(b, motion_to_be) {
+            if let Some((letter, token)) = super::block_checks::unused_word(b, motion_to_be) {
                 issues.push(Issue {
                     token: Some(token),
                     message: format!("{letter} word with no code in the block that uses it: LinuxCNC refuses the block (\"{letter} word with no ... to use it\"); remove it"),
