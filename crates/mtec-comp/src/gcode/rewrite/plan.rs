@@ -579,11 +579,7 @@ impl Rewriter<'_> {
         c_end: [f64; 3],
     ) -> bool {
         let rounding_um = rounding_in_effect_um(self.opt, self.st.units);
-        let moved = (0..3)
-            .map(|i| (c_end[i] - c0[i]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        let written = (arc.r_end - arc.r_start).abs() + moved + 4.0 * rounding_um * 1e-3;
+        let written = (arc.r_end - arc.r_start).abs() + dist(c_end, c0) + 4.0 * rounding_um * 1e-3;
         let inch = self.st.units == Some(Units::Inch);
         written <= center_arc_limit_mm(arc.r_start, arc.r_end, inch)
     }
