@@ -164,7 +164,7 @@ pub(super) fn unused_word(b: &Block, motion_to_be: Option<Motion>) -> Option<(ch
         _ => true,
     };
     // LinuxCNC marks an absent Q word by the value -1, so `Q-1` passes its check (a negative L
-    // is refused when read: see `interpret`)
+    // is refused when read: see `linuxcnc_stops`)
     let sentinel = |l: u8| {
         l == b'Q' && matches!(b.word(l).map(|w| w.value), Some(Value::Number(v)) if v == -1.0)
     };
