@@ -157,7 +157,12 @@ def ensure_user():
         pwd.getpwnam(USER)
     except KeyError:
         subprocess.run(["useradd", "--create-home", "--shell", "/bin/bash", USER], check=True)
-    return pwd.getpwnam(USER)
+    user = pwd.getpwnam(USER)
+    # LinuxCNC writes its logs to HOME: a home left to another uid (two useradds that raced
+    # before the lock covered them) is given back to the user
+    if os.path.isdir(user.pw_dir) and os.stat(user.pw_dir).st_uid != user.pw_uid:
+        chown_tree(user.pw_dir, user.pw_uid, user.pw_gid)
+    return user
 
 
 def chown_tree(path, uid, gid):
@@ -204,48 +209,53 @@ def main():
         module = InstalledModule(build_component(sim, os.path.abspath(args.lib)))
 
     cmd = ["linuxcnc", "-r", "axis_mm.ini"]
-    if os.geteuid() == 0:
-        user = ensure_user()
-        chown_tree(work, user.pw_uid, user.pw_gid)
-        os.chmod(work, 0o755)
-        cmd = ["runuser", "-u", USER, "--", "env", "HOME=" + user.pw_dir] + cmd
-
-    # one simulation at a time on this machine (HAL shared memory and NML channels are global)
-    with open(LOCK, "w") as lock, module:
-        os.chmod(LOCK, 0o666)
+    # one simulation at a time on this machine (HAL shared memory, NML channels and the module
+    # directory are global); the user is created under the same lock, since tests that start
+    # together on a fresh machine would otherwise run useradd twice and leave a broken account
+    with open(LOCK, "w") as lock:
+        try:
+            os.chmod(LOCK, 0o666)
+        except PermissionError:
+            pass  # another user's lock file: it is already shared
         fcntl.flock(lock, fcntl.LOCK_EX)
-        t = time.monotonic()
-        with open(os.path.join(work, "linuxcnc.log"), "w") as logf:
-            # no terminal and no X display: LinuxCNC then never asks anything (a leftover
-            # instance is cleaned up without the "Restart it? [Y/n]" prompt)
-            env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
-            proc = subprocess.Popen(
-                cmd,
-                cwd=sim,
-                env=env,
-                stdin=subprocess.DEVNULL,
-                stdout=logf,
-                stderr=subprocess.STDOUT,
-                start_new_session=True,
-            )
-            try:
-                proc.wait(timeout=args.timeout)
-            except subprocess.TimeoutExpired:
-                # LinuxCNC's script cleans up on TERM; whatever of ours is left in the group
-                # (the UI) is killed. A leftover server or rtapi_app, which start their own
-                # sessions, is cleaned up by the next `linuxcnc` start.
-                os.killpg(proc.pid, signal.SIGTERM)
+        if os.geteuid() == 0:
+            user = ensure_user()
+            chown_tree(work, user.pw_uid, user.pw_gid)
+            os.chmod(work, 0o755)
+            cmd = ["runuser", "-u", USER, "--", "env", "HOME=" + user.pw_dir] + cmd
+        with module:
+            t = time.monotonic()
+            with open(os.path.join(work, "linuxcnc.log"), "w") as logf:
+                # no terminal and no X display: LinuxCNC then never asks anything (a leftover
+                # instance is cleaned up without the "Restart it? [Y/n]" prompt)
+                env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
+                proc = subprocess.Popen(
+                    cmd,
+                    cwd=sim,
+                    env=env,
+                    stdin=subprocess.DEVNULL,
+                    stdout=logf,
+                    stderr=subprocess.STDOUT,
+                    start_new_session=True,
+                )
                 try:
-                    proc.wait(timeout=10)
+                    proc.wait(timeout=args.timeout)
                 except subprocess.TimeoutExpired:
-                    pass
-                try:
-                    os.killpg(proc.pid, signal.SIGKILL)
-                except ProcessLookupError:
-                    pass
-                proc.wait()
-                fail("LinuxCNC did not finish within %.0f s (see %s/linuxcnc.log)" % (args.timeout, work))
-        print("run_sim: LinuxCNC ran %.1f s" % (time.monotonic() - t), flush=True)
+                    # LinuxCNC's script cleans up on TERM; whatever of ours is left in the group
+                    # (the UI) is killed. A leftover server or rtapi_app, which start their own
+                    # sessions, is cleaned up by the next `linuxcnc` start.
+                    os.killpg(proc.pid, signal.SIGTERM)
+                    try:
+                        proc.wait(timeout=10)
+                    except subprocess.TimeoutExpired:
+                        pass
+                    try:
+                        os.killpg(proc.pid, signal.SIGKILL)
+                    except ProcessLookupError:
+                        pass
+                    proc.wait()
+                    fail("LinuxCNC did not finish within %.0f s (see %s/linuxcnc.log)" % (args.timeout, work))
+            print("run_sim: LinuxCNC ran %.1f s" % (time.monotonic() - t), flush=True)
 
     results = os.path.join(sim, "results.json")
     if not os.path.exists(results):
