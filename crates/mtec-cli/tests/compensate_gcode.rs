@@ -252,3 +252,54 @@ fn points_outside_the_map_and_assumed_coordinates_are_reported() {
     assert_eq!(o.status.code(), Some(0), "{err}");
     assert!(!err.contains("no --offsets"), "{err}");
 }
+
+/// A tighter `--tolerance-um` writes more digits where the user named none, instead of refusing
+/// an mm program for the inch digits it never writes; digits the user names are still checked.
+#[test]
+fn a_tight_tolerance_raises_the_default_digits_and_named_digits_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let poly = write(
+        dir.path(),
+        "poly.json",
+        r#"{"format": "mtec.poly-model/1", "description": "offset",
+            "terms": [{"powers": [0,0,0], "coef_um": [10.0, 0.0, 0.0]}]}"#,
+    );
+    let run = |name: &str, text: &str, extra: &[&str]| {
+        let prog = write(dir.path(), name, text);
+        let out = dir.path().join(format!("out-{name}"));
+        let o = mtec()
+            .args(["compensate", "gcode", "--model"])
+            .arg(&poly)
+            .arg(&prog)
+            .args(["-o"])
+            .arg(&out)
+            .args(["--tolerance-um", "0.2"])
+            .args(extra)
+            .output()
+            .unwrap();
+        let written = std::fs::read_to_string(&out).ok();
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+            written,
+        )
+    };
+    // mm: 4 digits hold 0.2 um (rounding 0.087 um); before, the default 5 inch digits
+    // (0.22 um) refused this program although it never switches to inch
+    let (code, err, out) = run("mm.ngc", "G21 G90\nG0 X0 Y0 Z0\nG1 X12.5 F100\nM2\n", &[]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(out.unwrap().contains("X12.49"), "X12.5 corrected by -10 um");
+    // inch: 6 digits (rounding 0.022 um), the correction of -10 um = -0.000394 in visible
+    let (code, err, out) = run("in.ngc", "G20 G90\nG0 X0 Y0 Z0\nG1 X1 F10\nM2\n", &[]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(out.unwrap().contains("X0.999606"), "six inch digits");
+    // named digits too coarse for the tolerance: refused before any work, exit 2
+    let (code, err, out) = run(
+        "in2.ngc",
+        "G20 G90\nG0 X0 Y0 Z0\nG1 X1 F10\nM2\n",
+        &["--decimals-inch", "5"],
+    );
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("use --decimals-inch 6 or more"), "{err}");
+    assert!(out.is_none());
+}

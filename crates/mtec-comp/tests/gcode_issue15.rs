@@ -5,7 +5,9 @@
 
 mod gcode_support;
 use gcode_support::*;
-use mtec_comp::gcode::{rewrite, BlockDelete, GcodeError, Offsets, ProblemKind, RewriteOptions};
+use mtec_comp::gcode::{
+    rewrite, BlockDelete, GcodeError, Offsets, ProblemKind, RewriteOptions, Units,
+};
 use mtec_comp::{ErrorModel, GridMap, Outside};
 
 fn run(input: &str, model: &dyn ErrorModel, opts: &RewriteOptions) -> String {
@@ -349,5 +351,26 @@ fn g53_with_a_tool_length_offset_from_other_units_is_refused() {
     ] {
         let out = run(&format!("{prefix}{tail}"), &PolyModel, &o);
         assert!(out.contains("G53 G0"), "{tail}: {out}");
+    }
+}
+
+#[test]
+fn default_digits_follow_the_tolerance() {
+    use mtec_comp::gcode::default_decimals;
+    assert_eq!(default_decimals(Units::Mm, 0.5), 4);
+    assert_eq!(default_decimals(Units::Inch, 0.5), 5);
+    // 0.2 um: 5 inch digits round by 0.22 um > 0.1 um, 6 by 0.022 um
+    assert_eq!(default_decimals(Units::Inch, 0.2), 6);
+    assert_eq!(default_decimals(Units::Mm, 0.2), 4);
+    assert_eq!(default_decimals(Units::Mm, 0.1), 5);
+    // the chosen digits always pass validation, down to what 9 digits can hold
+    for tol in [0.001, 0.01, 0.05, 0.1, 0.2, 0.5, 1.0, 5.0] {
+        let o = RewriteOptions {
+            tolerance_um: tol,
+            decimals_mm: default_decimals(Units::Mm, tol),
+            decimals_inch: default_decimals(Units::Inch, tol),
+            ..RewriteOptions::default()
+        };
+        assert!(o.validate().is_ok(), "{tol}: {:?}", o.validate());
     }
 }

@@ -3,7 +3,7 @@
 use crate::help::{examples, text};
 use crate::{choice::choice, error::CliError};
 use mtec_comp::gcode::tooltable::MachineUnits;
-use mtec_comp::gcode::{OnUnsupported, RewriteOptions, Units};
+use mtec_comp::gcode::{default_decimals, OnUnsupported, RewriteOptions, Units};
 use mtec_workflow::ops::compensate_gcode::{self, Options};
 use mtec_workflow::ops::selective::Elements;
 use mtec_workflow::rs274::Rs274;
@@ -52,12 +52,14 @@ pub struct Args {
     /// Units before the program's first G20/G21 (the controller's power-on default).
     #[arg(long, value_parser = choice::<Units>(), default_value = "mm")]
     pub default_units: Units,
-    /// Digits after the point of rewritten words in mm programs.
-    #[arg(long, default_value_t = 4)]
-    pub decimals_mm: usize,
-    /// Digits after the point of rewritten words in inch programs.
-    #[arg(long, default_value_t = 5)]
-    pub decimals_inch: usize,
+    /// Digits after the point of rewritten words in mm programs [default: 4, more if
+    /// --tolerance-um needs them].
+    #[arg(long)]
+    pub decimals_mm: Option<usize>,
+    /// Digits after the point of rewritten words in inch programs [default: 5, more if
+    /// --tolerance-um needs them].
+    #[arg(long)]
+    pub decimals_inch: Option<usize>,
     /// Machine position at program start, "x,y,z" in mm (e.g. home; on a lathe the fixed Y).
     #[arg(long, value_name = "X,Y,Z")]
     pub start_position_mm: Option<String>,
@@ -149,8 +151,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
         max_correction_um: args.max_correction_um,
         on_unsupported: args.on_unsupported,
         default_units: args.default_units,
-        decimals_mm: args.decimals_mm,
-        decimals_inch: args.decimals_inch,
+        decimals_mm: args
+            .decimals_mm
+            .unwrap_or_else(|| default_decimals(Units::Mm, args.tolerance_um)),
+        decimals_inch: args
+            .decimals_inch
+            .unwrap_or_else(|| default_decimals(Units::Inch, args.tolerance_um)),
         check_step_mm: args.check_step_mm,
         check_step_deg: args.check_step_deg,
         max_line_chars: args.max_line_chars,

@@ -93,7 +93,7 @@ pub mod tooltable;
 pub use code::GCode;
 pub use offsets::{Offsets, OffsetsFile};
 pub use rewrite::{
-    header_comment, rewrite, BlockDelete, Diagnostic, GcodeError, OnUnsupported, OutsidePoint,
-    ProblemKind, RewriteOptions, RewriteReport, Units,
+    default_decimals, header_comment, rewrite, BlockDelete, Diagnostic, GcodeError, OnUnsupported,
+    OutsidePoint, ProblemKind, RewriteOptions, RewriteReport, Units,
 };
 pub use solve::{correction_mm, SolveError};

@@ -41,7 +41,8 @@ mod words;
 
 pub use emit::header_comment;
 pub use options::{
-    rounding_um, BlockDelete, OnUnsupported, RewriteOptions, Units, LINUXCNC_MAX_LINE_CHARS,
+    default_decimals, rounding_um, BlockDelete, OnUnsupported, RewriteOptions, Units,
+    LINUXCNC_MAX_LINE_CHARS,
 };
 pub use report::{
     Diagnostic, GcodeError, OutsidePoint, ProblemKind, RewriteReport, MAX_WARNINGS_KEPT,

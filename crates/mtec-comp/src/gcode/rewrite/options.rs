@@ -91,8 +91,8 @@ impl Default for RewriteOptions {
             chord_tolerance_um: 0.5,
             max_correction_um: 500.0,
             on_unsupported: OnUnsupported::Refuse,
-            decimals_mm: 4,
-            decimals_inch: 5,
+            decimals_mm: default_decimals(Units::Mm, 0.5),
+            decimals_inch: default_decimals(Units::Inch, 0.5),
             default_units: Units::Mm,
             offsets: Offsets::default(),
             max_pieces_per_move: 100_000,
@@ -172,6 +172,20 @@ pub const LINUXCNC_MAX_LINE_CHARS: usize = 251;
 /// digits: half a unit of the last digit on each of three axes, √3·½·10⁻ᵈ program units.
 pub fn rounding_um(decimals: usize, units: Units) -> f64 {
     3f64.sqrt() * 0.5 * 10f64.powi(-(decimals as i32)) * units.mm_per_unit() * 1e3
+}
+
+/// The digits written when the user gives none: 4 in mm and 5 in inch (LinuxCNC's own
+/// precision and one more), or the fewest whose rounding leaves half of `tolerance_um` to
+/// the correction when the tolerance asks for more (`--tolerance-um 0.2` writes 6 inch
+/// decimals instead of refusing a program that may never switch to inch).
+pub fn default_decimals(units: Units, tolerance_um: f64) -> usize {
+    let base = match units {
+        Units::Mm => 4,
+        Units::Inch => 5,
+    };
+    (base..=9)
+        .find(|&k| rounding_um(k, units) <= tolerance_um / 2.0)
+        .unwrap_or(base)
 }
 
 /// [`rounding_um`] of the digits written in `units` (mm unless known to be inch).
