@@ -447,7 +447,32 @@ fn split_moves_under_a_naive_cam_tolerance_are_warned_about_once() {
     assert_eq!(w.len(), 1, "{w:?}");
     assert_eq!(w[0].0, 5);
     assert!(w[0].2.contains("0.0127 mm"), "{}", w[0].2);
+    // G64 in a block that sets offsets or goes to the reference point still sets the tolerance
+    for (program, line) in [
+        (
+            "G21 G90\nG0 X0 Y0 Z0\nG92 X0 Y0 Z0 G64 P0.5\nG1 X100 F500\nM2\n",
+            3,
+        ),
+        (
+            "G21 G90\nG0 X0 Y0 Z0\nG52 X0 G64 P0.5\nG1 X100 F500\nM2\n",
+            3,
+        ),
+        (
+            "G21 G90\nG0 X0 Y0 Z0\nG10 L2 P1 X0 G64 Q0.5\nG1 X100 F500\nM2\n",
+            3,
+        ),
+        ("G21 G90\nG64 P0.5 G28\nG0 X0 Y0 Z0\nG1 X100 F500\nM2\n", 2),
+    ] {
+        let w = warned(program);
+        assert_eq!(w.len(), 1, "{program}: {w:?}");
+        assert!(
+            w[0].2.contains(&format!("G64 of line {line}")),
+            "{}",
+            w[0].2
+        );
+    }
     for quiet in [
+        "G21 G90\nG64 P0.01\nG0 X0 Y0 Z0\nG92 X0 Y0 Z0 G61\nG1 X100 F500\nM2\n",
         "G21 G90\nG64 P0.01 Q0\nG0 X0 Y0 Z0\nG1 X100 F500\nM2\n",
         "G21 G90\nG64 P0.01\nG61\nG0 X0 Y0 Z0\nG1 X100 F500\nM2\n",
         "G21 G90\nG64\nG0 X0 Y0 Z0\nG1 X100 F500\nM2\n",

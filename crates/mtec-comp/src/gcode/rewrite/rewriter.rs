@@ -409,6 +409,11 @@ impl<'a> Rewriter<'a> {
             }
         }
 
+        // G64/G61 take effect in every block LinuxCNC runs, also one that sets offsets, goes to
+        // a reference point or is copied with a warning (found 2026-11-28: `G92 X0 G64 P0.5`
+        // left the naive-CAM warning out)
+        self.follow_path_control(b);
+
         // --- unsupported: refuse, or warn and pass through ----------------------------------
         if !issues.is_empty() {
             let first = issues
@@ -471,7 +476,6 @@ impl<'a> Rewriter<'a> {
             return Ok(true);
         }
 
-        self.follow_path_control(b);
         if let Some(m) = motion {
             self.emitted = false;
             let motion_tok = motion_word.map(|(_, t)| t);
