@@ -8,6 +8,8 @@ INI) step by step:
   {"op": "setp", "pin": "mtec.temp-00", "value": "25.1"} halcmd setp (a pin or parameter)
   {"op": "mdi", "code": "G53 G0 X10"}                    one MDI line, waits until it is done
   {"op": "machine", "value": "off"}                      machine off (or "on")
+  {"op": "program", "file": "p.ngc"}                     runs a program (beside the INI) in
+                                                         AUTO mode to its end, then back to MDI
   {"op": "read", "label": "x10", "pins": [...]}          waits until the pins are steady, reads
                                                          ("steady": false: reads at once)
 
@@ -112,6 +114,29 @@ class Ui:
         )
         self.check_errors(code)
 
+    def program(self, name):
+        """Runs a whole program as the operator's Cycle Start would: the interpreter reads ahead
+        as in production, unlike MDI, which synchronises after every line."""
+        self.c.mode(linuxcnc.MODE_AUTO)
+        self.c.wait_complete()
+        self.c.program_open(os.path.join(HERE, name))
+        self.c.wait_complete()
+        self.c.auto(linuxcnc.AUTO_RUN, 0)
+        self.c.wait_complete()
+        # a short program can be over before the first poll: wait for it to start, or 2 s
+        try:
+            wait_for("start", lambda: self.poll().interp_state != linuxcnc.INTERP_IDLE, 2)
+        except RuntimeError:
+            pass
+        wait_for(
+            "`%s` to finish" % name,
+            lambda: self.poll().interp_state == linuxcnc.INTERP_IDLE and self.s.inpos,
+            120,
+        )
+        self.check_errors(name)
+        self.c.mode(linuxcnc.MODE_MDI)
+        self.c.wait_complete()
+
     def halcmd(self, *args):
         out = subprocess.run(["halcmd", *args], capture_output=True, text=True, timeout=20)
         if out.returncode != 0:
@@ -148,6 +173,8 @@ class Ui:
             "values": dict(zip(pins, values)),
             "halcmd": dict(zip(pins, texts)),
             "position": list(self.s.position[:3]),
+            "tool_offset": list(self.s.tool_offset[:3]),
+            "tool_in_spindle": self.s.tool_in_spindle,
         }
 
 
@@ -168,6 +195,8 @@ def main():
                 ui.machine(step["value"])
             elif op == "mdi":
                 ui.mdi(step["code"])
+            elif op == "program":
+                ui.program(step["file"])
             elif op == "read":
                 result["steps"].append(
                     ui.read(step["label"], step["pins"], step.get("steady", True))

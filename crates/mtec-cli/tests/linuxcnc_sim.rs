@@ -732,3 +732,102 @@ fn eoffset_component_puts_the_tool_on_the_commanded_position() {
     );
     assert!(largest[1] > 10.0, "the thermal part should be real");
 }
+
+/// `M61 Q4` then a G43 without H: LinuxCNC takes tool 4's length (stand-alone rs274 keeps the
+/// length of the tool loaded before, T1: found 2026-11-28, mtec followed rs274 and corrected
+/// the move as if the tool tip stood 9.489 mm lower). The compensated program runs in AUTO mode
+/// in the simulation; the height the controller reaches (its tool offset and position, not
+/// mtec's) must be the one mtec corrected for: with e_x = 1 um per mm of machine Z, the
+/// rewritten X of each move is −z/1000 of the position LinuxCNC went to.
+#[test]
+fn g43_after_m61_takes_the_m61_tools_length_in_the_controller_and_in_the_rewrite() {
+    let dir = tempfile::tempdir().unwrap();
+    let work = dir.path();
+    let stock = Path::new("/usr/share/doc/linuxcnc/examples/sample-configs/sim/sim_mm.tbl");
+    if !stock.exists() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "LinuxCNC's sim_mm.tbl is required in CI"
+        );
+        eprintln!("note: LinuxCNC not installed: simulation test skipped");
+        return;
+    }
+    std::fs::copy(stock, work.join("tools.tbl")).unwrap();
+    std::fs::write(
+        work.join("slope.json"),
+        r#"{"format": "mtec.poly-model/1", "description": "x error grows with z",
+            "terms": [{"powers": [0,0,1], "coef_um": [1.0, 0.0, 0.0]}]}"#,
+    )
+    .unwrap();
+    // sim_mm.tbl: T1 Z0.511, T4 Z10; one program per height so each ends where it is read
+    let programs = [
+        ("t1.ngc", "G21 G90 G17\nT1 M6\nG43\nG0 X0 Y0 Z-5\nM2\n"),
+        (
+            "t4.ngc",
+            "G21 G90 G17\nT1 M6\nG43\nG0 X0 Y0 Z-5\nM61 Q4\nG43\nG0 X0 Y0 Z-6\nM2\n",
+        ),
+    ];
+    let mut rewritten_x = Vec::new();
+    for (name, text) in programs {
+        std::fs::write(work.join(name), text).unwrap();
+        let out = format!("comp-{name}");
+        mtec(
+            work,
+            &[
+                "compensate",
+                "gcode",
+                "--model",
+                "slope.json",
+                "--tool-table",
+                "tools.tbl",
+                "--machine-units",
+                "mm",
+                "--start-position-mm",
+                "0,0,0",
+                name,
+                "-o",
+                &out,
+            ],
+        );
+        let comp = std::fs::read_to_string(work.join(&out)).unwrap();
+        let last_move = comp.lines().rfind(|l| l.starts_with("G0 X")).unwrap();
+        let x: f64 = last_move[4..].split(' ').next().unwrap().parse().unwrap();
+        rewritten_x.push(x);
+    }
+    let case = json!({"files": ["comp-t1.ngc", "comp-t4.ngc"]});
+    // G54 and G92 zero, so that program + tool length is the machine position mtec assumed
+    // without --offsets
+    let mut plan = vec![
+        json!({"op": "mdi", "code": "G10 L2 P1 X0 Y0 Z0"}),
+        json!({"op": "mdi", "code": "G92.1"}),
+        json!({"op": "mdi", "code": "G54"}),
+    ];
+    for name in ["comp-t1.ngc", "comp-t4.ngc"] {
+        plan.push(json!({"op": "program", "file": name}));
+        plan.push(json!({"op": "read", "label": name, "pins": ["joint.2.motor-pos-cmd"]}));
+    }
+    let Some(results) = run_sim(work, &case, &plan) else {
+        return;
+    };
+    let steps = results["steps"].as_array().unwrap();
+    assert_eq!(steps.len(), 2);
+    for ((step, x), (tool_length, z_program)) in steps
+        .iter()
+        .zip(&rewritten_x)
+        .zip([(0.511, -5.0), (10.0, -6.0)])
+    {
+        let z = step["position"][2].as_f64().unwrap();
+        let offset = step["tool_offset"][2].as_f64().unwrap();
+        eprintln!(
+            "{}: LinuxCNC tool offset {offset} mm, machine Z {z} mm; mtec wrote X{x}",
+            step["label"]
+        );
+        assert!((offset - tool_length).abs() < 1e-9, "{step}");
+        assert!((z - (z_program + tool_length)).abs() < 1e-6, "{step}");
+        // the correction −e_x(z) = −z um, rounded to the 4 decimals written
+        assert!(
+            (x - (-z * 1e-3)).abs() <= 0.5e-4 + 1e-12,
+            "X{x} for machine Z {z}"
+        );
+    }
+}

@@ -370,3 +370,36 @@ fn g10_l1_takes_effect_at_the_next_g43() {
         .collect::<Vec<_>>();
     assert_eq!(z, vec![50.0, 60.0, 50.8]);
 }
+
+/// `M61 Q n` puts tool n in the spindle without a change: a later G43 without H takes tool n's
+/// length on LinuxCNC (its simulation, AUTO and MDI: crates/mtec-cli/tests/linuxcnc_sim.rs),
+/// while stand-alone rs274 keeps the tool loaded before. With e_x = 1 um per mm of machine Z
+/// the rewritten X tells which length the rewriter took.
+#[test]
+fn m61_sets_the_tool_a_bare_g43_takes() {
+    struct Slope;
+    impl ErrorModel for Slope {
+        fn error_um(&self, p: [f64; 3]) -> [f64; 3] {
+            [p[2], 0.0, 0.0]
+        }
+        fn describe(&self) -> String {
+            "slope".into()
+        }
+    }
+    let o = RewriteOptions {
+        offsets: mtec_comp::gcode::Offsets {
+            tool_length_mm: [(1, 0.5), (4, 10.0)].into(),
+            ..Default::default()
+        },
+        ..opts()
+    };
+    let p = "G21 G90\nT1 M6\nG43\nG0 X0 Y0 Z-5\nM61 Q4\nG43\nG0 X0 Y0 Z-6\nM2\n";
+    let out = rewrite_str(p, &Slope, &o);
+    let xs: Vec<&str> = out
+        .lines()
+        .filter(|l| l.starts_with("G0 X"))
+        .map(|l| l.split(' ').nth(1).unwrap())
+        .collect();
+    // machine Z: −5 + 0.5, then −6 + 10 (tool 4; tool 1 would give −5.5 and X0.0055)
+    assert_eq!(xs, vec!["X0.0045", "X-0.004"], "{out}");
+}

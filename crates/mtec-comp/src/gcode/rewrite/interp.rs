@@ -371,6 +371,15 @@ impl State {
         if b.has_m(6).is_some() {
             st.current_tool = st.selected_tool;
         }
+        // M61 Q n puts tool n in the spindle without a change: a later G43 without H takes its
+        // length on the controller (checked in LinuxCNC's simulation, MDI and AUTO), although
+        // stand-alone rs274 keeps the length of the tool loaded before
+        if b.has_m(61).is_some() {
+            st.current_tool = match b.word(b'Q').map(|q| q.value) {
+                Some(Value::Number(v)) if v >= 0.0 && v.fract() == 0.0 && v < 1e9 => Some(v as u32),
+                _ => None,
+            };
+        }
         for &(code, tok) in &b.g {
             use GCode::*;
             match code {
