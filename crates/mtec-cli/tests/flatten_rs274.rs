@@ -918,6 +918,26 @@ fn tool_lengths_come_from_the_user_only() {
         "G21 G90\nG49\nT1 M6\nG43\nG0 X1 Y1 Z5\nG1 Z-1 F100\nM2\n",
     );
     check(&bin, &after, Some(&table), None, &[], &Expect::Same);
+    // M61 Q2 then a bare G43: LinuxCNC takes tool 2's length (checked in its simulation:
+    // linuxcnc_sim.rs), stand-alone rs274 tool 1's, which flattening would have baked in
+    let two = write("two.tbl", "T1 P1 Z0.5 D0.25\nT2 P2 Z1.5 D0.25\n");
+    let m61 = write(
+        "m61.ngc",
+        "G21 G90\nT1 M6\nG43\nG0 X1 Y1 Z5\nM61 Q2\nG43 (bare)\nG0 Z4\nM2\n",
+    );
+    let (code, msg, out) = run(&m61, &[&two], "--tool-table");
+    assert_eq!(code, Some(2), "{msg}");
+    assert!(
+        msg.contains("m61.ngc:6:1:") && msg.contains("G43 without H after an M61"),
+        "{msg}"
+    );
+    assert!(out.is_none());
+    // G43 H2 names the tool: both take its length, flattened to the same motion
+    let named = write(
+        "m61h.ngc",
+        "G21 G90\nT1 M6\nG43\nG0 X1 Y1 Z5\nM61 Q2\nG43 H2\nG0 Z4\nM2\n",
+    );
+    check(&bin, &named, Some(&two), None, &[], &Expect::Same);
 }
 
 /// Stand-alone rs274 given no parameter file starts in G54 with a zero table, and flattening

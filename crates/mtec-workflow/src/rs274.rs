@@ -367,6 +367,27 @@ fn unknown_tool_length_used(canon: &str) -> Option<usize> {
     })
 }
 
+/// The canonical numbers of the tool length offsets (`USE_TOOL_LENGTH_OFFSET`) taken after an
+/// M61 (`CHANGE_TOOL_NUMBER`) with no tool change (`CHANGE_TOOL`) between. For a G43 without H
+/// there, stand-alone rs274 takes the length of the tool loaded before the M61 and LinuxCNC the
+/// M61 tool's (checked in LinuxCNC's simulation, 2026-11-28).
+fn offsets_after_m61(canon: &str) -> Vec<usize> {
+    let mut after_m61 = false;
+    let mut out = Vec::new();
+    for l in canon.lines() {
+        if l.contains("CHANGE_TOOL_NUMBER(") {
+            after_m61 = true;
+        } else if l.contains("CHANGE_TOOL(") {
+            after_m61 = false;
+        } else if after_m61 && l.contains("USE_TOOL_LENGTH_OFFSET(") {
+            if let Some(k) = l.split_whitespace().next().and_then(|k| k.parse().ok()) {
+                out.push(k);
+            }
+        }
+    }
+    out
+}
+
 /// Where in `program` rs274 stopped: rs274 prints the offending line last on stderr; when
 /// exactly one line of the program reads the same (blanks around it ignored), its 1-based line
 /// and the column of the first non-blank, or of the character a "Bad character 'c' used" names.
@@ -747,6 +768,25 @@ pub fn flatten_input(input: &Path, args: &FlattenInputs) -> Result<Flattened, Cl
         if tool_run.status != Some(0) || tool_length_offsets(&tool_run.stdout) != offsets {
             let message = "a tool length offset depends on the tool in the spindle when the program starts (a G43 without H, or an M6 without T, before the first T… M6), which mtec does not know and stand-alone rs274 takes for tool 0: write G43 Hn, or a T… M6 before it";
             return Err(located(input, bare_g43(&program), message).into());
+        }
+    }
+    // 5. a G43 without H after an M61 Q: rs274 and LinuxCNC take different tools' lengths
+    let bare_g43_lines: Vec<(usize, usize)> = g_words(&program)
+        .into_iter()
+        .filter(|w| w.code == 430 && !w.has_h)
+        .map(|w| (w.line, w.column))
+        .collect();
+    if !bare_g43_lines.is_empty() {
+        for k in offsets_after_m61(&run.stdout) {
+            let at = match source_of(k) {
+                Some((line, _)) => bare_g43_lines.iter().find(|&&(l, _)| l == line).copied(),
+                // not traced to its block: any G43 without H may be it
+                None => bare_g43_lines.first().copied(),
+            };
+            if let Some(at) = at {
+                let message = "a G43 without H after an M61 Q: LinuxCNC takes the length of the M61 tool, stand-alone rs274 that of the tool loaded before, so the flattened program would move to another height: write G43 Hn (n the M61 tool), or compensate without --flatten-with (the rewriter follows M61)";
+                return Err(located(input, Some(at), message).into());
+            }
         }
     }
     let held = held_axes(&run.stdout, &probe_run.stdout);
