@@ -676,3 +676,45 @@ fn a_program_without_an_end_is_warned_about_once() {
         assert_eq!(rep.warnings_total, 0, "{ended:?}: {:?}", rep.warnings);
     }
 }
+
+/// M0, M1, M2, M30 and M60 act after the block's motion (LinuxCNC's order of execution), so a
+/// move written as several pieces carries them after its last piece; words that act before the
+/// motion (M5 here) stay on the first. Before (found 2026-11-28, random blocks seed 8),
+/// `G1 M2` split in two ended the program after the first piece.
+#[test]
+fn stops_follow_the_last_piece_of_a_split_move() {
+    struct Bend;
+    impl ErrorModel for Bend {
+        fn error_um(&self, p: [f64; 3]) -> [f64; 3] {
+            [0.0, 1e-3 * p[0] * p[0], 0.0]
+        }
+        fn describe(&self) -> String {
+            "bend".into()
+        }
+    }
+    let opts = RewriteOptions::default();
+    for stop in ["M0", "M1", "M2", "M30", "M60", "m 30"] {
+        let program = format!("G21 G90\nG0 X0 Y0 Z0\nF500 S100 M3\nG1 X60 M5 {stop} (c)\nM2\n");
+        let (out, _) = run(&program, &Bend, &opts);
+        let lines: Vec<&str> = out.lines().filter(|l| !l.starts_with("(mtec")).collect();
+        let first = lines.iter().position(|l| l.contains("(c)")).unwrap();
+        let stop_at = lines.iter().position(|l| *l == stop).unwrap();
+        assert!(
+            lines[first].contains("M5") && !lines[first].contains(stop),
+            "{out}"
+        );
+        // every piece between, then the stop, then the program's own end
+        assert!(stop_at > first + 1, "{out}");
+        assert!(
+            lines[first + 1..stop_at]
+                .iter()
+                .all(|l| l.starts_with("G1 X")),
+            "{out}"
+        );
+        assert!(lines[stop_at - 1].starts_with("G1 X60"), "{out}");
+        assert_eq!(lines[stop_at + 1..], ["M2"], "{out}");
+    }
+    // a move written as one line keeps its stop
+    let (out, _) = run("G21 G90\nG0 X0 Y0 Z0\nG1 X0.5 F500 M0\nM2\n", &Bend, &opts);
+    assert!(out.contains("\nG1 X0.5 F500 M0\n"), "{out}");
+}

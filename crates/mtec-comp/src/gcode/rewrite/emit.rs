@@ -398,6 +398,27 @@ impl Rewriter<'_> {
         Some(s)
     }
 
+    /// M0, M1, M2, M30 and M60 run after the block's motion (LinuxCNC's order of execution:
+    /// stops last): when the block is written as several lines they leave the original line
+    /// and follow the last one, on a line of their own. Before (found 2026-11-28 with random
+    /// blocks), `G1 M2` split in two ended the program after the first piece.
+    pub(super) fn move_stops_after_the_move(&mut self, b: &Block, body: &[u8]) {
+        for &(code, tok) in &b.m {
+            if !matches!(code, 0 | 1 | 2 | 30 | 60) {
+                continue;
+            }
+            let span = self.tokens[tok].span.clone();
+            let text = String::from_utf8_lossy(&body[span.clone()]).into_owned();
+            let span = self.removal_span(body, span);
+            self.edits.push(Edit {
+                span,
+                text: String::new(),
+                order: 0,
+            });
+            self.extra_lines.push(text);
+        }
+    }
+
     /// The span to delete for a removed word: with the blanks before it, or (when it starts
     /// the line) with the blanks after it, so no double or leading blank is left.
     fn removal_span(&self, body: &[u8], span: std::ops::Range<usize>) -> std::ops::Range<usize> {

@@ -481,6 +481,9 @@ impl<'a> Rewriter<'a> {
             let motion_tok = motion_word.map(|(_, t)| t);
             let linearised = self.report.arcs_linearised;
             self.motion_block(b, body, m, motion_tok, g53)?;
+            if !self.extra_lines.is_empty() {
+                self.move_stops_after_the_move(b, body);
+            }
             let straight_pieces = m == Motion::Linear || self.report.arcs_linearised > linearised;
             if straight_pieces && !self.extra_lines.is_empty() {
                 self.warn_naive_cam(motion_tok.or(b.first_word));
