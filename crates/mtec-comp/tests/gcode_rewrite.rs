@@ -9,6 +9,17 @@ use mtec_comp::gcode::{
 use mtec_comp::ErrorModel;
 use std::collections::BTreeMap;
 
+/// e_y = 0.001·x² µm: a smooth bend that splits long moves along X into pieces.
+struct Bend;
+impl ErrorModel for Bend {
+    fn error_um(&self, p: [f64; 3]) -> [f64; 3] {
+        [0.0, 1e-3 * p[0] * p[0], 0.0]
+    }
+    fn describe(&self) -> String {
+        "bend".into()
+    }
+}
+
 fn run(input: &str, model: &dyn ErrorModel, opts: &RewriteOptions) -> (String, RewriteReport) {
     let mut out = Vec::new();
     let rep = rewrite(input.as_bytes(), &mut out, model, opts).unwrap();
@@ -413,15 +424,6 @@ fn a_tape_mark_after_the_first_line_is_refused_as_linuxcnc_refuses_it() {
 /// one piece give no warning.
 #[test]
 fn split_moves_under_a_naive_cam_tolerance_are_warned_about_once() {
-    struct Bend;
-    impl ErrorModel for Bend {
-        fn error_um(&self, p: [f64; 3]) -> [f64; 3] {
-            [0.0, 1e-3 * p[0] * p[0], 0.0]
-        }
-        fn describe(&self) -> String {
-            "bend".into()
-        }
-    }
     let opts = RewriteOptions {
         start_position_mm: Some([0.0; 3]),
         ..RewriteOptions::default()
@@ -683,15 +685,6 @@ fn a_program_without_an_end_is_warned_about_once() {
 /// `G1 M2` split in two ended the program after the first piece.
 #[test]
 fn stops_follow_the_last_piece_of_a_split_move() {
-    struct Bend;
-    impl ErrorModel for Bend {
-        fn error_um(&self, p: [f64; 3]) -> [f64; 3] {
-            [0.0, 1e-3 * p[0] * p[0], 0.0]
-        }
-        fn describe(&self) -> String {
-            "bend".into()
-        }
-    }
     let opts = RewriteOptions::default();
     for stop in ["M0", "M1", "M2", "M30", "M60", "m 30"] {
         let program = format!("G21 G90\nG0 X0 Y0 Z0\nF500 S100 M3\nG1 X60 M5 {stop} (c)\nM2\n");
