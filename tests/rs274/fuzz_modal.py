@@ -5,11 +5,21 @@ reachable radius, or centre words giving a half circle, with a helical rise and 
 plus cosmetic variation (lower case, N numbers, comments, no spaces). Run the result through
 run_all.py (also with --flatten always).
 
-usage: python3 fuzz_modal.py SEED COUNT OUT_DIR
+usage: python3 fuzz_modal.py SEED COUNT OUT_DIR [words]
+
+With `words` (added 2026-11-28, after a stop on a split move was found), a fifth of the moves
+and arcs also carry words LinuxCNC runs before the motion (M3/M5, M7/M8/M9, S, G4 P) or after
+it (M0, M1, M60), and some programs end with M30 on their last move; without it the programs of
+a seed are as before.
 """
 import random, sys, os
 seed=int(sys.argv[1]); n=int(sys.argv[2]); out=sys.argv[3]
+words=len(sys.argv) > 4 and sys.argv[4] == "words"
 rnd=random.Random(seed); os.makedirs(out, exist_ok=True)
+wrnd=random.Random(seed + 1000003)  # its own stream: the programs' moves stay those of the seed
+def extra():
+    if not words or wrnd.random() >= 0.2: return ""
+    return " " + wrnd.choice(["M0", "M1", "M60", "M5", "M3 S800", "M8", "M9", "M7", "G4 P0.1", "M5 M0", "M9 M1"])
 def f(v): return f"{v:.4f}".rstrip('0').rstrip('.') if rnd.random()<0.7 else f"{v:.3f}"
 for i in range(n):
     L=['G21 G90 G17 G94 G40 G49 G80','G0 X0 Y0 Z0','S1000 M3','F300']
@@ -49,20 +59,23 @@ for i in range(n):
             g=rnd.choice(['G2','G3'])
             if rnd.random()<0.5:
                 d=(da*da+db*db)**0.5; r=d/2*rnd.uniform(1.05,3); r=-r if rnd.random()<0.3 else r
-                L.append(f"G91 {g} {a}{f(da)} {b}{f(db)} R{f(r)}" + ("" if st['inc'] else "\nG90"))
+                L.append(f"G91 {g} {a}{f(da)} {b}{f(db)} R{f(r)}" + extra() + ("" if st['inc'] else "\nG90"))
             else:
                 # centre words (incremental IJK default), end = start + 2*centre -> half circle
                 third={17:'Z',18:'Y',19:'X'}[p]
                 hel=f" {third}{f(rnd.uniform(-2,2)*s)}" if rnd.random()<0.4 else ""
                 turns=f" P{rnd.choice([1,2])}" if rnd.random()<0.2 else ""
-                L.append(f"G91 {g} {a}{f(2*da)} {b}{f(2*db)}{hel} {ci[0]}{f(da)} {ci[1]}{f(db)}{turns}" + ("" if st['inc'] else "\nG90"))
+                L.append(f"G91 {g} {a}{f(2*da)} {b}{f(2*db)}{hel} {ci[0]}{f(da)} {ci[1]}{f(db)}{turns}" + extra() + ("" if st['inc'] else "\nG90"))
         else:
             g=rnd.choice(['G0','G1','G1','G1'])
             if st['inc']:
-                L.append(f"{g} X{f(rnd.uniform(-10,10)*s)} Y{f(rnd.uniform(-10,10)*s)}" + (f" Z{f(rnd.uniform(-2,2)*s)}" if rnd.random()<0.3 else ""))
+                L.append(f"{g} X{f(rnd.uniform(-10,10)*s)} Y{f(rnd.uniform(-10,10)*s)}" + (f" Z{f(rnd.uniform(-2,2)*s)}" if rnd.random()<0.3 else "") + extra())
             else:
-                L.append(f"{g} X{f(rnd.uniform(-30,30)*s)} Y{f(rnd.uniform(-30,30)*s)}" + (f" Z{f(rnd.uniform(-5,5)*s)}" if rnd.random()<0.3 else ""))
-    L.append('M2')
+                L.append(f"{g} X{f(rnd.uniform(-30,30)*s)} Y{f(rnd.uniform(-30,30)*s)}" + (f" Z{f(rnd.uniform(-5,5)*s)}" if rnd.random()<0.3 else "") + extra())
+    if words and wrnd.random() < 0.3:
+        L.append("G90 G1 X40 Y-35 M30")
+    else:
+        L.append('M2')
     def cosm(line):
         if rnd.random()<0.15: line=line.lower()
         if rnd.random()<0.1: line=f"N{rnd.randint(1,99999)} "+line
