@@ -711,3 +711,40 @@ fn stops_follow_the_last_piece_of_a_split_move() {
     let (out, _) = run("G21 G90\nG0 X0 Y0 Z0\nG1 X0.5 F500 M0\nM2\n", &Bend, &opts);
     assert!(out.contains("\nG1 X0.5 F500 M0\n"), "{out}");
 }
+
+/// A move before the program states its units or distance mode is compensated for
+/// `--default-units` and G90, LinuxCNC's start-up modes, but the controller keeps what the last
+/// program or MDI command left: warned once, at that move, naming what is missing.
+#[test]
+fn a_move_before_the_units_or_distance_mode_are_stated_is_warned_about() {
+    let opts = RewriteOptions::default();
+    let warned = |program: &str| -> Vec<(usize, String)> {
+        let (_, rep) = run(program, &Bend, &opts);
+        rep.warnings
+            .iter()
+            .filter(|d| d.message.contains("before the program states"))
+            .map(|d| (d.line, d.message.clone()))
+            .collect()
+    };
+    let w = warned("G0 X0 Y0 Z0\nG1 X10 F100\nG21 G90\nG1 X20\nM2\n");
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert_eq!(w[0].0, 1);
+    assert!(w[0].1.contains("units and distance mode"), "{}", w[0].1);
+    let w = warned("G21\nG0 X0 Y0 Z0\nM2\n");
+    assert!(
+        w.len() == 1 && w[0].1.contains("its distance mode: taken as G90"),
+        "{w:?}"
+    );
+    let w = warned("G90\nG0 X0 Y0 Z0\nF100 G1 X1\nM2\n");
+    assert!(
+        w.len() == 1 && w[0].1.contains("its units: taken as G21"),
+        "{w:?}"
+    );
+    // stated in the same block as the first move, or before it: quiet
+    for quiet in [
+        "G21 G90 G0 X0 Y0 Z0\nM2\n",
+        "G20\nG90\nG0 X0 Y0 Z0\nG91\nF10\nG1 X1\nM2\n",
+    ] {
+        assert_eq!(warned(quiet), vec![], "{quiet}");
+    }
+}

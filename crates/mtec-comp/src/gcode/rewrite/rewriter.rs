@@ -10,7 +10,7 @@ use super::super::expr::{for_each_system_parameter_range, LineValues, Params};
 use super::super::format::Edit;
 use super::super::lexer::{lex_line, Token, TokenKind, Value};
 use super::interp::{Interpreted, Motion, State};
-use super::options::{rounding_in_effect_um, BlockDelete, OnUnsupported, RewriteOptions};
+use super::options::{rounding_in_effect_um, BlockDelete, OnUnsupported, RewriteOptions, Units};
 use super::piece::{EmittedEnd, Piece, RotaryMove};
 use super::planner::{At, Planner};
 use super::report::{Diagnostic, GcodeError, ProblemKind, RewriteReport, MAX_WARNINGS_KEPT};
@@ -62,6 +62,10 @@ pub(super) struct Rewriter<'a> {
     pub(super) naive_cam: Option<(f64, usize)>,
     /// The naive-CAM warning was given (once per program).
     pub(super) naive_cam_warned: bool,
+    /// The program has stated its units (G20/G21) and its distance mode (G90/G91).
+    pub(super) modes_stated: [bool; 2],
+    /// The warning that a move came before them was given (once per program).
+    pub(super) modes_warned: bool,
 }
 
 impl<'a> Rewriter<'a> {
@@ -90,6 +94,8 @@ impl<'a> Rewriter<'a> {
             params_lost: false,
             naive_cam: None,
             naive_cam_warned: false,
+            modes_stated: [false; 2],
+            modes_warned: false,
             block: None,
             planner: Planner::new(model, opt),
             pieces: Vec::new(),
@@ -186,6 +192,34 @@ impl<'a> Rewriter<'a> {
             let q = number(b'Q').or(number(b'P')).unwrap_or(0.0) * mm;
             self.naive_cam = (q > 0.0).then_some((q, self.line_no));
         }
+    }
+
+    /// Warns (once) at the first move that comes before the program states its units or its
+    /// distance mode: they are taken as `--default-units` and G90, LinuxCNC's start-up modes,
+    /// but the controller keeps the modes the previous program or an MDI command left.
+    fn warn_assumed_modes(&mut self, b: &Block, moves: bool) {
+        use GCode::*;
+        self.modes_stated[0] |= b.has_g(G20).or(b.has_g(G21)).is_some();
+        self.modes_stated[1] |= b.has_g(G90).or(b.has_g(G91)).is_some();
+        if !moves || self.modes_warned || self.modes_stated == [true; 2] {
+            return;
+        }
+        self.modes_warned = true;
+        let units = match self.opt.default_units {
+            Units::Mm => "G21 (mm, --default-units)",
+            Units::Inch => "G20 (inch, --default-units)",
+        };
+        let missing = match self.modes_stated {
+            [false, false] => format!("its units and distance mode: taken as {units} and G90"),
+            [false, true] => format!("its units: taken as {units}"),
+            _ => "its distance mode: taken as G90".to_string(),
+        };
+        let d = self.diag(
+            self.column_of(b.first_word),
+            ProblemKind::Controller,
+            format!("this move comes before the program states {missing}, LinuxCNC's start-up modes; the controller keeps the modes the previous program or an MDI command left, and the program and its compensation run differently in others: state them before the first move (e.g. G21 G90)"),
+        );
+        self.warn(d);
     }
 
     /// Warns (once) that the pieces just written may be merged back into one line by the
@@ -413,6 +447,7 @@ impl<'a> Rewriter<'a> {
         // a reference point or is copied with a warning (found 2026-11-28: `G92 X0 G64 P0.5`
         // left the naive-CAM warning out)
         self.follow_path_control(b);
+        self.warn_assumed_modes(b, motion.is_some() && has_axis);
 
         // --- unsupported: refuse, or warn and pass through ----------------------------------
         if !issues.is_empty() {
