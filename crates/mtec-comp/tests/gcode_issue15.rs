@@ -324,6 +324,20 @@ fn block_delete_follows_the_operators_switch() {
         0.05,
         0.5e-3,
     );
+    // a split `/` block keeps its `/` on every line it becomes (and on a stop moved after it):
+    // at the other switch position the controller skips all of it, as it skips the original
+    let long = "G21 G90\nG0 X0 Y0 Z0\n/G1 X60 F100 M0\nG1 Y30\nM2\n";
+    let out = run(long, &PolyModel, &off);
+    let block: Vec<&str> = out
+        .lines()
+        .skip_while(|l| !l.starts_with('/'))
+        .take_while(|l| !l.starts_with("G1 Y"))
+        .collect();
+    assert!(
+        block.len() > 2 && block.iter().all(|l| l.starts_with('/')),
+        "{out}"
+    );
+    assert_eq!(block.last(), Some(&"/M0"), "{out}");
 }
 
 /// LinuxCNC's interpreter (rs274, linuxcnc-uspace 2.9) subtracts a tool length offset applied in

@@ -69,7 +69,15 @@ impl Rewriter<'_> {
         if bom {
             self.out_buf.drain(..3); // no edit touches the mark: the lexer starts after it
         }
-        let longest_added = self.extra_lines.iter().map(|l| l.len()).max().unwrap_or(0);
+        // the lines added for a `/` block keep its `/`: at the other switch position the whole
+        // block is skipped, as in the original, instead of all but its first piece
+        let delete = self
+            .tokens
+            .first()
+            .is_some_and(|t| t.kind == TokenKind::BlockDelete);
+        let prefix: &[u8] = if delete { b"/" } else { b"" };
+        let longest_added =
+            self.extra_lines.iter().map(|l| l.len()).max().unwrap_or(0) + prefix.len();
         let edited = self.out_buf.len();
         if (edited > self.opt.max_line_chars && edited > body.len())
             || longest_added > self.opt.max_line_chars
@@ -87,6 +95,7 @@ impl Rewriter<'_> {
         let sep: &[u8] = if ending.is_empty() { b"\n" } else { ending };
         for l in &self.extra_lines {
             self.out_buf.extend_from_slice(sep);
+            self.out_buf.extend_from_slice(prefix);
             self.out_buf.extend_from_slice(l.as_bytes());
         }
         self.out_buf.extend_from_slice(ending);
