@@ -143,6 +143,11 @@ pub(super) fn unused_word(b: &Block, motion_to_be: Option<Motion>) -> Option<(ch
     if matches!(motion_to_be, Some(Motion::Unknown)) {
         return None;
     }
+    // most blocks carry none of these words: answer without looking at the block's codes
+    // (the closure below asks for several G and M codes per letter)
+    if !b"DEHIJKLPQR".iter().any(|&l| b.word(l).is_some()) {
+        return None;
+    }
     let arc = matches!(motion_to_be, Some(Motion::Cw | Motion::Ccw));
     let g = |c: GCode| b.has_g(c).is_some();
     let m = |k: u32| b.has_m(k).is_some();
