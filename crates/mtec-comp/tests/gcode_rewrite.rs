@@ -330,6 +330,38 @@ fn unsupported_constructs_are_refused_with_line_and_column_or_passed_through() {
 }
 
 #[test]
+fn refusals_that_flattening_resolves_say_so_and_only_those() {
+    let hint = "--flatten-with rs274";
+    // LinuxCNC's interpreter turns these into plain moves
+    for input in [
+        "G21\n#5221 = 3\n",
+        "G21\no100 sub\n",
+        "G21 G0 X0 Y0 Z0\nG81 X1 Y1 Z-1 R1\n",
+        "G21 G0 X0 Y0 Z0\nG98 G83 X1 Y1 Z-1 R1 Q0.5\n",
+        "G21\nG41 D1\n",
+        "G21 G0 X0 Y0 Z0\nG92.3\n",
+    ] {
+        let d = refuse(input, &PolyModel, &RewriteOptions::default());
+        assert!(d.message.contains(hint), "{input:?}: {d}");
+    }
+    // flattening changes nothing here: a rotary axis the model lacks, a parameter never set
+    // or a block LinuxCNC refuses, threading, probing, a tool table entry set from the position
+    for input in [
+        "G21 G0 X0 Y0 Z0\nG1 X1 A30 F100\n",
+        "G21\nG0 X0 Y0 Z0\nG1 X#<depth>\n",
+        "G21\nM98 P100\n",
+        "G21 G0 X0 Y0 Z0\nG1 X1\n",
+        "G21 G0 X0 Y0 Z0\nG4\n",
+        "G21 G0 X0 Y0 Z0\nG33 Z-1 K1\n",
+        "G21 G0 X0 Y0 Z0\nG38.2 Z-1 F10\n",
+        "G21 G0 X0 Y0 Z0\nG10 L10 P1 Z3\n",
+    ] {
+        let d = refuse(input, &PolyModel, &RewriteOptions::default());
+        assert!(!d.message.contains(hint), "{input:?}: {d}");
+    }
+}
+
+#[test]
 fn correction_failures_are_errors_at_the_line() {
     let d = refuse(
         "G21\nG0 X0 Y0 Z0\nG0 X30000\n",

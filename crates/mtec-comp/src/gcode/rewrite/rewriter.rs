@@ -15,6 +15,9 @@ use super::piece::{EmittedEnd, Piece, RotaryMove};
 use super::planner::{At, Planner};
 use super::report::{Diagnostic, GcodeError, ProblemKind, RewriteReport, MAX_WARNINGS_KEPT};
 use crate::ErrorModel;
+
+/// Added to the refusal of a construct [`Rewriter::flattening_resolves`] names: what to do.
+const FLATTEN_HINT: &str = "LinuxCNC's interpreter resolves this: add --flatten-with rs274 to run the program through it first and compensate the moves it makes (see compensate gcode --help)";
 use std::io::{BufRead, Write};
 pub(super) struct Rewriter<'a> {
     pub(super) opt: &'a RewriteOptions,
@@ -154,6 +157,52 @@ impl<'a> Rewriter<'a> {
             .and_then(|t| self.tokens.get(t))
             .map(|t| t.span.start + 1)
             .unwrap_or(1)
+    }
+
+    /// True when the refused construct at `token` is one LinuxCNC's interpreter turns into plain
+    /// moves, so that `--flatten-with rs274` compensates the program: O-words, parameter
+    /// assignments, words it could not evaluate here, polar coordinates, cutter compensation,
+    /// the drilling and boring cycles, G92.3. Not a rotary or U/V/W axis, a missing tool length
+    /// or work offset, or a block LinuxCNC itself refuses: flattening does not change those.
+    fn flattening_resolves(&self, token: Option<usize>) -> bool {
+        use GCode::*;
+        let Some(t) = token.and_then(|t| self.tokens.get(t)) else {
+            return false;
+        };
+        match t.kind {
+            TokenKind::OWord { .. } | TokenKind::Assignment { .. } => true,
+            TokenKind::Word {
+                value: Value::Computed,
+                ..
+            } => true,
+            TokenKind::Word {
+                letter: b'@' | b'^',
+                ..
+            } => true,
+            TokenKind::Word {
+                letter: b'G',
+                value: Value::Number(v),
+            } => super::super::code::tenths_of(v).is_some_and(|g| {
+                matches!(
+                    GCode::from_tenths(g),
+                    G41 | G41_1
+                        | G42
+                        | G42_1
+                        | G73
+                        | G81
+                        | G82
+                        | G83
+                        | G84
+                        | G85
+                        | G86
+                        | G87
+                        | G88
+                        | G89
+                        | G92_3
+                )
+            }),
+            _ => false,
+        }
     }
 
     /// Refuses, or records a warning and returns Ok (the caller passes the line through).
@@ -456,10 +505,15 @@ impl<'a> Rewriter<'a> {
                 .min_by_key(|i| self.column_of(i.token))
                 .cloned()
                 .unwrap_or_else(|| issues[0].clone());
+            let message = if self.flattening_resolves(first.token) {
+                format!("{}; {FLATTEN_HINT}", first.message)
+            } else {
+                first.message.clone()
+            };
             let d = self.diag(
                 self.column_of(first.token),
                 ProblemKind::Unsupported,
-                first.message.clone(),
+                message,
             );
             self.unsupported(d)?;
             let mut edited = false;
