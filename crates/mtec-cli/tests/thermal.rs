@@ -332,6 +332,70 @@ fn bad_input_is_located_and_exits_2() {
         stderr(&o)
     );
 
+    // a logger's error code for a failed sensor is refused where it stands, in fit and select
+    // alike (columns: experiment, time_min, spindle_rpm, a_c, b_c, ambient_c, drift_um)
+    let m_out = dir.path().join("out.json");
+    for (row, col) in [
+        ("1,2,0,-9999,20.1,22,0.7", 4),
+        ("1,2,0,20.3,1372,22,0.7", 5),
+        ("1,2,0,20.3,20.1,-273.2,0.7", 6),
+    ] {
+        std::fs::write(
+            &f,
+            format!("experiment,time_min,spindle_rpm,a_c,b_c,ambient_c,drift_um\n1,0,0,20,20,22,0\n1,1,0,20.2,20,22,0.5\n{row}\n"),
+        )
+        .unwrap();
+        let data = f.to_str().unwrap();
+        for args in [
+            vec![
+                "thermal",
+                "fit",
+                "--model",
+                "mlr",
+                "--target",
+                "drift_um",
+                "--data",
+                data,
+                "-o",
+                m_out.to_str().unwrap(),
+            ],
+            vec!["thermal", "select", "--target", "drift_um", "--data", data],
+        ] {
+            let o = mtec(&args);
+            assert_eq!(o.status.code(), Some(2), "{row}: {}", stderr(&o));
+            assert!(
+                stderr(&o).contains(&format!("bad.csv:4:{col}"))
+                    && stderr(&o).contains("no machine tool is at that temperature"),
+                "{row}: {}",
+                stderr(&o)
+            );
+        }
+    }
+    assert!(!m_out.exists());
+    // the limits themselves are temperatures
+    let rows: String = (0..40)
+        .map(|i| {
+            let t = if i == 3 {
+                -60.0
+            } else if i == 7 {
+                300.0
+            } else {
+                20.0 + 0.1 * i as f64
+            };
+            format!("1,{i},{t},{}\n", 0.5 * i as f64)
+        })
+        .collect();
+    std::fs::write(&f, format!("experiment,time_min,a_c,drift_um\n{rows}")).unwrap();
+    let o = mtec(&[
+        "thermal",
+        "select",
+        "--target",
+        "drift_um",
+        "--data",
+        f.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+
     let m = dir.path().join("m.json");
     std::fs::write(&m, "{\"format\": \"mtec.errors/1\"}").unwrap();
     let o = mtec(&[

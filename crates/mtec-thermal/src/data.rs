@@ -39,6 +39,11 @@ pub struct ThermalData {
     pub lines: Vec<usize>,
 }
 
+/// The temperatures a machine tool's structure, coolant, motors and shop air can have (°C): a
+/// value outside is a logger's error code (−9999, −273.2, 9999.9, an open thermocouple's full
+/// scale), not a reading.
+pub const PLAUSIBLE_C: (f64, f64) = (-60.0, 300.0);
+
 /// Normalises a target name: `ch1` and `ch1_um` both mean the column `ch1_um`.
 pub fn target_column(name: &str) -> String {
     if name.ends_with("_um") {
@@ -110,6 +115,35 @@ impl ThermalData {
             }
             None => None,
         };
+        // a logger's error code (−9999, −273.2, an open thermocouple's full scale) is not a
+        // temperature: refused at its line, never fitted
+        let temperature_columns = sensor_names
+            .iter()
+            .map(|s| s.as_str())
+            .chain(ambient_c.as_ref().map(|_| "ambient_c"));
+        for (j, name) in temperature_columns.enumerate() {
+            for i in 0..n {
+                let v = match &ambient_c {
+                    Some(a) if j == sensor_names.len() => a[i],
+                    _ => temps_c[(i, j)],
+                };
+                if !(PLAUSIBLE_C.0..=PLAUSIBLE_C.1).contains(&v) {
+                    let v = if v.abs() < 1e6 {
+                        v.to_string()
+                    } else {
+                        format!("{v:e}")
+                    };
+                    return Err(table.error_at(
+                        &table.rows[i],
+                        name,
+                        format!(
+                            "`{name}` is {v} °C: no machine tool is at that temperature (mtec accepts {}…{} °C); a logger's error code for a disconnected or failed sensor? Remove those rows, or the sensor's column",
+                            PLAUSIBLE_C.0, PLAUSIBLE_C.1
+                        ),
+                    ));
+                }
+            }
+        }
         // time must not decrease within an experiment
         for i in 1..n {
             if experiment[i] == experiment[i - 1] && time_min[i] < time_min[i - 1] {
