@@ -34,6 +34,7 @@
 //! arrays in C order: node (i, j, k) at index (i·ny + j)·nz + k (x slowest, z fastest — the
 //! layout of a NumPy array `values[i, j, k]`).
 
+use mtec_io::plausible::{MAX_ERROR_UM, MAX_POSITION_MM};
 use mtec_io::{InputError, Table};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -212,6 +213,26 @@ impl GridMap {
         {
             return Err(MapShapeError(format!("node value {i} is not finite")));
         }
+        // a metre of error is a unit mistake, not a machine (crate mtec_io::plausible); such a
+        // node would reach a controller table unbounded
+        if let Some(i) = values_um
+            .iter()
+            .position(|v| v.iter().any(|c| c.abs() >= MAX_ERROR_UM))
+        {
+            let [x, y, z] = values_um[i];
+            return Err(MapShapeError(format!(
+                "node value {i} ({x:e}, {y:e}, {z:e}) um is implausible (|error| must be below {MAX_ERROR_UM:e} um): check the unit"
+            )));
+        }
+        if let Some((name, v)) = axes_mm.iter().zip(AXIS_NAMES).find_map(|(a, name)| {
+            a.iter()
+                .find(|v| v.abs() >= MAX_POSITION_MM)
+                .map(|v| (name, v))
+        }) {
+            return Err(MapShapeError(format!(
+                "axis `{name}` has {v:e} mm: implausible (|position| must be below {MAX_POSITION_MM:e} mm): check the unit"
+            )));
+        }
         let mut map = GridMap {
             axes_mm,
             values_um: values_um
@@ -262,8 +283,8 @@ impl GridMap {
             let mut p = [0.0; 3];
             let mut e = [0.0; 3];
             for a in 0..3 {
-                p[a] = table.cell_f64(r, cols[a])?;
-                e[a] = table.cell_f64(r, cols[3 + a])?;
+                p[a] = table.cell_f64_within(r, cols[a], MAX_POSITION_MM, "mm")?;
+                e[a] = table.cell_f64_within(r, cols[3 + a], MAX_ERROR_UM, "um")?;
             }
             rows.push((p, e));
         }
@@ -1124,5 +1145,27 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.0.contains("3 node values"));
+    }
+
+    #[test]
+    fn values_and_axes_no_machine_has_are_refused() {
+        let axes = || [vec![0.0, 10.0], vec![0.0], vec![0.0]];
+        let ok = GridMap::new(
+            axes(),
+            vec![[1.0; 3], [-999_999.0, 0.0, 0.0]],
+            Outside::Clamp,
+            "t",
+        );
+        assert!(ok.is_ok());
+        let e =
+            GridMap::new(axes(), vec![[1.0; 3], [0.0, 1e6, 0.0]], Outside::Clamp, "t").unwrap_err();
+        assert!(
+            e.0.contains("node value 1") && e.0.contains("implausible"),
+            "{}",
+            e.0
+        );
+        let far = [vec![0.0, 1e5], vec![0.0], vec![0.0]];
+        let e = GridMap::new(far, vec![[1.0; 3], [1.0; 3]], Outside::Clamp, "t").unwrap_err();
+        assert!(e.0.contains("axis `x_mm` has 1e5 mm"), "{}", e.0);
     }
 }

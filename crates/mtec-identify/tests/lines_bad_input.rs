@@ -50,6 +50,27 @@ fn misnamed_column_is_named() {
 }
 
 #[test]
+fn readings_and_positions_no_machine_has_are_located() {
+    // a reading of a metre (nm written as um, raw counts) gave NaN everywhere and an empty
+    // error file with exit 0; a position of 1e300 mm made the identification hang
+    let rows = good_rows("X1").replacen(",0.2\n", ",1e6\n", 1);
+    let e = parse(&format!("{HEADER}{rows}")).unwrap_err();
+    assert!(
+        e.starts_with("bad.csv:4:9:") && e.contains("implausible"),
+        "{e}"
+    );
+    let rows = good_rows("X1").replacen("X1,3,310,", "X1,3,1e300,", 1);
+    let e = parse(&format!("{HEADER}{rows}")).unwrap_err();
+    assert!(
+        e.starts_with("bad.csv:5:3:") && e.contains("`x_mm` is 1e300 mm: implausible"),
+        "{e}"
+    );
+    // just inside the bounds: read
+    let rows = good_rows("X1").replacen(",0.2\n", ",-999999\n", 1);
+    assert!(parse(&format!("{HEADER}{rows}")).is_ok());
+}
+
+#[test]
 fn nan_reading_is_located() {
     let mut rows = good_rows("X1");
     rows = rows.replacen(",0.2\n", ",NaN\n", 1);

@@ -16,6 +16,7 @@ mod error;
 mod fields;
 pub mod notes;
 pub mod number;
+pub mod plausible;
 mod stream;
 mod table;
 mod write;

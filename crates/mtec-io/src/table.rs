@@ -99,6 +99,20 @@ impl Table {
         self.view(row).f64(c)
     }
 
+    /// The number in row `row`, column `c`, with |value| below `limit` (`crate::plausible`), or
+    /// a located error naming the bound.
+    pub fn cell_f64_within(
+        &self,
+        row: &TableRow,
+        c: usize,
+        limit: f64,
+        unit: &str,
+    ) -> Result<f64, InputError> {
+        let v = self.cell_f64(row, c)?;
+        crate::plausible::within(&self.header[c], v, limit, unit)
+            .map_err(|m| InputError::at(&self.path, row.line, c + 1, m))
+    }
+
     /// A column of text cells.
     pub fn str_column(&self, name: &str) -> Result<Vec<String>, InputError> {
         let c = self.column(name)?;

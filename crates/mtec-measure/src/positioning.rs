@@ -47,7 +47,7 @@ fn target_key(t: f64) -> i64 {
 }
 
 /// Largest accepted |deviation| (1 m): anything larger is a unit or export mistake.
-pub const MAX_DEVIATION_UM: f64 = 1e6;
+pub const MAX_DEVIATION_UM: f64 = mtec_io::plausible::MAX_ERROR_UM;
 impl PositioningData {
     /// The same runs with every measured position scaled by `factor` (an environmental length
     /// correction, see [`crate::air`]): the measured position P_i + x_ij becomes

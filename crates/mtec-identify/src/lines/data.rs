@@ -19,6 +19,7 @@
 //! - Tolerances: |u| = 1 within 1e-3; `u` the same on every row of a channel within 1e-5; each
 //!   point within 1e-3 mm of the straight line through the channel's end points.
 
+use mtec_io::plausible::{MAX_ERROR_UM, MAX_POSITION_MM};
 use mtec_io::{InputError, Table};
 use mtec_model::Axis;
 
@@ -154,9 +155,9 @@ impl LineData {
                 )
             })?;
             let p = [
-                t.cell_f64(row, c_xyz[0])?,
-                t.cell_f64(row, c_xyz[1])?,
-                t.cell_f64(row, c_xyz[2])?,
+                t.cell_f64_within(row, c_xyz[0], MAX_POSITION_MM, "mm")?,
+                t.cell_f64_within(row, c_xyz[1], MAX_POSITION_MM, "mm")?,
+                t.cell_f64_within(row, c_xyz[2], MAX_POSITION_MM, "mm")?,
             ];
             let u = [
                 t.cell_f64(row, c_u[0])?,
@@ -175,7 +176,7 @@ impl LineData {
                     ),
                 ));
             }
-            let reading = t.cell_f64(row, c_read)?;
+            let reading = t.cell_f64_within(row, c_read, MAX_ERROR_UM, "um")?;
             let run = match c_run {
                 None => 1,
                 Some(c) => {
