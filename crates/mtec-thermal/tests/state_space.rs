@@ -85,7 +85,7 @@ impl Network {
 fn record(net: &Network) -> (ThermalData, Vec<f64>) {
     // 15-s samples; the spindle steps every 100 min through speeds no model saw in order
     let speeds = [0.0, 2000.0, 4000.0, 0.0, 3000.0, 1000.0, 0.0, 4500.0, 0.0];
-    let n = (speeds.len() * 400) as usize;
+    let n = speeds.len() * 400;
     let time: Vec<f64> = (0..n).map(|i| i as f64 * 0.25).collect();
     let rpm: Vec<f64> = time.iter().map(|t| speeds[(t / 100.0) as usize]).collect();
     let p: Vec<f64> = rpm.iter().map(|v| (v / 1000.0).powf(1.5)).collect();
