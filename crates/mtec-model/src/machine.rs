@@ -20,6 +20,7 @@
 //! letters between F and T are tool-side axes (the last carries the tool).
 
 use crate::element::Axis;
+use mtec_io::plausible::MAX_POSITION_MM;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -61,6 +62,8 @@ pub enum MachineError {
     Period(String, f64),
     #[error("{0} must be finite")]
     NotFinite(&'static str),
+    #[error("{0} has {1:e}: implausible for a machine tool (|value| must be below {2:e} {3}): check the unit")]
+    Implausible(String, f64, f64, &'static str),
 }
 
 impl Chain {
@@ -190,6 +193,25 @@ impl Machine {
             if !s.centre_mm.iter().all(|v| v.is_finite()) {
                 return Err(MachineError::NotFinite("centre_mm"));
             }
+            // a travel or centre of 100 m (or 100 000°) is a unit mistake; identification of
+            // such a machine ran on without a word (2026-11-29)
+            let unit = if a.is_rotary() { "deg" } else { "mm" };
+            if let Some(v) = s.travel.iter().find(|v| v.abs() >= MAX_POSITION_MM) {
+                return Err(MachineError::Implausible(
+                    format!("[axes.{k}] travel"),
+                    *v,
+                    MAX_POSITION_MM,
+                    unit,
+                ));
+            }
+            if let Some(v) = s.centre_mm.iter().find(|v| v.abs() >= MAX_POSITION_MM) {
+                return Err(MachineError::Implausible(
+                    format!("[axes.{k}] centre_mm"),
+                    *v,
+                    MAX_POSITION_MM,
+                    "mm",
+                ));
+            }
             if let Some(p) = s.period_mm {
                 if !(p.is_finite() && p > 0.0) || a.is_rotary() {
                     return Err(MachineError::Period(k.clone(), p));
@@ -211,6 +233,19 @@ impl Machine {
             return Err(MachineError::NotFinite(
                 "tool_offset_mm and workpiece_origin_mm",
             ));
+        }
+        for (name, v) in [
+            ("tool_offset_mm", spec.tool_offset_mm),
+            ("workpiece_origin_mm", spec.workpiece_origin_mm),
+        ] {
+            if let Some(x) = v.iter().find(|x| x.abs() >= MAX_POSITION_MM) {
+                return Err(MachineError::Implausible(
+                    name.to_string(),
+                    *x,
+                    MAX_POSITION_MM,
+                    "mm",
+                ));
+            }
         }
         Ok(Machine {
             name: spec.name,
@@ -301,5 +336,22 @@ mod tests {
         // absent: not written back out (files without it stay byte for byte)
         let spec = Machine::vmc_xyfz(100.0).to_spec();
         assert!(spec.axes.values().all(|a| a.period_mm.is_none()));
+    }
+
+    #[test]
+    fn travels_and_offsets_no_machine_has_are_refused() {
+        let mut m = Machine::vmc_xyfz(100.0).to_spec();
+        m.axes.get_mut("X").expect("X").travel = [0.0, 99_999.0];
+        assert!(Machine::from_spec(m.clone()).is_ok());
+        m.axes.get_mut("X").expect("X").travel = [0.0, 1e300];
+        let e = Machine::from_spec(m).unwrap_err();
+        assert!(
+            e.to_string().contains("[axes.X] travel has 1e300") && e.to_string().contains("mm"),
+            "{e}"
+        );
+        let mut m = Machine::vmc_xyfz(100.0).to_spec();
+        m.tool_offset_mm = [0.0, 0.0, -1e5];
+        let e = Machine::from_spec(m).unwrap_err();
+        assert!(e.to_string().contains("tool_offset_mm has -1e5"), "{e}");
     }
 }

@@ -184,6 +184,15 @@ impl CircularTrace {
                 format!("radius {radius_mm} mm: must be a positive number"),
             ));
         }
+        if radius_mm >= mtec_io::plausible::MAX_POSITION_MM {
+            return Err(InputError::file(
+                path,
+                format!(
+                    "radius {radius_mm:e} mm is implausible (a ballbar is below {:e} mm): check the unit",
+                    mtec_io::plausible::MAX_POSITION_MM
+                ),
+            ));
+        }
         let plane = match opts.plane {
             Some(p) => p,
             None => match table.comment_value("plane") {
@@ -225,7 +234,7 @@ impl CircularTrace {
                     row,
                     "dl_um",
                     format!(
-                        "dl_um = {} is more than 10 % of the radius: not a ballbar deviation (wrong unit?)",
+                        "dl_um = {:e} is more than 10 % of the radius: not a ballbar deviation (wrong unit?)",
                         dls[k]
                     ),
                 ));
@@ -457,6 +466,9 @@ mod tests {
 
         let e = trace("", &full(30)).unwrap_err();
         assert!(e.message.contains("radius is unknown"), "{e}");
+        // a radius in µm (or 1e300) is refused for what it is, not as unseparable faults
+        let e = trace("# radius_mm = 1e300\n", &full(30)).unwrap_err();
+        assert!(e.message.contains("radius 1e300 mm is implausible"), "{e}");
         let e = trace("# radius_mm = 100\n", &full(60)).unwrap_err();
         assert!(e.message.contains("at least 8"), "{e}");
         let rows = full(30).replacen("30,cw,0.5", "30,clockwise,0.5", 1);

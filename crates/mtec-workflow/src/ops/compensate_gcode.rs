@@ -319,6 +319,13 @@ fn parse3(s: &str, what: &str, unit: &str) -> Result<[f64; 3]> {
             "{what} '{s}': expected three numbers {names}"
         )));
     }
+    // 100 m (or 100 000°) is a unit mistake, not where a machine stands
+    let limit = mtec_io::plausible::MAX_POSITION_MM;
+    if let Some(x) = v.iter().find(|x| x.abs() >= limit) {
+        return Err(Error::usage(format!(
+            "{what} '{s}': {x:e} is implausible (each must be below {limit:e} in magnitude)"
+        )));
+    }
     Ok([v[0], v[1], v[2]])
 }
 
@@ -330,4 +337,22 @@ pub fn extra_inputs(opts: &Options) -> Vec<&Path> {
         .map(PathBuf::as_path)
         .chain(opts.flatten.iter().filter_map(|f| f.var_file.as_deref()))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn start_positions_are_three_plausible_numbers() {
+        assert_eq!(
+            parse_start_position("1, -2.5,99999").unwrap(),
+            [1.0, -2.5, 99_999.0]
+        );
+        for bad in ["1,2", "1,2,x", "1,2,inf", "1e300,0,0", "0,-100000,0"] {
+            assert!(parse_start_position(bad).is_err(), "{bad}");
+        }
+        let e = parse_start_position("1e300,0,0").unwrap_err().to_string();
+        assert!(e.contains("1e300 is implausible"), "{e}");
+    }
 }
