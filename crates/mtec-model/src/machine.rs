@@ -193,15 +193,16 @@ impl Machine {
             if !s.centre_mm.iter().all(|v| v.is_finite()) {
                 return Err(MachineError::NotFinite("centre_mm"));
             }
-            // a travel or centre of 100 m (or 100 000°) is a unit mistake; identification of
-            // such a machine ran on without a word (2026-11-29)
-            let unit = if a.is_rotary() { "deg" } else { "mm" };
-            if let Some(v) = s.travel.iter().find(|v| v.abs() >= MAX_POSITION_MM) {
+            // a linear travel or a centre of 100 m is a unit mistake; identification of such
+            // a machine ran on without a word (2026-11-29). A rotary axis that turns without
+            // limit is written with huge limits (LinuxCNC: ±1e99), so its travel is not bounded
+            let linear_end = s.travel.iter().find(|v| v.abs() >= MAX_POSITION_MM);
+            if let Some(v) = linear_end.filter(|_| !a.is_rotary()) {
                 return Err(MachineError::Implausible(
                     format!("[axes.{k}] travel"),
                     *v,
                     MAX_POSITION_MM,
-                    unit,
+                    "mm",
                 ));
             }
             if let Some(v) = s.centre_mm.iter().find(|v| v.abs() >= MAX_POSITION_MM) {
@@ -353,5 +354,12 @@ mod tests {
         m.tool_offset_mm = [0.0, 0.0, -1e5];
         let e = Machine::from_spec(m).unwrap_err();
         assert!(e.to_string().contains("tool_offset_mm has -1e5"), "{e}");
+        // a rotary axis without limits keeps its huge travel
+        let mut m = Machine::vmc_xyfz(100.0).to_spec();
+        m.chain = "WCXYFZT".into();
+        let mut c = m.axes["X"].clone();
+        c.travel = [-1e99, 1e99];
+        m.axes.insert("C".into(), c);
+        assert!(Machine::from_spec(m).is_ok());
     }
 }

@@ -298,7 +298,16 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
 
 /// The machine position at program start from `x,y,z` in mm (`--start-position-mm`).
 pub fn parse_start_position(s: &str) -> Result<[f64; 3]> {
-    parse3(s, "--start-position-mm", "x,y,z in mm")
+    let v = parse3(s, "--start-position-mm", "x,y,z in mm")?;
+    // 100 m is a unit mistake, not where a machine stands (a rotary angle is not bounded: an
+    // axis without limits may stand many turns from zero)
+    let limit = mtec_io::plausible::MAX_POSITION_MM;
+    if let Some(x) = v.iter().find(|x| x.abs() >= limit) {
+        return Err(Error::usage(format!(
+            "--start-position-mm '{s}': {x:e} is implausible (each must be below {limit:e} mm in magnitude)"
+        )));
+    }
+    Ok(v)
 }
 
 /// The rotary axes' angles at program start from `a,b,c` in degrees (`--start-rotary-deg`).
@@ -317,13 +326,6 @@ fn parse3(s: &str, what: &str, unit: &str) -> Result<[f64; 3]> {
         let names = unit.split(' ').next().unwrap_or("");
         return Err(Error::usage(format!(
             "{what} '{s}': expected three numbers {names}"
-        )));
-    }
-    // 100 m (or 100 000°) is a unit mistake, not where a machine stands
-    let limit = mtec_io::plausible::MAX_POSITION_MM;
-    if let Some(x) = v.iter().find(|x| x.abs() >= limit) {
-        return Err(Error::usage(format!(
-            "{what} '{s}': {x:e} is implausible (each must be below {limit:e} in magnitude)"
         )));
     }
     Ok([v[0], v[1], v[2]])
@@ -354,5 +356,6 @@ mod tests {
         }
         let e = parse_start_position("1e300,0,0").unwrap_err().to_string();
         assert!(e.contains("1e300 is implausible"), "{e}");
+        assert_eq!(parse_start_rotary("0,0,1e6").unwrap(), [0.0, 0.0, 1e6]);
     }
 }
