@@ -408,3 +408,34 @@ fn bad_input_is_located_and_exits_2() {
     ]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
+
+#[test]
+fn auto_says_why_the_heat_input_families_are_absent_and_has_no_error_bar_from_one_fold() {
+    // spindle-sensors: eight sensors, no spindle speed column, one forward fold
+    let dir = tempfile::tempdir().unwrap();
+    let data = scenario(dir.path(), "spindle-sensors");
+    let out = dir.path().join("m.json");
+    let o = mtec(&[
+        "thermal",
+        "fit",
+        "--model",
+        "auto",
+        "--data",
+        data.to_str().unwrap(),
+        "--target",
+        "radial_um",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+    assert!(
+        text.contains("heat-input, dynamic: not candidates: the log has no heat-input column"),
+        "{text}"
+    );
+    let ridge = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("ridge "))
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(ridge.contains("± n/a"), "{ridge}");
+}

@@ -426,12 +426,17 @@ fn write_candidates(f: &mut fmt::Formatter<'_>, candidates: &[CandidateScore]) -
                     .iter()
                     .map(|x| format!("{:.2}/{:.2}", x.metrics.rmse_um, x.uncompensated_rmse_um))
                     .collect();
+                // one fold has no standard error (the rule then takes the best mean)
+                let se = if fw.folds.len() >= 2 {
+                    format!("{:<6.3}", fw.rmse_std_error_um)
+                } else {
+                    format!("{:<6}", "n/a")
+                };
                 writeln!(
                     f,
-                    "  {:<13} {:>7.3} ± {:<6.3} pooled {:>7.3} um  folds (model/none) {}{}{}",
+                    "  {:<13} {:>7.3} ± {se} pooled {:>7.3} um  folds (model/none) {}{}{}",
                     c.family,
                     fw.mean_rmse_um(),
-                    fw.rmse_std_error_um,
                     fw.pooled_rmse_um,
                     folds.join(" "),
                     if c.worse_than_uncompensated.is_empty() {
@@ -449,6 +454,13 @@ fn write_candidates(f: &mut fmt::Formatter<'_>, candidates: &[CandidateScore]) -
                 c.error.as_deref().unwrap_or("")
             )?,
         }
+    }
+    // auto offers the heat-input families only with a heat-input column: say why they are absent
+    if !candidates.iter().any(|c| c.family == "heat-input") {
+        writeln!(
+            f,
+            "  heat-input, dynamic: not candidates: the log has no heat-input column (--input, default spindle_rpm)"
+        )?;
     }
     Ok(())
 }
