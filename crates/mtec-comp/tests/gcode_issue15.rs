@@ -378,13 +378,37 @@ fn default_digits_follow_the_tolerance() {
     assert_eq!(default_decimals(Units::Mm, 0.2), 4);
     assert_eq!(default_decimals(Units::Mm, 0.1), 5);
     // the chosen digits always pass validation, down to what 9 digits can hold
+    // (`with_tolerance`: what the CLI, the Python module and projects start from)
     for tol in [0.001, 0.01, 0.05, 0.1, 0.2, 0.5, 1.0, 5.0] {
-        let o = RewriteOptions {
-            tolerance_um: tol,
-            decimals_mm: default_decimals(Units::Mm, tol),
-            decimals_inch: default_decimals(Units::Inch, tol),
-            ..RewriteOptions::default()
-        };
+        let o = RewriteOptions::with_tolerance(tol);
+        assert_eq!(o.tolerance_um, tol);
+        assert_eq!(
+            (o.decimals_mm, o.decimals_inch),
+            (
+                default_decimals(Units::Mm, tol),
+                default_decimals(Units::Inch, tol)
+            )
+        );
         assert!(o.validate().is_ok(), "{tol}: {:?}", o.validate());
     }
+}
+
+#[test]
+fn a_start_position_no_machine_has_is_refused_by_every_caller() {
+    let at = |p: [f64; 3]| RewriteOptions {
+        start_position_mm: Some(p),
+        ..RewriteOptions::default()
+    };
+    assert!(at([1.0, -2.5, 99_999.0]).validate().is_ok());
+    for p in [[1e300, 0.0, 0.0], [0.0, -1e5, 0.0], [0.0, 0.0, f64::NAN]] {
+        assert!(at(p).validate().is_err(), "{p:?}");
+    }
+    let e = at([1e300, 0.0, 0.0]).validate().unwrap_err();
+    assert!(e.contains("1e300 is implausible"), "{e}");
+    // a rotary angle many turns from zero is a position an unlimited axis can have
+    let o = RewriteOptions {
+        start_rotary_deg: Some([0.0, 0.0, 1e6]),
+        ..RewriteOptions::default()
+    };
+    assert!(o.validate().is_ok());
 }

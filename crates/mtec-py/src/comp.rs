@@ -302,12 +302,11 @@ pub fn compensate_gcode<'py>(
     name: &str,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let options = RewriteOptions {
-        tolerance_um,
         max_segment_mm,
         chord_tolerance_um,
         max_correction_um,
         start_position_mm,
-        ..RewriteOptions::default()
+        ..RewriteOptions::with_tolerance(tolerance_um)
     };
     Ok(run_gcode(
         py,

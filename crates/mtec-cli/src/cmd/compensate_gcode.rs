@@ -3,7 +3,7 @@
 use crate::help::{examples, text};
 use crate::{choice::choice, error::CliError};
 use mtec_comp::gcode::tooltable::MachineUnits;
-use mtec_comp::gcode::{default_decimals, OnUnsupported, RewriteOptions, Units};
+use mtec_comp::gcode::{OnUnsupported, RewriteOptions, Units};
 use mtec_workflow::ops::compensate_gcode::{self, Options};
 use mtec_workflow::ops::selective::Elements;
 use mtec_workflow::rs274::Rs274;
@@ -144,19 +144,15 @@ pub struct FlattenArgs {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    let base = RewriteOptions::with_tolerance(args.tolerance_um);
     let rewrite = RewriteOptions {
-        tolerance_um: args.tolerance_um,
         max_segment_mm: args.max_segment_mm,
         chord_tolerance_um: args.chord_tolerance_um,
         max_correction_um: args.max_correction_um,
         on_unsupported: args.on_unsupported,
         default_units: args.default_units,
-        decimals_mm: args
-            .decimals_mm
-            .unwrap_or_else(|| default_decimals(Units::Mm, args.tolerance_um)),
-        decimals_inch: args
-            .decimals_inch
-            .unwrap_or_else(|| default_decimals(Units::Inch, args.tolerance_um)),
+        decimals_mm: args.decimals_mm.unwrap_or(base.decimals_mm),
+        decimals_inch: args.decimals_inch.unwrap_or(base.decimals_inch),
         check_step_mm: args.check_step_mm,
         check_step_deg: args.check_step_deg,
         max_line_chars: args.max_line_chars,
@@ -170,7 +166,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             .as_deref()
             .map(compensate_gcode::parse_start_rotary)
             .transpose()?,
-        ..RewriteOptions::default()
+        ..base
     };
     let f = args.flatten;
     let opts = Options {

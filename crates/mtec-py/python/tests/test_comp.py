@@ -100,6 +100,22 @@ def test_gcode_is_the_clis_and_cuts_true(cli, tmp_path):
     assert drill and np.allclose(drill[0], [300.0, 400.0, 180.0], atol=6e-5)
 
 
+def test_gcode_tolerance_sets_the_digits_as_the_cli_does(cli, tmp_path):
+    # 0.2 um: 5 inch digits round by 0.22 um, more than half the tolerance; the module refused
+    # every program with it until 2026-11-29 (only the CLI chose 6 digits)
+    model = tmp_path / "m.json"
+    mtec.map_fit(GRID, out=model)
+    program = "G20 G90\nG0 X0 Y0 Z0\nG1 X2 Y3 F10\nM2\n"
+    (tmp_path / "in.ngc").write_text(program)
+    text, _ = mtec.compensate_gcode(program, model, tolerance_um=0.2, name="in.ngc")
+    cli.run("compensate", "gcode", "--model", model, tmp_path / "in.ngc", "--tolerance-um", "0.2",
+            "-o", tmp_path / "cli.ngc")
+    assert text == (tmp_path / "cli.ngc").read_text()
+    assert re.search(r"X2\.\d{6}\b|X1\.\d{6}\b", text), text
+    with pytest.raises(ValueError, match="start-position-mm"):
+        mtec.compensate_gcode(program, model, start_position_mm=[1e300, 0.0, 0.0])
+
+
 def test_gcode_refusal_is_located(tmp_path):
     model = tmp_path / "m.json"
     mtec.map_fit(GRID, out=model)

@@ -107,6 +107,18 @@ impl Default for RewriteOptions {
 }
 
 impl RewriteOptions {
+    /// The defaults with `tolerance_um`, written with the digits that tolerance needs
+    /// ([`default_decimals`]): what the CLI, the Python module and a project give when the user
+    /// names no digits.
+    pub fn with_tolerance(tolerance_um: f64) -> RewriteOptions {
+        RewriteOptions {
+            tolerance_um,
+            decimals_mm: default_decimals(Units::Mm, tolerance_um),
+            decimals_inch: default_decimals(Units::Inch, tolerance_um),
+            ..RewriteOptions::default()
+        }
+    }
+
     /// Checks that the numbers make sense; the message names the option.
     pub fn validate(&self) -> Result<(), String> {
         let pos = |v: f64, name: &str| {
@@ -127,6 +139,17 @@ impl RewriteOptions {
         }
         pos(self.check_step_mm, "--check-step-mm")?;
         pos(self.check_step_deg, "--check-step-deg")?;
+        // 100 m is a unit mistake, not where a machine stands (a rotary angle is not bounded:
+        // an axis without limits may stand many turns from zero)
+        let limit = mtec_io::plausible::MAX_POSITION_MM;
+        if let Some(x) = self
+            .start_position_mm
+            .and_then(|p| p.into_iter().find(|x| !x.is_finite() || x.abs() >= limit))
+        {
+            return Err(format!(
+                "--start-position-mm: {x:e} is implausible (each must be finite and below {limit:e} mm in magnitude)"
+            ));
+        }
         if let Some(r) = self.start_rotary_deg {
             if !r.iter().all(|v| v.is_finite()) {
                 return Err("--start-rotary-deg must be three finite angles".into());
