@@ -62,8 +62,8 @@ pub enum MachineError {
     Period(String, f64),
     #[error("{0} must be finite")]
     NotFinite(&'static str),
-    #[error("{0} has {1:e}: implausible for a machine tool (|value| must be below {2:e} {3}): check the unit")]
-    Implausible(String, f64, f64, &'static str),
+    #[error("{0} has {1:e}: implausible for a machine tool (|value| must be below {MAX_POSITION_MM:e} mm): check the unit")]
+    Implausible(String, f64),
 }
 
 impl Chain {
@@ -198,19 +198,12 @@ impl Machine {
             // limit is written with huge limits (LinuxCNC: ±1e99), so its travel is not bounded
             let linear_end = s.travel.iter().find(|v| v.abs() >= MAX_POSITION_MM);
             if let Some(v) = linear_end.filter(|_| !a.is_rotary()) {
-                return Err(MachineError::Implausible(
-                    format!("[axes.{k}] travel"),
-                    *v,
-                    MAX_POSITION_MM,
-                    "mm",
-                ));
+                return Err(MachineError::Implausible(format!("[axes.{k}] travel"), *v));
             }
             if let Some(v) = s.centre_mm.iter().find(|v| v.abs() >= MAX_POSITION_MM) {
                 return Err(MachineError::Implausible(
                     format!("[axes.{k}] centre_mm"),
                     *v,
-                    MAX_POSITION_MM,
-                    "mm",
                 ));
             }
             if let Some(p) = s.period_mm {
@@ -240,12 +233,7 @@ impl Machine {
             ("workpiece_origin_mm", spec.workpiece_origin_mm),
         ] {
             if let Some(x) = v.iter().find(|x| x.abs() >= MAX_POSITION_MM) {
-                return Err(MachineError::Implausible(
-                    name.to_string(),
-                    *x,
-                    MAX_POSITION_MM,
-                    "mm",
-                ));
+                return Err(MachineError::Implausible(name.to_string(), *x));
             }
         }
         Ok(Machine {

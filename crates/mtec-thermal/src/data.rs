@@ -117,32 +117,33 @@ impl ThermalData {
         };
         // a logger's error code (−9999, −273.2, an open thermocouple's full scale) is not a
         // temperature: refused at its line, never fitted
-        let temperature_columns = sensor_names
-            .iter()
-            .map(|s| s.as_str())
-            .chain(ambient_c.as_ref().map(|_| "ambient_c"));
-        for (j, name) in temperature_columns.enumerate() {
-            for i in 0..n {
-                let v = match &ambient_c {
-                    Some(a) if j == sensor_names.len() => a[i],
-                    _ => temps_c[(i, j)],
-                };
-                if !(PLAUSIBLE_C.0..=PLAUSIBLE_C.1).contains(&v) {
-                    let v = if v.abs() < 1e6 {
-                        v.to_string()
-                    } else {
-                        format!("{v:e}")
-                    };
-                    return Err(table.error_at(
-                        &table.rows[i],
-                        name,
-                        format!(
-                            "`{name}` is {v} °C: no machine tool is at that temperature (mtec accepts {}…{} °C); a logger's error code for a disconnected or failed sensor? Remove those rows, or the sensor's column",
-                            PLAUSIBLE_C.0, PLAUSIBLE_C.1
-                        ),
-                    ));
-                }
-            }
+        let plausible = |name: &str, values: &[f64]| -> Result<(), InputError> {
+            let Some(i) = values
+                .iter()
+                .position(|v| !(PLAUSIBLE_C.0..=PLAUSIBLE_C.1).contains(v))
+            else {
+                return Ok(());
+            };
+            let v = values[i];
+            let v = if v.abs() < 1e6 {
+                v.to_string()
+            } else {
+                format!("{v:e}")
+            };
+            Err(table.error_at(
+                &table.rows[i],
+                name,
+                format!(
+                    "`{name}` is {v} °C: no machine tool is at that temperature (mtec accepts {}…{} °C); a logger's error code for a disconnected or failed sensor? Remove those rows, or the sensor's column",
+                    PLAUSIBLE_C.0, PLAUSIBLE_C.1
+                ),
+            ))
+        };
+        for (j, name) in sensor_names.iter().enumerate() {
+            plausible(name, temps_c.column(j).as_slice())?;
+        }
+        if let Some(a) = &ambient_c {
+            plausible("ambient_c", a)?;
         }
         // time must not decrease within an experiment
         for i in 1..n {

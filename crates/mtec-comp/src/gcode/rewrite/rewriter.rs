@@ -15,10 +15,11 @@ use super::piece::{EmittedEnd, Piece, RotaryMove};
 use super::planner::{At, Planner};
 use super::report::{Diagnostic, GcodeError, ProblemKind, RewriteReport, MAX_WARNINGS_KEPT};
 use crate::ErrorModel;
+use std::io::{BufRead, Write};
 
 /// Added to the refusal of a construct [`Rewriter::flattening_resolves`] names: what to do.
 const FLATTEN_HINT: &str = "LinuxCNC's interpreter resolves this: add --flatten-with rs274 to run the program through it first and compensate the moves it makes (see compensate gcode --help)";
-use std::io::{BufRead, Write};
+
 pub(super) struct Rewriter<'a> {
     pub(super) opt: &'a RewriteOptions,
     pub(super) st: State,
