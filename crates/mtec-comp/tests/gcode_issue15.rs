@@ -3,7 +3,7 @@
 //! checked against the original path with the documented bound: `--tolerance-um` for straight
 //! moves, plus `--chord-tolerance-um` for linearised arcs.
 
-mod gcode_support;
+use crate::gcode_support;
 use gcode_support::*;
 use mtec_comp::gcode::{
     rewrite, BlockDelete, GcodeError, Offsets, ProblemKind, RewriteOptions, Units,

@@ -12,7 +12,7 @@
 //! program, whose commanded positions, pushed through the machine p + e(p) of a model with a
 //! clear position dependence, must land on the original targets.
 
-mod gcode_support;
+use crate::gcode_support;
 use gcode_support::*;
 use mtec_comp::gcode::{rewrite, GcodeError, OnUnsupported, RewriteOptions};
 use mtec_comp::ErrorModel;

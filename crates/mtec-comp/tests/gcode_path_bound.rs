@@ -6,7 +6,7 @@
 //!
 //! 1000 cases in CI (about a second per hundred); `MTEC_PATH_BOUND_CASES=10000` runs more.
 
-mod gcode_support;
+use crate::gcode_support;
 use gcode_support::*;
 use mtec_comp::gcode::{rewrite, RewriteOptions};
 use proptest::prelude::*;
@@ -60,7 +60,7 @@ fn every_output_sample_lies_within_the_bound_of_the_original_path() {
         .unwrap();
 }
 
-/// Replays one case: `MTEC_SEED=<seed from a failure> cargo test --test gcode_path_bound replay`.
+/// Replays one case: `MTEC_SEED=<seed from a failure> cargo test -p mtec-comp --test integration gcode_path_bound::replay`.
 #[test]
 fn replay() {
     let Ok(seed) = std::env::var("MTEC_SEED") else {

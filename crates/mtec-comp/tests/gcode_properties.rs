@@ -3,7 +3,7 @@
 //! (split) move ends exactly at the original target plus its correction. Bounded to run in CI
 //! in seconds: 64 programs of up to 30 lines per property.
 
-mod gcode_support;
+use crate::gcode_support;
 use gcode_support::*;
 use mtec_comp::gcode::lexer::{lex_line, TokenKind};
 use mtec_comp::gcode::{correction_mm, rewrite, OnUnsupported, RewriteOptions};

@@ -5,7 +5,7 @@
 //! skipping with a note when it is absent, and always the copies in `tests/data/gcode`
 //! (GPL-2 programs from LinuxCNC, see the COPYING there).
 
-mod gcode_support;
+use crate::gcode_support;
 use gcode_support::*;
 use mtec_comp::gcode::{rewrite, GcodeError, Offsets, OnUnsupported, RewriteOptions};
 use std::collections::BTreeMap;

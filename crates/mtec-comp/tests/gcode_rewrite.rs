@@ -1,6 +1,6 @@
 //! The rewriter on small programs whose correct output is worked out by hand.
 
-mod gcode_support;
+use crate::gcode_support;
 use gcode_support::*;
 use mtec_comp::gcode::{
     correction_mm, rewrite, GcodeError, Offsets, OnUnsupported, ProblemKind, RewriteOptions,

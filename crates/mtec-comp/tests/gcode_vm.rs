@@ -4,7 +4,7 @@
 //! The rewriter compensates with the first-order kinematic model of the truth (what an
 //! identification would deliver at best); the machine that runs the output is the exact one.
 
-mod gcode_support;
+use crate::gcode_support;
 use gcode_support::*;
 use mtec_comp::gcode::{rewrite, RewriteOptions};
 use mtec_comp::kinematic::KinematicModel;

@@ -7,9 +7,9 @@
 //! RMS(e_true(target)) per axis and for the volumetric error, at 1000 random workspace points
 //! (the same measurement, before and after, as SPEC §1 C defines it).
 
+use crate::support;
 use mtec_comp::kinematic::KinematicModel;
 use mtec_comp::{command_for_target, CorrectionOptions};
-mod support;
 
 use mtec_identify::lines::{identify_with, DEFAULT_DEGREE};
 use mtec_model::{Formalism, Order, VolumetricModel};

@@ -7,7 +7,7 @@
 //! - `ECY` (yaw of Y, which carries X and the workpiece) reaches the tool as Ex ∋ y·ECY(y),
 //!   as a function of y alone in x, like the straightness `EXY`.
 
-mod support;
+use crate::support;
 
 use mtec_identify::lines::{identify, ChannelKind, LineData};
 use mtec_model::Machine;

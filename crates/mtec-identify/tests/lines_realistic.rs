@@ -3,7 +3,7 @@
 //! Done-when: at 1000 random points the identified model predicts the volumetric error within
 //! 1.0 µm RMS on every axis, and compensation with it reaches ≥ 95 % on every axis, on 5 seeds.
 
-mod support;
+use crate::support;
 
 use mtec_comp::kinematic::KinematicModel;
 use mtec_comp::{command_for_target, CorrectionOptions};

@@ -1,7 +1,7 @@
 //! Recovery of the virtual machine's truth from its `vmc-9line` measurements
 //! (issue 3, Done-when: volumetric prediction and per-element 3σ checks).
 
-mod support;
+use crate::support;
 
 use mtec_identify::lines::model::Block;
 use mtec_identify::lines::{

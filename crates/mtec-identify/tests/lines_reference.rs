@@ -1,6 +1,6 @@
 //! Independent references: cases worked by hand, and NumPy's least squares on the same matrix.
 
-mod support;
+use crate::support;
 
 use mtec_identify::lines::{identify, LineData};
 use mtec_io::Table;
@@ -165,7 +165,7 @@ fn solve_kept(a: &nalgebra::DMatrix<f64>, y: &nalgebra::DVector<f64>) -> (Vec<f6
     (fit.theta.iter().copied().collect(), se)
 }
 
-/// Writes the fixture input (run once: `cargo test -p mtec-identify --test lines_reference -- --ignored`),
+/// Writes the fixture input (run once: `cargo test -p mtec-identify --test integration lines_reference:: -- --ignored`),
 /// then `python3 tests/fixtures/lines_lstsq.py` writes the NumPy answer.
 #[test]
 #[ignore]

@@ -30,7 +30,7 @@ fn the_checked_in_header_is_cbindgens_output() {
             .unwrap_or(checked_in.lines().count().min(generated.lines().count()));
         panic!(
             "include/mtec_rt.h differs from cbindgen's output from line {}:\n  checked in: {:?}\n  generated:  {:?}\n\
-             regenerate it with MTEC_BLESS=1 cargo test -p mtec-rt --test header, and review the diff",
+             regenerate it with MTEC_BLESS=1 cargo test -p mtec-rt --test integration header::, and review the diff",
             first + 1,
             checked_in.lines().nth(first),
             generated.lines().nth(first)

@@ -1,0 +1,7 @@
+//! The integration tests of mtec-measure, one test binary: each file is a module (a binary per
+//! file linked the crate and its dependencies once per file, 93 times over the workspace,
+//! which cost CI minutes). Run one file's tests with
+//! `cargo test -p mtec-measure --test integration <file>::`.
+
+mod circular_faults;
+mod scenarios;
