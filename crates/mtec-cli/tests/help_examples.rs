@@ -129,6 +129,40 @@ fn run_example(dir: &Path, command: &str) -> Output {
         .expect("bash runs")
 }
 
+/// Runs the examples at the end of one leaf command's --help in a fresh folder.
+fn run_examples_of(path: &[String], long: &str) {
+    let name = format!("mtec {}", path.join(" "));
+    let commands = example_commands(&name, long);
+    assert!(
+        commands
+            .iter()
+            .any(|c| c == &name || c.starts_with(&format!("{name} "))),
+        "`{name}`: no example runs `{name}` itself: {commands:#?}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let t0 = Instant::now();
+    for c in &commands {
+        // the block stands alone: nothing from outside the fresh folder
+        assert!(
+            !c.contains("..") && !c.split_whitespace().any(|w| w.starts_with('/')),
+            "`{name}`: an example reaches outside its folder: {c}"
+        );
+        let o = run_example(dir.path(), c);
+        assert!(
+            o.status.success(),
+            "`{name}` example `{c}` failed ({:?}):\n{}\n{}",
+            o.status.code(),
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    eprintln!(
+        "{name}: {} commands, {:.2} s",
+        commands.len(),
+        t0.elapsed().as_secs_f64()
+    );
+}
+
 #[test]
 fn every_help_ends_with_examples_that_run_in_an_empty_folder() {
     let mut all = Vec::new();
@@ -136,38 +170,20 @@ fn every_help_ends_with_examples_that_run_in_an_empty_folder() {
     // the tree as the README presents it: 20 leaf commands when this test was written
     assert!(all.len() >= 20, "only {} leaf commands found", all.len());
     let start = Instant::now();
-    for (path, long) in &all {
-        let name = format!("mtec {}", path.join(" "));
-        let commands = example_commands(&name, long);
-        assert!(
-            commands
-                .iter()
-                .any(|c| c == &name || c.starts_with(&format!("{name} "))),
-            "`{name}`: no example runs `{name}` itself: {commands:#?}"
-        );
-        let dir = tempfile::tempdir().unwrap();
-        let t0 = Instant::now();
-        for c in &commands {
-            // the block stands alone: nothing from outside the fresh folder
-            assert!(
-                !c.contains("..") && !c.split_whitespace().any(|w| w.starts_with('/')),
-                "`{name}`: an example reaches outside its folder: {c}"
-            );
-            let o = run_example(dir.path(), c);
-            assert!(
-                o.status.success(),
-                "`{name}` example `{c}` failed ({:?}):\n{}\n{}",
-                o.status.code(),
-                String::from_utf8_lossy(&o.stdout),
-                String::from_utf8_lossy(&o.stderr)
-            );
+    // the leaves in parallel, each in its own folder (two workers: CI's 2 cores; the examples
+    // ran 17 s one after the other)
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    std::thread::scope(|scope| {
+        for _ in 0..2 {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some((path, long)) = all.get(i) else {
+                    break;
+                };
+                run_examples_of(path, long);
+            });
         }
-        eprintln!(
-            "{name}: {} commands, {:.2} s",
-            commands.len(),
-            t0.elapsed().as_secs_f64()
-        );
-    }
+    });
     eprintln!(
         "{} leaf commands, examples ran in {:.1} s",
         all.len(),
