@@ -199,7 +199,7 @@ fn table_trim(table: &[[f64; 3]], comp_type: u8, column: usize, x: f64) -> f64 {
 }
 
 #[test]
-fn comp_file_tables_move_the_motors_as_the_table_says() {
+fn linuxcnc_sim_comp_file_tables_move_the_motors_as_the_table_says() {
     let dir = tempfile::tempdir().unwrap();
     let work = dir.path();
     let root = repo_root();
@@ -336,7 +336,7 @@ fn comp_file_tables_move_the_motors_as_the_table_says() {
 /// axis (lost motion 3.5 um): LinuxCNC must give the forward trim at a target approached from
 /// below and the reverse one from above (control.c: `fwd_trim` while `vel_cmd > 0`).
 #[test]
-fn comp_file_from_iso230_2_run_applies_forward_and_reverse_trims_by_direction() {
+fn linuxcnc_sim_comp_file_from_iso230_2_run_applies_forward_and_reverse_trims_by_direction() {
     let dir = tempfile::tempdir().unwrap();
     let work = dir.path();
     mtec(work, &["simulate", "iso230-2", "--out", "r"]);
@@ -437,7 +437,7 @@ fn linear_model_um(model: &Value, temps: &dyn Fn(&str) -> f64) -> f64 {
 }
 
 #[test]
-fn eoffset_component_puts_the_tool_on_the_commanded_position() {
+fn linuxcnc_sim_eoffset_component_puts_the_tool_on_the_commanded_position() {
     let dir = tempfile::tempdir().unwrap();
     let work = dir.path();
     let root = repo_root();
@@ -740,7 +740,7 @@ fn eoffset_component_puts_the_tool_on_the_commanded_position() {
 /// mtec's) must be the one mtec corrected for: with e_x = 1 um per mm of machine Z, the
 /// rewritten X of each move is −z/1000 of the position LinuxCNC went to.
 #[test]
-fn g43_after_m61_takes_the_m61_tools_length_in_the_controller_and_in_the_rewrite() {
+fn linuxcnc_sim_g43_after_m61_takes_the_m61_tools_length_in_the_controller_and_in_the_rewrite() {
     let dir = tempfile::tempdir().unwrap();
     let work = dir.path();
     let stock = Path::new("/usr/share/doc/linuxcnc/examples/sample-configs/sim/sim_mm.tbl");
