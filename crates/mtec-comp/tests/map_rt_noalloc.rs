@@ -8,7 +8,8 @@ use std::alloc::{GlobalAlloc, Layout, System};
 struct Counting;
 
 thread_local! {
-    // only the measuring test's own thread counts (the tests of this file run in parallel)
+    // only the measuring test's own thread counts: this allocator serves the whole test binary
+    // (tests/main.rs), whose tests run in parallel
     static COUNTING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
     static MINE: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
 }
