@@ -883,7 +883,9 @@ class Walker:
         if self.i + 1 < len(self.nom.moves) and self.stands_at_start(c, self.i + 1):
             return
         i = self.i
-        stay = [i] if i >= 0 and self.nom.moves[i].kind == "feed" else []
+        # a zero-length move where the machine stood at the start (a bare `G1 F300`) is not
+        # continued: the next move starts the program's first real move (found on mecode's output)
+        stay = [i] if i >= 0 and i not in self.at_start and self.nom.moves[i].kind == "feed" else []
         advance = self.next_indices(start)
         if self.at_end(i, start):
             candidates = advance + stay  # prefer advancing once i is finished
@@ -923,7 +925,7 @@ class Walker:
         Returns (largest deviation um, bound um, new progress, first violation or None)."""
         n = self.nom.moves[j]
         bound = self.limits.path_bound_um(n, c)
-        if j == 0 or self.from_reference(j):
+        if self.first_real_move(j) or self.from_reference(j):
             # the first move starts wherever the machine happens to be, and a move out of a
             # G28/G30 reference point starts at the controller's point, uncorrected in both
             # programs (mtec: "feed moves from an unknown start corrected at their end point
@@ -959,6 +961,11 @@ class Walker:
         if first is not None:
             first += f" (largest on this move {worst:.3f} um)"
         return worst, bound, progress, first
+
+    def first_real_move(self, j):
+        """Nominal move j is the first the machine makes: every move before it stood where the
+        machine was at the start (`stands_at_start`)."""
+        return all(k in self.at_start for k in range(j))
 
     def from_reference(self, j):
         """Nominal move j and the compensated move being matched both start where a move to a

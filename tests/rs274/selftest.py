@@ -29,7 +29,8 @@ CASES = os.path.join(HERE, "cases")
 TRANSLATABLE = ["arc-g17-cw-quarter", "arc-g18-cw", "arc-g18-ccw", "arc-g19-cw", "arc-g19-ccw",
                 "helix-g17", "helix-g18-g19", "helix-turns", "full-circle-no-axis-words",
                 "full-circle-p2", "r-semicircle", "r-negative-large", "mixed-planes",
-                "g20-inch-arcs", "events-spindle-coolant", "back-and-forth", "g93-inverse-time"]
+                "g20-inch-arcs", "events-spindle-coolant", "back-and-forth", "g93-inverse-time",
+                "bare-g1-first"]
 E_UM = (20.0, -15.0, 10.0)
 WORD = re.compile(r"([XYZxyz])(-?\d*\.?\d+)")
 
