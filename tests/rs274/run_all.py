@@ -100,7 +100,10 @@ def write_bump_map(path, node, direction, h=2.0, size_um=30.0):
     """Zero everywhere except one node (30 um along `direction`); cells of h mm around it."""
     axes = []
     for a in range(3):
-        axes.append([-5000.0] + [node[a] + k * h for k in range(-3, 4)] + [5000.0])
+        # the box reaches 1000 mm past the node: a program may run beyond +-5000 mm (LinuxCNC's
+        # tests/interp/good/good-arc.big.imperial.* reaches 15 m)
+        near = [node[a] + k * h for k in range(-3, 4)]
+        axes.append([min(-5000.0, near[0] - 1000.0)] + near + [max(5000.0, near[-1] + 1000.0)])
 
     def values(x, y, z):
         if (x, y, z) == tuple(node):

@@ -54,12 +54,16 @@ pub struct Arc {
 /// The largest difference (mm) between the end and the start radius of a centre-format arc
 /// that LinuxCNC's interpreter runs (as a spiral): √2 · 0.02 mm in a G21 block, √2 · 0.002 in
 /// in a G20 block, or 0.1 % of the larger radius when that is more ("Radius to end of arc
-/// differs from radius to start"). Measured with rs274 (linuxcnc-uspace 2.9.0~pre1) by
-/// bisection at r = 2, 20, 200 mm and 0.05, 1, 10 in, 2026-11-28; until then mtec used 0.02 mm
-/// in both units, which refused inch arcs LinuxCNC runs.
+/// differs from radius to start"), but never more than 100 times the absolute part (2.83 mm,
+/// 0.283 in: on radii above 2.8 m the 0.1 % would allow more). Measured with rs274
+/// (linuxcnc-uspace 2.9.0~pre1) by bisection at r = 2, 20, 200 mm and 0.05, 1, 10 in,
+/// 2026-11-28; until then mtec used 0.02 mm in both units, which refused inch arcs LinuxCNC
+/// runs. The cap: r = 3000 mm runs 2.82 mm and stops at 2.835 mm, r = 300 in runs 0.282 in and
+/// stops at 0.2835 in (2026-11-29; found by LinuxCNC's own tests/interp/bad/bad-arc.big.*,
+/// which mtec had linearised into a program that runs where the original stops).
 pub fn center_arc_limit_mm(r_start: f64, r_end: f64, inch: bool) -> f64 {
     let abs = std::f64::consts::SQRT_2 * if inch { 0.002 * 25.4 } else { 0.02 };
-    abs.max(0.001 * r_start.max(r_end))
+    abs.max(0.001 * r_start.max(r_end)).min(100.0 * abs)
 }
 
 /// An R-format arc whose radius is short of half its chord by more than this (mm; 0.00005 in,
@@ -374,6 +378,10 @@ mod tests {
         assert!(ok(20.0, 0.028, false) && !ok(20.0, 0.0285, false));
         // the relative part: r = 200 mm runs up to 0.2002 mm
         assert!(ok(200.0, 0.2, false) && !ok(200.0, 0.201, false));
+        // ... up to 100 times the absolute part: r = 3000 mm runs 2.82 mm, stops at 2.835 mm
+        // (0.1 % would be 3 mm); r = 300 in runs 0.282 in, stops at 0.2835 in
+        assert!(ok(3000.0, 2.82, false) && !ok(3000.0, 2.835, false));
+        assert!(ok(7620.0, 0.282 * 25.4, true) && !ok(7620.0, 0.2835 * 25.4, true));
         // inch: 0.0028 in runs, 0.003 in stops (r = 1 in = 25.4 mm)
         assert!(ok(25.4, 0.0028 * 25.4, true) && !ok(25.4, 0.003 * 25.4, true));
         assert!(!ok(25.4, 0.0028 * 25.4, false));
