@@ -780,3 +780,59 @@ fn a_move_before_the_units_or_distance_mode_are_stated_is_warned_about() {
         assert_eq!(warned(quiet), vec![], "{quiet}");
     }
 }
+
+/// An arc that starts where the machine stands uncorrected (right after a G92 at the start) is
+/// corrected at its end point only, but it is still an arc LinuxCNC must accept: an arc whose
+/// end is off its circle is refused at its word, as anywhere else, and one whose corrected end
+/// alone would change its radius beyond LinuxCNC's tolerance (√2 · 0.02 mm) is refused with a
+/// remedy. Found 2026-11-29 on mecode's output: such an arc was written unchecked.
+#[test]
+fn an_arc_from_an_uncorrected_start_is_still_checked_as_linuxcnc_checks_it() {
+    let opts = RewriteOptions {
+        start_position_mm: Some([0.0; 3]),
+        ..RewriteOptions::default()
+    };
+    // the mecode program's block: radius 9.535 mm at the start, 6.555 mm at the end
+    let bad = "G21 G17 G90\nG1 F300\nG92 X-2.8444 Y-1.5487 Z-1.3216\nG18\nG2 X2.0881 Z-7.6760 I9.4061 K-1.5633\nM2\n";
+    let d = refuse(bad, &ConstModel([10.0, -10.0, 5.0]), &opts);
+    assert_eq!((d.line, d.column), (5, 4), "{}", d.message);
+    assert!(d.message.contains("not on the circle"), "{}", d.message);
+    let arc = "G21 G17 G90\nG92 X-10 Y0 Z0\nG2 X10 Y0 I10 J0 F100\nG1 X20\nM2\n";
+    // 15 um of correction at the end: within the tolerance, written as an arc to the corrected end
+    let (out, rep) = run(arc, &ConstModel([12.0, -9.0, 0.0]), &opts);
+    assert!(out.contains("G2 X9.988 Y0.009 I10 J0"), "{out}");
+    assert_eq!(rep.moves_end_point_only, 1);
+    // 50 um: the written arc's end radius would differ by 50 um from its start radius
+    let d = refuse(arc, &ConstModel([30.0, -40.0, 0.0]), &opts);
+    assert_eq!((d.line, d.column), (3, 4), "{}", d.message);
+    assert!(
+        d.message
+            .contains("starts where the machine stands uncorrected")
+            && d.message.contains("50.0 um"),
+        "{}",
+        d.message
+    );
+}
+
+/// An R arc from an uncorrected start (here the first move, incremental) keeps its start where
+/// the machine stands and moves its end: with R kept, a near-half circle's radius no longer
+/// reaches the moved end and LinuxCNC refuses the block ("Arc radius too small to reach end
+/// point"), where the original runs. It is written in centre form. Found 2026-11-29 on
+/// mecode's output (`G3 X-92.7153 Y-1.0392 R46.3606` as its first move).
+#[test]
+fn an_r_arc_from_an_uncorrected_start_is_written_in_centre_form() {
+    let opts = RewriteOptions {
+        start_position_mm: Some([0.0; 3]),
+        ..RewriteOptions::default()
+    };
+    let program = "G91 G21 G17\nG1 F300\nG3 X-92.7153 Y-1.0392 R46.3606\nG1 X10\nM2\n";
+    let (out, rep) = run(program, &ConstModel([20.0, -15.0, 10.0]), &opts);
+    assert_eq!(rep.moves_end_point_only, 1);
+    let arc = out.lines().find(|l| l.starts_with("G3")).unwrap();
+    assert!(
+        !arc.contains('R') && arc.contains('I') && arc.contains('J'),
+        "{out}"
+    );
+    // the centre is the nominal one (the start is not moved), the end is corrected by -e
+    assert!(arc.contains("X-92.7353 Y-1.0242"), "{arc}");
+}

@@ -544,7 +544,56 @@ impl Rewriter<'_> {
                 }
             }
             _ => {
-                // rapids and feed moves from an unknown start: end point only
+                // rapids and feed moves from an unknown start: end point only. An arc's start
+                // is known (else refused above), only not corrected: it is checked as LinuxCNC
+                // checks it, and its end corrected alone must leave a radius LinuxCNC accepts
+                // (found 2026-11-29 on mecode's output: an arc right after a G92 was written
+                // unchecked)
+                if matches!(m, Motion::Cw | Motion::Ccw) {
+                    let c0 = [0, 1, 2].map(|a| {
+                        self.st.out[a].unwrap_or(start_p[a]) - self.st.prog[a].unwrap_or(start_p[a])
+                    });
+                    let problem = match self.arc_of(
+                        b,
+                        start_p,
+                        target,
+                        m == Motion::Cw,
+                        absolute,
+                        scale,
+                        offsets,
+                    ) {
+                        Err(msg) => Some((ProblemKind::Syntax, msg)),
+                        Ok(arc) if !self.arc_stays_within_linuxcnc_tolerance(&arc, c0, c_end) => {
+                            Some((
+                                ProblemKind::Unsupported,
+                                format!(
+                                    "this arc starts where the machine stands uncorrected (the first move, or the first after G92 or a reference point) and its end moves by {:.1} um: LinuxCNC would refuse the arc's changed radius; start with a straight move (e.g. G0 to the arc's start) so that the arc starts corrected",
+                                    dist(c_end, c0) * 1000.0
+                                ),
+                            ))
+                        }
+                        Ok(arc) => {
+                            // R kept with a moved end point moves the centre (near 180° the
+                            // radius no longer reaches the end: found on mecode's output): the
+                            // arc is written in centre form, as in the corrected case above
+                            if let Some(rw) = b.word(b'R').filter(|_| c_end != c0) {
+                                self.r_to_center(&arc, rw.token, start_p, c0, out_offsets, scale);
+                            } else if self.st.arc_absolute == Some(true) {
+                                self.shift_center_words(b, c0, scale);
+                            }
+                            None
+                        }
+                    };
+                    if let Some((kind, msg)) = problem {
+                        let d = self.diag(col, kind, msg);
+                        self.unsupported(d)?;
+                        for a in 0..3 {
+                            self.st.prog[a] = None;
+                            self.st.out[a] = None;
+                        }
+                        return Ok(());
+                    }
+                }
                 if m != Motion::Rapid {
                     self.report.moves_end_point_only += 1;
                 }
