@@ -463,15 +463,7 @@ impl Rewriter<'_> {
                     offsets,
                 ) {
                     Ok(a) => a,
-                    Err(msg) => {
-                        let d = self.diag(col, ProblemKind::Syntax, msg);
-                        self.unsupported(d)?;
-                        for a in 0..3 {
-                            self.st.prog[a] = None;
-                            self.st.out[a] = None;
-                        }
-                        return Ok(());
-                    }
+                    Err(msg) => return self.arc_refused(col, ProblemKind::Syntax, msg),
                 };
                 // kept as an arc when the bound of its path error allows it (NaN: linearised,
                 // where the pieces report the missing model value)
@@ -481,13 +473,7 @@ impl Rewriter<'_> {
                 let keep = fits && planner.arc_bound_um(&arc, c0, c_end, &at) <= tolerance_um;
                 if keep {
                     let moved = c0 != [0.0; 3] || c_end != [0.0; 3];
-                    if let Some(rw) = b.word(b'R').filter(|_| moved) {
-                        // R kept with a corrected end point moves the centre, badly so near
-                        // 180°: the corrected arc is written in centre form instead
-                        self.r_to_center(&arc, rw.token, start_p, c0, out_offsets, scale);
-                    } else if self.st.arc_absolute == Some(true) {
-                        self.shift_center_words(b, c0, scale);
-                    }
+                    self.write_centre(b, &arc, start_p, c0, moved, out_offsets, scale);
                     let pieces = [Piece::new(target, c_end, 1.0)];
                     self.emit_pieces(
                         b,
@@ -573,25 +559,15 @@ impl Rewriter<'_> {
                             ))
                         }
                         Ok(arc) => {
-                            // R kept with a moved end point moves the centre (near 180° the
-                            // radius no longer reaches the end: found on mecode's output): the
-                            // arc is written in centre form, as in the corrected case above
-                            if let Some(rw) = b.word(b'R').filter(|_| c_end != c0) {
-                                self.r_to_center(&arc, rw.token, start_p, c0, out_offsets, scale);
-                            } else if self.st.arc_absolute == Some(true) {
-                                self.shift_center_words(b, c0, scale);
-                            }
+                            // an R arc whose end moves alone no longer reaches it near 180°
+                            // (found on mecode's output): written in centre form
+                            let moved = c_end != c0;
+                            self.write_centre(b, &arc, start_p, c0, moved, out_offsets, scale);
                             None
                         }
                     };
                     if let Some((kind, msg)) = problem {
-                        let d = self.diag(col, kind, msg);
-                        self.unsupported(d)?;
-                        for a in 0..3 {
-                            self.st.prog[a] = None;
-                            self.st.out[a] = None;
-                        }
-                        return Ok(());
+                        return self.arc_refused(col, kind, msg);
                     }
                 }
                 if m != Motion::Rapid {
@@ -614,6 +590,44 @@ impl Rewriter<'_> {
         }
         self.st.prog = target.map(Some);
         Ok(())
+    }
+
+    /// Refuses an arc block (or passes it through, warned, as the options say) and forgets the
+    /// position it would have changed.
+    fn arc_refused(
+        &mut self,
+        col: usize,
+        kind: ProblemKind,
+        msg: String,
+    ) -> Result<(), GcodeError> {
+        let d = self.diag(col, kind, msg);
+        self.unsupported(d)?;
+        for a in 0..3 {
+            self.st.prog[a] = None;
+            self.st.out[a] = None;
+        }
+        Ok(())
+    }
+
+    /// The centre words of an arc kept as an arc whose start is written moved by `c0`: an R
+    /// arc whose end point is `moved` is written in centre form (R kept with a moved end moves
+    /// the centre, badly so near 180°), absolute centres (G90.1) move with the start.
+    #[allow(clippy::too_many_arguments)]
+    fn write_centre(
+        &mut self,
+        b: &Block,
+        arc: &Arc,
+        start_p: [f64; 3],
+        c0: [f64; 3],
+        moved: bool,
+        out_offsets: [f64; 3],
+        scale: f64,
+    ) {
+        if let Some(rw) = b.word(b'R').filter(|_| moved) {
+            self.r_to_center(arc, rw.token, start_p, c0, out_offsets, scale);
+        } else if self.st.arc_absolute == Some(true) {
+            self.shift_center_words(b, c0, scale);
+        }
     }
 
     /// Whether the arc, written with its start (and centre) moved by `c0` and its end by
