@@ -414,8 +414,27 @@ impl Rewriter<'_> {
             return Ok(());
         }
 
-        match (m, c_start) {
-            (Motion::Linear, Some(c0)) => {
+        // an arc is built, and checked as LinuxCNC checks it, whether its start is corrected
+        // or not (until 2026-11-29 an arc from an uncorrected start was written unchecked: an
+        // arc off its circle right after a G92, found on mecode's output)
+        let arc = if matches!(m, Motion::Cw | Motion::Ccw) {
+            match self.arc_of(
+                b,
+                start_p,
+                target,
+                m == Motion::Cw,
+                absolute,
+                scale,
+                offsets,
+            ) {
+                Ok(a) => Some(a),
+                Err(msg) => return self.arc_refused(col, ProblemKind::Syntax, msg),
+            }
+        } else {
+            None
+        };
+        match (m, c_start, arc) {
+            (Motion::Linear, Some(c0), _) => {
                 let start_xyz = self.st.out.map(|o| o.unwrap_or(0.0));
                 let mut pieces = std::mem::take(&mut self.pieces);
                 pieces.clear();
@@ -452,19 +471,7 @@ impl Rewriter<'_> {
                     col,
                 )?;
             }
-            (Motion::Cw | Motion::Ccw, Some(c0)) => {
-                let arc = match self.arc_of(
-                    b,
-                    start_p,
-                    target,
-                    m == Motion::Cw,
-                    absolute,
-                    scale,
-                    offsets,
-                ) {
-                    Ok(a) => a,
-                    Err(msg) => return self.arc_refused(col, ProblemKind::Syntax, msg),
-                };
+            (Motion::Cw | Motion::Ccw, Some(c0), Some(arc)) => {
                 // kept as an arc when the bound of its path error allows it (NaN: linearised,
                 // where the pieces report the missing model value)
                 let tolerance_um = self.opt.tolerance_um;
@@ -529,46 +536,24 @@ impl Rewriter<'_> {
                     )?;
                 }
             }
-            _ => {
+            (_, _, arc) => {
                 // rapids and feed moves from an unknown start: end point only. An arc's start
-                // is known (else refused above), only not corrected: it is checked as LinuxCNC
-                // checks it, and its end corrected alone must leave a radius LinuxCNC accepts
-                // (found 2026-11-29 on mecode's output: an arc right after a G92 was written
-                // unchecked)
-                if matches!(m, Motion::Cw | Motion::Ccw) {
+                // is known (else refused above), only not corrected: its end corrected alone
+                // must leave a radius LinuxCNC accepts
+                if let Some(arc) = arc {
                     let c0 = [0, 1, 2].map(|a| {
                         self.st.out[a].unwrap_or(start_p[a]) - self.st.prog[a].unwrap_or(start_p[a])
                     });
-                    let problem = match self.arc_of(
-                        b,
-                        start_p,
-                        target,
-                        m == Motion::Cw,
-                        absolute,
-                        scale,
-                        offsets,
-                    ) {
-                        Err(msg) => Some((ProblemKind::Syntax, msg)),
-                        Ok(arc) if !self.arc_stays_within_linuxcnc_tolerance(&arc, c0, c_end) => {
-                            Some((
-                                ProblemKind::Unsupported,
-                                format!(
-                                    "this arc starts where the machine stands uncorrected (the first move, or the first after G92 or a reference point) and its end moves by {:.1} um: LinuxCNC would refuse the arc's changed radius; start with a straight move (e.g. G0 to the arc's start) so that the arc starts corrected",
-                                    dist(c_end, c0) * 1000.0
-                                ),
-                            ))
-                        }
-                        Ok(arc) => {
-                            // an R arc whose end moves alone no longer reaches it near 180°
-                            // (found on mecode's output): written in centre form
-                            let moved = c_end != c0;
-                            self.write_centre(b, &arc, start_p, c0, moved, out_offsets, scale);
-                            None
-                        }
-                    };
-                    if let Some((kind, msg)) = problem {
-                        return self.arc_refused(col, kind, msg);
+                    if !self.arc_stays_within_linuxcnc_tolerance(&arc, c0, c_end) {
+                        let msg = format!(
+                            "this arc starts where the machine stands uncorrected (the first move, or the first after G92 or a reference point) and its end moves by {:.1} um: LinuxCNC would refuse the arc's changed radius; start with a straight move (e.g. G0 to the arc's start) so that the arc starts corrected",
+                            dist(c_end, c0) * 1000.0
+                        );
+                        return self.arc_refused(col, ProblemKind::Unsupported, msg);
                     }
+                    // an R arc whose end moves alone no longer reaches it near 180° (found on
+                    // mecode's output): written in centre form
+                    self.write_centre(b, &arc, start_p, c0, c_end != c0, out_offsets, scale);
                 }
                 if m != Motion::Rapid {
                     self.report.moves_end_point_only += 1;
