@@ -150,6 +150,20 @@ def main():
         (failures.append(f"g93-inverse-time: a split move that doubles its duration: {v}")
          if not ok else None)
         passed += ok
+        # a program without M2/M30/%: rs274 stops both at the end of the file, each echoing its
+        # own last line, which the compensation may rewrite in more than its coordinates; the
+        # moves decide, so a compensated program that lost its last move must still fail
+        prog = os.path.join(CASES, "no-program-end.ngc")
+        lines = translated(open(prog, encoding="utf-8").read(),
+                           tuple(-e for e in E_UM)).splitlines()
+        right = "\n".join(lines[:-1] + ["G90 " + lines[-1]]) + "\n"
+        v = outcome(prog, right, constant, work, "noend.right.ngc")
+        (failures.append(f"no-program-end with its last line rewritten: {v[0]}") if v else None)
+        passed += not v
+        v = outcome(prog, "\n".join(lines[:-1]) + "\n", constant, work, "noend.short.ngc")
+        (failures.append("no-program-end: a compensated program without the last move was "
+                         "accepted") if not v else None)
+        passed += bool(v)
         ok, mid = g18_direction(work)
         (failures.append(f"G18 G2 midpoint {mid}, expected (30, 0, -20)") if not ok else None)
         passed += ok
