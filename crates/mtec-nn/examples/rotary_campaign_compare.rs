@@ -10,7 +10,8 @@
 //!     cargo run --release -p mtec-nn --example rotary_campaign_compare [-- --seeds 1,2,3,4,5
 //!         --tests 1,2,3,4 --models linear,bpnn,cnn-lstm --lags L --linear-harmonics H
 //!         --ensemble K --train-count N --bpnn-harmonics H --hidden N --bpnn-iters N
-//!         --cnn-harmonics H --epochs N --window W --conv C --lstm H --lr X --rises --changes]
+//!         --cnn-harmonics H --epochs N --window W --conv C --lstm H --lr X --rises --changes
+//!         --components R --decays L1,L2,.. --hiddens H1,H2,..]
 //!
 //! Every model is fitted on the rows of its training experiments of the campaign as
 //! mtec-thermal's `ThermalData` (`mtec_nn::rotary::rotary_data`): the networks as `NeuralFit`s
@@ -23,6 +24,14 @@
 //! - `--changes`: the networks learn each motion's change since the experiment's first
 //!   (static, t = 0) measurement, which is known before the run; the predicted motion is that
 //!   measurement plus the predicted change (`NnFitOptions::changes`).
+//! - Models with the output's structure (`mtec_nn::harmonic_net`, docs/methods.md §10.4): the
+//!   lagged linear model's Fourier stage, reduced to `--components R` (default 3) principal
+//!   directions, then `linear-pc` (least squares), `bpnn-harmonic` (a BPNN of `--hidden` units,
+//!   or each of `--hiddens`, with weight decay) or `cnn-lstm-harmonic` (a CNN-LSTM over each
+//!   training experiment, `--window`/`--conv`/`--lstm`/`--epochs`/`--lr`, AdamW weight decay)
+//!   from the lagged sensors to the scores. The networks' decay among `--decays` (and the
+//!   hidden size among `--hiddens`) is chosen nested: each training experiment left out in
+//!   turn, scored by the same criterion; `--ensemble K` averages K networks there too.
 //!
 //! The studies of docs/methods.md §10.4 with a whole validation experiment (`--validation
 //! experiment`, `--refit`) and with lagged sensors as network inputs (`--bpnn-lags`,
@@ -34,6 +43,7 @@ mod support;
 
 use mtec_identify::ballbar::{identify, Measurements, Setup};
 use mtec_io::Table;
+use mtec_nn::harmonic_net::{HarmonicNet, Stage2};
 use mtec_nn::lagged_linear::LaggedLinear;
 use mtec_nn::rotary::{compare_readings, motion_rows, rotary_data, AngleEncoding, TemperatureLog};
 use mtec_nn::thermal_fit::target_metrics;
@@ -43,6 +53,36 @@ use mtec_thermal::Fit;
 use std::path::Path;
 use std::time::Instant;
 use support::{overall_rmse, rows_of, ExampleArgs};
+
+/// The average of several harmonic-output networks' predictions.
+struct Averaged(Vec<HarmonicNet>);
+
+impl Averaged {
+    fn predict_targets(
+        &self,
+        d: &mtec_thermal::ThermalData,
+    ) -> mtec_nn::error::Result<Vec<Vec<f64>>> {
+        let mut sum: Option<Vec<Vec<f64>>> = None;
+        for m in &self.0 {
+            let p = m.predict_targets(d)?;
+            match &mut sum {
+                None => sum = Some(p),
+                Some(s) => {
+                    assert_eq!(s.len(), p.len());
+                    for (a, b) in s.iter_mut().zip(&p) {
+                        for (x, y) in a.iter_mut().zip(b) {
+                            *x += y;
+                        }
+                    }
+                }
+            }
+        }
+        let n = self.0.len() as f64;
+        let mut s = sum.expect("at least one network");
+        s.iter_mut().flatten().for_each(|x| *x /= n);
+        Ok(s)
+    }
+}
 
 /// The command line's settings for the networks.
 struct Settings {
@@ -175,6 +215,103 @@ fn main() {
                             LaggedLinear::fit_rows(&data, &train, &sensors, &harmonics(lin_h), lags)
                                 .and_then(|m| m.predict_targets(&test))
                                 .expect("linear")
+                        }
+                        "linear-pc" => HarmonicNet::fit_rows(
+                            &data,
+                            &train,
+                            (&sensors, &harmonics(lin_h)),
+                            lags,
+                            num("--components", 3),
+                            &Stage2::Linear,
+                        )
+                        .and_then(|m| m.predict_targets(&test))
+                        .expect("linear-pc"),
+                        kind @ ("bpnn-harmonic" | "cnn-lstm-harmonic") => {
+                            // the average of `ensemble` networks (seeds as for the others)
+                            let fit = |rows: &[usize], (hidden, decay): (usize, f64)| {
+                                let nets: Vec<HarmonicNet> = (0..ensemble as u64)
+                                    .map(|k| {
+                                        let s = if ensemble == 1 { seed } else { 100 * seed + k };
+                                        let stage = if kind == "bpnn-harmonic" {
+                                            Stage2::Bpnn(mtec_nn::BpnnTrainConfig {
+                                                hidden,
+                                                max_epochs: settings.bpnn_iters,
+                                                seed: s,
+                                                weight_decay: decay,
+                                                // no early stopping: the decay regularises
+                                                validation_fraction: 0.0,
+                                                ..Default::default()
+                                            })
+                                        } else {
+                                            let mut c = mtec_nn::CnnLstmConfig::default();
+                                            let o = &settings.cnn;
+                                            let a = &mut c.architecture;
+                                            a.window = o.window.unwrap_or(a.window);
+                                            a.conv_channels =
+                                                o.conv_channels.unwrap_or(a.conv_channels);
+                                            a.lstm_hidden = o.lstm_hidden.unwrap_or(a.lstm_hidden);
+                                            c.max_epochs = o.epochs.unwrap_or(c.max_epochs);
+                                            c.learning_rate =
+                                                o.learning_rate.unwrap_or(c.learning_rate);
+                                            c.final_learning_rate_fraction = 0.05;
+                                            (c.weight_decay, c.seed) = (decay, s);
+                                            c.validation_fraction = 0.0;
+                                            Stage2::CnnLstm(c)
+                                        };
+                                        HarmonicNet::fit_rows(
+                                            &data,
+                                            rows,
+                                            (&sensors, &harmonics(lin_h)),
+                                            lags,
+                                            num("--components", 3),
+                                            &stage,
+                                        )
+                                        .expect(kind)
+                                    })
+                                    .collect();
+                                Averaged(nets)
+                            };
+                            // λ by leaving out each training experiment in turn (nested: the
+                            // held-out experiment is never seen), scored by the same criterion
+                            let decays: Vec<f64> = list("--decays", "0.003,0.01,0.03,0.1,0.3")
+                                .iter()
+                                .map(|d| d.parse().expect("--decays"))
+                                .collect();
+                            // and the hidden size among --hiddens (default: --hidden alone)
+                            let hiddens: Vec<usize> = args
+                                .value("--hiddens")
+                                .unwrap_or_else(|| settings.bpnn_hidden.to_string())
+                                .split(',')
+                                .map(|h| h.parse().expect("--hiddens"))
+                                .collect();
+                            let inner = |choice: (usize, f64)| -> f64 {
+                                let mut worst = 0.0f64;
+                                for &v in &train_ids {
+                                    let fit_ids: Vec<u32> =
+                                        train_ids.iter().copied().filter(|&e| e != v).collect();
+                                    let m = fit(&rows_of(&data, &fit_ids), choice);
+                                    let vd = data.rows(&rows_of(&data, &[v]));
+                                    let p = m.predict_targets(&vd).expect("inner");
+                                    let r = motion_rows(&vd, &p).expect("labels");
+                                    let c = compare_readings(&setup, &measurements, v, &r)
+                                        .expect("readings");
+                                    worst = worst.max(c.change_residual_ratio);
+                                }
+                                worst
+                            };
+                            let scores: Vec<((usize, f64), f64)> = (hiddens.iter())
+                                .flat_map(|&h| decays.iter().map(move |&d| (h, d)))
+                                .map(|c| (c, inner(c)))
+                                .collect();
+                            let best = scores
+                                .iter()
+                                .min_by(|a, b| a.1.total_cmp(&b.1))
+                                .expect("a choice")
+                                .0;
+                            println!(
+                                "  inner (worst ratio by hidden, decay): {scores:.3?} -> {best:?}"
+                            );
+                            fit(&train, best).predict_targets(&test).expect(kind)
                         }
                         net => {
                             // the average of `ensemble` networks from different seeds

@@ -57,6 +57,9 @@ pub struct BpnnTrainConfig {
     pub validation_experiment: Option<u32>,
     /// Epochs without validation improvement before stopping; `None` = 6 (LM) or 50 (Adam).
     pub patience: Option<usize>,
+    /// Levenberg–Marquardt only: λ of the penalty λ·‖w‖² on the weights (not the biases),
+    /// added to the squared normalised residuals (ridge-type weight decay; 0 = none).
+    pub weight_decay: f64,
     pub seed: u64,
 }
 
@@ -72,6 +75,7 @@ impl Default for BpnnTrainConfig {
             validation_fraction: 0.15,
             validation_experiment: None,
             patience: None,
+            weight_decay: 0.0,
             seed: 42,
         }
     }
@@ -157,6 +161,17 @@ pub fn train_bpnn_with_validation_monitored(
     }
     if config.max_epochs == 0 {
         return Err(NnError::Config("max_epochs must be at least 1".into()));
+    }
+    if !(config.weight_decay >= 0.0 && config.weight_decay.is_finite()) {
+        return Err(NnError::Config(format!(
+            "weight decay {}: must be finite and ≥ 0",
+            config.weight_decay
+        )));
+    }
+    if config.weight_decay > 0.0 && config.optimizer == Optimizer::Adam {
+        return Err(NnError::Config(
+            "weight decay is a Levenberg–Marquardt option (Adam would ignore it)".into(),
+        ));
     }
     let (n_in, n_out) = (xt[0].len(), yt[0].len());
     let in_norm = Affine::min_max(xt, n_in);
@@ -268,10 +283,12 @@ fn mse(net: &Bpnn, data: &Normalised) -> f64 {
     s / (data.x.len() * net.n_out()) as f64
 }
 
-/// Residuals e = ŷ − y over all rows and outputs, and their analytic Jacobian.
+/// Residuals e = ŷ − y over all rows and outputs, and their analytic Jacobian; with a weight
+/// decay λ > 0 followed by √λ·w for every weight (‖e‖² then holds the penalty λ‖w‖²).
 struct BpnnLeastSquares<'a> {
     net: Bpnn,
     data: &'a Normalised,
+    decay: f64,
 }
 
 impl BpnnLeastSquares<'_> {
@@ -280,13 +297,31 @@ impl BpnnLeastSquares<'_> {
         n.set_params(theta);
         n
     }
+
+    /// The indices in θ of the weights (W1, then W2; the biases excluded), when decayed.
+    fn decayed(&self) -> Vec<usize> {
+        if self.decay <= 0.0 {
+            return Vec::new();
+        }
+        let (n_in, n_h, n_out) = (self.net.n_in(), self.net.n_hidden(), self.net.n_out());
+        let off_w2 = n_h * n_in + n_h;
+        (0..n_h * n_in)
+            .chain(off_w2..off_w2 + n_out * n_h)
+            .collect()
+    }
 }
 
 impl LmProblem for BpnnLeastSquares<'_> {
     fn residuals(&self, theta: &[f64]) -> DVector<f64> {
         let net = self.with(theta);
         let n_out = net.n_out();
-        let mut e = DVector::zeros(self.data.x.len() * n_out);
+        let decayed = self.decayed();
+        let n_fit = self.data.x.len() * n_out;
+        let mut e = DVector::zeros(n_fit + decayed.len());
+        let root = self.decay.max(0.0).sqrt();
+        for (k, &i) in decayed.iter().enumerate() {
+            e[n_fit + k] = root * theta[i];
+        }
         let mut hidden = vec![0.0; net.n_hidden()];
         let mut yn = vec![0.0; n_out];
         for (r, (x, y)) in self.data.x.iter().zip(&self.data.y).enumerate() {
@@ -306,7 +341,13 @@ impl LmProblem for BpnnLeastSquares<'_> {
         let (n_in, n_h, n_out) = (net.n_in(), net.n_hidden(), net.n_out());
         let (off_b1, off_w2) = (n_h * n_in, n_h * n_in + n_h);
         let off_b2 = off_w2 + n_out * n_h;
-        let mut j = DMatrix::zeros(self.data.x.len() * n_out, theta.len());
+        let decayed = self.decayed();
+        let n_fit = self.data.x.len() * n_out;
+        let mut j = DMatrix::zeros(n_fit + decayed.len(), theta.len());
+        let root = self.decay.max(0.0).sqrt();
+        for (k, &i) in decayed.iter().enumerate() {
+            j[(n_fit + k, i)] = root;
+        }
         let mut a = vec![0.0; n_h];
         let mut s = vec![0.0; n_h];
         let mut ds = vec![0.0; n_h];
@@ -398,6 +439,7 @@ fn train_lm(
     let problem = BpnnLeastSquares {
         net: template.clone(),
         data: train,
+        decay: config.weight_decay,
     };
     let lm_config = LmConfig {
         max_iterations: config.max_epochs,
@@ -406,7 +448,11 @@ fn train_lm(
     let n_rows = (train.x.len() * template.n_out()) as f64;
     let mut stop = EarlyStop::new(config.patience.unwrap_or(6), &theta0);
     let outcome = lm::minimise(&problem, &theta0, &lm_config, |it, theta, sse| {
-        let train_mse = sse / n_rows;
+        // the data's part of ‖e‖² (without the weight decay's rows)
+        let penalty: f64 = (problem.decayed().iter())
+            .map(|&i| config.weight_decay * theta[i] * theta[i])
+            .sum();
+        let train_mse = (sse - penalty) / n_rows;
         let val_mse = (!val.x.is_empty()).then(|| mse(&problem.with(theta), val));
         monitor.epoch(&Epoch {
             model: "BPNN (LM)",
@@ -569,7 +615,11 @@ mod tests {
     #[test]
     fn analytic_jacobian_equals_finite_differences() {
         let (x, y) = toy(20);
-        for act in [Activation::Sigmoid, Activation::Tanh] {
+        for (act, decay) in [
+            (Activation::Sigmoid, 0.0),
+            (Activation::Tanh, 0.0),
+            (Activation::Sigmoid, 0.3),
+        ] {
             let inorm = Affine::min_max(&x, 2);
             let onorm = Affine::z_score(&y, 2);
             let data = Normalised {
@@ -578,8 +628,23 @@ mod tests {
             };
             let theta = glorot_init(2, 4, 2, 3);
             let net = Bpnn::from_params(2, 4, 2, act, &inorm, &onorm, &theta);
-            let p = BpnnLeastSquares { net, data: &data };
+            let p = BpnnLeastSquares {
+                net,
+                data: &data,
+                decay,
+            };
             let j = p.jacobian(&theta);
+            // the decay's rows: one per weight (2·4 + 4·2), none per bias
+            assert_eq!(j.nrows(), 20 * 2 + if decay > 0.0 { 16 } else { 0 });
+            let e = p.residuals(&theta);
+            let penalty: f64 = e.iter().skip(40).map(|v| v * v).sum();
+            let weights: f64 = (theta[..8].iter().chain(&theta[12..20]))
+                .map(|w| w * w)
+                .sum();
+            assert!(
+                (penalty - decay * weights).abs() < 1e-12,
+                "{penalty} vs {weights}"
+            );
             let h = 1e-6;
             for k in 0..theta.len() {
                 let mut tp = theta.clone();
@@ -597,6 +662,42 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Weight decay (Levenberg–Marquardt) trades fit for smaller weights: a large λ gives a
+    /// smaller ‖w‖ and a larger training error than none; with Adam it is refused, not ignored.
+    #[test]
+    fn weight_decay_shrinks_the_weights_and_is_refused_with_adam() {
+        let (x, y) = toy(60);
+        let cfg = |decay| BpnnTrainConfig {
+            hidden: 6,
+            max_epochs: 100,
+            validation_fraction: 0.0,
+            weight_decay: decay,
+            seed: 5,
+            ..BpnnTrainConfig::default()
+        };
+        let norm = |n: &Bpnn| -> f64 {
+            let w1: f64 = n.w1.iter().flatten().map(|w| w * w).sum();
+            let w2: f64 = n.w2.iter().flatten().map(|w| w * w).sum();
+            w1 + w2
+        };
+        let (free, rf) = train_bpnn(&x, &y, &cfg(0.0)).unwrap();
+        let (decayed, rd) = train_bpnn(&x, &y, &cfg(1.0)).unwrap();
+        assert!(
+            norm(&decayed) < 0.5 * norm(&free),
+            "{} vs {}",
+            norm(&decayed),
+            norm(&free)
+        );
+        assert!(rd.train_mse > rf.train_mse, "{rd:?} {rf:?}");
+        let adam = BpnnTrainConfig {
+            optimizer: Optimizer::Adam,
+            ..cfg(0.1)
+        };
+        let e = train_bpnn(&x, &y, &adam).unwrap_err().to_string();
+        assert!(e.contains("Levenberg"), "{e}");
+        assert!(train_bpnn(&x, &y, &cfg(-1.0)).is_err());
     }
 
     #[test]

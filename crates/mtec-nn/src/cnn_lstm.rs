@@ -72,6 +72,9 @@ pub struct CnnLstmConfig {
     pub validation_experiment: Option<u32>,
     /// Epochs without validation improvement before stopping.
     pub patience: usize,
+    /// Decoupled weight decay of Adam (AdamW, Loshchilov & Hutter 2019): every step also
+    /// multiplies each parameter by 1 − lr·weight_decay (0 = Adam).
+    pub weight_decay: f64,
     pub seed: u64,
 }
 
@@ -92,6 +95,7 @@ impl Default for CnnLstmConfig {
             validation_fraction: 0.15,
             validation_experiment: None,
             patience: 15,
+            weight_decay: 0.0,
             seed: 42,
         }
     }
@@ -328,8 +332,8 @@ pub(crate) fn check_validation_experiment(train: &ThermalDataset, v: Option<u32>
 }
 
 /// Trains a CNN-LSTM on every experiment of `train` (the training representation of
-/// [`crate::thermal_fit::NeuralFit`], which is how a caller trains one).
-#[cfg(test)]
+/// [`crate::thermal_fit::NeuralFit`], which is how a caller trains one; and
+/// [`crate::harmonic_net`]'s sequence stage).
 pub(crate) fn train_cnn_lstm(
     train: &ThermalDataset,
     config: &CnnLstmConfig,
@@ -345,6 +349,12 @@ pub(crate) fn train_cnn_lstm_monitored(
     monitor: &mut dyn Monitor,
 ) -> Result<(CnnLstm, CnnLstmReport)> {
     train.validate()?;
+    if !(config.weight_decay >= 0.0 && config.weight_decay.is_finite()) {
+        return Err(NnError::Config(format!(
+            "weight decay {}: must be finite and ≥ 0",
+            config.weight_decay
+        )));
+    }
     let arch = config.architecture;
     let (nf, no) = (train.feature_names.len(), train.target_names.len());
     check_architecture(&arch, nf)?;
@@ -404,8 +414,8 @@ pub(crate) fn train_cnn_lstm_monitored(
     }
     let mut params = Params::<f32>::from_named(dims, |k| init.get(k).map(|v| v.as_slice()))
         .expect("param_shapes and the kernel agree");
-    // Adam as candle-nn's AdamW with weight decay 0 (default β₁, β₂, ε)
-    let mut adam = Adam::<f32>::new(params.values.len(), 0.0);
+    // Adam as candle-nn's AdamW (default β₁, β₂, ε; weight decay 0 unless configured)
+    let mut adam = Adam::<f32>::new(params.values.len(), config.weight_decay);
     // every buffer allocated here, once: no allocation per batch
     let batch = config.batch_size.min(tr.n);
     let mut ws = Workspace::<f32>::new(dims, batch);

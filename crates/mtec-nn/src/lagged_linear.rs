@@ -45,7 +45,13 @@ pub struct LaggedLinear {
 }
 
 /// The design row of row `t` of a sequence `x` (its features per row).
-fn design_row(x: &[Vec<f64>], t: usize, n_sensors: usize, lags: usize, mean: &[f64]) -> Vec<f64> {
+pub(crate) fn design_row(
+    x: &[Vec<f64>],
+    t: usize,
+    n_sensors: usize,
+    lags: usize,
+    mean: &[f64],
+) -> Vec<f64> {
     let mut phi = vec![1.0];
     for l in 0..=lags {
         let r = &x[t.saturating_sub(l)];
@@ -67,6 +73,58 @@ fn lstsq(a: DMatrix<f64>, y: &DMatrix<f64>) -> Result<DMatrix<f64>> {
 
 fn thermal(e: mtec_thermal::ThermalError) -> NnError {
     NnError::Data(e.to_string())
+}
+
+/// Stage 1 of the fit (module docs), shared with [`crate::harmonic_net`]: per experiment and
+/// time of `data` (features: `n_sensors` temperatures, then the angle harmonics), the lagged
+/// sensors φ (centred on `mean`, with the leading 1) and the Fourier coefficients of every
+/// target over the angles on ψ = [1, harmonics] (target k's coefficient h at k·nh + h).
+pub(crate) fn fourier_stage(
+    data: &ThermalDataset,
+    n_sensors: usize,
+    lags: usize,
+    mean: &[f64],
+) -> Result<FourierStage> {
+    let nf = data.feature_names.len();
+    let nt = data.target_names.len();
+    let nh = 1 + nf - n_sensors;
+    let (mut phis, mut coefs): (Vec<Vec<f64>>, Vec<Vec<f64>>) = (Vec::new(), Vec::new());
+    for e in &data.experiments {
+        let len = e.sequences.first().map_or(0, |s| s.len());
+        if e.sequences.iter().any(|s| s.len() != len || s.warmup != 0) {
+            return Err(NnError::Data(format!(
+                "experiment {}: the lagged linear model needs every angle at the same times",
+                e.id
+            )));
+        }
+        let psi = DMatrix::from_fn(e.sequences.len(), nh, |i, h| {
+            if h == 0 {
+                1.0
+            } else {
+                e.sequences[i].features[0][n_sensors + h - 1]
+            }
+        });
+        let svd = psi.svd(true, true);
+        for t in 0..len {
+            let y = DMatrix::from_fn(e.sequences.len(), nt, |i, k| e.sequences[i].targets[t][k]);
+            let c = svd
+                .solve(&y, 1e-10)
+                .map_err(|x| NnError::Model(format!("least squares: {x}")))?;
+            let x = &e.sequences[0].features;
+            let phi = design_row(x, t, n_sensors, lags, mean);
+            // design_row's ψ part is the first sequence's: keep every nh-th entry (ψ_0 = 1)
+            phis.push(phi.iter().step_by(nh).copied().collect());
+            coefs.push(c.iter().copied().collect()); // column-major: h fastest, then k
+        }
+    }
+    Ok(FourierStage { phis, coefs })
+}
+
+/// What [`fourier_stage`] gives per experiment and time: `phis` the lagged sensors φ (with the
+/// leading 1), `coefs` the Fourier coefficients of every target.
+pub(crate) struct FourierStage {
+    pub phis: Vec<Vec<f64>>,
+    pub coefs: Vec<Vec<f64>>,
 }
 
 impl LaggedLinear {
@@ -129,38 +187,7 @@ impl LaggedLinear {
         let nt = data.target_names.len();
         let nh = 1 + nf - n_sensors;
         let np = 1 + n_sensors * (lags + 1);
-        // stage 1: per (experiment, time) the Fourier coefficients of every target; beside them
-        // the lagged sensors φ of that time
-        let (mut phis, mut coefs): (Vec<Vec<f64>>, Vec<Vec<f64>>) = (Vec::new(), Vec::new());
-        for e in &data.experiments {
-            let len = e.sequences.first().map_or(0, |s| s.len());
-            if e.sequences.iter().any(|s| s.len() != len || s.warmup != 0) {
-                return Err(NnError::Data(format!(
-                    "experiment {}: the lagged linear model needs every angle at the same times",
-                    e.id
-                )));
-            }
-            let psi = DMatrix::from_fn(e.sequences.len(), nh, |i, h| {
-                if h == 0 {
-                    1.0
-                } else {
-                    e.sequences[i].features[0][n_sensors + h - 1]
-                }
-            });
-            let svd = psi.svd(true, true);
-            for t in 0..len {
-                let y =
-                    DMatrix::from_fn(e.sequences.len(), nt, |i, k| e.sequences[i].targets[t][k]);
-                let c = svd
-                    .solve(&y, 1e-10)
-                    .map_err(|x| NnError::Model(format!("least squares: {x}")))?;
-                let x = &e.sequences[0].features;
-                let phi = design_row(x, t, n_sensors, lags, &mean);
-                // design_row's ψ part is the first sequence's: keep every nh-th entry (ψ_0 = 1)
-                phis.push(phi.iter().step_by(nh).copied().collect());
-                coefs.push(c.iter().copied().collect()); // column-major: h fastest, then k
-            }
-        }
+        let FourierStage { phis, coefs } = fourier_stage(data, n_sensors, lags, &mean)?;
         let n = phis.len();
         if n <= np {
             return Err(NnError::Data(format!(
@@ -187,7 +214,7 @@ impl LaggedLinear {
 
     /// Predictions for every scored row of `data`, in [`ThermalDataset::rows`] order.
     #[cfg(test)]
-    fn predict(&self, data: &ThermalDataset) -> Vec<Vec<f64>> {
+    pub(crate) fn predict(&self, data: &ThermalDataset) -> Vec<Vec<f64>> {
         let mut out = Vec::new();
         for e in &data.experiments {
             for s in &e.sequences {
@@ -208,14 +235,14 @@ impl LaggedLinear {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::dataset::{Experiment, Sequence};
 
-    /// Data made by the model itself (a lag of one row, one harmonic) are fitted exactly, and a
-    /// model without the lag cannot fit them.
-    #[test]
-    fn recovers_a_lagged_harmonic_law() {
+    /// Three experiments of 12 angles × 10 times whose one target follows a lagged harmonic law
+    /// of two sensors (a lag of one row, one harmonic): the data of the tests here and in
+    /// [`crate::harmonic_net`].
+    pub(crate) fn law_dataset() -> ThermalDataset {
         let law = |t: &[f64], tp: &[f64], c: f64| {
             let (cs, sn) = (c.to_radians().cos(), c.to_radians().sin());
             vec![
@@ -254,13 +281,20 @@ mod tests {
                     .collect(),
             })
             .collect();
-        let data = ThermalDataset {
+        ThermalDataset {
             feature_names: ["T1_c", "T2_c", "cos_1(angle_deg)", "sin_1(angle_deg)"]
                 .map(String::from)
                 .to_vec(),
             target_names: vec!["EXC_um".into()],
             experiments,
-        };
+        }
+    }
+
+    /// Data made by the model itself are fitted exactly, and a model without the lag cannot
+    /// fit them.
+    #[test]
+    fn recovers_a_lagged_harmonic_law() {
+        let data = law_dataset();
         let m = LaggedLinear::fit(&data, 2, 1).unwrap();
         let (_, y) = data.rows();
         let worst = m

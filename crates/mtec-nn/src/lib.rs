@@ -46,6 +46,7 @@ pub mod cnn_lstm_kernel;
 mod dataset;
 pub mod error;
 pub mod grid_fit;
+pub mod harmonic_net;
 pub mod lagged_linear;
 pub mod lm;
 pub mod progress;
