@@ -17,7 +17,7 @@ use crate::bpnn_train::{train_bpnn, BpnnTrainConfig};
 use crate::cnn_lstm::{train_cnn_lstm, CnnLstm, CnnLstmConfig};
 use crate::dataset::{Experiment, Sequence, ThermalDataset};
 use crate::error::{NnError, Result};
-use crate::lagged_linear::{design_row, fourier_stage, FourierStage};
+use crate::lagged_linear::{design_row, fourier_stage, thermal, FourierStage};
 use crate::thermal_fit::{model_inputs, training_data};
 use mtec_comp::bpnn::Bpnn;
 use mtec_thermal::ThermalData;
@@ -61,10 +61,6 @@ pub struct HarmonicNet {
     pub net: ScoreMap,
     nh: usize,
     nt: usize,
-}
-
-fn thermal(e: mtec_thermal::ThermalError) -> NnError {
-    NnError::Data(e.to_string())
 }
 
 impl HarmonicNet {

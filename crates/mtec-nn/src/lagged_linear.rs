@@ -71,7 +71,8 @@ fn lstsq(a: DMatrix<f64>, y: &DMatrix<f64>) -> Result<DMatrix<f64>> {
         .map_err(|e| NnError::Model(format!("least squares: {e}")))
 }
 
-fn thermal(e: mtec_thermal::ThermalError) -> NnError {
+/// A data error of mtec-thermal as this crate's.
+pub(crate) fn thermal(e: mtec_thermal::ThermalError) -> NnError {
     NnError::Data(e.to_string())
 }
 
