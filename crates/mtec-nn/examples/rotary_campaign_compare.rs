@@ -11,7 +11,7 @@
 //!         --tests 1,2,3,4 --models linear,bpnn,cnn-lstm --lags L --linear-harmonics H
 //!         --ensemble K --train-count N --bpnn-harmonics H --hidden N --bpnn-iters N
 //!         --cnn-harmonics H --epochs N --window W --conv C --lstm H --lr X --rises --changes
-//!         --components R --decays L1,L2,.. --hiddens H1,H2,..]
+//!         --decay L --components R --decays L1,L2,.. --hiddens H1,H2,..]
 //!
 //! Every model is fitted on the rows of its training experiments of the campaign as
 //! mtec-thermal's `ThermalData` (`mtec_nn::rotary::rotary_data`): the networks as `NeuralFit`s
@@ -24,6 +24,7 @@
 //! - `--changes`: the networks learn each motion's change since the experiment's first
 //!   (static, t = 0) measurement, which is known before the run; the predicted motion is that
 //!   measurement plus the predicted change (`NnFitOptions::changes`).
+//! - `--decay L`: the weight decay of the pointwise networks (`NnFitOptions::weight_decay`).
 //! - Models with the output's structure (`mtec_nn::harmonic_net`, docs/methods.md §10.4): the
 //!   lagged linear model's Fourier stage, reduced to `--components R` (default 3) principal
 //!   directions, then `linear-pc` (least squares), `bpnn-harmonic` (a BPNN of `--hidden` units,
@@ -91,6 +92,8 @@ struct Settings {
     cnn: NnFitOptions,
     rises: bool,
     changes: bool,
+    /// `--decay`: the pointwise networks' weight decay (fixed, not chosen nested).
+    weight_decay: f64,
 }
 
 /// The options of network `model` (seed `seed`).
@@ -104,7 +107,7 @@ fn options(model: &str, seed: u64, s: &Settings) -> NnFitOptions {
         "cnn-lstm" => s.cnn.clone(),
         other => panic!("unknown model {other}"),
     };
-    (o.seed, o.rises, o.changes) = (seed, s.rises, s.changes);
+    (o.seed, o.rises, o.changes, o.weight_decay) = (seed, s.rises, s.changes, s.weight_decay);
     o
 }
 
@@ -162,6 +165,9 @@ fn main() {
         cnn,
         rises: args.flag("--rises"),
         changes: args.flag("--changes"),
+        weight_decay: args
+            .value("--decay")
+            .map_or(0.0, |d| d.parse().expect("--decay")),
     };
     // per model: (seed, held-out, test RMSE, change ratio, reading ratio, seconds)
     let mut results: Vec<(String, u64, u32, f64, f64, f64, f64)> = Vec::new();

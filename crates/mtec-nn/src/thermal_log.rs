@@ -85,6 +85,9 @@ pub struct NnFitOptions {
     pub batch_size: Option<usize>,
     /// bpnn: hidden units.
     pub hidden: Option<usize>,
+    /// Weight decay (0: none): bpnn λ·‖w‖² in Levenberg–Marquardt, cnn-lstm AdamW's decay.
+    #[serde(default)]
+    pub weight_decay: f64,
     /// Seed of the weights and batch order.
     pub seed: u64,
 }
@@ -108,6 +111,7 @@ impl NnFitOptions {
             final_lr_fraction: None,
             batch_size: None,
             hidden: None,
+            weight_decay: 0.0,
             seed: 42,
         }
     }
@@ -129,6 +133,7 @@ impl NnFitOptions {
                 .final_lr_fraction
                 .unwrap_or(d.final_learning_rate_fraction),
             patience: self.patience.unwrap_or(d.patience),
+            weight_decay: self.weight_decay,
             seed: self.seed,
             ..d
         }
@@ -143,6 +148,7 @@ impl NnFitOptions {
             optimizer: Optimizer::LevenbergMarquardt,
             max_epochs: self.epochs.unwrap_or(200),
             patience: self.patience,
+            weight_decay: self.weight_decay,
             seed: self.seed,
             ..d
         }
@@ -490,4 +496,24 @@ fn median_step(steps: &[(f64, usize)]) -> Option<f64> {
     }
     v.sort_by(f64::total_cmp);
     Some(v[v.len() / 2])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The weight decay reaches both networks' training configurations, and options written
+    /// before it existed still read (as no decay).
+    #[test]
+    fn weight_decay_reaches_both_trainers_and_defaults_to_none() {
+        let mut o = NnFitOptions::new(NnKind::CnnLstm);
+        assert_eq!(o.cnn_lstm_config().weight_decay, 0.0);
+        o.weight_decay = 0.25;
+        assert_eq!(o.cnn_lstm_config().weight_decay, 0.25);
+        assert_eq!(o.bpnn_config().weight_decay, 0.25);
+        let mut old = serde_json::to_value(NnFitOptions::new(NnKind::Bpnn)).unwrap();
+        old.as_object_mut().unwrap().remove("weight_decay").unwrap();
+        let read: NnFitOptions = serde_json::from_value(old).unwrap();
+        assert_eq!(read, NnFitOptions::new(NnKind::Bpnn));
+    }
 }
