@@ -63,26 +63,28 @@ impl Averaged {
         &self,
         d: &mtec_thermal::ThermalData,
     ) -> mtec_nn::error::Result<Vec<Vec<f64>>> {
-        let mut sum: Option<Vec<Vec<f64>>> = None;
-        for m in &self.0 {
-            let p = m.predict_targets(d)?;
-            match &mut sum {
-                None => sum = Some(p),
-                Some(s) => {
-                    assert_eq!(s.len(), p.len());
-                    for (a, b) in s.iter_mut().zip(&p) {
-                        for (x, y) in a.iter_mut().zip(b) {
-                            *x += y;
-                        }
-                    }
-                }
+        let p: mtec_nn::error::Result<Vec<_>> =
+            self.0.iter().map(|m| m.predict_targets(d)).collect();
+        Ok(average(p?))
+    }
+}
+
+/// The mean of several models' predictions (rows × targets), all of one shape.
+fn average(predictions: Vec<Vec<Vec<f64>>>) -> Vec<Vec<f64>> {
+    let n = predictions.len() as f64;
+    let mut it = predictions.into_iter();
+    let mut sum = it.next().expect("at least one model");
+    sum.iter_mut().flatten().for_each(|x| *x /= n);
+    for p in it {
+        assert_eq!(p.len(), sum.len(), "predictions of one shape");
+        for (a, b) in sum.iter_mut().zip(&p) {
+            assert_eq!(a.len(), b.len(), "predictions of one shape");
+            for (x, y) in a.iter_mut().zip(b) {
+                *x += y / n;
             }
         }
-        let n = self.0.len() as f64;
-        let mut s = sum.expect("at least one network");
-        s.iter_mut().flatten().for_each(|x| *x /= n);
-        Ok(s)
     }
+    sum
 }
 
 /// The command line's settings for the networks.
@@ -321,18 +323,12 @@ fn main() {
                         }
                         net => {
                             // the average of `ensemble` networks from different seeds
-                            let mut sum = vec![vec![0.0; 5]; test.len()];
-                            for k in 0..ensemble as u64 {
+                            let p = (0..ensemble as u64).map(|k| {
                                 let s = if ensemble == 1 { seed } else { 100 * seed + k };
                                 let m = network(net, s).fit_rows(&data, &train).expect(net);
-                                let p = m.predict_targets(&test).expect(net);
-                                for (a, b) in sum.iter_mut().zip(&p) {
-                                    for (x, y) in a.iter_mut().zip(b) {
-                                        *x += y / ensemble as f64;
-                                    }
-                                }
-                            }
-                            sum
+                                m.predict_targets(&test).expect(net)
+                            });
+                            average(p.collect())
                         }
                     };
                     let secs = t0.elapsed().as_secs_f64();

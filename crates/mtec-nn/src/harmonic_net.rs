@@ -17,7 +17,7 @@ use crate::bpnn_train::{train_bpnn, BpnnTrainConfig};
 use crate::cnn_lstm::{train_cnn_lstm, CnnLstm, CnnLstmConfig};
 use crate::dataset::{Experiment, Sequence, ThermalDataset};
 use crate::error::{NnError, Result};
-use crate::lagged_linear::{design_row, fourier_stage, thermal, FourierStage};
+use crate::lagged_linear::{design_row, fourier_stage, lstsq, thermal, FourierStage};
 use crate::thermal_fit::{model_inputs, training_data};
 use mtec_comp::bpnn::Bpnn;
 use mtec_thermal::ThermalData;
@@ -65,7 +65,7 @@ pub struct HarmonicNet {
 
 impl HarmonicNet {
     /// Fits on `rows` of `data`: sensors `sensors` with `lags` earlier rows, angle harmonics
-    /// `harmonics`, at most `components` principal directions, the network by `config`.
+    /// `harmonics`, at most `components` principal directions, the map to them by `stage2`.
     pub fn fit_rows(
         data: &ThermalData,
         rows: &[usize],
@@ -157,11 +157,7 @@ impl HarmonicNet {
             Stage2::Linear => {
                 let a = DMatrix::from_fn(n, phis[0].len(), |i, j| phis[i][j]);
                 let b = DMatrix::from_fn(n, kept, |i, j| y[i][j]);
-                let beta = a
-                    .svd(true, true)
-                    .solve(&b, 1e-10)
-                    .map_err(|e| NnError::Model(format!("least squares: {e}")))?;
-                ScoreMap::Linear(beta)
+                ScoreMap::Linear(lstsq(a, &b)?)
             }
         };
         let nh = 1 + train.feature_names.len() - n_sensors;

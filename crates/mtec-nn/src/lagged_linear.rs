@@ -65,7 +65,7 @@ pub(crate) fn design_row(
 }
 
 /// Least squares by SVD: the coefficients of `a` that best give each column of `y`.
-fn lstsq(a: DMatrix<f64>, y: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+pub(crate) fn lstsq(a: DMatrix<f64>, y: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     a.svd(true, true)
         .solve(y, 1e-10)
         .map_err(|e| NnError::Model(format!("least squares: {e}")))
