@@ -184,6 +184,105 @@ fn bpnn_with_train_until_is_validated_forward_by_the_regression_models_code() {
     ));
 }
 
+/// `--weight-decay` reaches the trainer as the library's option (the CLI's file is the one Rust
+/// writes with `weight_decay` set, and differs from the undecayed fit), and a negative decay or
+/// learning rate is refused with exit 2 before any training.
+#[test]
+fn weight_decay_reaches_the_network_and_bad_training_settings_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = write_log(dir.path());
+    let l = log.to_str().unwrap();
+    let fit = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "thermal",
+            "fit",
+            "--model",
+            "bpnn",
+            "--data",
+            l,
+            "--target",
+            "ez_um",
+            "--train-until",
+            "460",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend(BPNN);
+        args.extend(extra);
+        (mtec(&args), out)
+    };
+    let (o, decayed) = fit("decayed.json", &["--weight-decay", "0.05"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let rust = dir.path().join("rust.json");
+    let opts = mtec_workflow::ops::thermal::FitOptions {
+        data: log.clone(),
+        target: "ez_um".into(),
+        model: "bpnn".into(),
+        fit: mtec_thermal::FitOptions::default(),
+        split: SplitBy::Until(460.0),
+        output: rust.clone(),
+    };
+    let mut with_decay = bpnn();
+    with_decay.weight_decay = 0.05;
+    let mut obs = mtec_workflow::Collect::default();
+    mtec_workflow::ops::thermal::neural_log::fit(&opts, &with_decay, &mut obs).unwrap();
+    assert_eq!(
+        std::fs::read(&decayed).unwrap(),
+        std::fs::read(&rust).unwrap()
+    );
+    let (o, plain) = fit("plain.json", &[]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_ne!(
+        std::fs::read(&decayed).unwrap(),
+        std::fs::read(&plain).unwrap()
+    );
+    for (bad, says) in [
+        (
+            "--weight-decay=-0.1",
+            "weight decay -0.1: must be finite and ≥ 0",
+        ),
+        (
+            "--weight-decay=nan",
+            "weight decay NaN: must be finite and ≥ 0",
+        ),
+    ] {
+        let (o, out) = fit("bad.json", &[bad]);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", text(&o));
+        assert!(text(&o).contains(says), "{bad}: {}", text(&o));
+        assert!(!out.exists(), "{bad}");
+    }
+    // the CNN-LSTM's step size: before this check a negative one trained away from the data
+    let out = dir.path().join("bad-lr.json");
+    let o = mtec(&[
+        "thermal",
+        "fit",
+        "--model",
+        "cnn-lstm",
+        "--data",
+        l,
+        "--target",
+        "ez_um",
+        "--train-until",
+        "460",
+        "--window",
+        "4",
+        "--epochs",
+        "2",
+        "--learning-rate=-0.01",
+        "--quiet",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("learning rate -0.01: must be finite and > 0"),
+        "{}",
+        text(&o)
+    );
+    assert!(!out.exists());
+}
+
 #[test]
 fn the_cli_and_rust_write_the_same_file_and_predict_gives_the_librarys_numbers() {
     let dir = tempfile::tempdir().unwrap();

@@ -162,6 +162,12 @@ pub fn train_bpnn_with_validation_monitored(
     if config.max_epochs == 0 {
         return Err(NnError::Config("max_epochs must be at least 1".into()));
     }
+    if !(config.learning_rate > 0.0 && config.learning_rate.is_finite()) {
+        return Err(NnError::Config(format!(
+            "learning rate {}: must be finite and > 0",
+            config.learning_rate
+        )));
+    }
     if !(config.weight_decay >= 0.0 && config.weight_decay.is_finite()) {
         return Err(NnError::Config(format!(
             "weight decay {}: must be finite and ≥ 0",

@@ -349,6 +349,12 @@ pub(crate) fn train_cnn_lstm_monitored(
     monitor: &mut dyn Monitor,
 ) -> Result<(CnnLstm, CnnLstmReport)> {
     train.validate()?;
+    if !(config.learning_rate > 0.0 && config.learning_rate.is_finite()) {
+        return Err(NnError::Config(format!(
+            "learning rate {}: must be finite and > 0",
+            config.learning_rate
+        )));
+    }
     if !(config.weight_decay >= 0.0 && config.weight_decay.is_finite()) {
         return Err(NnError::Config(format!(
             "weight decay {}: must be finite and ≥ 0",

@@ -51,6 +51,11 @@ pub struct NnArgs {
     /// bpnn: hidden units [default: 10].
     #[arg(long)]
     pub hidden: Option<usize>,
+    /// Weight decay λ ≥ 0 (bpnn: λ·‖w‖² on the weights in Levenberg–Marquardt; cnn-lstm: AdamW's
+    /// decoupled decay) [default: 0]. On a few experiments a small regularised network
+    /// generalises better (rotary campaign: λ 0.01–0.3, docs/methods.md §10.4).
+    #[arg(long, value_name = "LAMBDA")]
+    pub weight_decay: Option<f64>,
     /// Seed of the weight initialisation and batch order (same seed, same weights).
     #[arg(long, default_value_t = 42)]
     pub seed: u64,
@@ -86,6 +91,7 @@ impl NnArgs {
             final_lr_fraction: self.final_lr_fraction,
             batch_size: self.batch_size,
             hidden: self.hidden,
+            weight_decay: self.weight_decay.unwrap_or(0.0),
             seed: self.seed,
             ..mtec_nn::thermal_log::NnFitOptions::new(kind)
         }
