@@ -30,7 +30,9 @@
 //!   directions, then `linear-pc` (least squares), `bpnn-harmonic` (a BPNN of `--hidden` units,
 //!   or each of `--hiddens`, with weight decay) or `cnn-lstm-harmonic` (a CNN-LSTM over each
 //!   training experiment, `--window`/`--conv`/`--lstm`/`--epochs`/`--lr`, AdamW weight decay)
-//!   from the lagged sensors to the scores. The networks' decay among `--decays` (and the
+//!   from the lagged sensors to the scores; `bpnn-residual` and `cnn-lstm-residual` are the
+//!   hybrids (`Stage2::Residual`): least squares, then the network on its residual scores.
+//!   The networks' decay among `--decays` (and the
 //!   hidden size among `--hiddens`) is chosen nested: each training experiment left out in
 //!   turn, scored by the same criterion; `--ensemble K` averages K networks there too.
 //!
@@ -234,13 +236,14 @@ fn main() {
                         )
                         .and_then(|m| m.predict_targets(&test))
                         .expect("linear-pc"),
-                        kind @ ("bpnn-harmonic" | "cnn-lstm-harmonic") => {
+                        kind @ ("bpnn-harmonic" | "cnn-lstm-harmonic" | "bpnn-residual"
+                        | "cnn-lstm-residual") => {
                             // the average of `ensemble` networks (seeds as for the others)
                             let fit = |rows: &[usize], (hidden, decay): (usize, f64)| {
                                 let nets: Vec<HarmonicNet> = (0..ensemble as u64)
                                     .map(|k| {
                                         let s = if ensemble == 1 { seed } else { 100 * seed + k };
-                                        let stage = if kind == "bpnn-harmonic" {
+                                        let stage = if kind.starts_with("bpnn") {
                                             Stage2::Bpnn(mtec_nn::BpnnTrainConfig {
                                                 hidden,
                                                 max_epochs: settings.bpnn_iters,
@@ -265,6 +268,13 @@ fn main() {
                                             (c.weight_decay, c.seed) = (decay, s);
                                             c.validation_fraction = 0.0;
                                             Stage2::CnnLstm(c)
+                                        };
+                                        // the hybrids: least squares, the network on its
+                                        // residual scores
+                                        let stage = if kind.ends_with("-residual") {
+                                            Stage2::Residual(Box::new(stage))
+                                        } else {
+                                            stage
                                         };
                                         HarmonicNet::fit_rows(
                                             &data,

@@ -33,6 +33,11 @@ pub enum ScoreMap {
     /// The control: least squares (SVD) on [1, φ], i.e. the lagged linear model restricted to
     /// the same principal directions.
     Linear(DMatrix<f64>),
+    /// The least-squares map plus a network fitted to what it leaves (its residual scores).
+    Residual {
+        linear: DMatrix<f64>,
+        net: Box<ScoreMap>,
+    },
 }
 
 /// How stage 2 is fitted.
@@ -43,6 +48,11 @@ pub enum Stage2 {
     /// as targets (the window gives the history, so `lags` only shapes the Fourier stage's φ).
     CnnLstm(CnnLstmConfig),
     Linear,
+    /// Least squares first, then the network (`Bpnn` or `CnnLstm`) on the residual scores: a
+    /// hybrid whose network only adds what the linear map misses, so that a strong weight
+    /// decay returns the linear model (the linear-plus-network hybrids of time-series
+    /// forecasting, Zhang 2003, *Neurocomputing* 50).
+    Residual(Box<Stage2>),
 }
 
 /// A fitted harmonic-output model.
@@ -61,6 +71,85 @@ pub struct HarmonicNet {
     pub net: ScoreMap,
     nh: usize,
     nt: usize,
+}
+
+/// Fits stage 2: the map from φ (`phis`, with its constant; `x` without it) to the scores `y`.
+fn fit_score_map(
+    stage2: &Stage2,
+    train: &ThermalDataset,
+    n_sensors: usize,
+    (phis, x): (&[Vec<f64>], &[Vec<f64>]),
+    y: &[Vec<f64>],
+) -> Result<ScoreMap> {
+    let (n, kept) = (y.len(), y.first().map_or(0, |r| r.len()));
+    let least_squares = || {
+        let a = DMatrix::from_fn(n, phis[0].len(), |i, j| phis[i][j]);
+        let b = DMatrix::from_fn(n, kept, |i, j| y[i][j]);
+        lstsq(a, &b)
+    };
+    Ok(match stage2 {
+        Stage2::Bpnn(config) => ScoreMap::Bpnn(train_bpnn(x, y, config)?.0),
+        Stage2::CnnLstm(config) => {
+            // φ without its constant starts with T(t) − T̄: the first n_sensors entries
+            let mut experiments = Vec::new();
+            let mut i = 0;
+            for e in &train.experiments {
+                let len = e.sequences[0].len();
+                experiments.push(Experiment {
+                    id: e.id,
+                    sequences: vec![Sequence {
+                        features: (i..i + len).map(|r| x[r][..n_sensors].to_vec()).collect(),
+                        targets: y[i..i + len].to_vec(),
+                        warmup: 0,
+                    }],
+                });
+                i += len;
+            }
+            if i != n {
+                return Err(NnError::Data(format!(
+                    "the experiments hold {i} rows, the scores {n}"
+                )));
+            }
+            let scores = ThermalDataset {
+                feature_names: train.feature_names[..n_sensors].to_vec(),
+                target_names: (0..kept).map(|r| format!("score_{r}")).collect(),
+                experiments,
+            };
+            ScoreMap::CnnLstm(train_cnn_lstm(&scores, config)?.0)
+        }
+        Stage2::Linear => ScoreMap::Linear(least_squares()?),
+        Stage2::Residual(inner) => {
+            if matches!(**inner, Stage2::Linear | Stage2::Residual(_)) {
+                return Err(NnError::Model(
+                    "a residual stage needs a network (BPNN or CNN-LSTM) after the linear map"
+                        .into(),
+                ));
+            }
+            let linear = least_squares()?;
+            let residual: Vec<Vec<f64>> = (0..n)
+                .map(|i| {
+                    (0..kept)
+                        .map(|r| y[i][r] - linear_score(&linear, r, &phis[i][1..]))
+                        .collect()
+                })
+                .collect();
+            let net = fit_score_map(inner, train, n_sensors, (phis, x), &residual)?;
+            ScoreMap::Residual {
+                linear,
+                net: Box::new(net),
+            }
+        }
+    })
+}
+
+/// Score `r` of the least-squares map β at φ without its constant: β₀ᵣ + Σⱼ φⱼ·βⱼ₊₁,ᵣ.
+fn linear_score(beta: &DMatrix<f64>, r: usize, phi: &[f64]) -> f64 {
+    beta[(0, r)]
+        + phi
+            .iter()
+            .enumerate()
+            .map(|(j, p)| p * beta[(j + 1, r)])
+            .sum::<f64>()
 }
 
 impl HarmonicNet {
@@ -129,37 +218,7 @@ impl HarmonicNet {
                     .collect()
             })
             .collect();
-        let net = match stage2 {
-            Stage2::Bpnn(config) => ScoreMap::Bpnn(train_bpnn(&x, &y, config)?.0),
-            Stage2::CnnLstm(config) => {
-                // φ without its constant starts with T(t) − T̄: the first n_sensors entries
-                let mut experiments = Vec::new();
-                let mut i = 0;
-                for e in &train.experiments {
-                    let len = e.sequences[0].len();
-                    experiments.push(Experiment {
-                        id: e.id,
-                        sequences: vec![Sequence {
-                            features: (i..i + len).map(|r| x[r][..n_sensors].to_vec()).collect(),
-                            targets: y[i..i + len].to_vec(),
-                            warmup: 0,
-                        }],
-                    });
-                    i += len;
-                }
-                let scores = ThermalDataset {
-                    feature_names: train.feature_names[..n_sensors].to_vec(),
-                    target_names: (0..kept).map(|r| format!("score_{r}")).collect(),
-                    experiments,
-                };
-                ScoreMap::CnnLstm(train_cnn_lstm(&scores, config)?.0)
-            }
-            Stage2::Linear => {
-                let a = DMatrix::from_fn(n, phis[0].len(), |i, j| phis[i][j]);
-                let b = DMatrix::from_fn(n, kept, |i, j| y[i][j]);
-                ScoreMap::Linear(lstsq(a, &b)?)
-            }
-        };
+        let net = fit_score_map(stage2, train, n_sensors, (&phis, &x), &y)?;
         let nh = 1 + train.feature_names.len() - n_sensors;
         Ok(HarmonicNet {
             sensors: train.feature_names[..n_sensors].to_vec(),
@@ -188,8 +247,16 @@ impl HarmonicNet {
     /// The predictions of every row of one sequence `x` (features per row), appended to `out`.
     fn predict_sequence(&self, x: &[Vec<f64>], out: &mut Vec<Vec<f64>>) -> Result<()> {
         // the sequence network's scores of every time of the sequence, at once
-        let sequence_scores = match &self.net {
-            ScoreMap::CnnLstm(net) => {
+        let sequence_net = match &self.net {
+            ScoreMap::CnnLstm(net) => Some(net),
+            ScoreMap::Residual { net, .. } => match &**net {
+                ScoreMap::CnnLstm(net) => Some(net),
+                _ => None,
+            },
+            _ => None,
+        };
+        let sequence_scores = match sequence_net {
+            Some(net) => {
                 let features = (x.iter())
                     .map(|r| (0..self.n_sensors).map(|k| r[k] - self.mean[k]).collect())
                     .collect();
@@ -213,31 +280,50 @@ impl HarmonicNet {
                         x.len()
                     )));
                 }
-                Some(scores)
+                scores
             }
-            _ => None,
+            None => Vec::new(),
+        };
+        let scores_at = |map: &ScoreMap, t: usize, phi: &[f64]| -> Result<Vec<f64>> {
+            Ok(match map {
+                ScoreMap::CnnLstm(_) => sequence_scores[t].clone(),
+                ScoreMap::Bpnn(net) => net
+                    .predict(phi)
+                    .map_err(|e| NnError::Model(e.to_string()))?,
+                ScoreMap::Linear(beta) => (0..beta.ncols())
+                    .map(|r| linear_score(beta, r, phi))
+                    .collect(),
+                ScoreMap::Residual { .. } => {
+                    return Err(NnError::Model("a residual stage inside another".into()))
+                }
+            })
         };
         for t in 0..x.len() {
             let d = design_row(x, t, self.n_sensors, self.lags, &self.mean);
             let phi: Vec<f64> = d.iter().step_by(self.nh).skip(1).copied().collect();
             let s = match &self.net {
-                ScoreMap::CnnLstm(_) => {
-                    sequence_scores.as_ref().expect("computed above")[t].clone()
+                ScoreMap::Residual { linear, net } => {
+                    let correction = scores_at(net, t, &phi)?;
+                    if correction.len() != linear.ncols() {
+                        return Err(NnError::Model(format!(
+                            "the residual network gives {} scores, the linear map {}",
+                            correction.len(),
+                            linear.ncols()
+                        )));
+                    }
+                    (0..linear.ncols())
+                        .map(|r| linear_score(linear, r, &phi) + correction[r])
+                        .collect()
                 }
-                ScoreMap::Bpnn(net) => net
-                    .predict(&phi)
-                    .map_err(|e| NnError::Model(e.to_string()))?,
-                ScoreMap::Linear(beta) => (0..beta.ncols())
-                    .map(|r| {
-                        beta[(0, r)]
-                            + phi
-                                .iter()
-                                .enumerate()
-                                .map(|(j, p)| p * beta[(j + 1, r)])
-                                .sum::<f64>()
-                    })
-                    .collect(),
+                map => scores_at(map, t, &phi)?,
             };
+            if s.len() != self.directions.len() {
+                return Err(NnError::Model(format!(
+                    "stage 2 gives {} scores for {} directions",
+                    s.len(),
+                    self.directions.len()
+                )));
+            }
             let mut c = self.coef_mean.clone();
             for (d, s) in self.directions.iter().zip(&s) {
                 for (c, d) in c.iter_mut().zip(d) {
@@ -324,5 +410,72 @@ mod tests {
         let (r, r0) = (rms(&p), rms(&predict(&mean_only)));
         eprintln!("cnn-lstm stage RMS {r} against {r0} for the mean coefficients");
         assert!(r < 0.2 * r0, "{r} vs {r0}");
+    }
+
+    /// The residual stage: on a law with a term the lagged sensors do not carry linearly
+    /// ((T1 − 20)²·cos c), the network on what least squares leaves fits it far better than
+    /// least squares alone; with a decay that leaves the network nothing, it is the linear
+    /// model; and a residual stage without a network is refused.
+    #[test]
+    fn residual_stage_adds_what_the_linear_map_misses_and_decays_to_it() {
+        let mut data = law_dataset();
+        for e in &mut data.experiments {
+            for s in &mut e.sequences {
+                for (f, y) in s.features.iter().zip(s.targets.iter_mut()) {
+                    y[0] += (f[0] - 20.0).powi(2) * f[2];
+                }
+            }
+        }
+        let (_, y) = data.rows();
+        let rms = |m: &HarmonicNet| {
+            let mut p = Vec::new();
+            for e in &data.experiments {
+                for s in &e.sequences {
+                    m.predict_sequence(&s.features, &mut p).unwrap();
+                }
+            }
+            assert_eq!(p.len(), y.len());
+            let ss: f64 = p.iter().zip(&y).map(|(a, b)| (a[0] - b[0]).powi(2)).sum();
+            ((ss / y.len() as f64).sqrt(), p)
+        };
+        let linear = HarmonicNet::fit(&data, 2, 1, 100, &Stage2::Linear).unwrap();
+        let (r_lin, p_lin) = rms(&linear);
+        let bpnn = |decay: f64| {
+            Stage2::Residual(Box::new(Stage2::Bpnn(BpnnTrainConfig {
+                hidden: 4,
+                max_epochs: 200,
+                validation_fraction: 0.0,
+                weight_decay: decay,
+                seed: 3,
+                ..BpnnTrainConfig::default()
+            })))
+        };
+        let hybrid = HarmonicNet::fit(&data, 2, 1, 100, &bpnn(1e-4)).unwrap();
+        let (r_hyb, _) = rms(&hybrid);
+        eprintln!("linear RMS {r_lin}, linear + BPNN on the residual {r_hyb}");
+        assert!(
+            r_lin > 1.0,
+            "the term must be one least squares misses: {r_lin}"
+        );
+        assert!(r_hyb < 0.1 * r_lin, "{r_hyb} vs {r_lin}");
+        // a decay of 1e6 on z-scored outputs leaves the network its bias: the mean residual
+        // (zero for least squares with an intercept), so the hybrid is the linear model
+        let damped = HarmonicNet::fit(&data, 2, 1, 100, &bpnn(1e6)).unwrap();
+        let (r_damped, p_damped) = rms(&damped);
+        let gap = (p_damped.iter().zip(&p_lin))
+            .map(|(a, b)| (a[0] - b[0]).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            gap < 0.02 * r_lin,
+            "{gap} vs {r_lin} (damped RMS {r_damped})"
+        );
+        let refused = HarmonicNet::fit(
+            &data,
+            2,
+            1,
+            100,
+            &Stage2::Residual(Box::new(Stage2::Linear)),
+        );
+        assert!(refused.is_err());
     }
 }
