@@ -78,6 +78,40 @@ fn same(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-12 * a.abs().max(1.0)
 }
 
+/// `mtec thermal fit --model MODEL --data LOG --target ez_um --train-until 460 -o OUT EXTRA…`.
+fn fit_cli(model: &str, log: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "thermal",
+        "fit",
+        "--model",
+        model,
+        "--data",
+        log.to_str().unwrap(),
+        "--target",
+        "ez_um",
+        "--train-until",
+        "460",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    mtec(&args)
+}
+
+/// The same fit as [`fit_cli`] from Rust, in-process (the workflow's `neural_log::fit`).
+fn fit_rust(model: &str, log: &Path, out: &Path, options: &NnFitOptions) {
+    let opts = mtec_workflow::ops::thermal::FitOptions {
+        data: log.to_path_buf(),
+        target: "ez_um".into(),
+        model: model.into(),
+        fit: mtec_thermal::FitOptions::default(),
+        split: SplitBy::Until(460.0),
+        output: out.to_path_buf(),
+    };
+    let mut obs = mtec_workflow::Collect::default();
+    mtec_workflow::ops::thermal::neural_log::fit(&opts, options, &mut obs).unwrap();
+}
+
 #[test]
 fn bpnn_with_train_until_is_validated_forward_by_the_regression_models_code() {
     let dir = tempfile::tempdir().unwrap();
@@ -191,42 +225,17 @@ fn bpnn_with_train_until_is_validated_forward_by_the_regression_models_code() {
 fn weight_decay_reaches_the_network_and_bad_training_settings_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let log = write_log(dir.path());
-    let l = log.to_str().unwrap();
     let fit = |name: &str, extra: &[&str]| {
         let out = dir.path().join(name);
-        let mut args = vec![
-            "thermal",
-            "fit",
-            "--model",
-            "bpnn",
-            "--data",
-            l,
-            "--target",
-            "ez_um",
-            "--train-until",
-            "460",
-            "-o",
-            out.to_str().unwrap(),
-        ];
-        args.extend(BPNN);
-        args.extend(extra);
-        (mtec(&args), out)
+        let args: Vec<&str> = BPNN.iter().chain(extra).copied().collect();
+        (fit_cli("bpnn", &log, &out, &args), out)
     };
     let (o, decayed) = fit("decayed.json", &["--weight-decay", "0.05"]);
     assert!(o.status.success(), "{}", text(&o));
     let rust = dir.path().join("rust.json");
-    let opts = mtec_workflow::ops::thermal::FitOptions {
-        data: log.clone(),
-        target: "ez_um".into(),
-        model: "bpnn".into(),
-        fit: mtec_thermal::FitOptions::default(),
-        split: SplitBy::Until(460.0),
-        output: rust.clone(),
-    };
     let mut with_decay = bpnn();
     with_decay.weight_decay = 0.05;
-    let mut obs = mtec_workflow::Collect::default();
-    mtec_workflow::ops::thermal::neural_log::fit(&opts, &with_decay, &mut obs).unwrap();
+    fit_rust("bpnn", &log, &rust, &with_decay);
     assert_eq!(
         std::fs::read(&decayed).unwrap(),
         std::fs::read(&rust).unwrap()
@@ -254,26 +263,19 @@ fn weight_decay_reaches_the_network_and_bad_training_settings_are_refused() {
     }
     // the CNN-LSTM's step size: before this check a negative one trained away from the data
     let out = dir.path().join("bad-lr.json");
-    let o = mtec(&[
-        "thermal",
-        "fit",
-        "--model",
+    let o = fit_cli(
         "cnn-lstm",
-        "--data",
-        l,
-        "--target",
-        "ez_um",
-        "--train-until",
-        "460",
-        "--window",
-        "4",
-        "--epochs",
-        "2",
-        "--learning-rate=-0.01",
-        "--quiet",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+        &log,
+        &out,
+        &[
+            "--window",
+            "4",
+            "--epochs",
+            "2",
+            "--learning-rate=-0.01",
+            "--quiet",
+        ],
+    );
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(
         text(&o).contains("learning rate -0.01: must be finite and > 0"),
@@ -289,35 +291,11 @@ fn the_cli_and_rust_write_the_same_file_and_predict_gives_the_librarys_numbers()
     let log = write_log(dir.path());
     let model = dir.path().join("cli.json");
     let (l, m) = (log.to_str().unwrap(), model.to_str().unwrap());
-    let mut args = vec![
-        "thermal",
-        "fit",
-        "--model",
-        "bpnn",
-        "--data",
-        l,
-        "--target",
-        "ez_um",
-        "--train-until",
-        "460",
-        "-o",
-        m,
-    ];
-    args.extend(BPNN);
-    let o = mtec(&args);
+    let o = fit_cli("bpnn", &log, &model, &BPNN);
     assert!(o.status.success(), "{}", text(&o));
     // the same fit from Rust, in-process
     let rust = dir.path().join("rust.json");
-    let opts = mtec_workflow::ops::thermal::FitOptions {
-        data: log.clone(),
-        target: "ez_um".into(),
-        model: "bpnn".into(),
-        fit: mtec_thermal::FitOptions::default(),
-        split: SplitBy::Until(460.0),
-        output: rust.clone(),
-    };
-    let mut obs = mtec_workflow::Collect::default();
-    mtec_workflow::ops::thermal::neural_log::fit(&opts, &bpnn(), &mut obs).unwrap();
+    fit_rust("bpnn", &log, &rust, &bpnn());
     assert_eq!(
         std::fs::read(&model).unwrap(),
         std::fs::read(&rust).unwrap()
