@@ -190,12 +190,25 @@ fn a_correction_beyond_max_correction_um_is_refused_with_exit_2() {
         assert!(o.status.success(), "{format}: {}", text(&o));
         assert!(std::path::Path::new(&out).exists(), "{format}");
     }
-    // the limit is an option, refused when not a positive number
+    // the limit is an option up to 10 mm, refused when not a positive number or above that
+    // (a huge limit would switch the size rule off)
     let o = table(
         &p("ten_mm.json"),
         "linuxcnc",
         &p("wide.comp"),
         &["--max-correction-um", "20000"],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("--max-correction-um must be a positive number of at most 10000 um"),
+        "{}",
+        text(&o)
+    );
+    let o = table(
+        &p("ten_mm.json"),
+        "linuxcnc",
+        &p("wide.comp"),
+        &["--max-correction-um", "10000"],
     );
     assert!(o.status.success(), "{}", text(&o));
     assert!(std::fs::read_to_string(p("wide.comp"))

@@ -278,7 +278,7 @@ fn weight_decay_reaches_the_network_and_bad_training_settings_are_refused() {
     );
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(
-        text(&o).contains("learning rate -0.01: must be finite and > 0"),
+        text(&o).contains("learning rate -0.01: must be > 0 and at most 1"),
         "{}",
         text(&o)
     );

@@ -346,6 +346,27 @@ fn too_large_an_update_is_refused() {
         &linear("g10", &["--base-mm", "0", "--max-correction-um", "0"]),
         &["--max-correction-um must be a positive number"],
     );
+    // the limit cannot be switched off: 1e308 let a 25 m offset through (issue 17's guard
+    // rails; docs/formats.md, "Bounded options")
+    refused(
+        &linear("g10", &["--base-mm", "0", "--max-correction-um=1e308"]),
+        &["--max-correction-um must be a positive number of at most 10000 um"],
+    );
+    // positions that reach the controller are machine positions: 1e9 wrote Z999999999.9965
+    for (flag, format) in [
+        ("--base-mm=1e9", "g10"),
+        ("--base-mm=1e308", "fanuc"),
+        ("--base-mm=inf", "fanuc-macro"),
+    ] {
+        refused(
+            &linear(format, &[flag]),
+            &["--base-mm", "is not a machine position"],
+        );
+    }
+    refused(
+        &linear("g10", &["--base-mm", "0", "--position-origin-mm=1e9"]),
+        &["--position-origin-mm 1e9 mm is not a machine position"],
+    );
 }
 
 #[test]

@@ -38,6 +38,9 @@ use std::path::Path;
 /// The format tag of a machine error model file.
 pub const MACHINE_FORMAT: &str = "mtec.machine-error/1";
 
+/// Widest fade of a temperature input outside its training range (°C).
+pub const MAX_FADE_TEMPERATURE_C: f64 = 10.0;
+
 /// Default fade width of a temperature input outside its training range (°C).
 pub const FADE_TEMPERATURE_C: f64 = 2.0;
 /// Default fade width of any other input, as a fraction of its training range.
@@ -208,9 +211,15 @@ impl MachineErrorModel {
         fade: Fade,
         source: String,
     ) -> Result<MachineErrorModel, String> {
-        let positive = |v: f64| v > 0.0 && v.is_finite();
-        if !positive(fade.temperature_c) || !positive(fade.other_fraction) {
-            return Err("`fade` widths must be positive and finite".into());
+        // a wider fade would keep the thermal part applied far outside its training range,
+        // which the envelope guard is there to stop
+        let within = |v: f64, max: f64| v > 0.0 && v <= max;
+        if !(within(fade.temperature_c, MAX_FADE_TEMPERATURE_C) && within(fade.other_fraction, 1.0))
+        {
+            return Err(format!(
+                "the fade widths (--fade-c {:e}, --fade-other {:e}) must be in (0, {MAX_FADE_TEMPERATURE_C}] °C and (0, 1] of the training range",
+                fade.temperature_c, fade.other_fraction
+            ));
         }
         let mut inputs: Vec<String> = Vec::new();
         let mut envelope: Vec<[f64; 2]> = Vec::new();

@@ -402,16 +402,20 @@ fn every_writer_writes_a_correction_just_under_the_bound() {
     assert!(err.to_string().contains("500.56"), "{err}");
 }
 
-/// The bound is the caller's: raised, a 10 mm table is written; a profile built by hand is held
-/// to it too; a bound that is not a positive number is refused.
+/// The bound is the caller's: raised to its largest (10 mm), a 10 mm table is written, beyond
+/// that the bound is refused; a profile built by hand is held to it too; a bound that is not a
+/// positive number is refused.
 #[test]
 fn the_bound_is_an_option_and_holds_for_hand_built_profiles() {
     let m = Constant(10_000.0);
     let p = axis_profile(&m, Axis::X, Axis::X, 0.0, 100.0, 100.0, [0.0; 3]).unwrap();
-    let wide = p.clone().with_max_correction_um(20_000.0);
+    let wide = p.clone().with_max_correction_um(10_000.0);
     assert!(table::linuxcnc::write(&wide, 1)
         .unwrap()
         .starts_with("0.000000 -10.000000 -10.000000\n"));
+    let beyond = p.clone().with_max_correction_um(20_000.0);
+    let err = table::linuxcnc::write(&beyond, 1).unwrap_err();
+    assert!(err.to_string().contains("at most 10000 um"), "{err}");
     let by_hand = AxisProfile {
         comp_um: vec![0.0, 600.0],
         ..p.with_max_correction_um(500.0)

@@ -156,15 +156,19 @@ pub fn train_bpnn_with_validation_monitored(
             ));
         }
     }
-    if config.hidden == 0 {
-        return Err(NnError::Config("hidden size must be at least 1".into()));
+    if config.hidden == 0 || config.hidden > crate::cnn_lstm::MAX_UNITS {
+        return Err(NnError::Config(format!(
+            "hidden size {}: must be 1 to {}",
+            config.hidden,
+            crate::cnn_lstm::MAX_UNITS
+        )));
     }
     if config.max_epochs == 0 {
         return Err(NnError::Config("max_epochs must be at least 1".into()));
     }
-    if !(config.learning_rate > 0.0 && config.learning_rate.is_finite()) {
+    if !(config.learning_rate > 0.0 && config.learning_rate <= crate::cnn_lstm::MAX_LEARNING_RATE) {
         return Err(NnError::Config(format!(
-            "learning rate {}: must be finite and > 0",
+            "learning rate {}: must be > 0 and at most 1",
             config.learning_rate
         )));
     }

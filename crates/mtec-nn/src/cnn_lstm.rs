@@ -164,11 +164,30 @@ fn param_shapes(
     ]
 }
 
+/// Largest window (rows) and layer width a CNN-LSTM may be given.
+pub const MAX_WINDOW: usize = 10_000;
+pub const MAX_UNITS: usize = 1000;
+
+/// Largest step size (Adam or AdamW) a network may be trained with: beyond 1 the weights of
+/// these z-scored problems diverge in the first steps.
+pub const MAX_LEARNING_RATE: f64 = 1.0;
+
 fn check_architecture(a: &Architecture, n_features: usize) -> Result<()> {
     if a.window == 0 || a.conv_channels == 0 || a.lstm_hidden == 0 {
         return Err(NnError::Config(
             "window, conv_channels and lstm_hidden must be at least 1".into(),
         ));
+    }
+    // the bounds of a network this machine can train (the source's: window 16, 16 filters,
+    // LSTM 32): a size of 10⁹ asked for gigabytes and aborted the process
+    for (name, v, max) in [
+        ("window", a.window, MAX_WINDOW),
+        ("conv_channels", a.conv_channels, MAX_UNITS),
+        ("lstm_hidden", a.lstm_hidden, MAX_UNITS),
+    ] {
+        if v > max {
+            return Err(NnError::Config(format!("{name} {v}: at most {max}")));
+        }
     }
     if a.kernel.is_multiple_of(2) {
         return Err(NnError::Config(format!(
@@ -349,9 +368,9 @@ pub(crate) fn train_cnn_lstm_monitored(
     monitor: &mut dyn Monitor,
 ) -> Result<(CnnLstm, CnnLstmReport)> {
     train.validate()?;
-    if !(config.learning_rate > 0.0 && config.learning_rate.is_finite()) {
+    if !(config.learning_rate > 0.0 && config.learning_rate <= MAX_LEARNING_RATE) {
         return Err(NnError::Config(format!(
-            "learning rate {}: must be finite and > 0",
+            "learning rate {}: must be > 0 and at most 1",
             config.learning_rate
         )));
     }

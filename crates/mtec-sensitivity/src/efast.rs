@@ -129,6 +129,12 @@ pub fn sample(
     settings.check()?;
     let d = problem.dim();
     let n = settings.n;
+    crate::problem::check_design_size(
+        n.checked_mul(d)
+            .and_then(|r| r.checked_mul(settings.resamples)),
+        d,
+        &format!("EFAST N = {n} × resamples {}", settings.resamples),
+    )?;
     let (omega_max, others) = frequencies(n, settings.m, d);
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
     let curves = settings.resamples * d;

@@ -654,14 +654,17 @@ pub fn allocate(
     target_um: f64,
     coverage_factor: f64,
 ) -> Result<ToleranceTable, SensitivityError> {
-    if !(target_um > 0.0 && target_um.is_finite()) {
+    // a target of a metre is no machine-tool accuracy (the error bound of the readers), and a
+    // coverage factor beyond 10 is no confidence level (k = 2 for 95 %, 3 for 99.7 %)
+    if !(target_um > 0.0 && target_um < mtec_io::plausible::MAX_ERROR_UM) {
         return Err(SensitivityError::Settings(format!(
-            "target accuracy {target_um} µm must be a positive number"
+            "target accuracy {target_um:e} µm must be a positive number below {:e} µm",
+            mtec_io::plausible::MAX_ERROR_UM
         )));
     }
-    if !(coverage_factor > 0.0 && coverage_factor.is_finite()) {
+    if !(coverage_factor > 0.0 && coverage_factor <= 10.0) {
         return Err(SensitivityError::Settings(format!(
-            "coverage factor {coverage_factor} must be a positive number"
+            "coverage factor {coverage_factor:e} must be a positive number of at most 10"
         )));
     }
     let sigma_target = target_um / coverage_factor;

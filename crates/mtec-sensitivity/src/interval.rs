@@ -41,10 +41,19 @@ impl Default for Bootstrap {
     }
 }
 
+/// Most bootstrap replicates (each holds an estimate of every input).
+pub const MAX_RESAMPLES: usize = 10_000;
+
 impl Bootstrap {
     /// Whether intervals are computed (B ≥ 2); checks the confidence level.
     pub fn active(&self) -> Result<bool, SensitivityError> {
         check_confidence(self.confidence)?;
+        if self.resamples > MAX_RESAMPLES {
+            return Err(SensitivityError::Settings(format!(
+                "{} bootstrap resamples: at most {MAX_RESAMPLES} (SALib's default is 100)",
+                self.resamples
+            )));
+        }
         Ok(self.resamples >= 2)
     }
 

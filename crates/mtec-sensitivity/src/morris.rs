@@ -59,9 +59,12 @@ fn check(settings: &MorrisSettings) -> Result<(), SensitivityError> {
             "Morris needs at least 2 trajectories".into(),
         ));
     }
-    if settings.levels < 2 || settings.levels % 2 != 0 {
+    // p = 4 to 10 in practice (Saltelli et al., *Global Sensitivity Analysis: The Primer*,
+    // 2008, §3.3); as p grows the step Δ = p/(2(p − 1)) tends to 1/2, half of every range,
+    // where a periodic input's effects cancel (Ishigami's x2 then reads as having none)
+    if settings.levels < 2 || settings.levels % 2 != 0 || settings.levels > 100 {
         return Err(SensitivityError::Settings(format!(
-            "Morris needs an even number of levels ≥ 2 (got {})",
+            "Morris needs an even number of levels from 2 to 100 (got {})",
             settings.levels
         )));
     }
@@ -76,6 +79,11 @@ pub fn sample(
 ) -> Result<MorrisDesign, SensitivityError> {
     check(settings)?;
     let d = problem.dim();
+    crate::problem::check_design_size(
+        settings.trajectories.checked_mul(d + 1),
+        d,
+        &format!("Morris r = {} trajectories", settings.trajectories),
+    )?;
     let p = settings.levels;
     let delta = p as f64 / (2.0 * (p - 1) as f64);
     let eps = 0.5 / p as f64;

@@ -93,6 +93,25 @@ impl<F: Fn(&[f64]) -> f64 + Sync> Model for FnModel<F> {
     }
 }
 
+/// Largest design a method may draw (rows × inputs values, 160 MB of f64): a count of 10⁹
+/// asked for hundreds of gigabytes and aborted the process.
+pub const MAX_DESIGN_VALUES: usize = 20_000_000;
+
+/// Refuses a design of `rows` rows (`None`: the count overflowed) of `dim` inputs beyond
+/// [`MAX_DESIGN_VALUES`]; `what` says how the rows were counted.
+pub fn check_design_size(
+    rows: Option<usize>,
+    dim: usize,
+    what: &str,
+) -> Result<(), SensitivityError> {
+    match rows.and_then(|r| r.checked_mul(dim.max(1))) {
+        Some(v) if v <= MAX_DESIGN_VALUES => Ok(()),
+        _ => Err(SensitivityError::Settings(format!(
+            "{what} with {dim} inputs is a design of more than {MAX_DESIGN_VALUES} values: use fewer samples"
+        ))),
+    }
+}
+
 /// Sample points, one per row (row-major), in input space.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SampleMatrix {

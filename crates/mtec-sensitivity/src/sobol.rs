@@ -33,6 +33,11 @@ pub fn sample(problem: &Problem, n: usize, seed: u64) -> Result<SampleMatrix, Se
         ));
     }
     let d = problem.dim();
+    crate::problem::check_design_size(
+        (d + 2).checked_mul(n),
+        d,
+        &format!("Sobol N = {n} (N·(D + 2) rows)"),
+    )?;
     let quasi = n <= MAX_SOBOL_POINTS && 2 * d <= sobol_burley::NUM_DIMENSIONS as usize;
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
     let seed32 = (seed ^ (seed >> 32)) as u32;

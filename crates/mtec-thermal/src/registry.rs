@@ -54,9 +54,12 @@ impl FitOptions {
             ));
         }
         if let Some(k) = self.k {
-            if !(k >= 0.0 && k.is_finite() && kind.takes_k) {
+            // correlation form: the diagonal of XᵀX is 1, so at k = 100 every coefficient is
+            // shrunk a hundredfold and the model is the mean (a larger k was accepted and wrote
+            // a constant model)
+            if !((0.0..=100.0).contains(&k) && kind.takes_k) {
                 return Err(format!(
-                    "--k must be a number ≥ 0 and goes with --model {}",
+                    "--k must be a number from 0 to 100 and goes with --model {}",
                     names_where(|k| k.takes_k)
                 ));
             }
@@ -441,8 +444,15 @@ mod tests {
         };
         assert_eq!(
             o.check(mlr).unwrap_err(),
-            "--k must be a number ≥ 0 and goes with --model ridge"
+            "--k must be a number from 0 to 100 and goes with --model ridge"
         );
+        for bad in [1e9, -0.1, f64::NAN] {
+            let o = FitOptions {
+                k: Some(bad),
+                ..Default::default()
+            };
+            assert!(o.check(kind("ridge").unwrap()).is_err(), "{bad}");
+        }
         assert!(o.check(kind("ridge").unwrap()).is_ok());
         let o = FitOptions {
             lag: true,

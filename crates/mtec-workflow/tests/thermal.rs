@@ -189,7 +189,10 @@ fn bad_input_is_located_and_usage_is_refused() {
     let mut o = mlr_options(&bad, dir.path().join("m.json"));
     o.fit.k = Some(0.1);
     match op::fit(&o, &mut Collect::default()).unwrap_err() {
-        Error::Usage(m) => assert_eq!(m, "--k must be a number ≥ 0 and goes with --model ridge"),
+        Error::Usage(m) => assert_eq!(
+            m,
+            "--k must be a number from 0 to 100 and goes with --model ridge"
+        ),
         other => panic!("{other:?}"),
     }
     // the model file may not overwrite the data

@@ -40,7 +40,8 @@ pub struct Args {
     /// Largest chord sagitta when an arc is replaced by straight pieces, in um.
     #[arg(long, default_value_t = 0.5)]
     pub chord_tolerance_um: f64,
-    /// Refuse corrections larger than this, in um.
+    /// Refuse corrections larger than this, in um (at most 10000: the limit cannot be switched
+    /// off).
     #[arg(long, default_value_t = 500.0)]
     pub max_correction_um: f64,
     /// What to do with constructs that cannot be compensated safely.
@@ -63,7 +64,7 @@ pub struct Args {
     /// Machine position at program start, "x,y,z" in mm (e.g. home; on a lathe the fixed Y).
     #[arg(long, value_name = "X,Y,Z")]
     pub start_position_mm: Option<String>,
-    /// Sample spacing of the path check for models that are not grid maps, in mm.
+    /// Sample spacing of the path check for models that are not grid maps, in mm (0.001-10).
     #[arg(long, default_value_t = 0.5)]
     pub check_step_mm: f64,
     /// Machine angles of the rotary axes at program start, "a,b,c" in degrees (only the axes of
@@ -73,7 +74,7 @@ pub struct Args {
     pub start_rotary_deg: Option<String>,
     /// Largest turn of a rotary axis between samples of the path check of a move that turns
     /// one, in degrees (0.5° moves a point 500 mm from the axis by 4.4 mm along its arc; the
-    /// check also samples every --check-step-mm of the tool tip's path).
+    /// check also samples every --check-step-mm of the tool tip's path; 0.001-10).
     #[arg(long, default_value_t = 0.5)]
     pub check_step_deg: f64,
     /// Longest line the controller reads (LinuxCNC: 251 with either line ending); longer

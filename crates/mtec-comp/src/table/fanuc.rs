@@ -81,6 +81,23 @@ pub fn write(profile: &AxisProfile, opts: &FanucOptions) -> Result<String, Table
             "pitch error compensation corrects the axis's own position (input axis = output axis)",
         ));
     }
+    if opts.axis_number == 0 {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            "the axis number (--axis-number) starts at 1 (A1 = the first axis)",
+        ));
+    }
+    if !(1..=127).contains(&opts.max_increment) {
+        return Err(TableError::rule(
+            FORMAT,
+            None,
+            format!(
+                "the value range per point (--max-increment) must be 1..127 (±7 on older controls, ±127 on 16i/0i), not {}",
+                opts.max_increment
+            ),
+        ));
+    }
     if !(1..=100).contains(&opts.magnification) {
         return Err(TableError::rule(
             FORMAT,
@@ -100,7 +117,7 @@ pub fn write(profile: &AxisProfile, opts: &FanucOptions) -> Result<String, Table
     let n = comp_um.len();
     let m_f = (opts.reference_mm - profile.start_mm) / profile.step_mm;
     let m = m_f.round();
-    if (m_f - m).abs() > 1e-6 || m < 0.0 || m as usize >= n {
+    if !m_f.is_finite() || (m_f - m).abs() > 1e-6 || m < 0.0 || m as usize >= n {
         return Err(TableError::rule(
             FORMAT,
             None,

@@ -130,6 +130,44 @@ impl AxisProfile {
     }
 }
 
+/// Most points one axis of a table may have: far beyond any controller's table (FANUC numbers
+/// its points up to 1023 on many models), and a bound on the memory a range can ask for.
+pub const MAX_TABLE_POINTS: usize = 100_000;
+
+/// `--max-correction-um`: positive and at most
+/// [`mtec_io::plausible::MAX_CORRECTION_LIMIT_UM`] (a huge limit would switch the size rule off).
+pub fn check_max_correction(max_um: f64) -> Result<(), String> {
+    use mtec_io::plausible::{positive_option, MAX_CORRECTION_LIMIT_UM};
+    positive_option("--max-correction-um", max_um, MAX_CORRECTION_LIMIT_UM, "um").map(|_| ())
+}
+
+/// The number of intervals of a table range FROM..TO step STEP: machine positions for ends,
+/// a whole number of steps, at least one interval and at most [`MAX_TABLE_POINTS`] − 1.
+pub fn range_intervals(from_mm: f64, to_mm: f64, step_mm: f64) -> Result<usize, String> {
+    use mtec_io::plausible::position_option;
+    position_option("the table range's start", from_mm)?;
+    position_option("the table range's end", to_mm)?;
+    if step_mm.is_nan() || step_mm <= 0.0 || to_mm <= from_mm {
+        return Err(format!(
+            "table range {from_mm}..{to_mm} step {step_mm}: the step must be positive and the end above the start"
+        ));
+    }
+    let intervals = (to_mm - from_mm) / step_mm;
+    let n = intervals.round();
+    if (intervals - n).abs() > 1e-6 {
+        return Err(format!(
+            "the range {from_mm}..{to_mm} mm is not a whole number of steps of {step_mm} mm ({intervals:.4} steps)"
+        ));
+    }
+    if n < 1.0 || n >= MAX_TABLE_POINTS as f64 {
+        return Err(format!(
+            "the range {from_mm}..{to_mm} mm step {step_mm} mm gives {} points: a table needs 2 to {MAX_TABLE_POINTS}",
+            n + 1.0
+        ));
+    }
+    Ok(n as usize)
+}
+
 /// The one size rule of every table writer: `value_um` (the value of `axis` at `p_mm`) must be
 /// finite, and `size_um` (|value| for a 1-D table, the vector length for a volumetric one) at
 /// most `max_um`. `table_position` is the input axis and position of a 1-D table point.
@@ -142,11 +180,7 @@ pub fn check_correction(
     size_um: f64,
     max_um: f64,
 ) -> Result<(), TableError> {
-    if !(max_um.is_finite() && max_um > 0.0) {
-        return Err(TableError::Sampling(format!(
-            "--max-correction-um must be a positive number, not {max_um}"
-        )));
-    }
+    check_max_correction(max_um).map_err(TableError::Sampling)?;
     if value_um.is_finite() && size_um.is_finite() && size_um <= max_um {
         return Ok(());
     }
@@ -249,24 +283,7 @@ pub fn axis_profile(
     step_mm: f64,
     at_mm: [f64; 3],
 ) -> Result<AxisProfile, TableError> {
-    if step_mm.is_nan() || step_mm <= 0.0 || !start_mm.is_finite() || !end_mm.is_finite() {
-        return Err(TableError::Sampling(format!(
-            "table range {start_mm}..{end_mm} step {step_mm}: the step must be positive and the ends finite"
-        )));
-    }
-    if end_mm <= start_mm {
-        return Err(TableError::Sampling(format!(
-            "table range {start_mm}..{end_mm}: the end must be above the start"
-        )));
-    }
-    let intervals = (end_mm - start_mm) / step_mm;
-    let n_int = intervals.round();
-    if (intervals - n_int).abs() > 1e-6 {
-        return Err(TableError::Sampling(format!(
-            "the range {start_mm}..{end_mm} mm is not a whole number of steps of {step_mm} mm ({intervals:.4} steps)"
-        )));
-    }
-    let n = n_int as usize + 1;
+    let n = range_intervals(start_mm, end_mm, step_mm).map_err(TableError::Sampling)? + 1;
     let mut comp_um = Vec::with_capacity(n);
     for i in 0..n {
         let mut p = at_mm;

@@ -31,11 +31,7 @@ fn check(p: u32, base_mm: f64) -> Result<(), OffsetError> {
             "--offset {p}: the FANUC outputs write work offsets 1 (G54) to 6 (G59)"
         )));
     }
-    if !base_mm.is_finite() {
-        return Err(OffsetError::Usage(format!(
-            "--base-mm {base_mm} is not a number"
-        )));
-    }
+    mtec_io::plausible::position_option("--base-mm", base_mm).map_err(OffsetError::Usage)?;
     Ok(())
 }
 

@@ -26,11 +26,7 @@ pub fn write(
             "--offset {p}: LinuxCNC's G10 L2 takes P0 (the active system) to P9 (G59.3)"
         )));
     }
-    if !base_mm.is_finite() {
-        return Err(OffsetError::Usage(format!(
-            "--base-mm {base_mm} is not a number"
-        )));
-    }
+    mtec_io::plausible::position_option("--base-mm", base_mm).map_err(OffsetError::Usage)?;
     let mut out = String::new();
     for h in header.iter().chain(std::iter::once(&update_line(u))) {
         out.push_str(&format!("({})\n", comment_text(h)));

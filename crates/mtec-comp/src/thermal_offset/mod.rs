@@ -126,18 +126,15 @@ pub struct TempCompSetting {
 }
 
 fn check_options(o: &UpdateOptions) -> Result<(), OffsetError> {
-    if !(o.max_correction_um.is_finite() && o.max_correction_um > 0.0) {
-        return Err(OffsetError::Usage(format!(
-            "--max-correction-um must be a positive number, not {}",
-            o.max_correction_um
-        )));
-    }
-    if !o.origin_mm.is_finite() {
-        return Err(OffsetError::Usage(format!(
-            "--position-origin-mm {} is not a position",
-            o.origin_mm
-        )));
-    }
+    use mtec_io::plausible::{position_option, positive_option, MAX_CORRECTION_LIMIT_UM};
+    positive_option(
+        "--max-correction-um",
+        o.max_correction_um,
+        MAX_CORRECTION_LIMIT_UM,
+        "um",
+    )
+    .map_err(OffsetError::Usage)?;
+    position_option("--position-origin-mm", o.origin_mm).map_err(OffsetError::Usage)?;
     Ok(())
 }
 
@@ -183,8 +180,7 @@ pub fn offset_update(
         )?;
     }
     let at_mm = match at_mm {
-        Some(a) if a.is_finite() => a,
-        Some(a) => return Err(OffsetError::Usage(format!("--at-mm {a} is not a position"))),
+        Some(a) => mtec_io::plausible::position_option("--at-mm", a).map_err(OffsetError::Usage)?,
         None if run.position_dependent => {
             return Err(OffsetError::Usage(format!(
                 "the model's {} drift depends on the axis position (k = {:.6} um/mm now): give --at-mm, the machine position the offset is used at (e.g. the height of the machined face)",
@@ -259,10 +255,17 @@ pub fn temp_comp_setting(
         position_dependent: run.position_dependent,
     };
     let ends: Vec<f64> = match opts.travel_mm {
-        Some([a, b]) if a.is_finite() && b.is_finite() && a < b => vec![a, b],
+        Some([a, b])
+            if a < b
+                && mtec_io::plausible::position_option("--travel-mm", a).is_ok()
+                && mtec_io::plausible::position_option("--travel-mm", b).is_ok() =>
+        {
+            vec![a, b]
+        }
         Some([a, b]) => {
             return Err(OffsetError::Usage(format!(
-                "--travel-mm {a}:{b}: expected FROM:TO with FROM < TO"
+                "--travel-mm {a:e}:{b:e}: expected FROM:TO with FROM < TO, machine positions (finite, below {:e} mm in magnitude)",
+                mtec_io::plausible::MAX_POSITION_MM
             )))
         }
         None if run.position_dependent => {

@@ -23,6 +23,9 @@
 use mtec_io::{InputError, Table};
 use std::path::Path;
 
+/// Fastest feed a trace may state (mm/min): 1000 m/min, beyond any machine tool.
+pub const MAX_FEED_MM_MIN: f64 = 1e6;
+
 /// The plane of the test: which machine axes are axis 1 and axis 2.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Plane {
@@ -210,10 +213,14 @@ impl CircularTrace {
             None => header_number("feed_mm_min")?,
         };
         if let Some(f) = feed_mm_min {
-            if f <= 0.0 {
+            // 1000 m/min is beyond any machine tool's feed: a unit mistake, and the servo
+            // mismatch estimate (a lag of radius·ω) would rank every fault below it
+            if !(f > 0.0 && f < MAX_FEED_MM_MIN) {
                 return Err(InputError::file(
                     path,
-                    format!("feed {f} mm/min: must be positive"),
+                    format!(
+                        "feed {f:e} mm/min: must be positive and below {MAX_FEED_MM_MIN:e} mm/min"
+                    ),
                 ));
             }
         }

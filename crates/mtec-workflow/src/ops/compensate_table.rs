@@ -99,13 +99,8 @@ impl Range {
     /// above FROM.
     pub fn values(&self) -> Result<Vec<f64>> {
         let Range { from, to, step } = *self;
-        let n = ((to - from) / step).round();
-        if to <= from || ((to - from) / step - n).abs() > 1e-6 {
-            return Err(Error::usage(format!(
-                "range {from}:{to}:{step} is not a whole number of steps from FROM up to TO"
-            )));
-        }
-        Ok((0..=n as usize).map(|i| from + step * i as f64).collect())
+        let n = table::range_intervals(from, to, step).map_err(Error::usage)?;
+        Ok((0..=n).map(|i| from + step * i as f64).collect())
     }
 }
 
@@ -118,7 +113,12 @@ pub fn parse_axis(opt: &str, s: &str) -> Result<Axis> {
 pub fn parse_at(s: &str) -> Result<[f64; 3]> {
     let v: Vec<Option<f64>> = s.split(',').map(|p| p.trim().parse::<f64>().ok()).collect();
     match v.as_slice() {
-        [Some(x), Some(y), Some(z)] => Ok([*x, *y, *z]),
+        [Some(x), Some(y), Some(z)] => {
+            for c in [x, y, z] {
+                mtec_io::plausible::position_option("--at", *c).map_err(Error::usage)?;
+            }
+            Ok([*x, *y, *z])
+        }
         _ => Err(Error::usage(format!(
             "--at `{s}`: expected X,Y,Z in mm, e.g. 250,150,-100"
         ))),
@@ -305,12 +305,7 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
     let map = load_map_if_grid(&opts.model)?;
     let axis = opts.axis;
     let output_axis = opts.output_axis.unwrap_or(axis);
-    if !(opts.max_correction_um.is_finite() && opts.max_correction_um > 0.0) {
-        return Err(Error::usage(format!(
-            "--max-correction-um must be a positive number, not {}",
-            opts.max_correction_um
-        )));
-    }
+    table::check_max_correction(opts.max_correction_um).map_err(Error::usage)?;
     let mut provenance = model.describe();
     if let Some(s) = &selective {
         provenance += &format!(
@@ -358,6 +353,16 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
                     "beckhoff: the model is not a grid map; give --x-range, --y-range and --z-range",
                 ));
             }
+        }
+        let points: usize = axes.iter().map(Vec::len).product();
+        if points > table::MAX_TABLE_POINTS {
+            return Err(Error::usage(format!(
+                "beckhoff: {} × {} × {} = {points} grid points, more than {}: choose coarser --x-range, --y-range, --z-range steps",
+                axes[0].len(),
+                axes[1].len(),
+                axes[2].len(),
+                table::MAX_TABLE_POINTS
+            )));
         }
         let text =
             table::beckhoff::write(model.as_ref(), &axes, &provenance, opts.max_correction_um)
@@ -468,12 +473,7 @@ fn load_map_if_grid(path: &Path) -> std::result::Result<Option<GridMap>, InputEr
 /// `--from-iso230-2`: the direction-dependent table of `opts.axis` from the run's mean
 /// unidirectional deviations (ISO 230-2:2014 3.3.1), c↑ = −x̄↑ and c↓ = −x̄↓ at each target.
 fn run_iso230_2(opts: &Options, run: &Path, obs: &mut dyn Observer) -> Result<Outcome> {
-    if !(opts.max_correction_um.is_finite() && opts.max_correction_um > 0.0) {
-        return Err(Error::usage(format!(
-            "--max-correction-um must be a positive number, not {}",
-            opts.max_correction_um
-        )));
-    }
+    table::check_max_correction(opts.max_correction_um).map_err(Error::usage)?;
     let guard = OutputGuard::new(&[run]);
     let dest = match &opts.out {
         Some(p) if opts.format == Format::Heidenhain && p.as_os_str() == "-" => {

@@ -316,16 +316,23 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
 /// Poses `--sampling lhs` draws when it gives no count.
 pub const LHS_POSES: usize = 64;
 
+/// Most poses `--sampling lhs:N` draws (each is a whole analysis at that pose).
+pub const MAX_LHS_POSES: usize = 10_000;
+
 /// The number of poses of `--sampling lhs[:N]` (`lhs` alone: [`LHS_POSES`]).
 pub fn parse_sampling(s: &str) -> Result<usize> {
     let bad = || {
         Error::usage(format!(
-            "--sampling: `{s}` is not lhs or lhs:N (N poses, at least 2)"
+            "--sampling: `{s}` is not lhs or lhs:N (N poses, 2 to {MAX_LHS_POSES})"
         ))
     };
     match s.split_once(':') {
         None if s == "lhs" => Ok(LHS_POSES),
-        Some(("lhs", n)) => n.parse().ok().filter(|n| *n >= 2).ok_or_else(bad),
+        Some(("lhs", n)) => n
+            .parse()
+            .ok()
+            .filter(|n| (2..=MAX_LHS_POSES).contains(n))
+            .ok_or_else(bad),
         _ => Err(bad()),
     }
 }

@@ -44,6 +44,16 @@ impl Units {
     }
 }
 
+/// Largest `--tolerance-um` and `--chord-tolerance-um` (µm): a path allowed to leave the
+/// compensated one by a millimetre is no compensation of µm errors.
+pub const MAX_TOLERANCE_UM: f64 = 1000.0;
+
+/// Range of `--check-step-mm` and `--check-step-deg` (mm or deg): finer than a µm the dense
+/// path check samples a real program for hours; coarser than 10 it samples past the features
+/// of any error model (the default is 0.5).
+pub const MIN_CHECK_STEP: f64 = 1e-3;
+pub const MAX_CHECK_STEP: f64 = 10.0;
+
 /// The knobs of the rewriter (every one has a CLI flag of the same name).
 #[derive(Debug, Clone)]
 pub struct RewriteOptions {
@@ -119,29 +129,44 @@ impl RewriteOptions {
         }
     }
 
-    /// Checks that the numbers make sense; the message names the option.
+    /// Checks that the numbers make sense; the message names the option. Every one is bounded
+    /// above too: a huge tolerance, correction limit or check step would switch a safety
+    /// check off, and a check step below [`MIN_CHECK_STEP`] runs for hours on a real program.
     pub fn validate(&self) -> Result<(), String> {
-        let pos = |v: f64, name: &str| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(format!("{name} must be a positive number, not {v}"))
+        use mtec_io::plausible::{positive_option, MAX_CORRECTION_LIMIT_UM, MAX_POSITION_MM};
+        positive_option("--tolerance-um", self.tolerance_um, MAX_TOLERANCE_UM, "um")?;
+        positive_option(
+            "--chord-tolerance-um",
+            self.chord_tolerance_um,
+            MAX_TOLERANCE_UM,
+            "um",
+        )?;
+        positive_option(
+            "--max-correction-um",
+            self.max_correction_um,
+            MAX_CORRECTION_LIMIT_UM,
+            "um",
+        )?;
+        positive_option(
+            "--max-segment-mm",
+            self.max_segment_mm,
+            MAX_POSITION_MM,
+            "mm",
+        )?;
+        for (flag, v, unit) in [
+            ("--check-step-mm", self.check_step_mm, "mm"),
+            ("--check-step-deg", self.check_step_deg, "deg"),
+        ] {
+            positive_option(flag, v, MAX_CHECK_STEP, unit)?;
+            if v < MIN_CHECK_STEP {
+                return Err(format!(
+                    "{flag} {v:e} {unit} is below {MIN_CHECK_STEP} {unit}: the path check would sample a long program for hours"
+                ));
             }
-        };
-        pos(self.tolerance_um, "--tolerance-um")?;
-        pos(self.chord_tolerance_um, "--chord-tolerance-um")?;
-        pos(self.max_correction_um, "--max-correction-um")?;
-        if self.max_segment_mm.is_nan() || self.max_segment_mm <= 0.0 {
-            return Err(format!(
-                "--max-segment-mm must be positive, not {}",
-                self.max_segment_mm
-            ));
         }
-        pos(self.check_step_mm, "--check-step-mm")?;
-        pos(self.check_step_deg, "--check-step-deg")?;
         // 100 m is a unit mistake, not where a machine stands (a rotary angle is not bounded:
         // an axis without limits may stand many turns from zero)
-        let limit = mtec_io::plausible::MAX_POSITION_MM;
+        let limit = MAX_POSITION_MM;
         if let Some(x) = self
             .start_position_mm
             .and_then(|p| p.into_iter().find(|x| !x.is_finite() || x.abs() >= limit))
