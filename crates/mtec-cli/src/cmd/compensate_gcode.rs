@@ -40,8 +40,7 @@ pub struct Args {
     /// Largest chord sagitta when an arc is replaced by straight pieces, in um.
     #[arg(long, default_value_t = 0.5)]
     pub chord_tolerance_um: f64,
-    /// Refuse corrections larger than this, in um (at most 10000: the limit cannot be switched
-    /// off).
+    /// Refuse corrections larger than this, in um (at most 10000).
     #[arg(long, default_value_t = 500.0)]
     pub max_correction_um: f64,
     /// What to do with constructs that cannot be compensated safely.

@@ -51,9 +51,7 @@ pub struct NnArgs {
     /// bpnn: hidden units [default: 10].
     #[arg(long)]
     pub hidden: Option<usize>,
-    /// Weight decay λ ≥ 0 (bpnn: λ·‖w‖² on the weights in Levenberg–Marquardt; cnn-lstm: AdamW's
-    /// decoupled decay) [default: 0]. On a few experiments a small regularised network
-    /// generalises better (rotary campaign: λ 0.01–0.3, docs/methods.md §10.4).
+    /// Weight decay λ ≥ 0 (bpnn: λ·‖w‖² in Levenberg–Marquardt; cnn-lstm: AdamW) [default: 0].
     #[arg(long, value_name = "LAMBDA")]
     pub weight_decay: Option<f64>,
     /// Seed of the weight initialisation and batch order (same seed, same weights).

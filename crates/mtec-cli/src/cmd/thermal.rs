@@ -302,10 +302,7 @@ fn predict(a: PredictArgs) -> Result<(), CliError> {
         None => Box::new(std::io::stderr()),
     };
     let text = match a.json {
-        true => format!(
-            "{}\n",
-            serde_json::to_string(&serde_json::to_value(&outcome)?)?
-        ),
+        true => serde_json::to_value(&outcome)?.to_string() + "\n",
         false => outcome.to_string(),
     };
     let _ = write!(say, "{text}");

@@ -255,17 +255,16 @@ pub fn temp_comp_setting(
         position_dependent: run.position_dependent,
     };
     let ends: Vec<f64> = match opts.travel_mm {
-        Some([a, b])
-            if a < b
-                && mtec_io::plausible::position_option("--travel-mm", a).is_ok()
-                && mtec_io::plausible::position_option("--travel-mm", b).is_ok() =>
-        {
+        Some([a, b]) if a < b => {
+            for end in [a, b] {
+                mtec_io::plausible::position_option("--travel-mm", end)
+                    .map_err(OffsetError::Usage)?;
+            }
             vec![a, b]
         }
         Some([a, b]) => {
             return Err(OffsetError::Usage(format!(
-                "--travel-mm {a:e}:{b:e}: expected FROM:TO with FROM < TO, machine positions (finite, below {:e} mm in magnitude)",
-                mtec_io::plausible::MAX_POSITION_MM
+                "--travel-mm {a}:{b}: expected FROM:TO with FROM < TO"
             )))
         }
         None if run.position_dependent => {
