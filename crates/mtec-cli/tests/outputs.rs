@@ -386,6 +386,62 @@ fn directories_block_devices_and_inputs_are_refused_with_exit_2() {
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
 }
 
+#[test]
+fn an_output_its_folder_cannot_take_is_refused_once_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    inputs(d);
+    let part = d.join("part.ngc");
+    let poly = d.join("poly.json");
+    // a file where a folder should be; /proc takes no new files, even from root
+    let under_a_file = part.join("out.ngc");
+    for (out, says) in [
+        (under_a_file.as_path(), "choose another path"),
+        (
+            Path::new("/proc/mtec-out.ngc"),
+            "the folder /proc does not take new files",
+        ),
+    ] {
+        let o = mtec(&[
+            "compensate",
+            "gcode",
+            "--model",
+            s(&poly),
+            s(&part),
+            "-o",
+            s(out),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+        let e = stderr(&o);
+        assert!(e.starts_with("error: cannot write "), "{e}");
+        assert!(e.contains(says), "{e}");
+        // the OS's reason once, not repeated by the error chain
+        assert_eq!(e.matches("(os error").count(), 1, "{e}");
+        assert!(o.stdout.is_empty(), "refused before any work");
+    }
+    assert!(part.is_file());
+    // a folder that does not exist yet is created when the output is written
+    let deep = d.join("new/sub/out.ngc");
+    let o = mtec(&[
+        "compensate",
+        "gcode",
+        "--model",
+        s(&poly),
+        s(&part),
+        "-o",
+        s(&deep),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(deep.is_file());
+    // the probe leaves nothing behind
+    let names: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(names.is_empty(), "{names:?}");
+}
+
 /// A German spreadsheet's export (semicolons, decimal commas, trailing separators) gives the same
 /// numbers as the comma file, and the command says how it read it.
 #[test]

@@ -283,6 +283,23 @@ fn weight_decay_reaches_the_network_and_bad_training_settings_are_refused() {
         text(&o)
     );
     assert!(!out.exists());
+    // a slip of 10⁹ epochs is refused, not trained for years (both networks)
+    for (model, extra) in [
+        ("bpnn", &["--hidden", "3"][..]),
+        ("cnn-lstm", &["--window", "4"][..]),
+    ] {
+        let out = dir.path().join(format!("{model}-epochs.json"));
+        let args: Vec<&str> = extra
+            .iter()
+            .chain(&["--epochs", "1000000000", "--quiet"])
+            .copied()
+            .collect();
+        let o = fit_cli(model, &log, &out, &args);
+        assert_eq!(o.status.code(), Some(2), "{model}: {}", text(&o));
+        assert!(text(&o).contains("1000000000"), "{model}: {}", text(&o));
+        assert!(text(&o).contains("1 to 1000000"), "{model}: {}", text(&o));
+        assert!(!out.exists(), "{model}");
+    }
 }
 
 #[test]

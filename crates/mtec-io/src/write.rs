@@ -27,19 +27,20 @@ pub enum OutputError {
     /// device): the user's mistake, exit code 2 in the CLI. The message names the path.
     #[error("{0}")]
     Refused(String),
-    /// Writing failed (permissions, disk full, a closed pipe): not the user's input.
-    #[error("cannot write {}: {source}", path.display())]
+    /// Writing failed (disk full, a closed pipe): not the user's input. (The OS error is
+    /// part of the message, not a `source`, so a report of the chain does not print it twice.)
+    #[error("cannot write {}: {error}", path.display())]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
 }
 
 impl OutputError {
-    fn io(path: &Path, source: std::io::Error) -> Self {
+    fn io(path: &Path, error: std::io::Error) -> Self {
         OutputError::Io {
             path: path.to_path_buf(),
-            source,
+            error,
         }
     }
 }
@@ -48,9 +49,9 @@ impl From<OutputError> for std::io::Error {
     fn from(e: OutputError) -> Self {
         match e {
             OutputError::Refused(m) => std::io::Error::new(std::io::ErrorKind::AlreadyExists, m),
-            OutputError::Io { path, source } => std::io::Error::new(
-                source.kind(),
-                format!("cannot write {}: {source}", path.display()),
+            OutputError::Io { path, error } => std::io::Error::new(
+                error.kind(),
+                format!("cannot write {}: {error}", path.display()),
             ),
         }
     }
@@ -84,7 +85,14 @@ impl Destination {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
                 return Ok(Destination::File(path.to_path_buf()))
             }
-            Err(e) => return Err(OutputError::io(path, e)),
+            // a file where a folder should be, a folder that cannot be searched, a name too
+            // long: the path itself is wrong, the user's to change
+            Err(e) => {
+                return Err(OutputError::Refused(format!(
+                    "cannot write {}: {e}; choose another path",
+                    path.display()
+                )))
+            }
         };
         if !meta.file_type().is_symlink() {
             return classify(path, path, &meta.file_type());
@@ -339,8 +347,9 @@ impl OutputGuard {
     }
 
     /// Where `path` would be written, refusing an input (only files can be replaced, so only a
-    /// file destination is compared), a directory or a block device. Writes nothing: call it
-    /// before any work.
+    /// file destination is compared), a directory, a block device, or a file whose folder
+    /// cannot take it ([`check_folder`]). Leaves nothing behind: call it before any work, so
+    /// that an unwritable `-o` is said at once, not after a long fit.
     pub fn check(&self, path: &Path) -> Result<Destination, OutputError> {
         let dest = Destination::of(path)?;
         if let Destination::File(target) = &dest {
@@ -351,6 +360,7 @@ impl OutputGuard {
                     path.display()
                 )));
             }
+            check_folder(path, target)?;
         }
         Ok(dest)
     }
@@ -358,6 +368,49 @@ impl OutputGuard {
     /// Writes `bytes` to `path` ([`OutputGuard::check`], then [`Destination::write`]).
     pub fn write(&self, path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
         self.check(path)?.write(bytes)
+    }
+}
+
+/// Can a file be created at `target` (shown as `shown`)? The nearest existing folder above it
+/// must be a folder and must take a new file: probed by creating and removing an empty file
+/// there (permission bits do not tell: root, read-only mounts, `/proc`). A folder that does not
+/// exist yet is created only when the output is written.
+fn check_folder(shown: &Path, target: &Path) -> Result<(), OutputError> {
+    let mut folder = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    while std::fs::symlink_metadata(&folder).is_err() {
+        match folder.parent() {
+            Some(d) if !d.as_os_str().is_empty() => folder = d.to_path_buf(),
+            _ => {
+                folder = PathBuf::from(".");
+                break;
+            }
+        }
+    }
+    if !folder.is_dir() {
+        return Err(OutputError::Refused(format!(
+            "cannot write {}: {} is not a folder",
+            shown.display(),
+            folder.display()
+        )));
+    }
+    let probe = folder.join(format!(".mtec-probe-{}", std::process::id()));
+    match OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(f) => {
+            drop(f);
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        // a probe left by a crashed run of the same pid: the folder takes files
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => Err(OutputError::Refused(format!(
+            "cannot write {}: the folder {} does not take new files ({e}); choose a path \
+             in a folder you can write",
+            shown.display(),
+            folder.display()
+        ))),
     }
 }
 
@@ -404,6 +457,28 @@ mod tests {
         assert_eq!(
             std::fs::read_dir(dir.path().join("sub")).unwrap().count(),
             1
+        );
+    }
+
+    #[test]
+    fn check_refuses_a_folder_that_cannot_take_the_file_and_creates_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("f.csv");
+        std::fs::write(&file, "a").unwrap();
+        let g = OutputGuard::new(&[&file]);
+        let e = g.check(&file.join("out.csv")).unwrap_err();
+        assert!(matches!(e, OutputError::Refused(_)), "{e}");
+        // a missing folder is fine and is not created by the check
+        let deep = dir.path().join("a/b/out.csv");
+        assert!(g.check(&deep).is_ok());
+        assert!(!dir.path().join("a").exists());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        // the probe's error is said once: the OS error is not also the source
+        let io = OutputError::io(&file, std::io::Error::other("disk full"));
+        assert!(std::error::Error::source(&io).is_none());
+        assert_eq!(
+            io.to_string(),
+            format!("cannot write {}: disk full", file.display())
         );
     }
 }

@@ -163,8 +163,12 @@ pub fn train_bpnn_with_validation_monitored(
             crate::cnn_lstm::MAX_UNITS
         )));
     }
-    if config.max_epochs == 0 {
-        return Err(NnError::Config("max_epochs must be at least 1".into()));
+    if config.max_epochs == 0 || config.max_epochs > crate::cnn_lstm::MAX_EPOCHS {
+        return Err(NnError::Config(format!(
+            "max_epochs {}: must be 1 to {}",
+            config.max_epochs,
+            crate::cnn_lstm::MAX_EPOCHS
+        )));
     }
     if !(config.learning_rate > 0.0 && config.learning_rate <= crate::cnn_lstm::MAX_LEARNING_RATE) {
         return Err(NnError::Config(format!(

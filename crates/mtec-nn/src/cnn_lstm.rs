@@ -172,6 +172,10 @@ pub const MAX_UNITS: usize = 1000;
 /// these z-scored problems diverge in the first steps.
 pub const MAX_LEARNING_RATE: f64 = 1.0;
 
+/// Most epochs (or LM iterations) a network may be asked for: 10⁶ epochs of the smallest
+/// network here take days; a typing slip of 10⁹ would run for years without a word.
+pub const MAX_EPOCHS: usize = 1_000_000;
+
 fn check_architecture(a: &Architecture, n_features: usize) -> Result<()> {
     if a.window == 0 || a.conv_channels == 0 || a.lstm_hidden == 0 {
         return Err(NnError::Config(
@@ -383,10 +387,11 @@ pub(crate) fn train_cnn_lstm_monitored(
     let arch = config.architecture;
     let (nf, no) = (train.feature_names.len(), train.target_names.len());
     check_architecture(&arch, nf)?;
-    if config.batch_size == 0 || config.max_epochs == 0 {
-        return Err(NnError::Config(
-            "batch_size and max_epochs must be at least 1".into(),
-        ));
+    if config.batch_size == 0 || config.max_epochs == 0 || config.max_epochs > MAX_EPOCHS {
+        return Err(NnError::Config(format!(
+            "batch_size must be at least 1 and max_epochs 1 to {MAX_EPOCHS} (got {} and {})",
+            config.batch_size, config.max_epochs
+        )));
     }
     if !(config.final_learning_rate_fraction > 0.0 && config.final_learning_rate_fraction <= 1.0) {
         return Err(NnError::Config(

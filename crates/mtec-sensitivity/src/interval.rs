@@ -74,7 +74,7 @@ pub fn check_confidence(c: f64) -> Result<(), SensitivityError> {
         Ok(())
     } else {
         Err(SensitivityError::Settings(format!(
-            "confidence level {c} is not in (0, 1)"
+            "confidence level {c:?} is not in (0, 1)"
         )))
     }
 }

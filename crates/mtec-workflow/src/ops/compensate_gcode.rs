@@ -119,6 +119,13 @@ impl fmt::Display for Outcome {
 /// Rewrites the program. Every output check (an input, a directory) comes before any work; an
 /// unfinished output leaves the target untouched.
 pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
+    // the one output routine of mtec-io: a file atomically, a device, FIFO or `-` straight
+    // through, a link's target; an input, a directory or a block device refused before any work
+    let mut guard = OutputGuard::new(&[&opts.input, &opts.model]);
+    for p in extra_inputs(opts) {
+        guard.add_input(p);
+    }
+    let dest = guard.check(&opts.output)?;
     let mut warnings = Vec::new();
     let mut warn = |obs: &mut dyn Observer, w: String| {
         obs.warning(&w);
@@ -149,13 +156,6 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
     }
     options.validate().map_err(Error::Usage)?;
 
-    // the one output routine of mtec-io: a file atomically, a device, FIFO or `-` straight
-    // through, a link's target; an input, a directory or a block device refused before any work
-    let mut guard = OutputGuard::new(&[&opts.input, &opts.model]);
-    for p in extra_inputs(opts) {
-        guard.add_input(p);
-    }
-    let dest = guard.check(&opts.output)?;
     // with flattening, the rewriter reads the flattened program; its errors name that
     let mut flattened = None;
     let (reader, source): (Box<dyn BufRead>, PathBuf) = if let Some(rs274) = &opts.flatten {

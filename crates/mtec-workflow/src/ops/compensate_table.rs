@@ -293,6 +293,20 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
         }
         return run_iso230_2(opts, run, obs);
     }
+    let mut guard = OutputGuard::new(&[&opts.model]);
+    if let Some(p) = &opts.state {
+        guard.add_input(p);
+    }
+    // where the table goes is settled before any work (an input, a directory: exit 2)
+    let dest = match &opts.out {
+        Some(p) if opts.format == Format::Heidenhain && p.as_os_str() == "-" => {
+            return Err(Error::usage(
+                "heidenhain writes two files: give -o NAME.COM, not - (the .CMA goes beside it)",
+            ))
+        }
+        Some(p) => guard.check(p)?,
+        None => Destination::Stdout,
+    };
     let mut keep = Keep {
         obs,
         warnings: Vec::new(),
@@ -314,20 +328,6 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
             s.selection
         );
     }
-    let mut guard = OutputGuard::new(&[&opts.model]);
-    if let Some(p) = &opts.state {
-        guard.add_input(p);
-    }
-    // where the table goes is settled before any work (an input, a directory: exit 2)
-    let dest = match &opts.out {
-        Some(p) if opts.format == Format::Heidenhain && p.as_os_str() == "-" => {
-            return Err(Error::usage(
-                "heidenhain writes two files: give -o NAME.COM, not - (the .CMA goes beside it)",
-            ))
-        }
-        Some(p) => guard.check(p)?,
-        None => Destination::Stdout,
-    };
     let done = |points: usize, cma: Option<PathBuf>| Outcome {
         format: opts.format,
         provenance: provenance.clone(),

@@ -399,9 +399,9 @@ impl EvalChunk {
             self.text.push(b'\n');
         }
         out.write_all(&self.text)
-            .map_err(|source| mtec_io::OutputError::Io {
+            .map_err(|error| mtec_io::OutputError::Io {
                 path: out.path().to_path_buf(),
-                source,
+                error,
             })?;
         self.text.clear();
         self.lines.clear();
