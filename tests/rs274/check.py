@@ -594,14 +594,19 @@ PLANE_AXES = {  # ARC_FEED(first_end, second_end, first_centre, second_centre, r
 UNIT = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
-def arc_from_canon(frame, start_machine, v, start_mm_per_unit=None):
+def arc_from_canon(frame, start_machine, v, start_mm_per_unit=None, start_offset_mm_per_unit=0.0):
     """ARC_FEED in canonical units -> Arc in machine mm (start = previous position).
 
     `start_mm_per_unit`: the units the start was printed in. After a G20/G21 switch the start
     (printed in the old units) and the end (in the new) carry different roundings, so a full
     circle (G91 with no axis words, end = start inside LinuxCNC) can print with its end a
     micrometre from its start: start and end within both printouts' rounding are one point
-    then (found by tests/rs274/generate.py)."""
+    then (found by tests/rs274/generate.py).
+
+    `start_offset_mm_per_unit`: the units of a G92 offset that was in force when the start was
+    printed and has changed since (the first arc after G92.1 or a new G92): the start carries
+    that offset's print rounding, the end does not, so a full circle can again print with its
+    end apart from its start (pygcode study, tests/rs274/README.md)."""
     i1, i2, i3 = PLANE_AXES[frame.plane]
     start_c = frame.to_canon(start_machine)
     end_c = [0.0, 0.0, 0.0]
@@ -634,6 +639,10 @@ def arc_from_canon(frame, start_machine, v, start_mm_per_unit=None):
     same = FULL_CIRCLE_MM
     if start_mm_per_unit is not None and start_mm_per_unit != frame.mm_per_unit:
         same = SQRT3 * HALF_PRINT_UNIT * (start_mm_per_unit + frame.mm_per_unit)
+    if start_offset_mm_per_unit > 0.0:
+        printed = start_mm_per_unit or frame.mm_per_unit
+        same = max(same, SQRT3 * HALF_PRINT_UNIT
+                   * (printed + start_offset_mm_per_unit + frame.mm_per_unit))
     if ang < 1e-12 or norm(sub(r_end_plane, scale(u, r1))) < same:
         ang = 2 * math.pi  # start == end: a full circle
     sweep = ang + 2 * math.pi * (abs(turns) - 1)
@@ -689,6 +698,8 @@ def interpret(path, calls, error):
     frame = Frame()
     pos = (0.0, 0.0, 0.0)  # rs274 stand-alone starts at machine zero (found by experiment)
     pos_units = None  # units in which the current position was printed
+    # the G92 offset in force when the current position was printed, and its print units
+    pos_g92, pos_g92_units = frame.g92, 0.0
     inverse_time, per_rev, feed = False, False, None  # G93, G95, the last SET_FEED_RATE
     for c in calls:
         if c.name == "COMMENT" and "feed mode set to" in c.args:
@@ -700,8 +711,10 @@ def interpret(path, calls, error):
                 continue  # compared as each move's time by check_inverse_time
         if c.name in MOTION_CALLS:
             v = numbers(c.args)
+            # a G92 changed since the start was printed: the start keeps the old one's rounding
+            old_g92_units = pos_g92_units if frame.g92 != pos_g92 else 0.0
             if c.name == "ARC_FEED":
-                geom = arc_from_canon(frame, pos, v, pos_units)
+                geom = arc_from_canon(frame, pos, v, pos_units, old_g92_units)
                 abc = tuple(v[6:9])
                 kind = "feed"
             else:
@@ -709,13 +722,14 @@ def interpret(path, calls, error):
                 abc = tuple(v[3:6])
                 kind = {"STRAIGHT_TRAVERSE": "rapid", "STRAIGHT_FEED": "feed"}.get(c.name, "probe")
             move = Move(kind, geom, c, frame.mm_per_unit, abc, pos_units, frame.offset_mm_per_unit,
-                        frame.g92_mm_per_unit)
+                        max(frame.g92_mm_per_unit, old_g92_units))
             if kind == "feed" and inverse_time and feed:
                 move.inverse_time_feed_mm = feed * frame.mm_per_unit  # mm/min rs274 computed
             elif kind == "feed" and not per_rev and feed:
                 move.feed_mm = feed * frame.mm_per_unit  # G94: mm/min
             prog.moves.append(move)
             pos, pos_units = geom.end, frame.mm_per_unit
+            pos_g92, pos_g92_units = frame.g92, frame.g92_mm_per_unit
             continue
         frame.update(c)
         if c.name not in IGNORED_CALLS:
