@@ -283,6 +283,21 @@ fn weight_decay_reaches_the_network_and_bad_training_settings_are_refused() {
         text(&o)
     );
     assert!(!out.exists());
+    // a network option auto's networks do not read is refused, as with a regression model
+    let out = dir.path().join("auto-window.json");
+    let o = fit_cli(
+        "auto",
+        &log,
+        &out,
+        &["--with-networks", "bpnn", "--window", "4"],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("--window is read by cnn-lstm only; --model auto does not use it"),
+        "{}",
+        text(&o)
+    );
+    assert!(!out.exists());
     // a slip of 10⁹ epochs is refused, not trained for years (both networks)
     for (model, extra) in [
         ("bpnn", &["--hidden", "3"][..]),

@@ -22,6 +22,7 @@ pub mod ops;
 pub mod project;
 pub mod rs274;
 pub mod state;
+pub mod unused;
 
 pub use choice::Choice;
 pub use error::{Error, Result};

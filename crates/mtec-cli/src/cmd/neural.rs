@@ -66,6 +66,43 @@ pub struct NnArgs {
     pub quiet: bool,
 }
 
+impl NnArgs {
+    /// A network option given to a model that does not read it is refused (exit 2), not
+    /// ignored: no network outside bpnn and cnn-lstm (auto: those of --with-networks).
+    pub fn refuse_unused(&self, model: &str) -> Result<(), crate::error::CliError> {
+        use mtec_workflow::unused::{refuse_unused, Given};
+        let (nets, cnn, bp): (&[&str], &[&str], &[&str]) =
+            (&["bpnn", "cnn-lstm"], &["cnn-lstm"], &["bpnn"]);
+        let chosen: Vec<&str> = match model {
+            "auto" => self.with_networks.iter().map(String::as_str).collect(),
+            m => vec![m],
+        };
+        let o = |option, given, read_by| Given {
+            option,
+            given,
+            read_by,
+        };
+        let options = [
+            o("--sequence-by", self.sequence_by.is_some(), nets),
+            o("--features", !self.features.is_empty(), nets),
+            o("--angle-harmonics", self.angle_harmonics.is_some(), nets),
+            o("--rises", self.rises, nets),
+            o("--changes", self.changes, nets),
+            o("--epochs", self.epochs.is_some(), nets),
+            o("--patience", self.patience.is_some(), nets),
+            o("--weight-decay", self.weight_decay.is_some(), nets),
+            o("--window", self.window.is_some(), cnn),
+            o("--conv-channels", self.conv_channels.is_some(), cnn),
+            o("--lstm-hidden", self.lstm_hidden.is_some(), cnn),
+            o("--learning-rate", self.learning_rate.is_some(), cnn),
+            o("--final-lr-fraction", self.final_lr_fraction.is_some(), cnn),
+            o("--batch-size", self.batch_size.is_some(), cnn),
+            o("--hidden", self.hidden.is_some(), bp),
+        ];
+        refuse_unused(&chosen, &format!("--model {model}"), &options)
+    }
+}
+
 #[cfg(feature = "neural")]
 impl NnArgs {
     /// The network and its training as `mtec_nn` takes them, for `--model` `model` (auto's

@@ -214,6 +214,11 @@ impl FitArgs {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    match &args.cmd {
+        Sub::Fit(a) => a.nn.refuse_unused(&a.common.model)?,
+        Sub::Cv(a) => a.nn.refuse_unused(&a.common.model)?,
+        _ => {}
+    }
     match args.cmd {
         Sub::Select(a) => select(a),
         Sub::Fit(a) if op::is_neural(&a.common.model) || !a.nn.with_networks.is_empty() => {
