@@ -145,17 +145,22 @@ fn a_correction_beyond_max_correction_um_is_refused_with_exit_2() {
             format,
             "--axis",
             "X",
-            "--range",
-            "0:100:50",
-            "--x-range",
-            "0:100:50",
-            "--y-range",
-            "0:10:10",
-            "--z-range",
-            "0:10:10",
             "-o",
             out,
         ];
+        // beckhoff's grid, the others' one axis (an option a format does not read is refused)
+        if format == "beckhoff" {
+            args.extend([
+                "--x-range",
+                "0:100:50",
+                "--y-range",
+                "0:10:10",
+                "--z-range",
+                "0:10:10",
+            ]);
+        } else {
+            args.extend(["--range", "0:100:50"]);
+        }
         args.extend_from_slice(extra);
         mtec(&args)
     };

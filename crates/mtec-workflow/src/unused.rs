@@ -1,29 +1,40 @@
 //! Options a command was given that its chosen model, method or format does not read: refused
 //! with exit code 2, never ignored without a word, so that nobody believes a setting took
-//! effect (`thermal fit --model ridge --learning-rate 0.01` used to fit ridge and say nothing).
+//! effect (`thermal fit --model ridge --learning-rate 0.01` used to fit ridge and say nothing;
+//! `compensate table --format linuxcnc --magnification 2` wrote a table without it).
 
 use crate::{Error, Result};
+use std::borrow::Cow;
 
-/// One option a user may have given: its name, whether it was given, and the choices (models,
-/// methods, formats) that read it.
+/// One option a user may have given: its name, whether it was given, whether the chosen
+/// model, method or format reads it, and what does (for the message).
 pub struct Given<'a> {
     pub option: &'a str,
     pub given: bool,
-    pub read_by: &'a [&'a str],
+    pub read: bool,
+    pub read_by: Cow<'a, str>,
 }
 
-/// Refuses the first option given that none of `chosen` reads; `what` names the choice the way
-/// the user wrote it (`--model ridge`).
-pub fn refuse_unused(chosen: &[&str], what: &str, options: &[Given]) -> Result<()> {
-    let unused = options
-        .iter()
-        .find(|o| o.given && !o.read_by.iter().any(|r| chosen.contains(r)));
-    match unused {
+impl<'a> Given<'a> {
+    /// An option that the choices `read_by` read, given to `chosen`.
+    pub fn among(option: &'a str, given: bool, read_by: &[&str], chosen: &[&str]) -> Self {
+        Given {
+            option,
+            given,
+            read: read_by.iter().any(|r| chosen.contains(r)),
+            read_by: Cow::Owned(read_by.join(" and ")),
+        }
+    }
+}
+
+/// Refuses the first option given that the choice does not read; `what` names the choice the
+/// way the user wrote it (`--model ridge`).
+pub fn refuse_unused(what: &str, options: &[Given]) -> Result<()> {
+    match options.iter().find(|o| o.given && !o.read) {
         None => Ok(()),
         Some(o) => Err(Error::usage(format!(
             "{} is read by {} only; {what} does not use it: leave it out",
-            o.option,
-            o.read_by.join(" and ")
+            o.option, o.read_by
         ))),
     }
 }
@@ -34,21 +45,15 @@ mod tests {
 
     #[test]
     fn an_option_no_chosen_model_reads_is_refused_by_name() {
-        let options = [
-            Given {
-                option: "--window",
-                given: true,
-                read_by: &["cnn-lstm"],
-            },
-            Given {
-                option: "--hidden",
-                given: false,
-                read_by: &["bpnn"],
-            },
-        ];
-        assert!(refuse_unused(&["cnn-lstm"], "--model cnn-lstm", &options).is_ok());
-        assert!(refuse_unused(&["bpnn", "cnn-lstm"], "auto", &options).is_ok());
-        let e = refuse_unused(&["bpnn"], "--model bpnn", &options).unwrap_err();
+        let options = |chosen: &[&str]| {
+            [
+                Given::among("--window", true, &["cnn-lstm"], chosen),
+                Given::among("--hidden", false, &["bpnn"], chosen),
+            ]
+        };
+        assert!(refuse_unused("--model cnn-lstm", &options(&["cnn-lstm"])).is_ok());
+        assert!(refuse_unused("auto", &options(&["bpnn", "cnn-lstm"])).is_ok());
+        let e = refuse_unused("--model bpnn", &options(&["bpnn"])).unwrap_err();
         assert_eq!(e.exit_code(), 2);
         assert_eq!(
             e.to_string(),

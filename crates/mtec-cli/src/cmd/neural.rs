@@ -77,11 +77,7 @@ impl NnArgs {
             "auto" => self.with_networks.iter().map(String::as_str).collect(),
             m => vec![m],
         };
-        let o = |option, given, read_by| Given {
-            option,
-            given,
-            read_by,
-        };
+        let o = |option, given, read_by: &[&str]| Given::among(option, given, read_by, &chosen);
         let options = [
             o("--sequence-by", self.sequence_by.is_some(), nets),
             o("--features", !self.features.is_empty(), nets),
@@ -99,7 +95,7 @@ impl NnArgs {
             o("--batch-size", self.batch_size.is_some(), cnn),
             o("--hidden", self.hidden.is_some(), bp),
         ];
-        refuse_unused(&chosen, &format!("--model {model}"), &options)
+        refuse_unused(&format!("--model {model}"), &options)
     }
 }
 

@@ -209,6 +209,114 @@ impl Options {
             elements: Elements::All,
         }
     }
+
+    /// Refuses an option that this format (from this source) does not read, given a value
+    /// other than its default: a controller must never get a table the user believes has a
+    /// magnification, a direction or a reference it does not have.
+    pub fn refuse_unused(&self) -> Result<()> {
+        use crate::unused::{refuse_unused, Given};
+        use Format::*;
+        let d = Options::new(&self.model, self.format, None);
+        let (f, iso) = (self.format, self.from_iso230_2.is_some());
+        let o = |option, given, read, read_by: &'static str| Given {
+            option,
+            given,
+            read,
+            read_by: read_by.into(),
+        };
+        let (fanuc, cec) = ("--format fanuc", "--format sinumerik-cec");
+        let model_1d = "the tables of a model along one axis (not beckhoff's grid)";
+        let options = [
+            o(
+                "--comp-type",
+                self.comp_type != d.comp_type,
+                f == Linuxcnc,
+                "--format linuxcnc",
+            ),
+            o(
+                "--table-index",
+                self.table_index != d.table_index,
+                f == SinumerikCec,
+                cec,
+            ),
+            o(
+                "--direction",
+                self.direction != d.direction,
+                f == SinumerikCec && !iso,
+                "--format sinumerik-cec from a model (--from-iso230-2 writes both directions)",
+            ),
+            o(
+                "--max-points",
+                self.max_points.is_some(),
+                matches!(f, SinumerikCec | SinumerikLec) || (f == Beckhoff && iso),
+                "--format sinumerik-cec, sinumerik-lec and beckhoff --from-iso230-2",
+            ),
+            o(
+                "--reference-mm",
+                self.reference_mm != d.reference_mm,
+                f == Fanuc,
+                fanuc,
+            ),
+            o(
+                "--reference-number",
+                self.reference_number != 0,
+                f == Fanuc,
+                fanuc,
+            ),
+            o(
+                "--magnification",
+                self.magnification != 1,
+                f == Fanuc,
+                fanuc,
+            ),
+            o(
+                "--detection-unit-um",
+                self.detection_unit_um != d.detection_unit_um,
+                f == Fanuc,
+                fanuc,
+            ),
+            o(
+                "--max-increment",
+                self.max_increment != d.max_increment,
+                f == Fanuc,
+                fanuc,
+            ),
+            o(
+                "--axis-number",
+                self.axis_number.is_some(),
+                f == Fanuc || (f == Beckhoff && iso),
+                "--format fanuc and beckhoff --from-iso230-2",
+            ),
+            o(
+                "--cma-name",
+                self.cma_name != d.cma_name,
+                f == Heidenhain,
+                "--format heidenhain",
+            ),
+            o(
+                "--x-range, --y-range, --z-range",
+                self.grid.iter().any(Option::is_some),
+                f == Beckhoff && !iso,
+                "--format beckhoff from a model",
+            ),
+            o(
+                "--output-axis",
+                self.output_axis.is_some(),
+                matches!(f, SinumerikCec | Heidenhain) && !iso,
+                "--format sinumerik-cec and heidenhain from a model",
+            ),
+            o(
+                "--range",
+                self.range.is_some(),
+                f != Beckhoff && !iso,
+                model_1d,
+            ),
+            o("--at", self.at.is_some(), f != Beckhoff && !iso, model_1d),
+            o("--state", self.state.is_some(), !iso, "tables of a model"),
+        ];
+        let source = if iso { " --from-iso230-2" } else { "" };
+        refuse_unused(&format!("--format {}{source}", f.name()), &options)
+    }
 }
 
 /// What [`run`] did.
@@ -285,6 +393,7 @@ impl Observer for Keep<'_> {
 /// directory) before any table is computed; every value is checked against the format's limits
 /// and `max_correction_um` before anything is written.
 pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
+    opts.refuse_unused()?;
     if let Some(run) = &opts.from_iso230_2 {
         if opts.elements != Elements::All {
             return Err(Error::usage(
