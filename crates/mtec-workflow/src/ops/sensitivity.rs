@@ -136,6 +136,46 @@ impl Options {
         }
     }
 
+    /// Refuses a method setting given another value than its default to a method that does
+    /// not read it (`--levels 6` with EFAST used to run EFAST and say nothing).
+    pub fn refuse_unused(&self) -> Result<()> {
+        use crate::unused::{refuse_unused, Given};
+        let (d, m) = (Options::new(), self.method);
+        let o = |option, given, read, read_by: &'static str| Given {
+            option,
+            given,
+            read,
+            read_by: read_by.into(),
+        };
+        let options = [
+            o(
+                "--interference",
+                self.interference != d.interference,
+                m == MethodKind::Efast,
+                "--method efast",
+            ),
+            o(
+                "--resamples",
+                self.resamples != d.resamples,
+                m == MethodKind::Efast,
+                "--method efast",
+            ),
+            o(
+                "--levels",
+                self.levels != d.levels,
+                m == MethodKind::Morris,
+                "--method morris",
+            ),
+            o(
+                "--num-resamples",
+                self.num_resamples != d.num_resamples,
+                m != MethodKind::Efast,
+                "--method sobol and morris",
+            ),
+        ];
+        refuse_unused(&format!("--method {}", crate::Choice::name(m)), &options)
+    }
+
     /// The method with its design settings.
     pub fn method(&self) -> Method {
         let bootstrap = Bootstrap {
@@ -235,6 +275,7 @@ impl Outcome {
 
 /// Analyses the machine (`machine` and `stats`) or the test function (`function`).
 pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
+    opts.refuse_unused()?;
     if let Some(name) = &opts.function {
         return function(opts, name).map(Outcome::Function);
     }
