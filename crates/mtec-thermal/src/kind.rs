@@ -32,6 +32,8 @@ pub trait Kind: Sized {
     const HELP: &'static str = "";
     /// Takes `--k`.
     const TAKES_K: bool = false;
+    /// Takes `--lag` (a first-order lag feature per sensor).
+    const TAKES_LAG: bool = false;
     /// Takes `--max-sensors`.
     const TAKES_MAX_SENSORS: bool = false;
     /// Takes `--up-sensors`/`--nut-sensors`.

@@ -219,12 +219,6 @@ impl Fit for Pls {
 impl Kind for Pls {
     const NAME: &'static str = "pls";
     const HELP: &'static str = "partial least squares on the sensors: collinear sensors share latent components (their number by forward validation)";
-    fn check(o: &FitOptions) -> Result<(), String> {
-        if o.lag {
-            return Err("--lag goes with mlr, ridge and ridge-select, not pls".into());
-        }
-        Ok(())
-    }
     fn from_options(o: &FitOptions, _: &ThermalData) -> Result<Self, ThermalError> {
         Ok(Pls {
             sensors: o.sensors.clone(),
@@ -342,10 +336,12 @@ mod tests {
         let d = data();
         let rows: Vec<usize> = (0..d.len()).collect();
         assert!(Pls::default().fit_components(&d, &rows, 4).is_err());
-        assert!(Pls::check(&FitOptions {
+        let pls = crate::registry::kind("pls").unwrap();
+        assert!(FitOptions {
             lag: true,
             ..FitOptions::default()
-        })
+        }
+        .check(pls)
         .is_err());
     }
 

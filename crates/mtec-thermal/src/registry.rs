@@ -47,6 +47,13 @@ impl FitOptions {
             ));
         }
         (kind.check)(self)?;
+        // heat-input, lag-select and pls fitted without their lag and said nothing
+        if self.lag && !kind.takes_lag {
+            return Err(format!(
+                "--lag goes with --model {} (the others choose their dynamics themselves or have none)",
+                names_where(|k| k.takes_lag)
+            ));
+        }
         if !self.up_sensors.is_empty() && !kind.takes_sensor_groups {
             return Err(format!(
                 "--up-sensors and --nut-sensors go with --model {}",
@@ -91,6 +98,7 @@ pub struct KindInfo {
     pub name: &'static str,
     pub help: &'static str,
     pub takes_k: bool,
+    pub takes_lag: bool,
     pub takes_max_sensors: bool,
     pub takes_sensor_groups: bool,
     pub requires_input: bool,
@@ -105,6 +113,7 @@ impl KindInfo {
             name: K::NAME,
             help: K::HELP,
             takes_k: K::TAKES_K,
+            takes_lag: K::TAKES_LAG,
             takes_max_sensors: K::TAKES_MAX_SENSORS,
             takes_sensor_groups: K::TAKES_SENSOR_GROUPS,
             requires_input: K::REQUIRES_INPUT,
@@ -277,6 +286,7 @@ impl Kind for Auto {
 
 impl Kind for Mlr {
     const NAME: &'static str = "mlr";
+    const TAKES_LAG: bool = true;
     fn fit_model(&self, d: &ThermalData, r: &[usize]) -> Result<ThermalModel, ThermalError> {
         Ok(ThermalModel::Linear(self.fit_rows(d, r)?))
     }
@@ -292,6 +302,7 @@ impl Kind for Mlr {
 impl Kind for Ridge {
     const NAME: &'static str = "ridge";
     const TAKES_K: bool = true;
+    const TAKES_LAG: bool = true;
     fn fit_model(&self, d: &ThermalData, r: &[usize]) -> Result<ThermalModel, ThermalError> {
         Ok(ThermalModel::Linear(self.fit_rows(d, r)?))
     }
@@ -307,6 +318,7 @@ impl Kind for Ridge {
 
 impl Kind for RidgeSelect {
     const NAME: &'static str = "ridge-select";
+    const TAKES_LAG: bool = true;
     fn fit_model(&self, d: &ThermalData, r: &[usize]) -> Result<ThermalModel, ThermalError> {
         Ok(ThermalModel::Linear(self.fit_rows(d, r)?))
     }
@@ -322,12 +334,6 @@ impl Kind for RidgeSelect {
 impl Kind for ExpAmbient {
     const NAME: &'static str = "exp-ambient";
     const TAKES_SENSOR_GROUPS: bool = true;
-    fn check(o: &FitOptions) -> Result<(), String> {
-        if o.lag {
-            return Err("--lag applies to the linear models, not exp-ambient".into());
-        }
-        Ok(())
-    }
     fn fit_model(&self, d: &ThermalData, r: &[usize]) -> Result<ThermalModel, ThermalError> {
         Ok(ThermalModel::ExpAmbient(Box::new(self.fit_rows(d, r)?)))
     }
@@ -459,7 +465,15 @@ mod tests {
             ..Default::default()
         };
         assert!(o.check(kind("auto").unwrap()).is_err());
-        assert!(o.check(kind("exp-ambient").unwrap()).is_err());
-        assert!(o.check(mlr).is_ok());
+        for name in ["exp-ambient", "heat-input", "lag-select", "pls"] {
+            assert_eq!(
+                o.check(kind(name).unwrap()).unwrap_err(),
+                "--lag goes with --model mlr or ridge or ridge-select (the others choose their dynamics themselves or have none)",
+                "{name}"
+            );
+        }
+        for name in ["mlr", "ridge", "ridge-select"] {
+            assert!(o.check(kind(name).unwrap()).is_ok(), "{name}");
+        }
     }
 }
