@@ -32,11 +32,15 @@ impl<'a> Given<'a> {
 pub fn refuse_unused(what: &str, options: &[Given]) -> Result<()> {
     match options.iter().find(|o| o.given && !o.read) {
         None => Ok(()),
-        Some(o) => Err(Error::usage(format!(
-            "{} is read by {} only; {what} does not use it: leave it out",
-            o.option, o.read_by
-        ))),
+        Some(o) => Err(refused(o.option, &o.read_by, what)),
     }
+}
+
+/// The refusal of one option: `option` is read by `read_by` only, not by `what`.
+pub fn refused(option: &str, read_by: &str, what: &str) -> Error {
+    Error::usage(format!(
+        "{option} is read by {read_by} only; {what} does not use it: leave it out"
+    ))
 }
 
 #[cfg(test)]

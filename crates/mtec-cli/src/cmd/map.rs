@@ -5,6 +5,7 @@ use crate::error::CliError;
 use crate::help::{examples, text};
 use mtec_comp::map::Outside;
 use mtec_workflow::ops::map;
+use mtec_workflow::unused::refused;
 use std::path::PathBuf;
 
 /// `mtec map`: volumetric error maps.
@@ -52,9 +53,10 @@ struct FitArgs {
     /// Largest number of grid points per axis (overrides the controller's).
     #[arg(long)]
     max_points_per_axis: Option<usize>,
-    /// Hidden neurons of the BPNN (--model bpnn): 10 gives the source's 3-10-3 network.
-    #[arg(long, default_value_t = 10)]
-    hidden: usize,
+    /// Hidden neurons of the BPNN (--model bpnn): 10 gives the source's 3-10-3 network
+    /// [default: 10].
+    #[arg(long)]
+    hidden: Option<usize>,
     /// Output map JSON.
     #[arg(short = 'o', long = "out")]
     out: PathBuf,
@@ -84,9 +86,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
 fn fit(a: FitArgs) -> Result<(), CliError> {
     let opts = map::FitOptions {
         grid: a.grid,
-        kind: match a.model {
-            MapModel::Trilinear => map::MapKind::Trilinear,
-            MapModel::Bpnn => map::MapKind::Bpnn { hidden: a.hidden },
+        kind: match (a.model, a.hidden) {
+            (MapModel::Trilinear, Some(_)) => {
+                Err(refused("--hidden", "--model bpnn", "--model trilinear"))?
+            }
+            (MapModel::Trilinear, None) => map::MapKind::Trilinear,
+            (MapModel::Bpnn, h) => map::MapKind::Bpnn {
+                hidden: h.unwrap_or(10),
+            },
         },
         outside: a.outside,
         controller: a.controller,
