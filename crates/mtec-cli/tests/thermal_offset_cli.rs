@@ -468,6 +468,15 @@ fn model_and_option_mistakes_are_refused() {
         &linear("sinumerik", &["--base-mm", "0"]),
         &["--base-mm does not apply"],
     );
+    // the setting data have no work offset, the offsets no slope limit: refused, not ignored
+    refused(
+        &linear("sinumerik-sd", &["--offset", "2"]),
+        &["--offset does not apply to --format sinumerik-sd"],
+    );
+    refused(
+        &linear("sinumerik", &["--comp-add-velo-factor", "0.02"]),
+        &["--comp-add-velo-factor does not apply to --format sinumerik"],
+    );
     refused(
         &linear("g10", &["--base-mm", "0", "--axis", "x"]),
         &["no thermal part acts along X"],

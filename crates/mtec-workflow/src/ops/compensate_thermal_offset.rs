@@ -239,7 +239,14 @@ fn lib_error(e: OffsetError) -> Error {
 fn check_options(o: &Options) -> Result<()> {
     use Format::*;
     let f = o.format;
-    let rules: [(&str, bool, bool); 6] = [
+    let d = Options::new(&o.model, &o.temps, f);
+    let rules: [(&str, bool, bool); 8] = [
+        ("--offset", o.offset != d.offset, f != SinumerikSd),
+        (
+            "--comp-add-velo-factor",
+            o.comp_add_velo_factor != d.comp_add_velo_factor,
+            f == SinumerikSd,
+        ),
         (
             "--base-mm",
             o.base_mm.is_some(),
