@@ -364,3 +364,26 @@ fn a_short_inverse_time_rotary_move_that_gains_xyz_motion_keeps_its_duration() {
     assert!(dev <= 0.55 && time <= 0.01, "{dev} {time}\n{out}");
     assert!(out.contains("G94 G1"), "{out}");
 }
+
+/// The rotary options are read with a model that has rotary axes and refused without one,
+/// where they would change nothing.
+#[test]
+fn rotary_options_are_refused_for_a_model_without_rotary_axes() {
+    let (rotary, _) = model();
+    let flat = mtec_comp::hand::ZeroModel::new("zero");
+    for opts in [
+        RewriteOptions {
+            start_rotary_deg: Some([0.0, 0.0, 10.0]),
+            ..RewriteOptions::default()
+        },
+        RewriteOptions {
+            check_step_deg: 0.1,
+            ..RewriteOptions::default()
+        },
+    ] {
+        assert!(opts.check_for(&rotary).is_ok());
+        let e = opts.check_for(&flat).unwrap_err();
+        assert!(e.contains("this model has none"), "{e}");
+    }
+    assert!(RewriteOptions::default().check_for(&flat).is_ok());
+}

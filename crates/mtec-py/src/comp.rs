@@ -362,6 +362,7 @@ fn run_gcode<'py>(
         &model_path,
         state.as_deref(),
     )?;
+    options.check_for(m.as_ref()).map_err(usage)?;
     let mut out: Vec<u8> = Vec::with_capacity(program.len() + program.len() / 8);
     let report = py
         .detach(|| rewrite(program.as_bytes(), &mut out, m.as_ref(), &options))

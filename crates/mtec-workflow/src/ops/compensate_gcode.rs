@@ -155,6 +155,7 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
         options.offsets = offsets;
     }
     options.validate().map_err(Error::Usage)?;
+    options.check_for(model.as_ref()).map_err(Error::Usage)?;
 
     // with flattening, the rewriter reads the flattened program; its errors name that
     let mut flattened = None;

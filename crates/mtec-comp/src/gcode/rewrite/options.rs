@@ -129,6 +129,29 @@ impl RewriteOptions {
         }
     }
 
+    /// Refuses the rotary options for a model without rotary axes, where they change nothing
+    /// (the rotary words pass through): a user must not believe the start angles or the
+    /// angular check step took effect.
+    pub fn check_for(&self, model: &dyn crate::ErrorModel) -> Result<(), String> {
+        let view = crate::gcode::rotary::RotaryView::new(model);
+        if view.rotary_axes() != [false; 3] {
+            return Ok(());
+        }
+        let given = [
+            ("--start-rotary-deg", self.start_rotary_deg.is_some()),
+            (
+                "--check-step-deg",
+                self.check_step_deg != RewriteOptions::default().check_step_deg,
+            ),
+        ];
+        match given.iter().find(|(_, g)| *g) {
+            Some((flag, _)) => Err(format!(
+                "{flag} is read only with a model that has rotary axes (a kinematic model with A, B or C); this model has none: leave it out"
+            )),
+            None => Ok(()),
+        }
+    }
+
     /// Checks that the numbers make sense; the message names the option. Every one is bounded
     /// above too: a huge tolerance, correction limit or check step would switch a safety
     /// check off, and a check step below [`MIN_CHECK_STEP`] runs for hours on a real program.
