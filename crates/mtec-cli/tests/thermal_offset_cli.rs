@@ -283,7 +283,7 @@ fn zeroed_warm_the_update_is_the_drift_since() {
     );
     refused(
         &linear("sinumerik-sd", &["--zeroed-at-min", "30"]),
-        &["--zeroed-at-min does not apply"],
+        &["--zeroed-at-min is read by the work-offset formats (not sinumerik-sd) only; --format sinumerik-sd does not use it"],
     );
 }
 
@@ -466,16 +466,16 @@ fn model_and_option_mistakes_are_refused() {
     refused(&linear("g10", &[]), &["--base-mm is required"]);
     refused(
         &linear("sinumerik", &["--base-mm", "0"]),
-        &["--base-mm does not apply"],
+        &["--base-mm is read by --format g10, fanuc and fanuc-macro only"],
     );
     // the setting data have no work offset, the offsets no slope limit: refused, not ignored
     refused(
         &linear("sinumerik-sd", &["--offset", "2"]),
-        &["--offset does not apply to --format sinumerik-sd"],
+        &["--offset is read by the work-offset formats (not sinumerik-sd) only; --format sinumerik-sd does not use it"],
     );
     refused(
         &linear("sinumerik", &["--comp-add-velo-factor", "0.02"]),
-        &["--comp-add-velo-factor does not apply to --format sinumerik"],
+        &["--comp-add-velo-factor is read by --format sinumerik-sd only; --format sinumerik does not use it"],
     );
     refused(
         &linear("g10", &["--base-mm", "0", "--axis", "x"]),

@@ -16,6 +16,16 @@ pub struct Given<'a> {
 }
 
 impl<'a> Given<'a> {
+    /// An option that the choice reads when `read`; `read_by` says what reads it.
+    pub fn new(option: &'a str, given: bool, read: bool, read_by: &'a str) -> Self {
+        Given {
+            option,
+            given,
+            read,
+            read_by: Cow::Borrowed(read_by),
+        }
+    }
+
     /// An option that the choices `read_by` read, given to `chosen`.
     pub fn among(option: &'a str, given: bool, read_by: &[&str], chosen: &[&str]) -> Self {
         Given {

@@ -121,7 +121,7 @@ fn a_bad_log_is_located_and_mistakes_are_refused_before_reading() {
     opts.travel_mm = Some([0.0, 1.0]);
     assert!(matches!(
         compensate_thermal_offset::run(&opts, &mut Silent),
-        Err(Error::Usage(m)) if m == "--travel-mm does not apply to --format g10 (see --help)"
+        Err(Error::Usage(m)) if m == "--travel-mm is read by --format sinumerik-sd only; --format g10 does not use it: leave it out"
     ));
     opts.travel_mm = None;
     opts.out = Some(temps.clone());

@@ -218,12 +218,7 @@ impl Options {
         use Format::*;
         let d = Options::new(&self.model, self.format, None);
         let (f, iso) = (self.format, self.from_iso230_2.is_some());
-        let o = |option, given, read, read_by: &'static str| Given {
-            option,
-            given,
-            read,
-            read_by: read_by.into(),
-        };
+        let o = Given::new;
         let (fanuc, cec) = ("--format fanuc", "--format sinumerik-cec");
         let model_1d = "the tables of a model along one axis (not beckhoff's grid)";
         let options = [

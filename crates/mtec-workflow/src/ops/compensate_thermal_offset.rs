@@ -237,39 +237,50 @@ fn lib_error(e: OffsetError) -> Error {
 
 /// Options given that the format does not use are refused, not silently ignored.
 fn check_options(o: &Options) -> Result<()> {
+    use crate::unused::{refuse_unused, Given};
     use Format::*;
     let f = o.format;
     let d = Options::new(&o.model, &o.temps, f);
-    let rules: [(&str, bool, bool); 8] = [
-        ("--offset", o.offset != d.offset, f != SinumerikSd),
-        (
+    let (sd, offsets) = (
+        "--format sinumerik-sd",
+        "the work-offset formats (not sinumerik-sd)",
+    );
+    let options = [
+        Given::new("--offset", o.offset != d.offset, f != SinumerikSd, offsets),
+        Given::new(
             "--comp-add-velo-factor",
             o.comp_add_velo_factor != d.comp_add_velo_factor,
             f == SinumerikSd,
+            sd,
         ),
-        (
+        Given::new(
             "--base-mm",
             o.base_mm.is_some(),
             matches!(f, G10 | Fanuc | FanucMacro),
+            "--format g10, fanuc and fanuc-macro",
         ),
-        ("--at-mm", o.at_mm.is_some(), f != SinumerikSd),
-        ("--axis-number", o.axis_number.is_some(), f == FanucMacro),
-        ("--machine-axis", o.machine_axis.is_some(), f == SinumerikSd),
-        ("--travel-mm", o.travel_mm.is_some(), f == SinumerikSd),
-        (
+        Given::new("--at-mm", o.at_mm.is_some(), f != SinumerikSd, offsets),
+        Given::new(
+            "--axis-number",
+            o.axis_number.is_some(),
+            f == FanucMacro,
+            "--format fanuc-macro",
+        ),
+        Given::new(
+            "--machine-axis",
+            o.machine_axis.is_some(),
+            f == SinumerikSd,
+            sd,
+        ),
+        Given::new("--travel-mm", o.travel_mm.is_some(), f == SinumerikSd, sd),
+        Given::new(
             "--zeroed-at-min",
             o.zeroed_at_min.is_some(),
             f != SinumerikSd,
+            offsets,
         ),
     ];
-    for (flag, given, applies) in rules {
-        if given && !applies {
-            return Err(Error::usage(format!(
-                "{flag} does not apply to --format {} (see --help)",
-                f.name()
-            )));
-        }
-    }
+    refuse_unused(&format!("--format {}", f.name()), &options)?;
     if matches!(f, G10 | Fanuc | FanucMacro) && o.base_mm.is_none() {
         return Err(Error::usage(
             "--base-mm is required: the offset's value with no drift (or when it was set, with --zeroed-at-min); the line sets the offset to base + update",

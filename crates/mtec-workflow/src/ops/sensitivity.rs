@@ -141,12 +141,7 @@ impl Options {
     pub fn refuse_unused(&self) -> Result<()> {
         use crate::unused::{refuse_unused, Given};
         let (d, m) = (Options::new(), self.method);
-        let o = |option, given, read, read_by: &'static str| Given {
-            option,
-            given,
-            read,
-            read_by: read_by.into(),
-        };
+        let o = Given::new;
         let options = [
             o(
                 "--interference",
