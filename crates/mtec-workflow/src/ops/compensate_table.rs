@@ -247,36 +247,6 @@ impl Options {
                 "--format sinumerik-cec, sinumerik-lec and beckhoff --from-iso230-2",
             ),
             o(
-                "--reference-mm",
-                self.reference_mm != d.reference_mm,
-                f == Fanuc,
-                fanuc,
-            ),
-            o(
-                "--reference-number",
-                self.reference_number != 0,
-                f == Fanuc,
-                fanuc,
-            ),
-            o(
-                "--magnification",
-                self.magnification != 1,
-                f == Fanuc,
-                fanuc,
-            ),
-            o(
-                "--detection-unit-um",
-                self.detection_unit_um != d.detection_unit_um,
-                f == Fanuc,
-                fanuc,
-            ),
-            o(
-                "--max-increment",
-                self.max_increment != d.max_increment,
-                f == Fanuc,
-                fanuc,
-            ),
-            o(
                 "--axis-number",
                 self.axis_number.is_some(),
                 f == Fanuc || (f == Beckhoff && iso),
@@ -309,6 +279,25 @@ impl Options {
             o("--at", self.at.is_some(), f != Beckhoff && !iso, model_1d),
             o("--state", self.state.is_some(), !iso, "tables of a model"),
         ];
+        // FANUC's pitch-error parameters, read by its tape only
+        let fanuc_options = [
+            ("--reference-mm", self.reference_mm != d.reference_mm),
+            (
+                "--reference-number",
+                self.reference_number != d.reference_number,
+            ),
+            ("--magnification", self.magnification != d.magnification),
+            (
+                "--detection-unit-um",
+                self.detection_unit_um != d.detection_unit_um,
+            ),
+            ("--max-increment", self.max_increment != d.max_increment),
+        ];
+        let options: Vec<Given> = fanuc_options
+            .into_iter()
+            .map(|(name, given)| o(name, given, f == Fanuc, fanuc))
+            .chain(options)
+            .collect();
         let source = if iso { " --from-iso230-2" } else { "" };
         refuse_unused(&format!("--format {}{source}", f.name()), &options)
     }
