@@ -13,8 +13,9 @@
 //!
 //! [`OutputGuard`] also refuses an output that is one of the command's inputs, compared by
 //! device and inode where both exist (hard links, symlinks, `./a/../a` spellings are the same
-//! file) and by canonical path otherwise. [`OutputGuard::check`] does all of this without writing,
-//! so a command calls it before any work.
+//! file) and by canonical path otherwise, and a file whose folder cannot take it.
+//! [`OutputGuard::check`] does all of this without writing the output (it only creates and
+//! removes an empty probe file in the folder), so a command calls it before any work.
 
 use std::fs::{File, OpenOptions};
 use std::io::Write;
