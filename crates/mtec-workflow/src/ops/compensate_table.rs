@@ -391,15 +391,7 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
         guard.add_input(p);
     }
     // where the table goes is settled before any work (an input, a directory: exit 2)
-    let dest = match &opts.out {
-        Some(p) if opts.format == Format::Heidenhain && p.as_os_str() == "-" => {
-            return Err(Error::usage(
-                "heidenhain writes two files: give -o NAME.COM, not - (the .CMA goes beside it)",
-            ))
-        }
-        Some(p) => guard.check(p)?,
-        None => Destination::Stdout,
-    };
+    let dest = check_outputs(opts, &guard)?;
     let mut keep = Keep {
         obs,
         warnings: Vec::new(),
@@ -568,15 +560,7 @@ fn load_map_if_grid(path: &Path) -> std::result::Result<Option<GridMap>, InputEr
 fn run_iso230_2(opts: &Options, run: &Path, obs: &mut dyn Observer) -> Result<Outcome> {
     table::check_max_correction(opts.max_correction_um).map_err(Error::usage)?;
     let guard = OutputGuard::new(&[run]);
-    let dest = match &opts.out {
-        Some(p) if opts.format == Format::Heidenhain && p.as_os_str() == "-" => {
-            return Err(Error::usage(
-                "heidenhain writes two files: give -o NAME.COM, not - (the .CMA goes beside it)",
-            ))
-        }
-        Some(p) => guard.check(p)?,
-        None => Destination::Stdout,
-    };
+    let dest = check_outputs(opts, &guard)?;
     let table_in = mtec_io::Table::read(run)?;
     let data = mtec_measure::PositioningData::from_table(&table_in)?;
     let mut warnings = Vec::new();
@@ -737,6 +721,31 @@ fn fanuc_options(opts: &Options, axis_number: u8) -> table::fanuc::FanucOptions 
 }
 
 /// HEIDENHAIN writes two files: the `-o NAME.COM` path and the name the `.COM` is known by.
+/// Where the table goes, settled before any work (an input, a directory, a folder that takes
+/// no file: exit 2); heidenhain's .CMA beside the .COM is checked here too.
+fn check_outputs(opts: &Options, guard: &OutputGuard) -> Result<Destination> {
+    match &opts.out {
+        Some(p) if opts.format == Format::Heidenhain && p.as_os_str() == "-" => Err(Error::usage(
+            "heidenhain writes two files: give -o NAME.COM, not - (the .CMA goes beside it)",
+        )),
+        Some(p) => {
+            let dest = guard.check(p)?;
+            if opts.format == Format::Heidenhain {
+                if p.file_name() == Some(std::ffi::OsStr::new(&opts.cma_name)) {
+                    return Err(Error::usage(format!(
+                        "-o {} and --cma-name {} name one file: the assignment table would replace the table",
+                        p.display(),
+                        opts.cma_name
+                    )));
+                }
+                guard.check(&p.with_file_name(&opts.cma_name))?;
+            }
+            Ok(dest)
+        }
+        None => Ok(Destination::Stdout),
+    }
+}
+
 fn heidenhain_com(opts: &Options) -> crate::Result<(&std::path::Path, String)> {
     let out = opts.out.as_deref().ok_or_else(|| {
         Error::usage("heidenhain writes two files: give -o NAME.COM (the .CMA goes beside it)")
