@@ -49,19 +49,24 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// One pose: comma-separated axis positions in the machine's axis order (mm, deg).
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, conflicts_with_all = ["points", "function"])]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        conflicts_with = "points"
+    )]
     pub at: Option<Vec<f64>>,
     /// Several poses (CSV with x_mm, y_mm, z_mm, ... columns); indices are aggregated.
-    #[arg(long, conflicts_with = "function")]
+    #[arg(long)]
     pub points: Option<PathBuf>,
     /// lhs or lhs:N: N poses (64) by Latin hypercube over the travels instead of --at/--points.
-    #[arg(long, conflicts_with = "function", value_parser = op::parse_sampling)]
+    #[arg(long, value_parser = op::parse_sampling)]
     pub sampling: Option<usize>,
     /// Target accuracy of Ex, Ey, Ez for the tolerance allocation, µm.
-    #[arg(long, conflicts_with = "function", default_value_t = 25.0)]
+    #[arg(long, default_value_t = 25.0)]
     pub target_um: f64,
     /// Coverage factor k: the target bounds k·σ of each axis.
-    #[arg(long, conflicts_with = "function", default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0)]
     pub coverage: f64,
     /// Print JSON ("format": "mtec.sensitivity/1").
     #[arg(long)]

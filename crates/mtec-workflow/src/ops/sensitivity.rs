@@ -168,7 +168,23 @@ impl Options {
                 "--method sobol and morris",
             ),
         ];
-        refuse_unused(&format!("--method {}", crate::Choice::name(m)), &options)
+        refuse_unused(&format!("--method {}", crate::Choice::name(m)), &options)?;
+        // a test function has no machine: no pose, no tolerance allocation
+        let machine = "a machine (--machine, --stats)";
+        let function = self.function.is_none();
+        let options = [
+            o("--at", self.at.is_some(), function, machine),
+            o("--points", self.points.is_some(), function, machine),
+            o("--sampling", self.lhs_poses.is_some(), function, machine),
+            o(
+                "--target-um",
+                self.target_um != d.target_um,
+                function,
+                machine,
+            ),
+            o("--coverage", self.coverage != d.coverage, function, machine),
+        ];
+        refuse_unused("--function", &options)
     }
 
     /// The method with its design settings.
