@@ -147,6 +147,22 @@ pub struct GridMap {
     /// 1 / (x_{i+1} − x_i) of every cell of each axis: the fraction of the way through a cell
     /// by a multiplication instead of a division (a division costs several multiplications).
     inv_width: [Vec<f64>; 3],
+    /// Each axis' lookup constants, computed once (a single-point evaluation would otherwise
+    /// derive them from the axes on every call).
+    consts: [AxisConst; 3],
+}
+
+/// The per-axis constants of a lookup: the range, 1 / step when equally spaced (else 0), the
+/// last cell (as an index and as a float), the index stride of one step (0 for a single-value
+/// axis).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct AxisConst {
+    lo: f64,
+    hi: f64,
+    inv_step: f64,
+    last_cell: usize,
+    last_cell_f: f64,
+    stride: usize,
 }
 
 /// The JSON document of a map (`mtec.map/1`).
@@ -243,6 +259,14 @@ impl GridMap {
             source: source.into(),
             inv_step: [0.0; 3],
             inv_width: Default::default(),
+            consts: [AxisConst {
+                lo: 0.0,
+                hi: 0.0,
+                inv_step: 0.0,
+                last_cell: 0,
+                last_cell_f: 0.0,
+                stride: 0,
+            }; 3],
         };
         for a in 0..3 {
             let ax = &map.axes_mm[a];
@@ -250,6 +274,19 @@ impl GridMap {
                 map.inv_step[a] = (ax.len() - 1) as f64 / (ax[ax.len() - 1] - ax[0]);
             }
             map.inv_width[a] = ax.windows(2).map(|w| 1.0 / (w[1] - w[0])).collect();
+        }
+        let (ny, nz) = (map.axes_mm[1].len(), map.axes_mm[2].len());
+        for (a, stride) in [(0, ny * nz), (1, nz), (2, 1)] {
+            let ax = &map.axes_mm[a];
+            let last_cell = ax.len().saturating_sub(2);
+            map.consts[a] = AxisConst {
+                lo: ax[0],
+                hi: ax[ax.len() - 1],
+                inv_step: map.inv_step[a],
+                last_cell,
+                last_cell_f: last_cell as f64,
+                stride: if ax.len() > 1 { stride } else { 0 },
+            };
         }
         Ok(map)
     }
@@ -606,22 +643,21 @@ impl GridMap {
     /// The per-map constants of a lookup.
     #[inline]
     fn lookup(&self) -> Lookup<'_> {
-        let ny = self.axes_mm[1].len();
-        let nz = self.axes_mm[2].len();
-        let axis = |a: usize, stride: usize| {
-            let ax = self.axes_mm[a].as_slice();
+        let axis = |a: usize| {
+            let c = self.consts[a];
             AxisLookup {
-                ax,
-                lo: ax[0],
-                hi: ax[ax.len() - 1],
-                inv_step: self.inv_step[a],
+                ax: self.axes_mm[a].as_slice(),
+                lo: c.lo,
+                hi: c.hi,
+                inv_step: c.inv_step,
                 inv_width: self.inv_width[a].as_slice(),
-                last_cell: ax.len().saturating_sub(2),
-                stride: if ax.len() > 1 { stride } else { 0 },
+                last_cell: c.last_cell,
+                last_cell_f: c.last_cell_f,
+                stride: c.stride,
             }
         };
         Lookup {
-            axes: [axis(0, ny * nz), axis(1, nz), axis(2, 1)],
+            axes: [axis(0), axis(1), axis(2)],
             outside: self.outside,
         }
     }
@@ -696,6 +732,7 @@ struct AxisLookup<'a> {
     inv_step: f64,
     inv_width: &'a [f64],
     last_cell: usize,
+    last_cell_f: f64,
     stride: usize,
 }
 
@@ -742,9 +779,12 @@ impl AxisLookup<'_> {
     #[inline(always)]
     fn cell(&self, x: f64) -> usize {
         if self.inv_step > 0.0 {
-            ((x - self.lo) * self.inv_step)
+            let i = ((x - self.lo) * self.inv_step)
                 .max(0.0)
-                .min(self.last_cell as f64) as i32 as usize
+                .min(self.last_cell_f);
+            // SAFETY: as in `locate_block`: `i` is finite and in [0, n − 2] (`max` maps NaN
+            // to 0), and n − 2 fits in an i32 (checked in `GridMap::new`)
+            unsafe { i.to_int_unchecked::<i32>() as usize }
         } else {
             self.ax
                 .partition_point(|&v| v <= x)
@@ -785,7 +825,7 @@ impl AxisLookup<'_> {
         }
         if self.inv_step > 0.0 {
             // as `cell`, with the index clamped as a float (the same integer)
-            let last = self.last_cell as f64;
+            let last = self.last_cell_f;
             for (c, &x) in cell.iter_mut().zip(frac.iter()) {
                 let i = ((x - self.lo) * self.inv_step).max(0.0).min(last);
                 // SAFETY: `i` is finite and in [0, n − 2] (`max` maps NaN to 0), and n − 2
@@ -828,27 +868,33 @@ impl AxisLookup<'_> {
 
 /// What one trilinear evaluation needs of a map, gathered once per call of
 /// [`GridMap::try_error_um`] or per batch of [`GridMap::eval_batch`] (both go through
-/// [`Lookup::corners`], so they agree bit for bit).
+/// [`Lookup::sum`] or [`Lookup::sum_avx`], the same operations, so they agree bit for bit).
 struct Lookup<'a> {
     axes: [AxisLookup<'a>; 3],
     outside: Outside,
 }
 
 impl Lookup<'_> {
-    /// The interpolated error at `p` (padded to four), `None` when the policy refuses it.
+    /// The interpolated error at `p` (padded to four), `None` when the policy refuses it. The
+    /// policy is matched once, so that each policy's code has no branch on it per axis.
     #[inline(always)]
     fn eval(&self, v: &[[f64; 4]], p: [f64; 3]) -> Option<[f64; 4]> {
-        let [ax, ay, az] = &self.axes;
-        let (i0, tx) = ax.locate(p[0], self.outside)?;
-        let (j0, ty) = ay.locate(p[1], self.outside)?;
-        let (k0, tz) = az.locate(p[2], self.outside)?;
-        Some(self.corners([i0 as u32, j0 as u32, k0 as u32], [tx, ty, tz], v))
+        match self.outside {
+            Outside::Clamp => self.eval_in(v, p, Outside::Clamp),
+            Outside::Extrapolate => self.eval_in(v, p, Outside::Extrapolate),
+            Outside::Refuse => self.eval_in(v, p, Outside::Refuse),
+        }
     }
 
-    /// The trilinear interpolation in the cell with lower node `ijk` at fractions `t`.
+    /// [`Lookup::eval`] under the policy `outside`.
     #[inline(always)]
-    fn corners(&self, ijk: [u32; 3], t: [f64; 3], v: &[[f64; 4]]) -> [f64; 4] {
-        self.sum(self.base(ijk), t, v)
+    fn eval_in(&self, v: &[[f64; 4]], p: [f64; 3], outside: Outside) -> Option<[f64; 4]> {
+        let [ax, ay, az] = &self.axes;
+        let (i0, tx) = ax.locate(p[0], outside)?;
+        let (j0, ty) = ay.locate(p[1], outside)?;
+        let (k0, tz) = az.locate(p[2], outside)?;
+        let base = self.base([i0 as u32, j0 as u32, k0 as u32]);
+        Some(self.sum(base, [tx, ty, tz], v))
     }
 
     /// Index of node `ijk` (the lower corner of its cell).

@@ -113,7 +113,8 @@ impl PathBound {
     }
 
     /// `max_s |g(s)|` in µm along the command segment p0 → p1 (mm), given the model's values
-    /// `e0`, `e1` at the ends. NaN when the model has no value somewhere along it.
+    /// `e0`, `e1` at the ends (`model.error_um(p0)` and `(p1)`: g is zero there by definition,
+    /// and not evaluated again). NaN when the model has no value somewhere along it.
     pub fn chord_departure_um(
         &mut self,
         model: &dyn ErrorModel,
@@ -152,7 +153,9 @@ impl PathBound {
                 self.breaks
                     .sort_unstable_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
                 let mut worst = [0.0f64; 3];
-                let mut g_prev = g(model, 0.0);
+                // g is zero at both ends: e0 and e1 are the model's values there (a NaN in
+                // either reaches every interior value of g, so it is not lost)
+                let mut g_prev = [0.0; 3];
                 let mut s_prev = 0.0;
                 for k in 1..self.breaks.len() {
                     let s1 = self.breaks[k];
@@ -162,7 +165,7 @@ impl PathBound {
                     let h = (s1 - s_prev) / 3.0;
                     let ga = g(model, s_prev + h);
                     let gb = g(model, s_prev + 2.0 * h);
-                    let g1 = g(model, s1);
+                    let g1 = if s1 >= 1.0 { [0.0; 3] } else { g(model, s1) };
                     for i in 0..3 {
                         let m = cubic_max_abs([g_prev[i], ga[i], gb[i], g1[i]]);
                         worst[i] = if m.is_nan() {
