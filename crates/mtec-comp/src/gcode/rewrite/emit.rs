@@ -255,7 +255,7 @@ impl Rewriter<'_> {
                     };
                     let (r, n) = rounded(w, decimals);
                     if r != v {
-                        let mut s = String::new();
+                        let mut s = self.spare_texts.pop().unwrap_or_default();
                         write_rounded(w, decimals, n, &mut s);
                         self.edits.push(Edit {
                             span,

@@ -27,6 +27,9 @@ pub(super) struct Rewriter<'a> {
     pub(super) line_no: usize,
     pub(super) tokens: Vec<Token>,
     pub(super) edits: Vec<Edit>,
+    /// The emptied texts of the last line's edits, reused for the next line's corrected words
+    /// (an allocation and a free per word otherwise).
+    pub(super) spare_texts: Vec<String>,
     pub(super) extra_lines: Vec<String>,
     pub(super) out_buf: Vec<u8>,
     pub(super) tape_started: bool,
@@ -81,6 +84,7 @@ impl<'a> Rewriter<'a> {
             line_no: 0,
             tokens: Vec::new(),
             edits: Vec::new(),
+            spare_texts: Vec::new(),
             extra_lines: Vec::new(),
             out_buf: Vec::new(),
             tape_started: false,
@@ -454,7 +458,11 @@ impl<'a> Rewriter<'a> {
             self.seen_content = true;
         }
         self.program_ended |= block.has_m(2).is_some() || block.has_m(30).is_some();
-        self.edits.clear();
+        for edit in self.edits.drain(..) {
+            let mut text = edit.text;
+            text.clear();
+            self.spare_texts.push(text);
+        }
         self.extra_lines.clear();
         let handled = self.block(block, body)?;
         if !handled || (self.edits.is_empty() && self.extra_lines.is_empty()) {
