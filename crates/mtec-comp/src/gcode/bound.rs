@@ -144,14 +144,22 @@ impl PathBound {
                         (p1[a], p0[a])
                     };
                     let first = ax.partition_point(|&x| x <= lo);
+                    // no grid value in (lo, hi) when hi is at most the first value above lo
+                    // (the usual short move, inside one cell): the second search is not needed
+                    if first == ax.len() || hi <= ax[first] {
+                        continue;
+                    }
                     let last = ax.partition_point(|&x| x < hi);
                     for &x in &ax[first..last] {
                         self.breaks.push((x - p0[a]) / d);
                     }
                 }
                 self.breaks.push(1.0);
-                self.breaks
-                    .sort_unstable_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+                if self.breaks.len() > 2 {
+                    self.breaks.sort_unstable_by(|a, b| {
+                        a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal)
+                    });
+                }
                 let mut worst = [0.0f64; 3];
                 // g is zero at both ends: e0 and e1 are the model's values there (a NaN in
                 // either reaches every interior value of g, so it is not lost)
