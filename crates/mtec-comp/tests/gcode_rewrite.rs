@@ -836,3 +836,28 @@ fn an_r_arc_from_an_uncorrected_start_is_written_in_centre_form() {
     // the centre is the nominal one (the start is not moved), the end is corrected by -e
     assert!(arc.contains("X-92.7353 Y-1.0242"), "{arc}");
 }
+
+/// An M code outside LinuxCNC's table (found 2026-11-30 with FreeCAD's Centroid post, whose
+/// programs carry M25, "Z home" on that control) is copied with a warning at the word, once per
+/// code; LinuxCNC's own codes, user M100–M199 among them, are not warned about.
+#[test]
+fn an_m_code_linuxcnc_does_not_have_is_warned_about_once_per_code() {
+    let model = ConstModel([3.0, -2.0, 1.0]);
+    let program =
+        "G21 G90\nG0 X0 Y0 Z5\nM8 M25\nG1 X5 F100\nM25\nM101\nG0 Z5 M10\nM3 S1000 M9\nM5\nM2\n";
+    let (out, rep) = run(program, &model, &RewriteOptions::default());
+    assert_eq!(rep.warnings_total, 2, "{:?}", rep.warnings);
+    assert_eq!((rep.warnings[0].line, rep.warnings[0].column), (3, 4));
+    assert!(
+        rep.warnings[0]
+            .message
+            .starts_with("M25 is not a LinuxCNC M code"),
+        "{}",
+        rep.warnings[0].message
+    );
+    assert_eq!((rep.warnings[1].line, rep.warnings[1].column), (7, 7));
+    assert!(rep.warnings[1].message.starts_with("M10 is not"));
+    // the blocks are copied, the moves compensated
+    assert!(out.contains("\nM8 M25\n") && out.contains("\nM25\n") && out.contains("\nM101\n"));
+    assert!(out.contains("\nG1 X4.997 F100\n"), "{out}");
+}

@@ -73,6 +73,8 @@ pub(super) struct Rewriter<'a> {
     pub(super) modes_stated: [bool; 2],
     /// The warning that a move came before them was given (once per program).
     pub(super) modes_warned: bool,
+    /// The M codes outside LinuxCNC's table already warned about (once per code).
+    pub(super) unknown_m_warned: Vec<u32>,
 }
 
 impl<'a> Rewriter<'a> {
@@ -104,6 +106,7 @@ impl<'a> Rewriter<'a> {
             naive_cam_warned: false,
             modes_stated: [false; 2],
             modes_warned: false,
+            unknown_m_warned: Vec::new(),
             block: None,
             planner: Planner::new(model, opt),
             pieces: Vec::new(),
@@ -274,6 +277,29 @@ impl<'a> Rewriter<'a> {
             format!("this move comes before the program states {missing}, LinuxCNC's start-up modes; the controller keeps the modes the previous program or an MDI command left, and the program and its compensation run differently in others: state them before the first move (e.g. G21 G90)"),
         );
         self.warn(d);
+    }
+
+    /// Warns (once per code) of an M code outside LinuxCNC's table (M0–M9, M19, M30, M48–M53,
+    /// M60–M73, user M100–M199; M98/M99 are refused elsewhere): the block is copied unchanged and mtec compensates as
+    /// if the code moved no axis, but LinuxCNC stops at it ("Unknown m code used") unless the
+    /// machine's INI remaps it, and a remap or another control's code (a Centroid M25 sends Z
+    /// home) may move the machine where the rewrite does not follow.
+    fn warn_unknown_m_codes(&mut self, b: &Block) {
+        for &(code, token) in &b.m {
+            if matches!(code, 98 | 99)
+                || crate::gcode::modal::m_group(code).is_some()
+                || self.unknown_m_warned.contains(&code)
+            {
+                continue;
+            }
+            self.unknown_m_warned.push(code);
+            let d = self.diag(
+                self.column_of(Some(token)),
+                ProblemKind::Controller,
+                format!("M{code} is not a LinuxCNC M code: LinuxCNC stops here (\"Unknown m code used\") unless the machine's INI remaps it; the block is copied unchanged and the moves after it are compensated as if M{code} moved no axis. If it moves the machine (a remap, or another control's code such as a Centroid M25 that sends Z home), the first move after it starts elsewhere than the rewrite assumed: follow it with an absolute rapid naming every axis (G90 G0 X… Y… Z…) before the next feed move"),
+            );
+            self.warn(d);
+        }
     }
 
     /// Warns (once) that the pieces just written may be merged back into one line by the
@@ -506,6 +532,7 @@ impl<'a> Rewriter<'a> {
         // left the naive-CAM warning out)
         self.follow_path_control(b);
         self.warn_assumed_modes(b, motion.is_some() && has_axis);
+        self.warn_unknown_m_codes(b);
 
         // --- unsupported: refuse, or warn and pass through ----------------------------------
         if !issues.is_empty() {
