@@ -451,6 +451,15 @@ class Arc:
             self.cum.append(self.cum[-1] + norm(sub(pts[k + 1], pts[k])))
         self.length = self.cum[-1]
         self.planar_circle = abs(r1 - r0) < 1e-12 and abs(rise) < 1e-12
+        # the length itself, for the time of a G93 move: the polyline above is short of it by
+        # ~(panel angle)^2/24, 4e-4 of a quarter circle, and two arcs of nearly the same sweep
+        # can get different panel counts (found 2026-11-30: a kept G93 arc reported 5e-5 too
+        # fast). |P'(phi)|^2 = r(phi)^2 + r'^2 + w'^2 (U, V, W orthonormal), integrated by
+        # Simpson's rule on 256 panels per turn (exact for a circle or a helix)
+        dr, dw = (r1 - r0) / sweep, rise / sweep
+        m = 2 * max(8, int(128 * sweep / (2 * math.pi)) + 1)
+        f = [math.sqrt(self.radius(sweep * k / m) ** 2 + dr * dr + dw * dw) for k in range(m + 1)]
+        self.true_length = sweep / (3 * m) * (f[0] + f[-1] + 4 * sum(f[1:-1:2]) + 2 * sum(f[2:-1:2]))
 
     def radius(self, phi):
         return self.r0 + (self.r1 - self.r0) * phi / self.sweep
@@ -1092,7 +1101,8 @@ def check_inverse_time(nominal, comp, match):
             f = m.inverse_time_feed_mm
             dl = 2 * SQRT3 * HALF_PRINT_UNIT * m.mm_per_unit  # both end points' rounding
             df = HALF_PRINT_UNIT * m.mm_per_unit  # the printed feed's rounding
-            return m.length / f, dl / f + m.length * df / f ** 2
+            length = getattr(m.geom, "true_length", m.length)
+            return length / f, dl / f + length * df / f ** 2
         t_n, b_n = time_and_bound(n)
         tb = [time_and_bound(c) for c in pieces]
         t_c, b_c = sum(t for t, _ in tb), sum(b for _, b in tb)

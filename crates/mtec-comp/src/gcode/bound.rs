@@ -33,7 +33,13 @@ use crate::{map::Outside, ErrorModel};
 pub struct PathBound {
     check_step_mm: f64,
     breaks: Vec<f64>,
+    /// Per axis: the box's ends and the grid planes between them ([`PathBound::variation_um`]).
+    planes: [Vec<f64>; 3],
 }
+
+/// Most points [`PathBound::variation_um`] evaluates for the exact range over a box; a box
+/// crossing more grid planes takes the range of the nodes of its cells (cheaper, looser).
+const MAX_RANGE_POINTS: usize = 4096;
 
 /// One end of an output move, see [`PathBound::end`].
 #[derive(Debug, Clone, Copy)]
@@ -104,6 +110,7 @@ impl PathBound {
         PathBound {
             check_step_mm,
             breaks: Vec::new(),
+            planes: Default::default(),
         }
     }
 
@@ -206,6 +213,16 @@ impl PathBound {
     /// A bound of `max |e(p) − e(q)|` (µm) for p, q in the box `lo..hi` (mm), for a grid map;
     /// for other models the largest |e(p) − e(first)| over `samples` (points of the path).
     /// Infinity when a grid map extrapolates beyond its nodes inside the box.
+    ///
+    /// For a grid map it is the norm of the exact range of each component over the box: between
+    /// two consecutive grid planes of every axis the map is multilinear (trilinear in a cell,
+    /// and constant along an axis where it is clamped), so over each such part of the box each
+    /// component takes its extremes at the part's corners; the corners of all parts are the
+    /// points whose coordinates are the box's ends or a grid plane between them. (Before
+    /// 2026-11-30 it was the range of the node values of every cell the box touches, which for a
+    /// map of one large cell, a tilt over ±5 m, was the whole map's range: every arc was cut
+    /// into chords.) A box crossing so many planes that this takes more than
+    /// [`MAX_RANGE_POINTS`] evaluations gets the range of its cells' nodes.
     pub fn variation_um(
         &mut self,
         model: &dyn ErrorModel,
@@ -216,6 +233,47 @@ impl PathBound {
         match model.as_grid() {
             Some(grid) => {
                 let axes = grid.axes_mm();
+                for a in 0..3 {
+                    let ax = &axes[a];
+                    let n = ax.len();
+                    if n > 1
+                        && (lo[a] < ax[0] || hi[a] > ax[n - 1])
+                        && grid.outside() != Outside::Clamp
+                    {
+                        return f64::INFINITY;
+                    }
+                    let planes = &mut self.planes[a];
+                    planes.clear();
+                    planes.push(lo[a]);
+                    if n > 1 {
+                        let first = ax.partition_point(|&x| x <= lo[a]);
+                        let last = ax.partition_point(|&x| x < hi[a]).max(first);
+                        planes.extend_from_slice(&ax[first..last]);
+                        if hi[a] > lo[a] {
+                            planes.push(hi[a]);
+                        }
+                    }
+                }
+                let points: usize = self.planes.iter().map(Vec::len).product();
+                if points <= MAX_RANGE_POINTS {
+                    let mut min = [f64::INFINITY; 3];
+                    let mut max = [f64::NEG_INFINITY; 3];
+                    for &x in &self.planes[0] {
+                        for &y in &self.planes[1] {
+                            for &z in &self.planes[2] {
+                                let v = model.error_um([x, y, z]);
+                                if v.iter().any(|c| c.is_nan()) {
+                                    return f64::NAN;
+                                }
+                                for c in 0..3 {
+                                    min[c] = min[c].min(v[c]);
+                                    max[c] = max[c].max(v[c]);
+                                }
+                            }
+                        }
+                    }
+                    return norm([0, 1, 2].map(|c| max[c] - min[c]));
+                }
                 let mut range = [[0usize; 2]; 3];
                 for a in 0..3 {
                     let ax = &axes[a];
@@ -353,34 +411,74 @@ mod tests {
     }
 
     #[test]
-    fn variation_over_a_box_holds_the_node_range() {
+    fn variation_over_a_box_is_the_exact_range_of_the_map_on_it() {
         let map = bump_map();
         let mut b = PathBound::new(1.0);
         let none = &mut std::iter::empty();
-        assert_eq!(
-            b.variation_um(&map, [0.0, 0.0, 0.0], [39.0, 39.0, 0.0], none),
-            0.0
-        );
-        assert_eq!(
-            b.variation_um(&map, [41.0, 41.0, 0.0], [45.0, 45.0, 0.0], none),
-            30.0
-        );
-        assert_eq!(
-            b.variation_um(&map, [61.0, 0.0, 0.0], [62.0, 100.0, 0.0], none),
-            0.0
-        );
-        assert_eq!(
-            b.variation_um(&map, [60.0, 0.0, 0.0], [62.0, 100.0, 0.0], none),
-            0.0
-        );
-        assert_eq!(
-            b.variation_um(&map, [59.9, 0.0, 0.0], [62.0, 100.0, 0.0], none),
-            30.0
-        );
-        // clamped outside the box: still the edge nodes
-        assert_eq!(
-            b.variation_um(&map, [-20.0, -20.0, 0.0], [5.0, 5.0, 0.0], none),
-            0.0
-        );
+        let mut v = |b: &mut PathBound, lo: [f64; 2], hi: [f64; 2]| {
+            b.variation_um(&map, [lo[0], lo[1], 0.0], [hi[0], hi[1], 0.0], none)
+        };
+        // the bump is the tent 30·(1 − |x − 50|/10)·(1 − |y − 50|/10) µm on (40, 60)²
+        assert_eq!(v(&mut b, [0.0, 0.0], [39.0, 39.0]), 0.0);
+        // within one cell: the values at the box's corners, 30·0.5·0.5 − 30·0.1·0.1
+        assert!((v(&mut b, [41.0, 41.0], [45.0, 45.0]) - 7.2).abs() < 1e-12);
+        // the node inside the box is one of the points: 30 − 30·0.5·0.5
+        assert!((v(&mut b, [45.0, 45.0], [55.0, 55.0]) - 22.5).abs() < 1e-12);
+        assert_eq!(v(&mut b, [61.0, 0.0], [62.0, 100.0]), 0.0);
+        assert_eq!(v(&mut b, [60.0, 0.0], [62.0, 100.0]), 0.0);
+        // 0.1 mm into the tent at its crest row: 30·0.01
+        assert!((v(&mut b, [59.9, 0.0], [62.0, 100.0]) - 0.3).abs() < 1e-12);
+        // clamped outside the grid: the edge values
+        assert_eq!(v(&mut b, [-20.0, -20.0], [5.0, 5.0]), 0.0);
+        assert!((v(&mut b, [-20.0, 45.0], [45.0, 200.0]) - 15.0).abs() < 1e-12);
+        // never below the range of dense samples of the box, never above the nodes' range
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut uniform = |lo: f64, hi: f64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            lo + (hi - lo) * (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..200 {
+            let (x0, y0) = (uniform(-10.0, 100.0), uniform(-10.0, 100.0));
+            let (x1, y1) = (x0 + uniform(0.0, 30.0), y0 + uniform(0.0, 30.0));
+            let bound = v(&mut b, [x0, y0], [x1, y1]);
+            let (mut min, mut max) = (f64::INFINITY, f64::NEG_INFINITY);
+            for i in 0..=40 {
+                for j in 0..=40 {
+                    let p = [
+                        x0 + (x1 - x0) * i as f64 / 40.0,
+                        y0 + (y1 - y0) * j as f64 / 40.0,
+                        0.0,
+                    ];
+                    let e = map.error_um(p)[1];
+                    min = min.min(e);
+                    max = max.max(e);
+                }
+            }
+            assert!(max - min <= bound + 1e-9, "{bound} < {}", max - min);
+            assert!(bound <= 30.0 + 1e-12);
+        }
+    }
+
+    /// A box crossing more grid planes than [`MAX_RANGE_POINTS`] allows evaluations for takes
+    /// the range of the nodes of its cells.
+    #[test]
+    fn a_box_over_many_planes_takes_the_range_of_its_cells_nodes() {
+        let xs: Vec<f64> = (0..=100).map(|i| i as f64).collect();
+        let mut values = vec![[0.0; 3]; 101 * 101];
+        values[50 * 101 + 50] = [0.0, 30.0, 0.0];
+        let map =
+            GridMap::new([xs.clone(), xs, vec![0.0]], values, Outside::Clamp, "bump").unwrap();
+        let mut b = PathBound::new(1.0);
+        let none = &mut std::iter::empty();
+        // 102 × 102 points > 4096: the nodes of the cells, the bump's node among them
+        let v = b.variation_um(&map, [0.5, 0.5, 0.0], [99.5, 99.5, 0.0], none);
+        assert_eq!(v, 30.0);
+        // 62 × 62 points ≤ 4096 (60 planes inside each side): exact, the node is a plane
+        let v = b.variation_um(&map, [20.5, 20.5, 0.0], [80.5, 80.5, 0.0], none);
+        assert_eq!(v, 30.0);
+        let v = b.variation_um(&map, [49.5, 49.5, 0.0], [49.75, 49.75, 0.0], none);
+        assert!((v - 30.0 * (0.75 * 0.75 - 0.5 * 0.5)).abs() < 1e-12, "{v}");
     }
 }
