@@ -20,6 +20,9 @@ use std::io::{BufRead, Write};
 /// Added to the refusal of a construct [`Rewriter::flattening_resolves`] names: what to do.
 const FLATTEN_HINT: &str = "LinuxCNC's interpreter resolves this: add --flatten-with rs274 to run the program through it first and compensate the moves it makes (see compensate gcode --help)";
 
+/// Most emptied edit texts kept for reuse (a line corrects at most a few words).
+const MAX_SPARE_TEXTS: usize = 16;
+
 pub(super) struct Rewriter<'a> {
     pub(super) opt: &'a RewriteOptions,
     pub(super) st: State,
@@ -280,10 +283,10 @@ impl<'a> Rewriter<'a> {
     }
 
     /// Warns (once per code) of an M code outside LinuxCNC's table (M0–M9, M19, M30, M48–M53,
-    /// M60–M73, user M100–M199; M98/M99 are refused elsewhere): the block is copied unchanged and mtec compensates as
-    /// if the code moved no axis, but LinuxCNC stops at it ("Unknown m code used") unless the
-    /// machine's INI remaps it, and a remap or another control's code (a Centroid M25 sends Z
-    /// home) may move the machine where the rewrite does not follow.
+    /// M60–M73, user M100–M199; M98/M99 are refused elsewhere): the block is copied unchanged
+    /// and mtec compensates as if the code moved no axis, but LinuxCNC stops at it ("Unknown m
+    /// code used") unless the machine's INI remaps it, and a remap or another control's code (a
+    /// Centroid M25 sends Z home) may move the machine where the rewrite does not follow.
     fn warn_unknown_m_codes(&mut self, b: &Block) {
         for &(code, token) in &b.m {
             if matches!(code, 98 | 99)
@@ -485,9 +488,13 @@ impl<'a> Rewriter<'a> {
         }
         self.program_ended |= block.has_m(2).is_some() || block.has_m(30).is_some();
         for edit in self.edits.drain(..) {
-            let mut text = edit.text;
-            text.clear();
-            self.spare_texts.push(text);
+            // kept only while the pool is small: a line's edits made by other means than a
+            // corrected word would otherwise add to it on every line of a long program
+            if self.spare_texts.len() < MAX_SPARE_TEXTS && edit.text.capacity() > 0 {
+                let mut text = edit.text;
+                text.clear();
+                self.spare_texts.push(text);
+            }
         }
         self.extra_lines.clear();
         let handled = self.block(block, body)?;
