@@ -282,10 +282,7 @@ impl PathBound {
                         range[a] = [0, 0];
                         continue;
                     }
-                    let outside = lo[a] < ax[0] || hi[a] > ax[n - 1];
-                    if outside && grid.outside() != Outside::Clamp {
-                        return f64::INFINITY;
-                    }
+                    // (a box outside the grid under another policy than clamp returned above)
                     // nodes of the cells that hold lo..hi: the last node ≤ lo to the first ≥ hi
                     let i0 = ax.partition_point(|&x| x <= lo[a]).saturating_sub(1);
                     let i1 = ax.partition_point(|&x| x < hi[a]).min(n - 1);

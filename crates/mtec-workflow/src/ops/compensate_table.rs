@@ -720,7 +720,6 @@ fn fanuc_options(opts: &Options, axis_number: u8) -> table::fanuc::FanucOptions 
     }
 }
 
-/// HEIDENHAIN writes two files: the `-o NAME.COM` path and the name the `.COM` is known by.
 /// Where the table goes, settled before any work (an input, a directory, a folder that takes
 /// no file: exit 2); heidenhain's .CMA beside the .COM is checked here too.
 fn check_outputs(opts: &Options, guard: &OutputGuard) -> Result<Destination> {
@@ -746,6 +745,7 @@ fn check_outputs(opts: &Options, guard: &OutputGuard) -> Result<Destination> {
     }
 }
 
+/// HEIDENHAIN writes two files: the `-o NAME.COM` path and the name the `.COM` is known by.
 fn heidenhain_com(opts: &Options) -> crate::Result<(&std::path::Path, String)> {
     let out = opts.out.as_deref().ok_or_else(|| {
         Error::usage("heidenhain writes two files: give -o NAME.COM (the .CMA goes beside it)")
