@@ -36,11 +36,14 @@ fn _mtec(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("InputError", py.get_type::<errors::InputError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(measure::iso230_2, m)?)?;
+    m.add_function(wrap_pyfunction!(measure::circular, m)?)?;
     m.add_function(wrap_pyfunction!(identify::identify_lines, m)?)?;
     m.add_function(wrap_pyfunction!(identify::identify_ballbar, m)?)?;
     m.add_function(wrap_pyfunction!(model::volumetric, m)?)?;
     m.add_function(wrap_pyfunction!(thermal::thermal_fit, m)?)?;
     m.add_function(wrap_pyfunction!(thermal::thermal_predict, m)?)?;
+    m.add_function(wrap_pyfunction!(thermal::thermal_select, m)?)?;
+    m.add_function(wrap_pyfunction!(thermal::thermal_cv, m)?)?;
     m.add_function(wrap_pyfunction!(comp::map_fit, m)?)?;
     m.add_function(wrap_pyfunction!(comp::map_eval, m)?)?;
     m.add_function(wrap_pyfunction!(comp::compensate_gcode, m)?)?;

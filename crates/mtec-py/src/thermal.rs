@@ -95,11 +95,10 @@ fn fit_model<'py>(
     let file = py.detach(|| op::fit_table(&table, target, model, fit, split))?;
     if let Some(p) = &out {
         let text = serde_json::to_string_pretty(&file).map_err(internal)?;
-        let inputs: Vec<PathBuf> = if table.path == Path::new(ARRAYS) {
-            Vec::new()
-        } else {
-            vec![table.path.clone()]
-        };
+        let inputs: Vec<PathBuf> = file_inputs(&table)
+            .into_iter()
+            .map(Path::to_path_buf)
+            .collect();
         write_output(p, &inputs, text.as_bytes())?;
     }
     serde_to_py(py, &file)
@@ -151,4 +150,141 @@ fn predict<'py>(
     out.set_item("outside_training_range", &p.outside_training_range)?;
     out.set_item("predictions", PyArray1::from_vec(py, p.predictions))?;
     Ok(out)
+}
+
+/// Chooses the temperature sensors of a thermal model by VIF and the ridge trace: the library
+/// behind `mtec thermal select`.
+///
+/// `data` is the log (CSV path or mapping, as for `thermal_fit`), `target` the drift column
+/// (`radial_um` or `radial`), `sensors` the candidates (every `_c` column but `ambient_c` when
+/// empty). The method (docs/methods.md §7): variance inflation factors of the candidates (VIF >
+/// 10 is severe collinearity), the ridge trace over k on standardised regressors, elimination
+/// by the ridge-trace rules (stable and small, falling to zero, unstable, changing sign), k
+/// where the kept coefficients settle, and the comparison with the all-sensor and the simple-
+/// correlation models (R², max |residual|, SSE, MSE, F).
+///
+/// Returns the document `mtec thermal select --json` prints (`mtec.thermal-selection/1`):
+/// `vif` (a list of `{sensor, vif, severe}`), `steps` (what each rule removed at which k),
+/// `selected`, `k`, `coefficients` and `standardised_coefficients` of the selected sensors,
+/// `intercept_um`, `comparison` (the three models' metrics), `trace` (k and the coefficients
+/// along it). `out` (a folder) also gets the CLI's ridge_trace.csv, ridge_trace.svg and
+/// selection.json.
+///
+/// >>> import mtec, numpy as np
+/// >>> rng = np.random.default_rng(7)
+/// >>> t = np.arange(0.0, 600.0, 5.0)
+/// >>> s1 = 20 + 4 * (1 - np.exp(-t / 90))
+/// >>> s2 = s1 + 0.02 * rng.standard_normal(t.size)          # nearly a copy of s1
+/// >>> s3 = 20 + 0.3 * np.sin(t / 40)
+/// >>> r = mtec.thermal_select({"time_min": t, "s1_c": s1, "s2_c": s2, "s3_c": s3,
+/// ...                          "dz_um": 3 * (s1 - 20) + 0.05 * rng.standard_normal(t.size)},
+/// ...                         target="dz_um")
+/// >>> [v["severe"] for v in r["vif"]]
+/// [True, True, False]
+/// >>> len(r["selected"]), "s3_c" in r["selected"]
+/// (1, False)
+#[pyfunction]
+#[pyo3(signature = (data, target, *, sensors = Vec::new(), out = None))]
+pub fn thermal_select<'py>(
+    py: Python<'py>,
+    data: &Bound<'py, PyAny>,
+    target: &str,
+    sensors: Vec<String>,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyAny>> {
+    Ok(select(py, data, target, &sensors, out)?)
+}
+
+fn select<'py>(
+    py: Python<'py>,
+    data: &Bound<'py, PyAny>,
+    target: &str,
+    sensors: &[String],
+    out: Option<PathBuf>,
+) -> Result<Bound<'py, PyAny>> {
+    let table = read_table(data, "data")?;
+    let outcome = py.detach(|| op::select_table(&table, target, sensors))?;
+    if let Some(dir) = &out {
+        let inputs: Vec<&Path> = file_inputs(&table);
+        op::write_selection(&outcome, dir, &inputs)?;
+    }
+    serde_to_py(py, &outcome)
+}
+
+/// Validates a thermal model kind forward in time: the library behind `mtec thermal cv`.
+///
+/// `data`, `target`, `model` and the options are those of `thermal_fit` (the networks need the
+/// CLI's `neural` build). The log is cut into blocks (experiments, the steps of the `input`
+/// column, or `block_min` minutes); fold i fits on every block before block i + 1 and scores
+/// it (the first block only trains). `loo=True` leaves one block out at a time instead: optimistic for a model that must
+/// predict forward, because it trains on the future of the block it scores.
+///
+/// Returns the document `mtec thermal cv --json` prints: forward (`mtec.thermal-cv/2`) with
+/// `folds` (per fold: `train_from_min`, `train_to_min`, `test_from_min`, `test_to_min`,
+/// `metrics` of the scored block (`rmse_um`, `max_abs_residual_um`, `r2`, ...) and
+/// `uncompensated_rmse_um`), `pooled_rmse_um`, `pooled_max_abs_um`, `rmse_std_error_um` and
+/// `folds_worse_than_uncompensated` (1-based); leave-one-block-out (`mtec.thermal-cv/1`) with
+/// its blocks.
+///
+/// >>> import mtec, numpy as np
+/// >>> t = np.arange(0.0, 960.0, 2.0)
+/// >>> rpm = np.where((t // 240) % 2 == 0, 3000.0, 0.0)      # 4 h steps: on, off, on, off
+/// >>> s1 = 20 + np.cumsum(np.where(rpm > 0, 0.01, -0.01))
+/// >>> cv = mtec.thermal_cv({"time_min": t, "spindle_rpm": rpm, "s1_c": s1,
+/// ...                       "dz_um": 2.5 * (s1 - 20)}, "dz_um", "mlr")
+/// >>> cv["protocol"], len(cv["folds"]), cv["pooled_rmse_um"] < 1e-9
+/// ('forward', 2, True)
+#[pyfunction]
+#[pyo3(signature = (data, target, model = "auto", *, sensors = Vec::new(), k = None, lag = false,
+    block_min = None, max_sensors = None, input = "spindle_rpm".to_string(),
+    up_sensors = Vec::new(), nut_sensors = Vec::new(), loo = false))]
+#[allow(clippy::too_many_arguments)]
+pub fn thermal_cv<'py>(
+    py: Python<'py>,
+    data: &Bound<'py, PyAny>,
+    target: &str,
+    model: &str,
+    sensors: Vec<String>,
+    k: Option<f64>,
+    lag: bool,
+    block_min: Option<f64>,
+    max_sensors: Option<usize>,
+    input: String,
+    up_sensors: Vec<String>,
+    nut_sensors: Vec<String>,
+    loo: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let fit = FitOptions {
+        sensors,
+        k,
+        lag,
+        block_min,
+        max_sensors,
+        input,
+        up_sensors,
+        nut_sensors,
+    };
+    Ok(cv(py, data, target, model, &fit, loo)?)
+}
+
+fn cv<'py>(
+    py: Python<'py>,
+    data: &Bound<'py, PyAny>,
+    target: &str,
+    model: &str,
+    fit: &FitOptions,
+    loo: bool,
+) -> Result<Bound<'py, PyAny>> {
+    let table = read_table(data, "data")?;
+    let outcome = py.detach(|| op::cv_table(&table, target, model, fit, loo))?;
+    serde_to_py(py, &outcome)
+}
+
+/// The files among the inputs (none for arrays): what an output must not overwrite.
+fn file_inputs(table: &mtec_io::Table) -> Vec<&Path> {
+    if table.path == Path::new(ARRAYS) {
+        Vec::new()
+    } else {
+        vec![table.path.as_path()]
+    }
 }

@@ -11,6 +11,7 @@ arrays, a pandas DataFrame), validated as the CLI validates files. Errors in the
 from ._mtec import (
     InputError,
     __version__,
+    circular,
     compensate_gcode,
     identify_ballbar,
     identify_lines,
@@ -20,14 +21,17 @@ from ._mtec import (
     run_project,
     sensitivity,
     simulate,
+    thermal_cv,
     thermal_fit,
     thermal_predict,
+    thermal_select,
     volumetric,
 )
 
 __all__ = [
     "InputError",
     "__version__",
+    "circular",
     "compensate_gcode",
     "identify_ballbar",
     "identify_lines",
@@ -37,7 +41,9 @@ __all__ = [
     "run_project",
     "sensitivity",
     "simulate",
+    "thermal_cv",
     "thermal_fit",
     "thermal_predict",
+    "thermal_select",
     "volumetric",
 ]

@@ -29,6 +29,19 @@ class InputError(ValueError):
 def iso230_2(data: Columns) -> dict[str, Any]:
     """ISO 230-2:2014 positioning statistics and VDI/DGQ 3441 values of a linear axis."""
 
+def circular(
+    run: Columns,
+    *,
+    radius_mm: Optional[float] = None,
+    plane: Optional[Literal["XY", "YZ", "ZX"]] = None,
+    feed_mm_min: Optional[float] = None,
+    arc_start_deg: Optional[float] = None,
+    arc_end_deg: Optional[float] = None,
+    threshold_um: float = 0.3,
+    out: Optional[PathLike] = None,
+) -> dict[str, Any]:
+    """ISO 230-4 circular deviation and hysteresis and the ballbar diagnostics of a trace."""
+
 def identify_lines(
     machine: PathLike,
     data: Columns,
@@ -83,6 +96,32 @@ def thermal_predict(
     model: PathLike, data: Columns, history: Optional[Columns] = None
 ) -> dict[str, Any]:
     """Predicts the thermal drift (µm) of every row of a log with a model file."""
+
+def thermal_select(
+    data: Columns,
+    target: str,
+    *,
+    sensors: Sequence[str] = ...,
+    out: Optional[PathLike] = None,
+) -> dict[str, Any]:
+    """VIF table, ridge trace and the sensors kept (`mtec.thermal-selection/1`)."""
+
+def thermal_cv(
+    data: Columns,
+    target: str,
+    model: Literal["auto", "mlr", "ridge", "heat-input", "exp-ambient"] = "auto",
+    *,
+    sensors: Sequence[str] = ...,
+    k: Optional[float] = None,
+    lag: bool = False,
+    block_min: Optional[float] = None,
+    max_sensors: Optional[int] = None,
+    input: str = "spindle_rpm",
+    up_sensors: Sequence[str] = ...,
+    nut_sensors: Sequence[str] = ...,
+    loo: bool = False,
+) -> dict[str, Any]:
+    """Forward (or, with loo, leave-one-block-out) validation of a thermal model kind."""
 
 def map_fit(
     grid: Columns,

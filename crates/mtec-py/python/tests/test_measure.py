@@ -117,3 +117,57 @@ def test_missing_column_and_ragged_columns():
         mtec.iso230_2(cols)
     with pytest.raises(ValueError, match="CSV path or a mapping"):
         mtec.iso230_2(42)
+
+
+# ---- circular test (ISO 230-4) ----
+
+
+def test_circular_is_the_clis(cli, sim, tmp_path):
+    """The simulated trace: the document and both files of `mtec circular --json --out`."""
+    trace = sim("circular-test")["circular.csv"]
+    ref = cli.json("circular", trace, "--json", "--out", tmp_path / "cli")
+    r = mtec.circular(trace, out=tmp_path / "py")
+    assert r["iso230_4"] == ref["iso230_4"]
+    assert r["diagnostics"]["faults"] == ref["diagnostics"]["faults"]
+    assert (r["radius_mm"], r["plane"], r["samples"]) == (ref["radius_mm"], ref["plane"], ref["samples"])
+    for f in ("circular.json", "polar.svg"):
+        assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
+
+
+def test_circular_from_arrays_equals_from_file(sim):
+    trace = sim("circular-test")["circular.csv"]
+    cols = read_csv_columns(trace)
+    a = mtec.circular(trace, threshold_um=0.5)
+    b = mtec.circular(cols, radius_mm=a["radius_mm"], plane=a["plane"],
+                      feed_mm_min=a["feed_mm_min"], threshold_um=0.5)
+    assert a["iso230_4"] == b["iso230_4"]
+    assert a["diagnostics"] == b["diagnostics"]
+    assert b["file"] == "<arrays>"
+
+
+def test_circular_deviation_by_hand():
+    """G of a trace is max − min of its radial deviation about the least-squares circle (ISO
+    230-4 §3.2): a centred ellipse plus a third harmonic, whose least-squares circle is the
+    nominal one (the harmonics are orthogonal to 1, cos θ, sin θ), computed here in numpy."""
+    a = np.arange(0.0, 360.0, 0.5)
+    th = np.radians(a)
+    ccw = 2.0 * np.cos(2 * th) + 0.7 * np.sin(3 * th)
+    cw = ccw + 0.4  # the other direction 0.4 µm larger all round: its own circle
+    r = mtec.circular({"angle_deg": np.concatenate([a, a]),
+                       "direction": ["ccw"] * a.size + ["cw"] * a.size,
+                       "dl_um": np.concatenate([ccw, cw])}, radius_mm=100.0)
+    iso = r["iso230_4"]
+    assert iso["G_ccw_um"] == pytest.approx(ccw.max() - ccw.min(), abs=1e-9)
+    assert iso["G_cw_um"] == pytest.approx(cw.max() - cw.min(), abs=1e-9)
+    assert iso["circle_cw"]["radius_deviation_um"] == pytest.approx(0.4, abs=1e-9)
+
+
+def test_circular_needs_a_radius_and_checks_options():
+    cols = {"angle_deg": [0.0, 90.0], "direction": ["ccw", "ccw"], "dl_um": [0.0, 0.0]}
+    with pytest.raises(mtec.InputError) as e:
+        mtec.circular(cols)
+    assert "radius" in e.value.message and e.value.file == "<arrays>"
+    with pytest.raises(ValueError, match="plane"):
+        mtec.circular(cols, radius_mm=100.0, plane="XZ")
+    with pytest.raises(ValueError, match="arc"):
+        mtec.circular(cols, radius_mm=100.0, arc_start_deg=0.0)

@@ -104,3 +104,82 @@ def test_bad_thermal_input_is_located(tmp_path):
     with pytest.raises(mtec.InputError) as e:
         mtec.thermal_predict(bad, REAL)
     assert e.value.file == str(bad) and e.value.line == 2
+
+
+# ---- sensor selection and forward validation ----
+
+
+def test_select_is_the_clis(cli, tmp_path):
+    """VIF, ridge trace and selection on the real log: the document of `thermal select --json`
+    and the three files of `--out`, byte for byte."""
+    sensors = ["t1_c", "t4_c", "t6_c", "t9_c", "t13_c"]
+    ref = cli.json("thermal", "select", "--data", REAL, "--target", "ch2_um",
+                   "--sensors", ",".join(sensors), "--json", "--out", tmp_path / "cli")
+    r = mtec.thermal_select(REAL, "ch2_um", sensors=sensors, out=tmp_path / "py")
+    assert r["selected"] == ref["selected"] and r["k"] == ref["k"]
+    assert r["vif"] == ref["vif"]
+    assert r["coefficients"] == ref["coefficients"]
+    for f in ("ridge_trace.csv", "ridge_trace.svg", "selection.json"):
+        assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
+
+
+def test_select_vif_is_numpys():
+    """VIF_j = 1 / (1 − R²_j), R²_j of sensor j regressed on the others (numpy lstsq)."""
+    sensors = ["t1_c", "t4_c", "t6_c", "t9_c", "t13_c"]
+    cols = read_csv_columns(REAL)
+    x = np.column_stack([cols[s] for s in sensors])
+    r = mtec.thermal_select(REAL, "ch1_um", sensors=sensors)
+    for j, v in enumerate(r["vif"]):
+        others = np.column_stack([np.ones(len(x))] + [x[:, i] for i in range(x.shape[1]) if i != j])
+        beta, *_ = np.linalg.lstsq(others, x[:, j], rcond=None)
+        res = x[:, j] - others @ beta
+        r2 = 1 - res @ res / np.sum((x[:, j] - x[:, j].mean()) ** 2)
+        assert v["sensor"] == sensors[j]
+        assert v["vif"] == pytest.approx(1 / (1 - r2), rel=1e-8)
+
+
+@pytest.mark.parametrize("model,args,kwargs", [
+    ("mlr", ["--sensors", ",".join(SENSORS)], {"sensors": SENSORS}),
+    ("ridge", ["--sensors", ",".join(SENSORS), "--k", "0.1", "--loo", "--block-min", "240"],
+     {"sensors": SENSORS, "k": 0.1, "loo": True, "block_min": 240.0}),
+], ids=["mlr-forward", "ridge-loo"])
+def test_cv_is_the_clis(cli, model, args, kwargs):
+    ref = cli.json("thermal", "cv", "--data", REAL, "--target", "ch1_um", "--model", model,
+                   *args, "--json")
+    r = mtec.thermal_cv(REAL, "ch1_um", model, **kwargs)
+    if "per_block" in ref:
+        # flat numeric records come back as a dict of arrays (docs/python.md, conventions)
+        blocks, ref_blocks = r.pop("per_block"), ref.pop("per_block")
+        assert len(ref_blocks) >= 4 and set(blocks) == set(ref_blocks[0])
+        for k, col in blocks.items():
+            want = [np.nan if b[k] is None else b[k] for b in ref_blocks]
+            np.testing.assert_array_equal(col, want, err_msg=k)
+    assert r == ref
+
+
+def test_cv_folds_only_train_on_the_past():
+    """Forward folds on arrays: each fold's training rows end before its scored rows begin, and
+    the pooled RMSE is that of the scored residuals (an MLR refitted by numpy on each fold)."""
+    cols = read_csv_columns(REAL)
+    r = mtec.thermal_cv(cols, "ch1_um", "mlr", sensors=SENSORS)
+    assert r["protocol"] == "forward" and len(r["folds"]) >= 2
+    t, y = cols["time_min"], cols["ch1_um"]
+    x = np.column_stack([np.ones(len(t))] + [cols[s] for s in SENSORS])
+    sq = []
+    for f in r["folds"]:
+        assert f["train_to_min"] < f["test_from_min"]
+        tr = (t >= f["train_from_min"]) & (t <= f["train_to_min"])
+        te = (t >= f["test_from_min"]) & (t <= f["test_to_min"])
+        beta, *_ = np.linalg.lstsq(x[tr], y[tr], rcond=None)
+        res = y[te] - x[te] @ beta
+        assert f["metrics"]["rmse_um"] == pytest.approx(np.sqrt(np.mean(res**2)), rel=1e-8)
+        sq.append(res**2)
+    assert r["pooled_rmse_um"] == pytest.approx(np.sqrt(np.mean(np.concatenate(sq))), rel=1e-8)
+
+
+def test_select_and_cv_locate_bad_input(tmp_path):
+    with pytest.raises(mtec.InputError) as e:
+        mtec.thermal_select({"time_min": [0.0, 1.0, 2.0], "s1_c": [20.0, 20.5, 21.0]}, "dz_um")
+    assert "dz_um" in e.value.message
+    with pytest.raises(ValueError, match="no thermal model"):
+        mtec.thermal_cv(REAL, "ch1_um", "lstm")

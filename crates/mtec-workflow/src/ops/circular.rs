@@ -3,7 +3,7 @@
 //! The job of `mtec circular`.
 
 use crate::{Error, Observer, Result};
-use mtec_io::{InputError, OutputGuard};
+use mtec_io::{InputError, OutputGuard, Table};
 use mtec_measure::circular::{
     diagnose, evaluate, radii_about, Arc, CircularTrace, Diagnostics, DiagnosticsConfig, Iso230_4,
     Plane, TraceOptions, Travel,
@@ -134,13 +134,34 @@ fn check(o: &Options) -> Result<()> {
 /// Evaluates the trace; writes `circular.json` and `polar.svg` into `opts.out` when given.
 pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
     check(opts)?;
+    // where the files go is settled before any work
     let guard = OutputGuard::new(&[&opts.run]);
+    check_out(&guard, opts)?;
+    evaluate_into(&Table::read(&opts.run)?, opts, &guard)
+}
+
+/// [`run`] of a trace already read (a file, or the Python module's arrays): `opts.run` is not
+/// read; the table's path names the trace in errors and in the outcome's `file`.
+pub fn run_table(table: &Table, opts: &Options) -> Result<Outcome> {
+    check(opts)?;
+    let guard = OutputGuard::new(&[&table.path]);
+    check_out(&guard, opts)?;
+    evaluate_into(table, opts, &guard)
+}
+
+/// Neither file of `opts.out` is an input.
+fn check_out(guard: &OutputGuard, opts: &Options) -> Result<()> {
     if let Some(dir) = &opts.out {
         guard.check(&dir.join(RESULTS_FILE))?;
         guard.check(&dir.join(PLOT_FILE))?;
     }
-    let trace = CircularTrace::read(
-        &opts.run,
+    Ok(())
+}
+
+/// The evaluation of the trace `table`, and its files written into `opts.out` when given.
+fn evaluate_into(table: &Table, opts: &Options, guard: &OutputGuard) -> Result<Outcome> {
+    let trace = CircularTrace::from_table(
+        table,
         &TraceOptions {
             radius_mm: opts.radius_mm,
             plane: opts.plane,
@@ -154,10 +175,10 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
         ..Default::default()
     };
     let diagnostics =
-        diagnose(&trace, &cfg).map_err(|e| InputError::file(&opts.run, e.to_string()))?;
+        diagnose(&trace, &cfg).map_err(|e| InputError::file(&table.path, e.to_string()))?;
     let outcome = Outcome {
         format: "mtec.circular/1".into(),
-        file: opts.run.display().to_string(),
+        file: table.path.display().to_string(),
         radius_mm: trace.radius_mm,
         plane: trace.plane,
         feed_mm_min: trace.feed_mm_min,

@@ -60,18 +60,9 @@ pub fn is_neural(model: &str) -> bool {
 /// A non-temperature input column to attach: its name and whether the file must have it.
 type InputColumn<'a> = Option<(&'a str, bool)>;
 
-/// Reads the log and attaches the heat-source column (e.g. `spindle_rpm`): required for
-/// heat-input models, otherwise when the file has it (it marks the duty-cycle blocks).
-fn load(
-    path: &Path,
-    target: Option<&str>,
-    require: bool,
-    input: InputColumn,
-) -> Result<ThermalData> {
-    load_table(&Table::read(path)?, target, require, input)
-}
-
-/// [`load`] of a log already read (a file, or the Python module's arrays).
+/// Attaches the heat-source column (e.g. `spindle_rpm`) to a log already read (a file, or the
+/// Python module's arrays): required for heat-input models, otherwise when the log has it (it
+/// marks the duty-cycle blocks).
 fn load_table(
     t: &Table,
     target: Option<&str>,
@@ -172,49 +163,75 @@ pub fn select(opts: &SelectOptions, obs: &mut dyn Observer) -> Result<SelectOutc
     // where the files go is settled before any work: a folder, and none of them the input
     let guard = OutputGuard::new(&[&opts.data]);
     if let Some(dir) = &opts.out {
-        if dir.exists() && !dir.is_dir() {
-            return Err(Error::usage(format!(
-                "--out {} is a file: it must be a folder (ridge_trace.csv, ridge_trace.svg and selection.json go into it)",
-                dir.display()
-            )));
-        }
-        for f in ["ridge_trace.csv", "ridge_trace.svg", "selection.json"] {
-            guard.check(&dir.join(f))?;
-        }
+        check_selection_dir(&guard, dir)?;
     }
-    let data = load(&opts.data, Some(&opts.target), true, None)?;
-    let err = |e| located(&data, &opts.data, e);
-    let features = temp_features(&data, &opts.sensors).map_err(err)?;
+    let mut outcome = select_table(&Table::read(&opts.data)?, &opts.target, &opts.sensors)?;
+    if let Some(dir) = &opts.out {
+        write_selection_files(&guard, &outcome, dir)?;
+        outcome.out = Some(dir.clone());
+    }
+    warn_all(obs, &outcome.warnings);
+    Ok(outcome)
+}
+
+/// [`select`] of a log already read (a file, or the Python module's arrays): the selection,
+/// nothing written (`out` is `None`; [`write_selection`] writes its files).
+pub fn select_table(table: &Table, target: &str, sensors: &[String]) -> Result<SelectOutcome> {
+    let data = load_table(table, Some(target), true, None)?;
+    let err = |e| located(&data, &table.path, e);
+    let features = temp_features(&data, sensors).map_err(err)?;
     let names: Vec<String> = features.iter().map(|f| f.name()).collect();
     let x = design(&data, &features).map_err(err)?;
     let y = data.target_um().map_err(err)?;
     let sel = select_sensors(&x, y, &names, RidgeTraceRules::default()).map_err(err)?;
-    let outcome = SelectOutcome {
+    Ok(SelectOutcome {
         format: "mtec.thermal-selection/1".into(),
         target: data.target_name().unwrap_or_default().into(),
         warnings: sel.warnings.clone(),
         selection: sel,
-        out: opts.out.clone(),
-    };
-    if let Some(dir) = &opts.out {
-        std::fs::create_dir_all(dir)?;
-        let sel = &outcome.selection;
-        guard.write(&dir.join("ridge_trace.csv"), sel.trace.to_csv().as_bytes())?;
-        let trace = mtec_report::ridge_trace::RidgeTrace {
-            sensors: &sel.trace.sensors,
-            k: &sel.trace.k,
-            coefficients: &sel.trace.coefficients,
-        };
-        let svg = mtec_report::ridge_trace::ridge_trace_svg(&trace, sel.k)
-            .map_err(|e| Error::Internal(anyhow::anyhow!("plot: {e}")))?;
-        guard.write(&dir.join("ridge_trace.svg"), svg.as_bytes())?;
-        guard.write(
-            &dir.join("selection.json"),
-            serde_json::to_string_pretty(&serde_json::to_value(&outcome)?)?.as_bytes(),
-        )?;
+        out: None,
+    })
+}
+
+/// Writes ridge_trace.csv, ridge_trace.svg and selection.json of `outcome` into the folder
+/// `dir` (created), none of them over one of `inputs`: what [`select`] writes with `out`.
+pub fn write_selection(outcome: &SelectOutcome, dir: &Path, inputs: &[&Path]) -> Result<()> {
+    let guard = OutputGuard::new(inputs);
+    check_selection_dir(&guard, dir)?;
+    write_selection_files(&guard, outcome, dir)
+}
+
+/// The selection's folder: a folder (or nothing yet), and none of its three files an input.
+fn check_selection_dir(guard: &OutputGuard, dir: &Path) -> Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::usage(format!(
+            "--out {} is a file: it must be a folder (ridge_trace.csv, ridge_trace.svg and selection.json go into it)",
+            dir.display()
+        )));
     }
-    warn_all(obs, &outcome.warnings);
-    Ok(outcome)
+    for f in ["ridge_trace.csv", "ridge_trace.svg", "selection.json"] {
+        guard.check(&dir.join(f))?;
+    }
+    Ok(())
+}
+
+fn write_selection_files(guard: &OutputGuard, outcome: &SelectOutcome, dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let sel = &outcome.selection;
+    guard.write(&dir.join("ridge_trace.csv"), sel.trace.to_csv().as_bytes())?;
+    let trace = mtec_report::ridge_trace::RidgeTrace {
+        sensors: &sel.trace.sensors,
+        k: &sel.trace.k,
+        coefficients: &sel.trace.coefficients,
+    };
+    let svg = mtec_report::ridge_trace::ridge_trace_svg(&trace, sel.k)
+        .map_err(|e| Error::Internal(anyhow::anyhow!("plot: {e}")))?;
+    guard.write(&dir.join("ridge_trace.svg"), svg.as_bytes())?;
+    guard.write(
+        &dir.join("selection.json"),
+        serde_json::to_string_pretty(&serde_json::to_value(outcome)?)?.as_bytes(),
+    )?;
+    Ok(())
 }
 
 impl fmt::Display for SelectOutcome {
@@ -930,15 +947,39 @@ pub fn cv(opts: &CvOptions, obs: &mut dyn Observer) -> Result<CvOutcome> {
         )));
     }
     let kind = checked_kind(&opts.model, &opts.fit)?;
-    let input = Some((opts.fit.input.as_str(), kind.requires_input));
-    let data = load(&opts.data, Some(&opts.target), true, input)?;
-    let spec = ModelSpec::from_options(kind.name, &opts.fit, &data)
-        .map_err(|e| located(&data, &opts.data, e))?;
-    let outcome = validate_cv(&spec, &data, opts)?;
+    let outcome = cv_checked(&Table::read(&opts.data)?, kind, opts)?;
     if let CvOutcome::Forward(o) = &outcome {
         warn_all(obs, &o.warnings);
     }
     Ok(outcome)
+}
+
+/// [`cv`] of a log already read (the Python module's arrays) with a registered kind (the
+/// networks need the CLI's `neural` build): the validation, its warnings in the outcome.
+pub fn cv_table(
+    table: &Table,
+    target: &str,
+    model: &str,
+    fit: &registry::FitOptions,
+    loo: bool,
+) -> Result<CvOutcome> {
+    let kind = checked_kind(model, fit)?;
+    let opts = CvOptions {
+        data: table.path.clone(),
+        target: target.into(),
+        model: model.into(),
+        fit: fit.clone(),
+        loo,
+    };
+    cv_checked(table, kind, &opts)
+}
+
+fn cv_checked(table: &Table, kind: &KindInfo, opts: &CvOptions) -> Result<CvOutcome> {
+    let input = Some((opts.fit.input.as_str(), kind.requires_input));
+    let data = load_table(table, Some(&opts.target), true, input)?;
+    let spec = ModelSpec::from_options(kind.name, &opts.fit, &data)
+        .map_err(|e| located(&data, &table.path, e))?;
+    validate_cv(&spec, &data, opts)
 }
 
 /// [`cv`] of the fitter `fitter` (a registered kind's spec, or a network) on `data`: the
