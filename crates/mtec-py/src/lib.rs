@@ -24,6 +24,7 @@ mod measure;
 mod model;
 mod sensitivity;
 mod sim;
+mod table;
 mod thermal;
 // the place of the project pipeline's binding (`mtec.run_project`), see its docs
 mod workflow;
@@ -47,6 +48,7 @@ fn _mtec(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(comp::map_fit, m)?)?;
     m.add_function(wrap_pyfunction!(comp::map_eval, m)?)?;
     m.add_function(wrap_pyfunction!(comp::compensate_gcode, m)?)?;
+    m.add_function(wrap_pyfunction!(table::compensate_table, m)?)?;
     m.add_function(wrap_pyfunction!(sensitivity::sensitivity, m)?)?;
     m.add_function(wrap_pyfunction!(sim::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(workflow::run_project, m)?)?;

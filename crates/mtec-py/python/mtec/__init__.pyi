@@ -152,6 +152,36 @@ def compensate_gcode(
 ) -> Tuple[str, dict[str, Any]]:
     """An NC program rewritten so the machine with the model's errors cuts the programmed path."""
 
+def compensate_table(
+    format: Literal["linuxcnc", "sinumerik-cec", "sinumerik-lec", "fanuc", "heidenhain", "beckhoff"],
+    out: PathLike,
+    *,
+    model: Optional[PathLike] = None,
+    from_iso230_2: Optional[PathLike] = None,
+    state: Optional[PathLike] = None,
+    axis: Literal["X", "Y", "Z"] = "X",
+    output_axis: Optional[Literal["X", "Y", "Z"]] = None,
+    range: Optional[Tuple[float, float, float]] = None,
+    at: Optional[Tuple[float, float, float]] = None,
+    elements: str = "all",
+    max_correction_um: float = 500.0,
+    comp_type: int = 1,
+    table_index: int = 0,
+    direction: int = 0,
+    max_points: Optional[int] = None,
+    reference_mm: float = 0.0,
+    reference_number: int = 0,
+    magnification: int = 1,
+    detection_unit_um: float = 1.0,
+    max_increment: int = 127,
+    axis_number: Optional[int] = None,
+    cma_name: str = "config.cma",
+    x_range: Optional[Tuple[float, float, float]] = None,
+    y_range: Optional[Tuple[float, float, float]] = None,
+    z_range: Optional[Tuple[float, float, float]] = None,
+) -> dict[str, Any]:
+    """Writes a controller's compensation table from a model or an ISO 230-2 run."""
+
 def sensitivity(
     *,
     function: Optional[Literal["ishigami", "sobol-g", "linear"]] = None,

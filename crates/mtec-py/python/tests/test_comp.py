@@ -128,3 +128,106 @@ def test_gcode_refusal_is_located(tmp_path):
     with pytest.raises(mtec.InputError) as e:
         mtec.compensate_gcode("G0 X1\n", EXAMPLES / "vmc" / "machine.toml")
     assert e.value.file.endswith("machine.toml") and e.value.line == 1
+
+
+# ---- controller tables ----
+
+RUN = EXAMPLES / "vmc" / "iso230-2.csv"
+
+
+@pytest.mark.parametrize("fmt,py_kwargs,cli_args", [
+    ("linuxcnc", {"axis": "X"}, ["--axis", "X"]),
+    ("linuxcnc", {"axis": "Y", "range": (0.0, 400.0, 20.0), "at": (100.0, 0.0, -50.0),
+                  "comp_type": 0},
+     ["--axis", "Y", "--range", "0:400:20", "--at", "100,0,-50", "--comp-type", "0"]),
+    ("sinumerik-cec", {"axis": "X", "output_axis": "Z", "table_index": 2},
+     ["--axis", "X", "--output-axis", "Z", "--table-index", "2"]),
+    ("fanuc", {"axis": "Z", "magnification": 2}, ["--axis", "Z", "--magnification", "2"]),
+    ("beckhoff", {}, []),
+], ids=["linuxcnc", "linuxcnc-range", "sinumerik-cec", "fanuc", "beckhoff"])
+def test_table_from_a_map_is_the_clis(cli, tmp_path, fmt, py_kwargs, cli_args):
+    mtec.map_fit(GRID, out=tmp_path / "map.json")
+    ours, theirs = tmp_path / "py.txt", tmp_path / "cli.txt"
+    r = mtec.compensate_table(fmt, ours, model=tmp_path / "map.json", **py_kwargs)
+    cli.run("compensate", "table", "--model", tmp_path / "map.json", "--format", fmt,
+            *cli_args, "-o", theirs)
+    assert ours.read_bytes() == theirs.read_bytes()
+    assert r["format"] == fmt and r["points"] > 1 and r["out"] == str(ours)
+
+
+def test_linuxcnc_table_is_minus_the_map_along_the_axis(tmp_path):
+    """Type 1 trims are c = −e (mm) at each nominal position, e the map interpolated there by
+    hand (trilinear, from the grid file) at the other axes' `at`."""
+    m = mtec.map_fit(GRID, out=tmp_path / "map.json")
+    axes = [m["x_mm"], m["y_mm"], m["z_mm"]]
+    at = (0.5 * (axes[0][0] + axes[0][-1]), 123.0, axes[2][1])
+    mtec.compensate_table("linuxcnc", tmp_path / "x.comp", model=tmp_path / "map.json",
+                          axis="X", at=at)
+    rows = [list(map(float, l.split())) for l in (tmp_path / "x.comp").read_text().splitlines()]
+    assert [r[0] for r in rows] == pytest.approx(list(axes[0]))
+    for x, fwd, rev in rows:
+        e = trilinear(axes, m["ex_um"], (x, at[1], at[2]))
+        assert fwd == rev == pytest.approx(-e * 1e-3, abs=5e-7)  # 6 decimals of mm
+
+
+@pytest.mark.parametrize("fmt", ["linuxcnc", "beckhoff"])
+def test_table_from_an_iso230_2_run_is_the_clis(cli, tmp_path, fmt):
+    ours, theirs = tmp_path / "py.txt", tmp_path / "cli.txt"
+    r = mtec.compensate_table(fmt, ours, from_iso230_2=RUN, axis="X")
+    cli.run("compensate", "table", "--from-iso230-2", RUN, "--format", fmt, "--axis", "X",
+            "-o", theirs)
+    assert ours.read_bytes() == theirs.read_bytes()
+    assert r["reversal_max_um"] > 0
+
+
+def test_equally_spaced_formats_refuse_the_standards_unequal_targets(tmp_path):
+    """ISO 230-2 spaces targets unequally on purpose; FANUC and Siemens tables hold equal
+    steps only: refused at the run's line, nothing written."""
+    for fmt in ("fanuc", "sinumerik-cec"):
+        with pytest.raises(mtec.InputError) as e:
+            mtec.compensate_table(fmt, tmp_path / "t", from_iso230_2=RUN, axis="X")
+        assert e.value.file == str(RUN) and e.value.line is not None
+        assert "equally spaced" in e.value.message
+    assert not (tmp_path / "t").exists()
+
+
+def test_heidenhain_writes_the_com_and_its_cma(cli, tmp_path):
+    mtec.map_fit(GRID, out=tmp_path / "map.json")
+    (tmp_path / "py").mkdir()
+    (tmp_path / "cli").mkdir()
+    r = mtec.compensate_table("heidenhain", tmp_path / "py" / "X.COM",
+                              model=tmp_path / "map.json", axis="X", output_axis="Y")
+    cli.run("compensate", "table", "--model", tmp_path / "map.json", "--format", "heidenhain",
+            "--axis", "X", "--output-axis", "Y", "-o", tmp_path / "cli" / "X.COM")
+    for f in ("X.COM", "config.cma"):
+        assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
+    assert r["cma"] == str(tmp_path / "py" / "config.cma")
+
+
+def test_table_refusals(tmp_path):
+    mtec.map_fit(GRID, out=tmp_path / "map.json")
+    model = tmp_path / "map.json"
+    with pytest.raises(ValueError, match="exactly one"):
+        mtec.compensate_table("linuxcnc", tmp_path / "t", model=model, from_iso230_2=RUN)
+    with pytest.raises(ValueError, match="exactly one"):
+        mtec.compensate_table("linuxcnc", tmp_path / "t")
+    with pytest.raises(ValueError, match="format `haas`"):
+        mtec.compensate_table("haas", tmp_path / "t", model=model)
+    with pytest.raises(ValueError, match="stdout"):
+        mtec.compensate_table("linuxcnc", "-", model=model)
+    # an option the format does not read is refused, not ignored
+    with pytest.raises(ValueError, match="magnification"):
+        mtec.compensate_table("linuxcnc", tmp_path / "t", model=model, magnification=10)
+    # a run's table has the run's targets: a range would be silently ignored
+    with pytest.raises(ValueError, match="--range"):
+        mtec.compensate_table("linuxcnc", tmp_path / "t", from_iso230_2=RUN,
+                              range=(0.0, 100.0, 10.0))
+    with pytest.raises(ValueError, match="range"):
+        mtec.compensate_table("linuxcnc", tmp_path / "t", model=model, range=(0.0, 100.0, -1.0))
+    # never over an input, and a correction beyond the bound writes nothing
+    with pytest.raises(Exception):
+        mtec.compensate_table("linuxcnc", model, model=model)
+    assert model.read_text().startswith("{")
+    with pytest.raises(mtec.InputError):
+        mtec.compensate_table("linuxcnc", tmp_path / "t", model=model, max_correction_um=1e-3)
+    assert not (tmp_path / "t").exists()

@@ -82,16 +82,23 @@ impl Range {
     pub fn parse(s: &str) -> Result<Range> {
         let v: Vec<Option<f64>> = s.split(':').map(|p| p.trim().parse::<f64>().ok()).collect();
         match v.as_slice() {
-            [Some(a), Some(b), Some(c)] if a.is_finite() && b.is_finite() && *c > 0.0 => {
-                Ok(Range {
-                    from: *a,
-                    to: *b,
-                    step: *c,
-                })
+            [Some(a), Some(b), Some(c)] if Range::new(*a, *b, *c).is_ok() => {
+                Range::new(*a, *b, *c)
             }
             _ => Err(Error::usage(format!(
                 "range `{s}`: expected FROM:TO:STEP in mm with FROM < TO and STEP > 0, e.g. 0:500:25"
             ))),
+        }
+    }
+
+    /// The range `from`:`to`:`step` (finite ends, a positive step); a usage error otherwise.
+    pub fn new(from: f64, to: f64, step: f64) -> Result<Range> {
+        if from.is_finite() && to.is_finite() && step > 0.0 {
+            Ok(Range { from, to, step })
+        } else {
+            Err(Error::usage(format!(
+                "range {from}:{to}:{step}: expected FROM:TO:STEP in mm with FROM < TO and STEP > 0, e.g. 0:500:25"
+            )))
         }
     }
 
@@ -113,16 +120,19 @@ pub fn parse_axis(opt: &str, s: &str) -> Result<Axis> {
 pub fn parse_at(s: &str) -> Result<[f64; 3]> {
     let v: Vec<Option<f64>> = s.split(',').map(|p| p.trim().parse::<f64>().ok()).collect();
     match v.as_slice() {
-        [Some(x), Some(y), Some(z)] => {
-            for c in [x, y, z] {
-                mtec_io::plausible::position_option("--at", *c).map_err(Error::usage)?;
-            }
-            Ok([*x, *y, *z])
-        }
+        [Some(x), Some(y), Some(z)] => checked_at([*x, *y, *z]),
         _ => Err(Error::usage(format!(
             "--at `{s}`: expected X,Y,Z in mm, e.g. 250,150,-100"
         ))),
     }
+}
+
+/// `--at` (mm) when each coordinate is a plausible position; a usage error otherwise.
+pub fn checked_at(at: [f64; 3]) -> Result<[f64; 3]> {
+    for c in at {
+        mtec_io::plausible::position_option("--at", c).map_err(Error::usage)?;
+    }
+    Ok(at)
 }
 
 /// Options of [`run`].
@@ -383,6 +393,23 @@ pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
             return Err(Error::usage(
                 "--elements selects elements of a kinematic model; an ISO 230-2 run has none",
             ));
+        }
+        // what only a model's table reads (the command line refuses these before; a library
+        // caller must not get a table the user believes has them)
+        let model_only = [
+            ("--state", opts.state.is_some()),
+            ("--output-axis", opts.output_axis.is_some()),
+            ("--range", opts.range.is_some()),
+            ("--at", opts.at.is_some()),
+            (
+                "--x-range/--y-range/--z-range",
+                opts.grid.iter().any(Option::is_some),
+            ),
+        ];
+        if let Some((name, _)) = model_only.iter().find(|(_, given)| *given) {
+            return Err(Error::usage(format!(
+                "{name} is for a table from a model; --from-iso230-2 takes the run's targets"
+            )));
         }
         return run_iso230_2(opts, run, obs);
     }
