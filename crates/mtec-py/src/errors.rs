@@ -95,3 +95,15 @@ fn input_error(mut e: MtecInputError) -> PyErr {
         }
     })
 }
+
+/// The value of a closed set (`mtec_workflow::Choice`) named `name`, given for the argument
+/// `what`; a usage error listing the names otherwise.
+pub fn choice<C: mtec_workflow::Choice>(what: &str, name: &str) -> Result<C> {
+    C::from_name(name).ok_or_else(|| {
+        let names: Vec<&str> = C::ALL.iter().map(|c| c.name()).collect();
+        usage(format!(
+            "{what} `{name}`: expected one of {}",
+            names.join(", ")
+        ))
+    })
+}

@@ -26,6 +26,7 @@ mod sensitivity;
 mod sim;
 mod table;
 mod thermal;
+mod thermal_offset;
 // the place of the project pipeline's binding (`mtec.run_project`), see its docs
 mod workflow;
 
@@ -49,6 +50,10 @@ fn _mtec(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(comp::map_eval, m)?)?;
     m.add_function(wrap_pyfunction!(comp::compensate_gcode, m)?)?;
     m.add_function(wrap_pyfunction!(table::compensate_table, m)?)?;
+    m.add_function(wrap_pyfunction!(
+        thermal_offset::compensate_thermal_offset,
+        m
+    )?)?;
     m.add_function(wrap_pyfunction!(sensitivity::sensitivity, m)?)?;
     m.add_function(wrap_pyfunction!(sim::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(workflow::run_project, m)?)?;

@@ -1,7 +1,7 @@
 //! Controller compensation tables (mtec-comp's writers): the job of `mtec compensate table`.
 
 use crate::convert::serde_to_py;
-use crate::errors::{usage, Result};
+use crate::errors::{choice, usage, Result};
 use mtec_workflow::ops::compensate_table::{self as op, Format, Options, Range};
 use mtec_workflow::ops::selective::Elements;
 use pyo3::prelude::*;
@@ -81,13 +81,7 @@ pub fn compensate_table<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let range_of = |r: Option<(f64, f64, f64)>| r.map(|(a, b, c)| Range::new(a, b, c)).transpose();
     let opts = || -> Result<Options> {
-        let format = Format::from_name(format).ok_or_else(|| {
-            let names: Vec<&str> = Format::ALL.iter().map(|f| f.name()).collect();
-            usage(format!(
-                "format `{format}`: expected one of {}",
-                names.join(", ")
-            ))
-        })?;
+        let format = choice::<Format>("format", format)?;
         if out == Path::new("-") {
             return Err(usage(
                 "`out` must be a file: `-` (stdout) is the command line's",

@@ -182,6 +182,30 @@ def compensate_table(
 ) -> dict[str, Any]:
     """Writes a controller's compensation table from a model or an ISO 230-2 run."""
 
+def compensate_thermal_offset(
+    model: PathLike,
+    temps: Columns,
+    format: Literal["g10", "fanuc", "fanuc-macro", "sinumerik", "sinumerik-sd"] = "g10",
+    *,
+    axis: Literal["X", "Y", "Z"] = "Z",
+    offset: int = 1,
+    base_mm: Optional[float] = None,
+    at_mm: Optional[float] = None,
+    position_origin_mm: float = 0.0,
+    zeroed_at_min: Optional[float] = None,
+    starts_at_rest: bool = False,
+    outside: Literal["refuse", "fade"] = "refuse",
+    max_correction_um: float = 500.0,
+    training: Optional[PathLike] = None,
+    sign: Optional[float] = None,
+    axis_number: Optional[int] = None,
+    machine_axis: Optional[str] = None,
+    travel_mm: Optional[Tuple[float, float]] = None,
+    comp_add_velo_factor: Optional[float] = None,
+    out: Optional[PathLike] = None,
+) -> dict[str, Any]:
+    """The work-offset update (or Siemens SD43900 data) for the thermal drift now."""
+
 def sensitivity(
     *,
     function: Optional[Literal["ishigami", "sobol-g", "linear"]] = None,

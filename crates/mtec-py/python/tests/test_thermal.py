@@ -183,3 +183,90 @@ def test_select_and_cv_locate_bad_input(tmp_path):
     assert "dz_um" in e.value.message
     with pytest.raises(ValueError, match="no thermal model"):
         mtec.thermal_cv(REAL, "ch1_um", "lstm")
+
+
+# ---- the thermal model at the machine: work-offset updates ----
+
+from conftest import REPO  # noqa: E402
+
+OFFSET_DATA = REPO / "crates" / "mtec-cli" / "tests" / "data" / "thermal_offset"
+
+
+@pytest.mark.parametrize("fmt,kwargs,golden", [
+    ("g10", {"base_mm": -312.4501}, "linuxcnc.ngc"),
+    ("fanuc", {"base_mm": -312.4501}, "fanuc.nc"),
+    ("fanuc-macro", {"base_mm": -312.4501}, "fanuc_macro.nc"),
+    ("sinumerik", {}, "sinumerik_frame.spf"),
+], ids=["g10", "fanuc", "fanuc-macro", "sinumerik"])
+def test_offset_update_is_the_controllers_golden_text(tmp_path, fmt, kwargs, golden):
+    """The goldens were worked from each controller's documentation (their README): the linear
+    model e = 12·t1 − 228 µm at t1 = 20 °C now, +12 µm along Z."""
+    r = mtec.compensate_thermal_offset(OFFSET_DATA / "machine.json", OFFSET_DATA / "now.csv",
+                                       fmt, out=tmp_path / "u.txt", **kwargs)
+    want = (OFFSET_DATA / "golden" / golden).read_text()
+    assert r["text"] == want
+    assert (tmp_path / "u.txt").read_text() == want
+    assert r["update"]["drift_um"] == pytest.approx(12.0, abs=1e-9)
+    assert r["update"]["correction_um"] == pytest.approx(-12.0, abs=1e-9)
+
+
+def test_sinumerik_temperature_compensation_is_the_golden():
+    r = mtec.compensate_thermal_offset(
+        OFFSET_DATA / "exp_machine.json", OFFSET_DATA / "exp_now.csv", "sinumerik-sd",
+        starts_at_rest=True, position_origin_mm=-500.0, travel_mm=(-500.0, 0.0))
+    assert r["text"] == (OFFSET_DATA / "golden" / "sinumerik_sd.spf").read_text()
+    assert r["update"] is None and r["setting"]["position_dependent"]
+
+
+def test_offset_from_arrays_is_the_clis(cli, tmp_path):
+    """A bare thermal model with its training log (README tour, step 4), the temperatures
+    now as arrays: the CLI's lines on the same rows written as a file."""
+    sim_dir = tmp_path / "t"
+    files = mtec.simulate("spindle-sensors", sim_dir, seed=1)
+    log = files["thermal.csv"]
+    mtec.thermal_fit(log, "radial_um", "mlr", sensors=["s1_c", "s4_c"], out=tmp_path / "m.json")
+    cols = read_csv_columns(log)
+    last = {k: v[-3:] for k, v in cols.items() if k in ("time_min", "s1_c", "s4_c")}
+    now = tmp_path / "now.csv"
+    now.write_text("time_min,s1_c,s4_c\n" + "".join(
+        f"{float(t)!r},{float(a)!r},{float(b)!r}\n"
+        for t, a, b in zip(last["time_min"], last["s1_c"], last["s4_c"])))
+    ref = cli.run("compensate", "thermal-offset", "--model", tmp_path / "m.json", "--training",
+                  log, "--temps", now, "--axis", "X", "--format", "g10", "--base-mm", "-312.45")
+    r = mtec.compensate_thermal_offset(tmp_path / "m.json", last, "g10", axis="X",
+                                       training=log, base_mm=-312.45)
+    # the second comment names the log and its lines: `<arrays>` rows here, the file's there
+    ours, theirs = r["text"].splitlines(), ref.splitlines()
+    assert len(ours) == len(theirs) == 4
+    assert ours[0] == theirs[0] and ours[2:] == theirs[2:]
+    now_min = f"{last['time_min'][-1]:g} min"
+    assert f"<arrays> line 3 at {now_min}" in ours[1] and f"now.csv line 4 at {now_min}" in theirs[1]
+    assert r["temps"] == "<arrays>" and r["now_line"] == 3
+
+
+def test_offset_envelope_rule_and_refusals(tmp_path):
+    model = OFFSET_DATA / "machine.json"
+    # t1 = 27 °C, 1 °C above the training range [18, 26]: refused at its row (the second:
+    # line 2 of the arrays) and column, or faded to half (fade width 2 °C): c = −0.5·96 µm
+    hot = {"time_min": [0.0, 60.0], "t1_c": [19.0, 27.0]}
+    with pytest.raises(mtec.InputError) as e:
+        mtec.compensate_thermal_offset(model, hot, base_mm=0.0)
+    assert (e.value.file, e.value.line, e.value.column) == ("<arrays>", 2, 2)
+    r = mtec.compensate_thermal_offset(model, hot, base_mm=0.0, outside="fade")
+    assert r["update"]["weight"] == pytest.approx(0.5)
+    assert r["text"].endswith("G10 L2 P1 Z-0.048\n")
+    with pytest.raises(ValueError, match="--base-mm is required"):
+        mtec.compensate_thermal_offset(model, OFFSET_DATA / "now.csv", "fanuc")
+    with pytest.raises(ValueError, match="--base-mm"):
+        mtec.compensate_thermal_offset(model, OFFSET_DATA / "now.csv", "sinumerik", base_mm=1.0)
+    with pytest.raises(ValueError, match="format `heidenhain`"):
+        mtec.compensate_thermal_offset(model, OFFSET_DATA / "now.csv", "heidenhain")
+    with pytest.raises(ValueError, match="outside `clamp`"):
+        mtec.compensate_thermal_offset(model, OFFSET_DATA / "now.csv", base_mm=0.0,
+                                       outside="clamp")
+    # never over an input
+    before = (OFFSET_DATA / "now.csv").read_bytes()
+    with pytest.raises(Exception):
+        mtec.compensate_thermal_offset(model, OFFSET_DATA / "now.csv", base_mm=0.0,
+                                       out=OFFSET_DATA / "now.csv")
+    assert (OFFSET_DATA / "now.csv").read_bytes() == before

@@ -293,13 +293,22 @@ fn check_options(o: &Options) -> Result<()> {
 /// format does not use and an output that is an input are refused before any reading.
 pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
     check_options(opts)?;
-    let axis = opts.axis;
     let mut inputs = vec![opts.model.clone(), opts.temps.clone()];
     inputs.extend(opts.training.clone());
     let dest = match &opts.out {
         Some(p) => OutputGuard::new(&inputs).check(p)?,
         None => Destination::Stdout,
     };
+    let outcome = update_now(opts, &Table::read(&opts.temps)?)?;
+    dest.write(outcome.text.as_bytes())?;
+    Ok(outcome)
+}
+
+/// [`run`] on a temperature log already read (a file, or the Python module's arrays; `temps`
+/// is not read, the log's path names it), without writing: the update and its text.
+pub fn update_now(opts: &Options, log: &Table) -> Result<Outcome> {
+    check_options(opts)?;
+    let axis = opts.axis;
     let mut model = OffsetModel::load(
         &opts.model,
         LoadOptions {
@@ -309,10 +318,9 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
         },
     )
     .map_err(lib_error)?;
-    let log = Table::read(&opts.temps)?;
     let run = to::run_log(
         &mut model,
-        &log,
+        log,
         RunOptions {
             starts_at_rest: opts.starts_at_rest,
             zeroed_at_min: opts.zeroed_at_min,
@@ -324,11 +332,11 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
         outside: opts.outside,
         max_correction_um: opts.max_correction_um,
     };
-    let header = to::provenance(&run, &log, model.source());
+    let header = to::provenance(&run, log, model.source());
     let (text, update, setting) = if opts.format == Format::SinumerikSd {
         let s = to::temp_comp_setting(
             &run,
-            &log,
+            log,
             axis,
             SettingOptions {
                 update: update_opts,
@@ -352,7 +360,7 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
         };
         (text, None, Some(setting))
     } else {
-        let u = to::offset_update(&run, &log, axis, opts.at_mm, update_opts).map_err(lib_error)?;
+        let u = to::offset_update(&run, log, axis, opts.at_mm, update_opts).map_err(lib_error)?;
         let base = opts.base_mm.unwrap_or(0.0);
         let text = match opts.format {
             Format::G10 => linuxcnc::write(&u, opts.offset, base, &header),
@@ -377,13 +385,12 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
         };
         (text, Some(update), None)
     };
-    dest.write(text.as_bytes())?;
     let mut notes = Vec::new();
     if run.earlier_outside > 0 {
         notes.push(format!(
             "{} earlier row(s) of {} were outside the training envelope; the model's filters carry their history",
             run.earlier_outside,
-            opts.temps.display()
+            log.path.display()
         ));
     }
     Ok(Outcome {
@@ -395,7 +402,7 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
         now_line: run.now.line,
         now_time_min: run.now.time_min,
         earlier_outside: run.earlier_outside,
-        temps: opts.temps.clone(),
+        temps: log.path.clone(),
         out: opts.out.clone(),
         notes,
     })
