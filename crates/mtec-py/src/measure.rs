@@ -1,22 +1,32 @@
 //! ISO 230-2 positioning statistics and ISO 230-4 circular tests (mtec-measure).
 
 use crate::columns::read_table;
-use crate::convert::{serde_to_py, to_py};
-use crate::errors::{internal, Result};
-use mtec_measure::{evaluate_iso230_2, vdi3441, PositioningData};
+use crate::convert::serde_to_py;
+use crate::errors::{choice, Result};
 use mtec_workflow::ops::circular as circular_op;
+use mtec_workflow::ops::iso230_2 as iso_op;
 use pyo3::prelude::*;
-use serde_json::json;
 use std::path::PathBuf;
 
-/// ISO 230-2:2014 positioning statistics of a linear axis, and the VDI/DGQ 3441 values.
+/// ISO 230-2:2014 positioning statistics of a linear axis, and the VDI/DGQ 3441 values: the
+/// library behind `mtec iso230-2`.
 ///
 /// `data` is the run file (CSV path with `target_mm,run,direction,deviation_um`) or a mapping
-/// with these four columns (`direction` holds `"+"` or `"-"`). Returns the document
-/// `mtec iso230-2 --json` prints (`format` `mtec.iso230-2/1`): the axis values (`A_um`, `E_um`,
-/// `R_um`, `B_um`, `M_um`, ... in µm), `targets` and `vdi3441["targets"]` as dicts of numpy
-/// arrays (one entry per target position), `runs_up`, `runs_down` and `warnings` (what ISO 230-2
-/// asks for that the data does not meet). Raises `mtec.InputError` at the offending row.
+/// with these four columns (`direction` holds `"+"` or `"-"`). The environmental corrections
+/// of the readings (docs/methods.md §2.1), as the CLI's options: the air the laser measured in
+/// (`air_temp_c`, `pressure_pa`, `humidity_pct`, all three; `co2_ppm`; `wavelength_nm`, a HeNe
+/// laser by default; `air_formula` `ciddor`, `edlen` (Birch & Downs) or `bonsch-potulski`;
+/// `laser_n`, the index the laser used, by default the formula's at 20 °C, 101325 Pa, 50 %)
+/// and the ISO 1 normalisation to 20 °C (`material_temp_c` and `alpha_um_per_m_k`, both).
+/// `standard`: `iso230-2:2014`, `vdi-3441` or `all` (their axis values side by side in
+/// `standards`). `out` (a folder) also gets the CLI's iso230-2.json.
+///
+/// Returns the document `mtec iso230-2 --json` prints (`format` `mtec.iso230-2/1`): the axis
+/// values (`A_um`, `E_um`, `R_um`, `B_um`, `M_um`, ... in µm), `targets` and
+/// `vdi3441["targets"]` as dicts of numpy arrays (one entry per target position), `runs_up`,
+/// `runs_down`, `corrections` (each correction applied, in ppm, and the `scale_factor` of the
+/// positions) and `warnings` (what ISO 230-2 asks for that the data does not meet). Raises
+/// `mtec.InputError` at the offending row.
 ///
 /// >>> import mtec
 /// >>> r = mtec.iso230_2({"target_mm": [0, 10, 0, 10, 0, 10, 0, 10],
@@ -25,40 +35,54 @@ use std::path::PathBuf;
 /// ...                    "deviation_um": [1, 2, 3, 4, 0, 1, 1, 2]})
 /// >>> r["B_um"], r["targets"]["mean_up_um"].tolist()
 /// (1.5, [2.0, 3.0])
+/// >>> runs = {"target_mm": [0, 1000] * 4, "run": [1, 1, 2, 2] * 2,
+/// ...         "direction": ["+"] * 4 + ["-"] * 4, "deviation_um": [0.0] * 8}
+/// >>> warm = mtec.iso230_2(runs, material_temp_c=21.0, alpha_um_per_m_k=11.5)  # 1 K warm
+/// >>> round(warm["corrections"]["material"]["correction_ppm"], 3), round(warm["E_um"], 3)
+/// (-11.5, 11.5)
 #[pyfunction]
-#[pyo3(signature = (data))]
-pub fn iso230_2<'py>(py: Python<'py>, data: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
-    Ok(run(py, data)?)
-}
-
-fn run<'py>(py: Python<'py>, data: &Bound<'py, PyAny>) -> Result<Bound<'py, PyAny>> {
-    let table = read_table(data, "data")?;
-    let runs = PositioningData::from_table(&table)?;
-    let iso = evaluate_iso230_2(&runs);
-    let vdi = vdi3441(&iso);
-    // the document of `mtec iso230-2 --json`, without the corrections it was not asked for
-    let mut doc = json!({
-        "format": "mtec.iso230-2/1",
-        "file": table.path.display().to_string(),
-        "runs_up": iso.runs_up,
-        "runs_down": iso.runs_down,
-    });
-    let obj = doc
-        .as_object_mut()
-        .ok_or_else(|| internal("not an object"))?;
-    if let serde_json::Value::Object(axis) = serde_json::to_value(&iso.axis).map_err(internal)? {
-        obj.extend(axis);
-    }
-    obj.insert(
-        "targets".into(),
-        serde_json::to_value(&iso.targets).map_err(internal)?,
-    );
-    obj.insert(
-        "vdi3441".into(),
-        serde_json::to_value(&vdi).map_err(internal)?,
-    );
-    obj.insert("warnings".into(), json!(runs.warnings));
-    Ok(to_py(py, &doc)?)
+#[pyo3(signature = (data, *, air_temp_c = None, pressure_pa = None, humidity_pct = None,
+    co2_ppm = 450.0, wavelength_nm = None, air_formula = "ciddor", laser_n = None,
+    material_temp_c = None, alpha_um_per_m_k = None, standard = iso_op::DEFAULT_STANDARD,
+    out = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn iso230_2<'py>(
+    py: Python<'py>,
+    data: &Bound<'py, PyAny>,
+    air_temp_c: Option<f64>,
+    pressure_pa: Option<f64>,
+    humidity_pct: Option<f64>,
+    co2_ppm: f64,
+    wavelength_nm: Option<f64>,
+    air_formula: &str,
+    laser_n: Option<f64>,
+    material_temp_c: Option<f64>,
+    alpha_um_per_m_k: Option<f64>,
+    standard: &str,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let run = || -> Result<Bound<'py, PyAny>> {
+        let table = read_table(data, "data")?;
+        let defaults = iso_op::Options::new(&table.path);
+        let opts = iso_op::Options {
+            out,
+            air_temp_c,
+            pressure_pa,
+            humidity_pct,
+            co2_ppm,
+            wavelength_nm: wavelength_nm.unwrap_or(defaults.wavelength_nm),
+            air_formula: choice("air_formula", air_formula)?,
+            laser_n,
+            material_temp_c,
+            alpha_um_per_m_k,
+            standard: standard.to_string(),
+            ..defaults
+        };
+        let outcome =
+            py.detach(|| iso_op::run_table(&table, &opts, &mut mtec_workflow::Collect::default()))?;
+        serde_to_py(py, &outcome)
+    };
+    Ok(run()?)
 }
 
 /// An ISO 230-4 circular test of two linear axes (ballbar) and its diagnostics: the library

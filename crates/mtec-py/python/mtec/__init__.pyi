@@ -26,7 +26,21 @@ class InputError(ValueError):
     column: Optional[int]
     message: str
 
-def iso230_2(data: Columns) -> dict[str, Any]:
+def iso230_2(
+    data: Columns,
+    *,
+    air_temp_c: Optional[float] = None,
+    pressure_pa: Optional[float] = None,
+    humidity_pct: Optional[float] = None,
+    co2_ppm: float = 450.0,
+    wavelength_nm: Optional[float] = None,
+    air_formula: Literal["ciddor", "edlen", "bonsch-potulski"] = "ciddor",
+    laser_n: Optional[float] = None,
+    material_temp_c: Optional[float] = None,
+    alpha_um_per_m_k: Optional[float] = None,
+    standard: Literal["iso230-2:2014", "vdi-3441", "all"] = "iso230-2:2014",
+    out: Optional[PathLike] = None,
+) -> dict[str, Any]:
     """ISO 230-2:2014 positioning statistics and VDI/DGQ 3441 values of a linear axis."""
 
 def circular(

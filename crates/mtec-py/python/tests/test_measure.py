@@ -171,3 +171,51 @@ def test_circular_needs_a_radius_and_checks_options():
         mtec.circular(cols, radius_mm=100.0, plane="XZ")
     with pytest.raises(ValueError, match="arc"):
         mtec.circular(cols, radius_mm=100.0, arc_start_deg=0.0)
+
+
+# ---- environmental corrections and the standards side by side ----
+
+
+@pytest.mark.parametrize("py_kwargs,cli_args", [
+    ({"air_temp_c": 23.5, "pressure_pa": 98000.0, "humidity_pct": 40.0},
+     ["--air-temp-c", "23.5", "--pressure-pa", "98000", "--humidity-pct", "40"]),
+    ({"air_temp_c": 18.0, "pressure_pa": 101000.0, "humidity_pct": 60.0, "air_formula": "edlen",
+      "laser_n": 1.00027, "material_temp_c": 21.5, "alpha_um_per_m_k": 11.7, "standard": "all"},
+     ["--air-temp-c", "18", "--pressure-pa", "101000", "--humidity-pct", "60", "--air-formula",
+      "edlen", "--laser-n", "1.00027", "--material-temp-c", "21.5", "--alpha-um-per-m-k", "11.7",
+      "--standard", "all"]),
+], ids=["air", "air-material-all"])
+def test_corrections_are_the_clis(cli, tmp_path, py_kwargs, cli_args):
+    ref = cli.json("iso230-2", RUNS, *cli_args, "--json", "--out", tmp_path / "cli")
+    r = mtec.iso230_2(RUNS, out=tmp_path / "py", **py_kwargs)
+    assert r["corrections"] == ref["corrections"]
+    assert r.get("standards") == ref.get("standards")
+    for k in ("A_um", "B_um", "E_um", "M_um", "R_um"):
+        assert r[k] == ref[k], k
+    f = "iso230-2.json"
+    assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes()
+
+
+def test_material_normalisation_scales_the_positions():
+    """ISO 1: a reading taken on a scale at T is normalised to 20 °C by k = 1 / (1 + α(T − 20))
+    applied to the measured position P + x (the interferometer reads 0 at target 0), so a
+    deviation x becomes k·(P + x) − P: worked here by hand."""
+    cols = read_csv_columns(RUNS)
+    plain = mtec.iso230_2(cols)
+    warm = mtec.iso230_2(cols, material_temp_c=22.0, alpha_um_per_m_k=11.5)
+    k = 1 / (1 + 11.5e-6 * 2.0)
+    assert warm["corrections"]["scale_factor"] == pytest.approx(k, rel=1e-12)
+    p_um = plain["targets"]["target_mm"] * 1000
+    for key in ("mean_up_um", "mean_down_um"):
+        np.testing.assert_allclose(warm["targets"][key],
+                                   k * (p_um + plain["targets"][key]) - p_um, rtol=0, atol=1e-9)
+
+
+def test_correction_options_are_checked():
+    with pytest.raises(ValueError, match="all of --air-temp-c"):
+        mtec.iso230_2(RUNS, air_temp_c=20.0)
+    with pytest.raises(ValueError, match="air_formula `owens`"):
+        mtec.iso230_2(RUNS, air_temp_c=20.0, pressure_pa=1e5, humidity_pct=50.0,
+                      air_formula="owens")
+    with pytest.raises(ValueError, match="both --material-temp-c"):
+        mtec.iso230_2(RUNS, alpha_um_per_m_k=11.5)

@@ -3,13 +3,13 @@
 //! The job of `mtec iso230-2`.
 
 use crate::{Error, Observer, Result};
-use mtec_io::OutputGuard;
+use mtec_io::{OutputGuard, Table};
 use mtec_measure::air::{self, Air, AirFormula};
 use mtec_measure::iso230_2::{self as iso230_2, AxisValues, StandardValues, TargetStats};
 use mtec_measure::{evaluate_iso230_2, vdi3441, PositioningData, Standard, Vdi3441};
 use serde::Serialize;
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The name of the file the job writes into [`Options::out`].
 pub const OUTPUT_FILE: &str = "iso230-2.json";
@@ -214,44 +214,81 @@ fn corrections(o: &Options) -> Result<Corrections> {
     Ok(c)
 }
 
-/// Evaluates the runs; writes `iso230-2.json` into `opts.out` when given.
+/// Evaluates the runs; writes `iso230-2.json` into `opts.out` when given. The file is read as
+/// a stream (files of any size).
 pub fn run(opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
+    let prepared = prepare(opts, &opts.run)?;
+    let data = PositioningData::read(&opts.run)?;
+    finish(&opts.run, data, prepared, obs)
+}
+
+/// [`run`] of runs already read (the Python module's arrays, or a file): `opts.run` is not
+/// read; the table's path names the runs in errors, warnings and the outcome's `file`.
+pub fn run_table(table: &Table, opts: &Options, obs: &mut dyn Observer) -> Result<Outcome> {
+    let prepared = prepare(opts, &table.path)?;
+    let data = PositioningData::from_table(table)?;
+    finish(&table.path, data, prepared, obs)
+}
+
+/// What is settled before any reading: the corrections and the standards asked for (usage
+/// errors), and that the output is not the input.
+struct Prepared {
+    corrections: Corrections,
+    chosen: Vec<Standard>,
+    guard: OutputGuard,
+    out_file: Option<PathBuf>,
+}
+
+fn prepare(opts: &Options, run: &Path) -> Result<Prepared> {
     let corrections = corrections(opts)?;
     let chosen = Standard::parse(&opts.standard).map_err(Error::usage)?;
-    let guard = OutputGuard::new(&[&opts.run]);
+    let guard = OutputGuard::new(&[run]);
     let out_file = opts.out.as_ref().map(|d| d.join(OUTPUT_FILE));
     if let Some(f) = &out_file {
         guard.check(f)?;
     }
-    let mut data = PositioningData::read(&opts.run)?;
-    if corrections.scale_factor != 1.0 {
-        data = data.with_scaled_positions(corrections.scale_factor);
+    Ok(Prepared {
+        corrections,
+        chosen,
+        guard,
+        out_file,
+    })
+}
+
+fn finish(
+    run: &Path,
+    mut data: PositioningData,
+    p: Prepared,
+    obs: &mut dyn Observer,
+) -> Result<Outcome> {
+    if p.corrections.scale_factor != 1.0 {
+        data = data.with_scaled_positions(p.corrections.scale_factor);
     }
     let iso = evaluate_iso230_2(&data);
     let vdi = vdi3441(&iso);
-    let standards = (chosen != [Standard::Iso230_2_2014]).then(|| {
-        chosen
+    let standards = (p.chosen != [Standard::Iso230_2_2014]).then(|| {
+        p.chosen
             .iter()
             .map(|s| iso230_2::values_of(*s, &iso))
             .collect()
     });
     for w in &data.warnings {
-        obs.warning(&format!("{}: {w}", opts.run.display()));
+        obs.warning(&format!("{}: {w}", run.display()));
     }
     let outcome = Outcome {
         format: "mtec.iso230-2/1".into(),
-        file: opts.run.display().to_string(),
+        file: run.display().to_string(),
         runs_up: iso.runs_up,
         runs_down: iso.runs_down,
         axis: iso.axis,
         targets: iso.targets,
         vdi3441: vdi,
-        corrections,
+        corrections: p.corrections,
         standards,
         warnings: data.warnings,
     };
-    if let Some(f) = &out_file {
-        guard.write(f, outcome.to_json()?.as_bytes())?;
+    if let Some(f) = &p.out_file {
+        p.guard.write(f, outcome.to_json()?.as_bytes())?;
     }
     Ok(outcome)
 }
