@@ -67,47 +67,9 @@ pub struct NnArgs {
 }
 
 impl NnArgs {
-    /// A network option given to a model that does not read it is refused (exit 2), not
-    /// ignored: no network outside bpnn and cnn-lstm (auto: those of --with-networks).
-    pub fn refuse_unused(&self, model: &str) -> Result<(), crate::error::CliError> {
-        use mtec_workflow::unused::{refuse_unused, Given};
-        let (nets, cnn, bp): (&[&str], &[&str], &[&str]) =
-            (&["bpnn", "cnn-lstm"], &["cnn-lstm"], &["bpnn"]);
-        let chosen: Vec<&str> = match model {
-            "auto" => self.with_networks.iter().map(String::as_str).collect(),
-            m => vec![m],
-        };
-        let o = |option, given, read_by: &[&str]| Given::among(option, given, read_by, &chosen);
-        let options = [
-            o("--sequence-by", self.sequence_by.is_some(), nets),
-            o("--features", !self.features.is_empty(), nets),
-            o("--angle-harmonics", self.angle_harmonics.is_some(), nets),
-            o("--rises", self.rises, nets),
-            o("--changes", self.changes, nets),
-            o("--epochs", self.epochs.is_some(), nets),
-            o("--patience", self.patience.is_some(), nets),
-            o("--weight-decay", self.weight_decay.is_some(), nets),
-            o("--window", self.window.is_some(), cnn),
-            o("--conv-channels", self.conv_channels.is_some(), cnn),
-            o("--lstm-hidden", self.lstm_hidden.is_some(), cnn),
-            o("--learning-rate", self.learning_rate.is_some(), cnn),
-            o("--final-lr-fraction", self.final_lr_fraction.is_some(), cnn),
-            o("--batch-size", self.batch_size.is_some(), cnn),
-            o("--hidden", self.hidden.is_some(), bp),
-        ];
-        refuse_unused(&format!("--model {model}"), &options)
-    }
-}
-
-#[cfg(feature = "neural")]
-impl NnArgs {
-    /// The network and its training as `mtec_nn` takes them, for `--model` `model` (auto's
-    /// networks: bpnn's options); candle then runs on one thread.
-    pub fn fit_options(&self, model: &str) -> mtec_nn::thermal_log::NnFitOptions {
-        use mtec_nn::thermal_log::NnKind;
-        single_candle_thread();
-        let kind = NnKind::from_name(model).unwrap_or(NnKind::Bpnn);
-        mtec_nn::thermal_log::NnFitOptions {
+    /// The options as the library takes them.
+    pub fn options(&self) -> mtec_workflow::ops::thermal::NetworkOptions {
+        mtec_workflow::ops::thermal::NetworkOptions {
             sequence_by: self.sequence_by.clone(),
             features: self.features.clone(),
             angle_harmonics: self.angle_harmonics,
@@ -122,10 +84,25 @@ impl NnArgs {
             final_lr_fraction: self.final_lr_fraction,
             batch_size: self.batch_size,
             hidden: self.hidden,
-            weight_decay: self.weight_decay.unwrap_or(0.0),
+            weight_decay: self.weight_decay,
             seed: self.seed,
-            ..mtec_nn::thermal_log::NnFitOptions::new(kind)
+            with_networks: self.with_networks.clone(),
         }
+    }
+
+    /// A network option given to a model that does not read it is refused (exit 2).
+    pub fn refuse_unused(&self, model: &str) -> Result<(), crate::error::CliError> {
+        Ok(self.options().refuse_unused(model)?)
+    }
+}
+
+#[cfg(feature = "neural")]
+impl NnArgs {
+    /// The network and its training as `mtec_nn` takes them, for `--model` `model` (auto's
+    /// networks: bpnn's options); candle then runs on one thread.
+    pub fn fit_options(&self, model: &str) -> mtec_nn::thermal_log::NnFitOptions {
+        single_candle_thread();
+        self.options().fit_options(model)
     }
 }
 

@@ -23,10 +23,12 @@ use serde::Serialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+mod network_options;
 #[cfg(feature = "neural")]
 pub mod neural;
 #[cfg(feature = "neural")]
 pub mod neural_log;
+pub use network_options::NetworkOptions;
 
 /// The `--model` values of the neural models (cargo feature `neural`; see [`neural`]).
 pub const NEURAL_KINDS: [&str; 2] = ["cnn-lstm", "bpnn"];
