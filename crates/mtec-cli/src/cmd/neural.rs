@@ -92,7 +92,7 @@ impl NnArgs {
 
     /// A network option given to a model that does not read it is refused (exit 2).
     pub fn refuse_unused(&self, model: &str) -> Result<(), crate::error::CliError> {
-        Ok(self.options().refuse_unused(model)?)
+        self.options().refuse_unused(model)
     }
 }
 
