@@ -19,6 +19,7 @@ mod columns;
 mod comp;
 mod convert;
 mod errors;
+mod gcode_file;
 mod identify;
 mod measure;
 mod model;
@@ -49,6 +50,7 @@ fn _mtec(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(comp::map_fit, m)?)?;
     m.add_function(wrap_pyfunction!(comp::map_eval, m)?)?;
     m.add_function(wrap_pyfunction!(comp::compensate_gcode, m)?)?;
+    m.add_function(wrap_pyfunction!(gcode_file::compensate_gcode_file, m)?)?;
     m.add_function(wrap_pyfunction!(table::compensate_table, m)?)?;
     m.add_function(wrap_pyfunction!(
         thermal_offset::compensate_thermal_offset,

@@ -166,6 +166,37 @@ def compensate_gcode(
 ) -> Tuple[str, dict[str, Any]]:
     """An NC program rewritten so the machine with the model's errors cuts the programmed path."""
 
+def compensate_gcode_file(
+    input: PathLike,
+    model: PathLike,
+    output: PathLike,
+    *,
+    state: Optional[PathLike] = None,
+    offsets: Optional[PathLike] = None,
+    tool_table: Optional[PathLike] = None,
+    machine_units: Literal["mm", "inch"] = "mm",
+    block_delete: Optional[bool] = None,
+    elements: str = "all",
+    tolerance_um: float = 0.5,
+    max_segment_mm: float = 10.0,
+    chord_tolerance_um: float = 0.5,
+    max_correction_um: float = 500.0,
+    on_unsupported: Literal["refuse", "pass-through-with-warning"] = "refuse",
+    default_units: Literal["mm", "inch"] = "mm",
+    decimals_mm: Optional[int] = None,
+    decimals_inch: Optional[int] = None,
+    start_position_mm: Optional[Tuple[float, float, float]] = None,
+    check_step_mm: float = 0.5,
+    start_rotary_deg: Optional[Tuple[float, float, float]] = None,
+    check_step_deg: float = 0.5,
+    max_line_chars: int = 251,
+    flatten_with: Optional[Literal["rs274"]] = None,
+    rs274: Optional[PathLike] = None,
+    var_file: Optional[PathLike] = None,
+    rs274_timeout_s: Optional[float] = None,
+) -> dict[str, Any]:
+    """An NC program file compensated as `mtec compensate gcode` does it (every option)."""
+
 def compensate_table(
     format: Literal["linuxcnc", "sinumerik-cec", "sinumerik-lec", "fanuc", "heidenhain", "beckhoff"],
     out: PathLike,

@@ -231,3 +231,94 @@ def test_table_refusals(tmp_path):
     with pytest.raises(mtec.InputError):
         mtec.compensate_table("linuxcnc", tmp_path / "t", model=model, max_correction_um=1e-3)
     assert not (tmp_path / "t").exists()
+
+
+# ---- a program file, as the command compensates it ----
+
+
+def _rs274_or_skip():
+    import os
+    import shutil
+
+    if shutil.which("rs274"):
+        return
+    if os.environ.get("CI"):
+        pytest.fail("rs274 (LinuxCNC) is installed by .ci/run before the tests: not found")
+    pytest.skip("rs274 (LinuxCNC) not installed")
+
+
+@pytest.mark.parametrize("py_kwargs,cli_args", [
+    ({}, []),
+    ({"tolerance_um": 0.2, "max_segment_mm": 5.0, "decimals_mm": 5},
+     ["--tolerance-um", "0.2", "--max-segment-mm", "5", "--decimals-mm", "5"]),
+], ids=["defaults", "options"])
+def test_gcode_file_is_the_clis(cli, tmp_path, py_kwargs, cli_args):
+    mtec.map_fit(GRID, out=tmp_path / "map.json")
+    r = mtec.compensate_gcode_file(PART, tmp_path / "map.json", tmp_path / "py.ngc", **py_kwargs)
+    cli.run("compensate", "gcode", "--model", tmp_path / "map.json", PART, "-o",
+            tmp_path / "cli.ngc", *cli_args)
+    assert (tmp_path / "py.ngc").read_bytes() == (tmp_path / "cli.ngc").read_bytes()
+    assert r["report"]["moves_compensated"] > 0 and r["output"] == str(tmp_path / "py.ngc")
+    if not py_kwargs:
+        # the text form of the same call gives the same program
+        text, _ = mtec.compensate_gcode(PART.read_text(), tmp_path / "map.json")
+        assert text == (tmp_path / "py.ngc").read_text()
+
+
+def test_gcode_file_block_delete(cli, tmp_path):
+    mtec.map_fit(GRID, out=tmp_path / "map.json")
+    prog = tmp_path / "p.ngc"
+    prog.write_text("G21 G90 G17\nG0 X10 Y10 Z5\n/G1 X200 F500\nG1 X100 F500\nM2\n")
+    with pytest.raises(mtec.InputError) as e:
+        mtec.compensate_gcode_file(prog, tmp_path / "map.json", tmp_path / "o.ngc")
+    assert (e.value.file, e.value.line) == (str(prog), 3)
+    for on, flag in ((True, "on"), (False, "off")):
+        mtec.compensate_gcode_file(prog, tmp_path / "map.json", tmp_path / f"py-{flag}.ngc",
+                                   block_delete=on)
+        cli.run("compensate", "gcode", "--model", tmp_path / "map.json", prog, "-o",
+                tmp_path / f"cli-{flag}.ngc", "--block-delete", flag)
+        assert (tmp_path / f"py-{flag}.ngc").read_bytes() == \
+            (tmp_path / f"cli-{flag}.ngc").read_bytes()
+
+
+def test_gcode_file_key_elements_are_the_clis(cli, sim, tmp_path):
+    d = sim("vmc-9line")
+    mtec.identify_lines(d["machine.toml"], d["lines.csv"], kinematic_model_out=tmp_path / "km.json")
+    r = mtec.compensate_gcode_file(PART, tmp_path / "km.json", tmp_path / "py.ngc",
+                                   elements="key")
+    cli.run("compensate", "gcode", "--model", tmp_path / "km.json", PART, "-o",
+            tmp_path / "cli.ngc", "--elements", "key")
+    assert (tmp_path / "py.ngc").read_bytes() == (tmp_path / "cli.ngc").read_bytes()
+    assert r["selective"]["selection"] == "key" and r["selective"]["elements"]
+
+
+def test_gcode_file_flattened_by_rs274_is_the_clis(cli, tmp_path):
+    _rs274_or_skip()
+    mtec.map_fit(GRID, out=tmp_path / "map.json")
+    prog = tmp_path / "loop.ngc"
+    prog.write_text("G21 G90 G17\nG0 X10 Y10 Z5\n#1 = 0\no100 while [#1 LT 3]\n"
+                    "G1 X[20 + 30 * #1] Y40 F600\n#1 = [#1 + 1]\no100 endwhile\nM2\n")
+    r = mtec.compensate_gcode_file(prog, tmp_path / "map.json", tmp_path / "py.ngc",
+                                   flatten_with="rs274")
+    cli.run("compensate", "gcode", "--model", tmp_path / "map.json", prog, "-o",
+            tmp_path / "cli.ngc", "--flatten-with", "rs274")
+    assert (tmp_path / "py.ngc").read_bytes() == (tmp_path / "cli.ngc").read_bytes()
+    assert r["flattened"] is not None
+    assert "while" not in (tmp_path / "py.ngc").read_text()
+
+
+def test_gcode_file_refusals(tmp_path):
+    mtec.map_fit(GRID, out=tmp_path / "map.json")
+    m = tmp_path / "map.json"
+    with pytest.raises(ValueError, match="stdout"):
+        mtec.compensate_gcode_file(PART, m, "-")
+    with pytest.raises(ValueError, match="flatten_with"):
+        mtec.compensate_gcode_file(PART, m, tmp_path / "o.ngc", rs274="/usr/bin/rs274")
+    with pytest.raises(ValueError, match="flatten_with `camotics`"):
+        mtec.compensate_gcode_file(PART, m, tmp_path / "o.ngc", flatten_with="camotics")
+    with pytest.raises(ValueError, match="machine_units `cm`"):
+        mtec.compensate_gcode_file(PART, m, tmp_path / "o.ngc", machine_units="cm")
+    before = PART.read_bytes()
+    with pytest.raises(Exception):
+        mtec.compensate_gcode_file(PART, m, PART)
+    assert PART.read_bytes() == before
