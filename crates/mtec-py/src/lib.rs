@@ -21,6 +21,7 @@ mod convert;
 mod errors;
 mod gcode_file;
 mod identify;
+mod machine;
 mod measure;
 mod model;
 mod sensitivity;
@@ -56,6 +57,8 @@ fn _mtec(m: &Bound<'_, PyModule>) -> PyResult<()> {
         thermal_offset::compensate_thermal_offset,
         m
     )?)?;
+    m.add_function(wrap_pyfunction!(machine::machine_build, m)?)?;
+    m.add_function(wrap_pyfunction!(machine::machine_replay, m)?)?;
     m.add_function(wrap_pyfunction!(sensitivity::sensitivity, m)?)?;
     m.add_function(wrap_pyfunction!(sim::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(workflow::run_project, m)?)?;

@@ -251,6 +251,23 @@ def compensate_thermal_offset(
 ) -> dict[str, Any]:
     """The work-offset update (or Siemens SD43900 data) for the thermal drift now."""
 
+def machine_build(
+    output: PathLike,
+    *,
+    geometric: Optional[PathLike] = None,
+    thermal: Sequence[str] = ...,
+    data: Optional[PathLike] = None,
+    guard: Sequence[str] = ...,
+    fade_c: Optional[float] = None,
+    fade_other: Optional[float] = None,
+) -> dict[str, Any]:
+    """A machine error model file (`mtec.machine-error/1`) of geometric and thermal models."""
+
+def machine_replay(
+    model: PathLike, state: PathLike, probes: PathLike, *, output: Optional[PathLike] = None
+) -> dict[str, Any]:
+    """A recorded day compensated through the real-time code path, before and after."""
+
 def sensitivity(
     *,
     function: Optional[Literal["ishigami", "sobol-g", "linear"]] = None,

@@ -1,7 +1,9 @@
-"""`mtec.run_project` against `mtec run` on the same project: the same files, byte for byte."""
+"""`mtec.run_project` against `mtec run` on the same project, and the machine model's build and
+replay against `mtec machine`: the same files, byte for byte."""
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import mtec
@@ -46,3 +48,44 @@ def test_a_failed_stage_raises_located_and_keeps_the_report(tmp_path):
     assert e.value.file.endswith("runs.csv") and (e.value.line, e.value.column) == (3, 4)
     html = (tmp_path / "out" / "report.html").read_text()
     assert "<h2>FAILED: ISO 230-2 statistics of" in html.rsplit("<section", 1)[1]
+
+
+# ---- the machine error model with a state ----
+
+
+def test_machine_build_and_replay_are_the_clis(cli, sim, tmp_path):
+    """production-day: a heat-input model of dz on the training days, built into a machine
+    file, replayed on the unseen day; the files and the summary are the CLI's."""
+    d = sim("production-day")
+    dz = tmp_path / "dz.json"
+    mtec.thermal_fit(d["train.csv"], "dz_um", "heat-input", out=dz)
+    m = mtec.machine_build(tmp_path / "py" / "machine.json", thermal=[f"z={dz}"],
+                           data=d["train.csv"], guard=["air_c"])
+    cli.run("machine", "build", "--thermal", f"z={dz}", "--data", d["train.csv"], "--guard",
+            "air_c", "-o", tmp_path / "cli" / "machine.json")
+    assert (tmp_path / "py" / "machine.json").read_bytes() == \
+        (tmp_path / "cli" / "machine.json").read_bytes()
+    assert m["thermal"][0]["axis"] == "z" and "air_c" in m["thermal"][0]["envelope"]
+
+    machine = tmp_path / "cli" / "machine.json"
+    r = mtec.machine_replay(machine, d["day-state.csv"], d["day-probes.csv"],
+                            output=tmp_path / "py.csv")
+    ref = cli.json("machine", "replay", "--model", machine, "--state", d["day-state.csv"],
+                   "--probes", d["day-probes.csv"], "--json", "-o", tmp_path / "cli.csv")
+    samples = r.pop("samples")
+    assert r == ref
+    assert (tmp_path / "py.csv").read_bytes() == (tmp_path / "cli.csv").read_bytes()
+    # the samples are the rows of the CSV, and the summary is their RMS
+    n = ref["readings"]
+    assert samples["after_um"].shape == (n, 3) and len(samples["probe"]) == n
+    np.testing.assert_allclose(samples["after_um"],
+                               samples["before_um"] + samples["correction_um"], atol=1e-9)
+    assert np.sqrt(np.mean(samples["after_um"][:, 2] ** 2)) == \
+        pytest.approx(ref["z"]["rms_after_um"], rel=1e-9)
+
+
+def test_machine_refusals(tmp_path):
+    with pytest.raises(ValueError, match="--thermal `q=dz.json`"):
+        mtec.machine_build(tmp_path / "m.json", thermal=["q=dz.json"])
+    with pytest.raises(ValueError, match="stdout"):
+        mtec.machine_build("-", thermal=["z=dz.json"])
