@@ -299,22 +299,45 @@ fn lex_value(line: &[u8], i: usize) -> Result<(Value, usize), LexError> {
             Ok((Value::Computed, end))
         }
         _ => {
+            let negative = line[i] == b'-';
             let mut j = i;
             if line[j] == b'+' || line[j] == b'-' {
                 j += 1;
             }
-            let int_end = digits_end(line, j);
-            let mut end = int_end;
-            if end < n && line[end] == b'.' {
-                end = digits_end(line, end + 1);
+            // one pass over `digits[.digits]`, the digits gathered as the integer m (as
+            // `parse_short_decimal` does, while they fit its fast path)
+            let mut m = 0u64;
+            let mut end = j;
+            while end < n && line[end].is_ascii_digit() {
+                m = m.wrapping_mul(10).wrapping_add(u64::from(line[end] - b'0'));
+                end += 1;
             }
-            let digits = (int_end - j) + end.saturating_sub(int_end + 1);
+            let int_digits = end - j;
+            let mut after_point = 0;
+            if end < n && line[end] == b'.' {
+                end += 1;
+                while end < n && line[end].is_ascii_digit() {
+                    m = m.wrapping_mul(10).wrapping_add(u64::from(line[end] - b'0'));
+                    end += 1;
+                    after_point += 1;
+                }
+            }
+            let digits = int_digits + after_point;
             if digits == 0 {
                 return Err(err(i.saturating_sub(1), "word without a number"));
             }
             exponent_check(line, i, end)?;
-            let value =
-                parse_number(&line[i..end]).ok_or_else(|| err(i, "number cannot be read"))?;
+            let value = if digits <= SHORT_DIGITS {
+                // m < 10^15 < 2^53 (no wrap): `parse_short_decimal`'s quotient
+                let v = m as f64 / POW10[after_point];
+                if negative {
+                    -v
+                } else {
+                    v
+                }
+            } else {
+                parse_number(&line[i..end]).ok_or_else(|| err(i, "number cannot be read"))?
+            };
             Ok((Value::Number(value), end))
         }
     }
@@ -357,6 +380,9 @@ pub fn parse_number(text: &[u8]) -> Option<f64> {
     s.parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
+/// Most digits of a number read as m / 10^k ([`parse_short_decimal`]): m < 10^15 < 2^53.
+const SHORT_DIGITS: usize = 15;
+
 /// 10^k, k = 0..=15: each exact in f64 (10^22 is the largest power of ten that is).
 const POW10: [f64; 16] = [
     1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
@@ -392,7 +418,7 @@ fn parse_short_decimal(text: &[u8]) -> Option<f64> {
             _ => return None,
         }
     }
-    if digits == 0 || digits > 15 {
+    if digits == 0 || digits > SHORT_DIGITS {
         return None;
     }
     let v = m as f64 / POW10[after_point];
@@ -402,6 +428,50 @@ fn parse_short_decimal(text: &[u8]) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A word's number, read in the lexer's one pass, is the standard parser's f64 bit for
+    /// bit: 1 to 20 digits (past the fast path's 15 too), points anywhere, signs, zeros.
+    #[test]
+    fn a_words_number_is_the_standard_parsers() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = |n: u64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed % n
+        };
+        let mut toks = Vec::new();
+        let mut checked = 0;
+        for _ in 0..100_000 {
+            let digits = 1 + next(20) as usize;
+            let mut s: String = (0..digits)
+                .map(|_| char::from(b'0' + next(10) as u8))
+                .collect();
+            let point = next(digits as u64 + 2) as usize;
+            if point <= digits {
+                s.insert(point, '.');
+            }
+            match next(3) {
+                0 => s.insert(0, '-'),
+                1 => s.insert(0, '+'),
+                _ => {}
+            }
+            let line = format!("G1 X{s} F100");
+            lex_line(line.as_bytes(), 0, &mut toks).unwrap();
+            let TokenKind::Word {
+                letter: b'X',
+                value: Value::Number(v),
+            } = toks[1].kind
+            else {
+                panic!("{line}: {toks:?}");
+            };
+            let std = s.trim_start_matches('+').parse::<f64>().unwrap();
+            assert_eq!(v.to_bits(), std.to_bits(), "{s}: {v} vs {std}");
+            assert_eq!(toks[1].value_span, 4..4 + s.len());
+            checked += 1;
+        }
+        assert_eq!(checked, 100_000);
+    }
 
     /// The short-decimal path gives the standard parser's f64, bit for bit (signs, zeros,
     /// points at either end, 1 to 15 digits), and leaves the rest to it.
