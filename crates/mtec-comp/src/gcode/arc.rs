@@ -66,6 +66,18 @@ pub fn center_arc_limit_mm(r_start: f64, r_end: f64, inch: bool) -> f64 {
     abs.max(0.001 * r_start.max(r_end)).min(100.0 * abs)
 }
 
+/// LinuxCNC stops at a centre-format arc whose radius to the start or to the end is below this
+/// ("Zero-radius arc"; mm, 0.00005 in, in both units: rs274 2.9.0~pre1 runs r = 0.00127 mm and
+/// stops at 0.00126 mm in G21, runs 0.00005 in and stops at 0.000049 in in G20; its
+/// `arc_data_ijk` takes a tenth of the radius tolerance). An R-format arc has no such limit, so
+/// an R arc mtec writes with its centre must have its radii above it (found 2026-11-30 by a
+/// dxf2gcode program's R0.0011 arc, which rs274 ran and mtec's IJK rewrite made it refuse).
+pub const CENTER_ARC_MIN_RADIUS_MM: f64 = 0.00005 * 25.4;
+
+/// Radii this close to [`CENTER_ARC_MIN_RADIUS_MM`] (mm) are refused as below it: which side
+/// LinuxCNC takes depends on the last bits of a sum in the program's units.
+const MIN_RADIUS_SLACK_MM: f64 = 1e-9;
+
 /// An R-format arc whose radius is short of half its chord by more than this (mm; 0.00005 in,
 /// in both units) is refused by LinuxCNC ("Arc radius too small to reach end point"); within
 /// it the arc is a half circle. Measured as above; until 2026-11-28 mtec allowed 0.02 mm and
@@ -91,6 +103,30 @@ impl Arc {
     /// The block is in inch (`inch`) or mm: LinuxCNC's radius tolerance depends on its units
     /// ([`center_arc_limit_mm`]).
     pub fn from_center(
+        start: [f64; 3],
+        end: [f64; 3],
+        center: [f64; 2],
+        plane: Plane,
+        clockwise: bool,
+        turns: u32,
+        inch: bool,
+    ) -> Result<Arc, String> {
+        let s = in_plane(&start, plane);
+        let e = in_plane(&end, plane);
+        let r_start = (s[0] - center[0]).hypot(s[1] - center[1]);
+        let r_end = (e[0] - center[0]).hypot(e[1] - center[1]);
+        if r_start.min(r_end) < CENTER_ARC_MIN_RADIUS_MM + MIN_RADIUS_SLACK_MM {
+            return Err(format!(
+                "arc radius {:.6} mm (to the start) / {:.6} mm (to the end) is below the smallest LinuxCNC runs in centre format, {CENTER_ARC_MIN_RADIUS_MM} mm (0.00005 in): it stops here with \"Zero-radius arc\"",
+                r_start, r_end
+            ));
+        }
+        Arc::through(start, end, center, plane, clockwise, turns, inch)
+    }
+
+    /// [`Arc::from_center`] without LinuxCNC's smallest centre-format radius (an R arc's centre,
+    /// which has none); a centre on the start point is still refused.
+    fn through(
         start: [f64; 3],
         end: [f64; 3],
         center: [f64; 2],
@@ -186,7 +222,7 @@ impl Arc {
         let side = if clockwise { -1.0 } else { 1.0 } * r.signum();
         let m = [(s[0] + e[0]) / 2.0, (s[1] + e[1]) / 2.0];
         let center = [m[0] + side * h * left[0], m[1] + side * h * left[1]];
-        Arc::from_center(start, end, center, plane, clockwise, 1, false)
+        Arc::through(start, end, center, plane, clockwise, 1, false)
     }
 
     /// The point at fraction `t` ∈ [0, 1] of the sweep; `t = 1` is exactly the end point.
@@ -361,6 +397,30 @@ mod tests {
         )
         .is_err());
         assert!(Arc::from_radius([0.0, 0.0, 0.0], [3.0, 0.0, 0.0], 1.0, XY, false).is_err());
+    }
+
+    /// LinuxCNC's smallest centre-format radius, as rs274 (2.9.0~pre1) showed it by bisection:
+    /// r = 0.00127 mm runs and 0.00126 mm stops in G21, 0.00005 in runs and 0.000049 in stops
+    /// in G20, to the start or to the end; an R arc of radius 0.0011 mm runs.
+    #[test]
+    fn centre_arcs_below_linuxcnc_s_smallest_radius_are_refused() {
+        let half = |r: f64, inch: bool| {
+            Arc::from_center([0.0; 3], [2.0 * r, 0.0, 0.0], [r, 0.0], XY, true, 1, inch)
+        };
+        assert!(half(0.0013, false).is_ok() && half(0.00126, false).is_err());
+        assert!(half(0.00005 * 25.4 * 1.001, true).is_ok());
+        assert!(half(0.000049 * 25.4, true).is_err());
+        let e = half(0.0011, false).unwrap_err();
+        assert!(
+            e.contains("Zero-radius arc") && e.contains("0.001100"),
+            "{e}"
+        );
+        // the end radius counts too: start radius 0.0013, end radius 0.00126
+        let end = [0.0013 - 0.00004, 0.00126, 0.0];
+        assert!(Arc::from_center([0.0; 3], end, [0.0013, 0.0], XY, false, 1, false).is_err());
+        // an R arc has no such limit
+        let r = Arc::from_radius([0.0; 3], [0.0017, 0.0008, 0.0], 0.0011, XY, true).unwrap();
+        assert!((r.r_start - 0.0011).abs() < 1e-12);
     }
 
     /// LinuxCNC's limits as rs274 (2.9.0~pre1) showed them by bisection: a centre-format arc

@@ -13,7 +13,7 @@
 // axis loops index several per-axis arrays at once (target, correction, offsets, words)
 #![allow(clippy::needless_range_loop)]
 
-use super::super::arc::{center_arc_limit_mm, Arc};
+use super::super::arc::{center_arc_limit_mm, Arc, CENTER_ARC_MIN_RADIUS_MM};
 use super::super::block::{Block, Issue};
 use super::super::code::GCode;
 use super::super::lexer::Value;
@@ -617,9 +617,10 @@ impl Rewriter<'_> {
 
     /// Whether the arc, written with its start (and centre) moved by `c0` and its end by
     /// `c_end`, still has end and start radii that LinuxCNC accepts: the end radius changes by
-    /// up to |c_end − c0| and the written end point and centre are rounded. An arc near
-    /// LinuxCNC's limit is cut into chords instead, so that the compensated program runs
-    /// wherever the original does.
+    /// up to |c_end − c0| and the written end point and centre are rounded; and both radii
+    /// stay well above LinuxCNC's smallest centre-format radius (an R arc, which has none, is
+    /// written with its centre). An arc near either limit is cut into chords instead, so that
+    /// the compensated program runs wherever the original does.
     fn arc_stays_within_linuxcnc_tolerance(
         &self,
         arc: &Arc,
@@ -627,9 +628,14 @@ impl Rewriter<'_> {
         c_end: [f64; 3],
     ) -> bool {
         let rounding_um = rounding_in_effect_um(self.opt, self.st.units);
-        let written = (arc.r_end - arc.r_start).abs() + dist(c_end, c0) + 4.0 * rounding_um * 1e-3;
+        let slack_mm = dist(c_end, c0) + 4.0 * rounding_um * 1e-3;
+        let written = (arc.r_end - arc.r_start).abs() + slack_mm;
         let inch = self.st.units == Some(Units::Inch);
+        // the written radii (start and centre moved by c0, the end by c_end, each word rounded)
+        // must stay above LinuxCNC's smallest centre-format radius: an R arc has none
+        let smallest_written = arc.r_start.min(arc.r_end) - slack_mm;
         written <= center_arc_limit_mm(arc.r_start, arc.r_end, inch)
+            && smallest_written > 2.0 * CENTER_ARC_MIN_RADIUS_MM
     }
 
     /// Whether the block's word for rotary axis `k` (0 = A) leaves the axis where it stands:
