@@ -273,7 +273,10 @@ def convert_tool_table_to_inch(src, dst):
 # --------------------------------------------------------------------------------------------
 # running rs274 and reading its canonical calls
 
-CANON_RE = re.compile(r"^\s*(\d+)\s+N(\S*)\s+([A-Z_0-9]+)\((.*)\)\s*$")
+# the block number field is `N.....`, `N0080`, and from six digits on has no blank before the
+# call (`N100000STRAIGHT_FEED(`): with `\s+` required there, every move of a block numbered
+# N100000 or above was dropped from both programs and went unchecked (found 2026-11-30)
+CANON_RE = re.compile(r"^\s*(\d+)\s+N([0-9.]*)\s*([A-Z_][A-Z_0-9]*)\((.*)\)\s*$")
 
 
 class Canon:

@@ -111,12 +111,12 @@ pub fn parse_line(raw: &str, text_line: usize) -> Result<Option<Call<'_>>, Flatt
         t[..digits].parse::<usize>().unwrap_or(text_line),
         t[digits..].trim_start(),
     );
-    // the block's line number field: `N.....` or `N0080`
+    // the block's line number field: `N.....`, `N0080`, or from six digits on no blank before
+    // the call (`N100000STRAIGHT_FEED(`)
     let rest = match rest.strip_prefix('N') {
-        Some(r) if !r.starts_with(|c: char| c.is_ascii_uppercase() || c == '_') => {
-            let end = r.find(char::is_whitespace).unwrap_or(r.len());
-            r[end..].trim_start()
-        }
+        Some(r) if !r.starts_with(|c: char| c.is_ascii_uppercase() || c == '_') => r
+            .trim_start_matches(|c: char| c.is_ascii_digit() || c == '.')
+            .trim_start(),
         _ => rest,
     };
     let Some(open) = rest.find('(') else {
@@ -150,6 +150,28 @@ pub fn parse_line(raw: &str, text_line: usize) -> Result<Option<Call<'_>>, Flatt
 #[cfg(test)]
 mod tests {
     use super::parse_line;
+
+    /// rs274 prints a block number of six digits or more without a blank before the call
+    /// (`N100000STRAIGHT_FEED(`; found 2026-11-30 on a dxf2gcode program numbered past N99999,
+    /// which flattening refused): the call is read all the same.
+    #[test]
+    fn calls_after_six_digit_block_numbers_are_read() {
+        for raw in [
+            "   11 N100000STRAIGHT_FEED(600.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+            "   11 N99990 STRAIGHT_FEED(600.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+            "   11 N..... STRAIGHT_FEED(600.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)",
+        ] {
+            let c = parse_line(raw, 11).unwrap().unwrap();
+            assert_eq!(
+                (c.line, c.name, c.args.len()),
+                (11, "STRAIGHT_FEED", 6),
+                "{raw}"
+            );
+            assert_eq!(c.args[0], "600.0000");
+        }
+        let c = parse_line("   14 N1000000ON_RESET()", 14).unwrap().unwrap();
+        assert_eq!(c.name, "ON_RESET");
+    }
 
     /// `(PRINT, hello)` makes rs274 write ` hello` between its numbered calls: not a call,
     /// and not a reason to refuse (found on LinuxCNC's tests/interp/g52 programs); a numbered

@@ -90,7 +90,10 @@ pub fn canonical_source_line(original: &str, numbered: &str, k: usize) -> Option
                 return None;
             }
             let rest = t[digits..].trim_start().strip_prefix('N')?;
-            let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
+            // from six digits on rs274 prints no blank before the call (`N100000TURN_PROBE_ON(`)
+            let end = rest
+                .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+                .unwrap_or(rest.len());
             Some((rest[..end].to_string(), rest[end..].trim().to_string()))
         })
     };
@@ -138,6 +141,9 @@ mod tests {
         assert_eq!(canonical_source_line(original, other, 10), None);
         // no line number in the N field
         assert_eq!(canonical_source_line(original, original, 10), None);
+        // six digits: no blank before the call
+        let long = "   10 N100000TURN_PROBE_ON()\n";
+        assert_eq!(canonical_source_line(original, long, 10), Some(100000));
     }
 
     #[test]
