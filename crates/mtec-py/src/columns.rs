@@ -11,6 +11,15 @@ use pyo3::prelude::*;
 use pyo3::types::PyString;
 use std::path::{Path, PathBuf};
 
+/// The files a table was read from (none for arrays): outputs may not overwrite them.
+pub fn file_inputs(t: &Table) -> Vec<PathBuf> {
+    if t.path == Path::new(ARRAYS) {
+        Vec::new()
+    } else {
+        vec![t.path.clone()]
+    }
+}
+
 /// Where a table came from: the path that located errors name.
 pub fn read_table(obj: &Bound<'_, PyAny>, what: &str) -> Result<Table> {
     match as_path(obj)? {

@@ -1,7 +1,7 @@
 //! Compensation (mtec-comp): volumetric error maps from a measured grid and their values at
 //! points, and an NC program rewritten with an error model.
 
-use crate::columns::{as_path, path_arg, read_table};
+use crate::columns::{as_path, file_inputs, path_arg, read_table};
 use crate::convert::write_output;
 use crate::errors::{internal, usage, Result, ARRAYS};
 use mtec_comp::gcode::{rewrite, GcodeError, OffsetsFile, OnUnsupported, RewriteOptions, Units};
@@ -81,7 +81,7 @@ fn run_map_fit<'py>(
     if let Some(p) = &out {
         let mut json = serde_json::to_string_pretty(&file).map_err(internal)?;
         json.push('\n');
-        write_output(p, &inputs_of(&table), json.as_bytes())?;
+        write_output(p, &file_inputs(&table), json.as_bytes())?;
     }
     let shape = [file.x_mm.len(), file.y_mm.len(), file.z_mm.len()];
     let d = PyDict::new(py);
@@ -104,15 +104,6 @@ fn run_map_fit<'py>(
         d.set_item(k, PyArray1::from_slice(py, v).reshape(shape)?)?;
     }
     Ok(d.into_any())
-}
-
-/// The files a table was read from (none for arrays): outputs may not overwrite them.
-fn inputs_of(t: &Table) -> Vec<PathBuf> {
-    if t.path == Path::new(ARRAYS) {
-        Vec::new()
-    } else {
-        vec![t.path.clone()]
-    }
 }
 
 /// Points (mm) and where each came from (file, line, column of its `x_mm`) for messages.

@@ -5,9 +5,9 @@
 //! for byte (python/tests/test_thermal.py checks it against the CLI), and every kind of the
 //! registry (`mtec_thermal::registry::KINDS`) is a `model` here as it is a `--model` there.
 
-use crate::columns::{path_arg, read_table};
+use crate::columns::{file_inputs, path_arg, read_table};
 use crate::convert::{serde_to_py, write_output};
-use crate::errors::{internal, usage, Result, ARRAYS};
+use crate::errors::{internal, usage, Result};
 use mtec_thermal::model_file::SplitBy;
 use mtec_thermal::registry::FitOptions;
 use mtec_workflow::ops::thermal as op;
@@ -95,11 +95,7 @@ fn fit_model<'py>(
     let file = py.detach(|| op::fit_table(&table, target, model, fit, split))?;
     if let Some(p) = &out {
         let text = serde_json::to_string_pretty(&file).map_err(internal)?;
-        let inputs: Vec<PathBuf> = file_inputs(&table)
-            .into_iter()
-            .map(Path::to_path_buf)
-            .collect();
-        write_output(p, &inputs, text.as_bytes())?;
+        write_output(p, &file_inputs(&table), text.as_bytes())?;
     }
     serde_to_py(py, &file)
 }
@@ -205,7 +201,8 @@ fn select<'py>(
     let table = read_table(data, "data")?;
     let outcome = py.detach(|| op::select_table(&table, target, sensors))?;
     if let Some(dir) = &out {
-        let inputs: Vec<&Path> = file_inputs(&table);
+        let inputs = file_inputs(&table);
+        let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
         op::write_selection(&outcome, dir, &inputs)?;
     }
     serde_to_py(py, &outcome)
@@ -278,13 +275,4 @@ fn cv<'py>(
     let table = read_table(data, "data")?;
     let outcome = py.detach(|| op::cv_table(&table, target, model, fit, loo))?;
     serde_to_py(py, &outcome)
-}
-
-/// The files among the inputs (none for arrays): what an output must not overwrite.
-fn file_inputs(table: &mtec_io::Table) -> Vec<&Path> {
-    if table.path == Path::new(ARRAYS) {
-        Vec::new()
-    } else {
-        vec![table.path.as_path()]
-    }
 }

@@ -2,7 +2,7 @@
 //! Siemens temperature-compensation data, for the state the temperature log ends in; the job of
 //! `mtec compensate thermal-offset`.
 
-use crate::columns::{path_arg, read_table};
+use crate::columns::{file_inputs, path_arg, read_table};
 use crate::convert::{serde_to_py, write_output};
 use crate::errors::{choice, Result};
 use mtec_workflow::ops::compensate_table::parse_axis;
@@ -101,7 +101,7 @@ pub fn compensate_thermal_offset<'py>(
         };
         // the output is settled before any work: never one of the inputs
         let mut inputs = vec![model.clone()];
-        inputs.extend(log.path.is_file().then(|| log.path.clone()));
+        inputs.extend(file_inputs(&log));
         inputs.extend(training);
         if let Some(p) = &out {
             mtec_io::OutputGuard::new(&inputs).check(p)?;

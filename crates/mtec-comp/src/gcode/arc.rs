@@ -111,17 +111,14 @@ impl Arc {
         turns: u32,
         inch: bool,
     ) -> Result<Arc, String> {
-        let s = in_plane(&start, plane);
-        let e = in_plane(&end, plane);
-        let r_start = (s[0] - center[0]).hypot(s[1] - center[1]);
-        let r_end = (e[0] - center[0]).hypot(e[1] - center[1]);
-        if r_start.min(r_end) < CENTER_ARC_MIN_RADIUS_MM + MIN_RADIUS_SLACK_MM {
+        let arc = Arc::through(start, end, center, plane, clockwise, turns, inch)?;
+        if arc.r_start.min(arc.r_end) < CENTER_ARC_MIN_RADIUS_MM + MIN_RADIUS_SLACK_MM {
             return Err(format!(
                 "arc radius {:.6} mm (to the start) / {:.6} mm (to the end) is below the smallest LinuxCNC runs in centre format, {CENTER_ARC_MIN_RADIUS_MM} mm (0.00005 in): it stops here with \"Zero-radius arc\"",
-                r_start, r_end
+                arc.r_start, arc.r_end
             ));
         }
-        Arc::through(start, end, center, plane, clockwise, turns, inch)
+        Ok(arc)
     }
 
     /// [`Arc::from_center`] without LinuxCNC's smallest centre-format radius (an R arc's centre,

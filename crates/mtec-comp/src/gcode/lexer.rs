@@ -429,33 +429,40 @@ fn parse_short_decimal(text: &[u8]) -> Option<f64> {
 mod tests {
     use super::*;
 
+    /// A random `[+-]digits[.digits]` of 1 to `max_digits` digits, the point anywhere or
+    /// nowhere, from the xorshift state `seed`.
+    fn random_decimal(seed: &mut u64, max_digits: u64) -> String {
+        let mut next = |n: u64| {
+            *seed ^= *seed << 13;
+            *seed ^= *seed >> 7;
+            *seed ^= *seed << 17;
+            *seed % n
+        };
+        let digits = 1 + next(max_digits) as usize;
+        let mut s: String = (0..digits)
+            .map(|_| char::from(b'0' + next(10) as u8))
+            .collect();
+        let point = next(digits as u64 + 2) as usize;
+        if point <= digits {
+            s.insert(point, '.');
+        }
+        match next(3) {
+            0 => s.insert(0, '-'),
+            1 => s.insert(0, '+'),
+            _ => {}
+        }
+        s
+    }
+
     /// A word's number, read in the lexer's one pass, is the standard parser's f64 bit for
     /// bit: 1 to 20 digits (past the fast path's 15 too), points anywhere, signs, zeros.
     #[test]
     fn a_words_number_is_the_standard_parsers() {
         let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = |n: u64| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed % n
-        };
         let mut toks = Vec::new();
         let mut checked = 0;
         for _ in 0..100_000 {
-            let digits = 1 + next(20) as usize;
-            let mut s: String = (0..digits)
-                .map(|_| char::from(b'0' + next(10) as u8))
-                .collect();
-            let point = next(digits as u64 + 2) as usize;
-            if point <= digits {
-                s.insert(point, '.');
-            }
-            match next(3) {
-                0 => s.insert(0, '-'),
-                1 => s.insert(0, '+'),
-                _ => {}
-            }
+            let s = random_decimal(&mut seed, 20);
             let line = format!("G1 X{s} F100");
             lex_line(line.as_bytes(), 0, &mut toks).unwrap();
             let TokenKind::Word {
@@ -478,27 +485,9 @@ mod tests {
     #[test]
     fn short_decimals_read_as_the_standard_parser_reads_them() {
         let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = |n: u64| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed % n
-        };
         let mut checked = 0;
         for _ in 0..200_000 {
-            let digits = 1 + next(15) as usize;
-            let mut s: String = (0..digits)
-                .map(|_| char::from(b'0' + next(10) as u8))
-                .collect();
-            let point = next(digits as u64 + 2) as usize;
-            if point <= digits {
-                s.insert(point, '.');
-            }
-            match next(3) {
-                0 => s.insert(0, '-'),
-                1 => s.insert(0, '+'),
-                _ => {}
-            }
+            let s = random_decimal(&mut seed, 15);
             let std = s.trim_start_matches('+').parse::<f64>().unwrap();
             let fast = parse_short_decimal(s.as_bytes()).expect(&s);
             assert_eq!(fast.to_bits(), std.to_bits(), "{s}: {fast} vs {std}");
