@@ -220,14 +220,27 @@ fn arcs_are_linearised_when_the_correction_varies_and_modal_g2_is_restored() {
         0.09e-3,
         1.1e-3,
     );
-    // an arc kept as an arc after a linearised one gets its G2 back
+    // a modal R arc kept as an arc is written in centre form; one of radius 1 um, below
+    // LinuxCNC's smallest centre-format radius (1.27 um: rs274 stops at "Zero-radius arc"),
+    // becomes a chord instead
+    let input = "G21 G90 G17\nG0 X0 Y0 Z0\nG2 X50 Y0 R25 F100\nX50.01 Y0.01 R0.01\n";
+    let (out, _) = run(
+        input,
+        &ConstModel([1.0, 1.0, 1.0]),
+        &RewriteOptions::default(),
+    );
+    assert_eq!(
+        out.lines().nth(4),
+        Some("X50.009 Y0.009 I0.01 J0.0"),
+        "{out}"
+    );
     let input = "G21 G90 G17\nG0 X0 Y0 Z0\nG2 X50 Y0 R25 F100\nX50.001 Y0.001 R0.001\n";
     let (out, _) = run(
         input,
         &ConstModel([1.0, 1.0, 1.0]),
         &RewriteOptions::default(),
     );
-    assert_eq!(out.lines().nth(4), Some("X50.0 Y0.0 I0.001 J0.0"), "{out}");
+    assert_eq!(out.lines().nth(4), Some("G1 X50.0 Y0.0"), "{out}");
 }
 
 #[test]
