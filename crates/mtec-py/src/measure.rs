@@ -1,6 +1,6 @@
 //! ISO 230-2 positioning statistics and ISO 230-4 circular tests (mtec-measure).
 
-use crate::columns::read_table;
+use crate::columns::{as_path, read_table};
 use crate::convert::serde_to_py;
 use crate::errors::{choice, Result};
 use mtec_workflow::ops::circular as circular_op;
@@ -155,6 +155,13 @@ fn evaluate_circular<'py>(
     run: &Bound<'py, PyAny>,
     a: CircularArgs,
 ) -> Result<Bound<'py, PyAny>> {
+    // the output files are settled before any work: neither is the trace file
+    if let (Some(dir), Some(trace)) = (&a.out, as_path(run)?) {
+        let guard = mtec_io::OutputGuard::new(&[&trace]);
+        for f in [circular_op::RESULTS_FILE, circular_op::PLOT_FILE] {
+            guard.check(&dir.join(f))?;
+        }
+    }
     let table = read_table(run, "run")?;
     let opts = circular_op::Options {
         radius_mm: a.radius_mm,

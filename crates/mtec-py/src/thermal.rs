@@ -5,7 +5,7 @@
 //! for byte (python/tests/test_thermal.py checks it against the CLI), and every kind of the
 //! registry (`mtec_thermal::registry::KINDS`) is a `model` here as it is a `--model` there.
 
-use crate::columns::{file_inputs, path_arg, read_table};
+use crate::columns::{as_path, file_inputs, path_arg, read_table};
 use crate::convert::{serde_to_py, write_output};
 use crate::errors::{internal, usage, Result};
 use mtec_thermal::model_file::SplitBy;
@@ -198,6 +198,10 @@ fn select<'py>(
     sensors: &[String],
     out: Option<PathBuf>,
 ) -> Result<Bound<'py, PyAny>> {
+    // the folder is settled before any work: none of its files the log
+    if let (Some(dir), Some(log)) = (&out, as_path(data)?) {
+        op::check_selection_out(dir, &[&log])?;
+    }
     let table = read_table(data, "data")?;
     let outcome = py.detach(|| op::select_table(&table, target, sensors))?;
     if let Some(dir) = &out {

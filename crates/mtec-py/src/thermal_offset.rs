@@ -2,7 +2,7 @@
 //! Siemens temperature-compensation data, for the state the temperature log ends in; the job of
 //! `mtec compensate thermal-offset`.
 
-use crate::columns::{file_inputs, path_arg, read_table};
+use crate::columns::{as_path, path_arg, read_table};
 use crate::convert::{serde_to_py, write_output};
 use crate::errors::{choice, Result};
 use mtec_workflow::ops::compensate_table::parse_axis;
@@ -77,6 +77,13 @@ pub fn compensate_thermal_offset<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let update = || -> Result<Bound<'py, PyAny>> {
         let model = path_arg(model, "model")?;
+        // the output is settled before any work: never one of the inputs
+        let mut inputs = vec![model.clone()];
+        inputs.extend(as_path(temps)?);
+        inputs.extend(training.clone());
+        if let Some(p) = &out {
+            mtec_io::OutputGuard::new(&inputs).check(p)?;
+        }
         let log = read_table(temps, "temps")?;
         let format = choice::<Format>("format", format)?;
         let defaults = Options::new(&model, &log.path, format);
@@ -99,13 +106,6 @@ pub fn compensate_thermal_offset<'py>(
             training: training.clone(),
             ..defaults
         };
-        // the output is settled before any work: never one of the inputs
-        let mut inputs = vec![model.clone()];
-        inputs.extend(file_inputs(&log));
-        inputs.extend(training);
-        if let Some(p) = &out {
-            mtec_io::OutputGuard::new(&inputs).check(p)?;
-        }
         let outcome = py.detach(|| op::update_now(&opts, &log))?;
         if let Some(p) = &out {
             write_output(p, &inputs, outcome.text.as_bytes())?;

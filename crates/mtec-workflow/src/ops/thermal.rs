@@ -195,6 +195,12 @@ pub fn select_table(table: &Table, target: &str, sensors: &[String]) -> Result<S
     })
 }
 
+/// Whether the folder `dir` can take ridge_trace.csv, ridge_trace.svg and selection.json, none
+/// of them over one of `inputs` (a usage error otherwise): checked before any work.
+pub fn check_selection_out(dir: &Path, inputs: &[&Path]) -> Result<()> {
+    check_selection_dir(&OutputGuard::new(inputs), dir)
+}
+
 /// Writes ridge_trace.csv, ridge_trace.svg and selection.json of `outcome` into the folder
 /// `dir` (created), none of them over one of `inputs`: what [`select`] writes with `out`.
 pub fn write_selection(outcome: &SelectOutcome, dir: &Path, inputs: &[&Path]) -> Result<()> {
