@@ -107,3 +107,13 @@ pub fn choice<C: mtec_workflow::Choice>(what: &str, name: &str) -> Result<C> {
         ))
     })
 }
+
+/// `-` is the command line's stdout; the module writes files only (argument `what`).
+pub fn refuse_stdout(p: &std::path::Path, what: &str) -> Result<()> {
+    if p == std::path::Path::new("-") {
+        return Err(usage(format!(
+            "`{what}` must be a file: `-` (stdout) is the command line's"
+        )));
+    }
+    Ok(())
+}

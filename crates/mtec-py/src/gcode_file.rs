@@ -4,13 +4,13 @@
 //! and has none of these, which read files beside the program).
 
 use crate::convert::serde_to_py;
-use crate::errors::{choice, usage, Result};
+use crate::errors::{choice, refuse_stdout, usage, Result};
 use mtec_comp::gcode::RewriteOptions;
 use mtec_workflow::ops::compensate_gcode::{self as op, Options};
 use mtec_workflow::ops::selective::Elements;
 use mtec_workflow::rs274::Rs274;
 use pyo3::prelude::*;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Compensates an NC program file into `output`: the library behind `mtec compensate gcode`,
 /// byte for byte.
@@ -82,11 +82,7 @@ pub fn compensate_gcode_file<'py>(
     rs274_timeout_s: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let run = || -> Result<Bound<'py, PyAny>> {
-        if output == Path::new("-") {
-            return Err(usage(
-                "`output` must be a file: `-` (stdout) is the command line's",
-            ));
-        }
+        refuse_stdout(&output, "output")?;
         let flatten = match flatten_with.as_deref() {
             Some("rs274") => Some(Rs274 {
                 bin: rs274,

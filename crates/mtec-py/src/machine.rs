@@ -3,11 +3,11 @@
 //! jobs of `mtec machine build` and `mtec machine replay`.
 
 use crate::convert::{matrix, serde_to_py};
-use crate::errors::{usage, Result};
+use crate::errors::{refuse_stdout, Result};
 use mtec_workflow::ops::machine::{self as op, BuildOptions, Part, ReplayOptions};
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Builds a machine error model file: the library behind `mtec machine build`.
 ///
@@ -139,14 +139,4 @@ pub fn machine_replay<'py>(
         Ok(doc)
     };
     Ok(replay()?)
-}
-
-/// `-` is the command line's stdout; here a file is needed.
-fn refuse_stdout(p: &Path, what: &str) -> Result<()> {
-    if p == Path::new("-") {
-        return Err(usage(format!(
-            "`{what}` must be a file: `-` (stdout) is the command line's"
-        )));
-    }
-    Ok(())
 }

@@ -157,10 +157,7 @@ fn evaluate_circular<'py>(
 ) -> Result<Bound<'py, PyAny>> {
     // the output files are settled before any work: neither is the trace file
     if let (Some(dir), Some(trace)) = (&a.out, as_path(run)?) {
-        let guard = mtec_io::OutputGuard::new(&[&trace]);
-        for f in [circular_op::RESULTS_FILE, circular_op::PLOT_FILE] {
-            guard.check(&dir.join(f))?;
-        }
+        circular_op::check_out_dir(dir, &trace)?;
     }
     let table = read_table(run, "run")?;
     let opts = circular_op::Options {

@@ -1,11 +1,11 @@
 //! Controller compensation tables (mtec-comp's writers): the job of `mtec compensate table`.
 
 use crate::convert::serde_to_py;
-use crate::errors::{choice, usage, Result};
+use crate::errors::{choice, refuse_stdout, usage, Result};
 use mtec_workflow::ops::compensate_table::{self as op, Format, Options, Range};
 use mtec_workflow::ops::selective::Elements;
 use pyo3::prelude::*;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Writes a controller's compensation table: the library behind `mtec compensate table`.
 ///
@@ -82,11 +82,7 @@ pub fn compensate_table<'py>(
     let range_of = |r: Option<(f64, f64, f64)>| r.map(|(a, b, c)| Range::new(a, b, c)).transpose();
     let opts = || -> Result<Options> {
         let format = choice::<Format>("format", format)?;
-        if out == Path::new("-") {
-            return Err(usage(
-                "`out` must be a file: `-` (stdout) is the command line's",
-            ));
-        }
+        refuse_stdout(&out, "out")?;
         let model = match (model, &from_iso230_2) {
             (Some(m), None) => m,
             (None, Some(_)) => PathBuf::new(),

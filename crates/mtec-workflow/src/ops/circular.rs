@@ -11,7 +11,7 @@ use mtec_measure::circular::{
 use mtec_report::polar::{polar_svg, PolarOptions, PolarTrace};
 use serde::Serialize;
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The results file the job writes into [`Options::out`].
 pub const RESULTS_FILE: &str = "circular.json";
@@ -152,9 +152,20 @@ pub fn run_table(table: &Table, opts: &Options) -> Result<Outcome> {
 /// Neither file of `opts.out` is an input.
 fn check_out(guard: &OutputGuard, opts: &Options) -> Result<()> {
     if let Some(dir) = &opts.out {
-        guard.check(&dir.join(RESULTS_FILE))?;
-        guard.check(&dir.join(PLOT_FILE))?;
+        check_files(guard, dir)?;
     }
+    Ok(())
+}
+
+/// Whether the folder `dir` can take circular.json and polar.svg, neither over the trace file
+/// `run` (a usage error otherwise): for a caller that settles its outputs before reading.
+pub fn check_out_dir(dir: &Path, run: &Path) -> Result<()> {
+    check_files(&OutputGuard::new(&[run]), dir)
+}
+
+fn check_files(guard: &OutputGuard, dir: &Path) -> Result<()> {
+    guard.check(&dir.join(RESULTS_FILE))?;
+    guard.check(&dir.join(PLOT_FILE))?;
     Ok(())
 }
 

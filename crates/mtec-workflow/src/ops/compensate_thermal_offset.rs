@@ -299,7 +299,7 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
         Some(p) => OutputGuard::new(&inputs).check(p)?,
         None => Destination::Stdout,
     };
-    let outcome = update_now(opts, &Table::read(&opts.temps)?)?;
+    let outcome = update_checked(opts, &Table::read(&opts.temps)?)?;
     dest.write(outcome.text.as_bytes())?;
     Ok(outcome)
 }
@@ -308,6 +308,11 @@ pub fn run(opts: &Options, _obs: &mut dyn Observer) -> Result<Outcome> {
 /// is not read, the log's path names it), without writing: the update and its text.
 pub fn update_now(opts: &Options, log: &Table) -> Result<Outcome> {
     check_options(opts)?;
+    update_checked(opts, log)
+}
+
+/// [`update_now`] of options already checked.
+fn update_checked(opts: &Options, log: &Table) -> Result<Outcome> {
     let axis = opts.axis;
     let mut model = OffsetModel::load(
         &opts.model,
